@@ -1,0 +1,15 @@
+# SPDX-License-Identifier: MIT
+# Runs a bench with small arguments and checks it succeeds and writes a non-empty JSON file.
+file(REMOVE ${JSON})
+execute_process(COMMAND ${EXE} ${ARGS} --json ${JSON} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${EXE} exited with ${rc}")
+endif()
+if(NOT EXISTS ${JSON})
+  message(FATAL_ERROR "${EXE} wrote no JSON to ${JSON}")
+endif()
+file(READ ${JSON} content)
+string(JSON kind TYPE "${content}")
+if(NOT kind STREQUAL "OBJECT")
+  message(FATAL_ERROR "${EXE} wrote JSON that is not an object")
+endif()

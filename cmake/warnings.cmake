@@ -1,0 +1,15 @@
+# SPDX-License-Identifier: MIT
+# impact_warnings: an INTERFACE target carrying warning (and optional sanitizer) flags for the
+# project's own tests, benches and examples only; consumers of impact::impact never see them.
+add_library(impact_warnings INTERFACE)
+if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+  target_compile_options(impact_warnings INTERFACE -Wall -Wextra -Wpedantic -Wshadow)
+  if(IMPACT_WARNINGS_AS_ERRORS)
+    target_compile_options(impact_warnings INTERFACE -Werror)
+  endif()
+  if(IMPACT_SANITIZE)
+    target_compile_options(impact_warnings INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer
+      -fno-sanitize-recover=all)
+    target_link_options(impact_warnings INTERFACE -fsanitize=address,undefined)
+  endif()
+endif()
