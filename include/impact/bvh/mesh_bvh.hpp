@@ -1,0 +1,106 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// MeshBvh<BV>: a triangle mesh together with its hierarchy, the object every mesh query takes.
+/// Construction validates the arrays (throws InvalidInput on empty meshes, NaN/Inf coordinates,
+/// out-of-range indices), copies them, builds the tree top-down with each node's BV fitted around
+/// its triangles' vertices, and keeps the triangles in leaf order so leaf tests read memory in
+/// sequence. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
+/// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
+#pragma once
+
+#include "impact/bvh/build_top_down.hpp"
+#include "impact/bvh/refit.hpp"
+#include "impact/geometry/triangle_mesh.hpp"
+
+namespace impact {
+
+struct MeshBvhConfig {
+  BuildConfig build;  ///< split rule and leaf size
+  FitConfig fit;      ///< how node spheres are fitted (ignored by other BVs)
+};
+
+template <class BV> class MeshBvh {
+ public:
+  using Traits = BvTraits<BV>;
+  using S = typename Traits::Scalar;
+
+  /// Validates and copies the mesh, then builds the tree. Throws InvalidInput on bad input.
+  MeshBvh(const Vertices<S>& V, const Faces& F, const MeshBvhConfig& cfg = {}) : mesh_(V, F), cfg_(cfg) {
+    validate_mesh(mesh_.V, mesh_.F);
+    build();
+  }
+  explicit MeshBvh(const TriangleMesh<S>& m, const MeshBvhConfig& cfg = {}) : MeshBvh(m.V, m.F, cfg) {}
+
+  const Bvh<BV>& tree() const { return tree_; }
+  const TriangleMesh<S>& mesh() const { return mesh_; }
+  const MeshBvhConfig& config() const { return cfg_; }
+  std::int32_t num_triangles() const { return static_cast<std::int32_t>(tris_.size()); }
+
+  /// Triangle at leaf position k (the primitive ids the traversals hand out).
+  const Triangle<S>& triangle(std::int32_t k) const { return tris_[static_cast<std::size_t>(k)]; }
+  /// Row of F of the triangle at leaf position k.
+  std::int32_t triangle_id(std::int32_t k) const { return ids_[static_cast<std::size_t>(k)]; }
+  /// Vertex indices of the triangle at leaf position k.
+  Eigen::Matrix<int, 1, 3> triangle_indices(std::int32_t k) const { return mesh_.F.row(ids_[static_cast<std::size_t>(k)]); }
+  /// True when the triangles at leaf positions p and q share a vertex index.
+  bool adjacent(std::int32_t p, std::int32_t q) const {
+    const auto a = triangle_indices(p), b = triangle_indices(q);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (a[i] == b[j]) return true;
+    return false;
+  }
+
+  /// Moves the vertices (same count, finite) and refits the tree; the topology stays.
+  /// Throws InvalidInput when V has another size or a non-finite coordinate.
+  void set_vertices(const Vertices<S>& V, RefitMode mode = RefitMode::Merge) {
+    if (V.rows() != mesh_.V.rows()) throw InvalidInput("MeshBvh::set_vertices: vertex count changed");
+    validate_mesh(V, mesh_.F);
+    mesh_.V = V;
+    gather_triangles();
+    refit(tree_, fitter(), mode);
+  }
+
+ private:
+  void gather_triangles() {
+    for (std::size_t k = 0; k < ids_.size(); ++k) tris_[k] = mesh_.triangle(ids_[k]);
+  }
+  /// Fits a BV around the vertices of the triangles at leaf positions ids[0..n).
+  auto fitter() {
+    return [this](const std::int32_t* ids, std::size_t n) {
+      scratch_.resize(3 * n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Triangle<S>& t = tris_[static_cast<std::size_t>(ids[i])];
+        scratch_[3 * i] = t.a;
+        scratch_[3 * i + 1] = t.b;
+        scratch_[3 * i + 2] = t.c;
+      }
+      return Traits::fit(scratch_.data(), scratch_.size(), cfg_.fit);
+    };
+  }
+  void build() {
+    const auto m = static_cast<std::size_t>(mesh_.F.rows());
+    std::vector<Vec3<S>> centroids(m);
+    tris_.resize(m);
+    for (std::size_t t = 0; t < m; ++t) {
+      tris_[t] = mesh_.triangle(static_cast<int>(t));
+      centroids[t] = tris_[t].centroid();
+    }
+    // Build over mesh order, then renumber primitives to leaf positions.
+    tree_ = build_top_down<BV>(centroids, fitter(), cfg_.build);
+    ids_ = tree_.primitives;
+    std::vector<Triangle<S>> ordered(m);
+    for (std::size_t k = 0; k < m; ++k) ordered[k] = tris_[static_cast<std::size_t>(ids_[k])];
+    tris_ = std::move(ordered);
+    for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
+  }
+
+  TriangleMesh<S> mesh_;
+  MeshBvhConfig cfg_;
+  Bvh<BV> tree_;
+  std::vector<Triangle<S>> tris_;  // leaf order
+  std::vector<std::int32_t> ids_;  // leaf position -> row of F
+  std::vector<Vec3<S>> scratch_;
+};
+
+}  // namespace impact

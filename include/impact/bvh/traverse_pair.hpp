@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Pair traversal of two trees (or of one tree against itself), iterative, written once for every
+/// BV type. Where two nodes' BVs overlap, the larger node (BvTraits::size) is split first, or the
+/// inner one when the other is a leaf; leaf pairs go to the visitor. The overlap callable carries
+/// any relative transform, so neither tree is rebuilt or copied to move one mesh against another.
+#pragma once
+
+#include "impact/bvh/bvh.hpp"
+#include "impact/bvh/traversal_stack.hpp"
+
+namespace impact {
+
+
+/// Visits every pair of primitives (id_a, id_b) whose leaves' BVs overlap.
+/// `overlap(const BVA& a, const BVB& b) -> bool` must be conservative (never false for volumes
+/// that touch). `visit(std::int32_t id_a, std::int32_t id_b) -> bool` returns false to stop.
+/// Returns false when the visitor stopped the walk.
+template <class BVA, class BVB, class Overlap, class Visit>
+bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visit&& visit) {
+  if (a.empty() || b.empty()) return true;
+  detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
+  stack.push({0, 0});
+  while (!stack.empty()) {
+    const auto [i, j] = stack.pop();
+    const auto& na = a.nodes[static_cast<std::size_t>(i)];
+    const auto& nb = b.nodes[static_cast<std::size_t>(j)];
+    if (!overlap(na.bv, nb.bv)) continue;
+    const bool la = na.is_leaf(), lb = nb.is_leaf();
+    if (la && lb) {
+      for (std::int32_t p = na.first; p < na.first + na.count; ++p)
+        for (std::int32_t q = nb.first; q < nb.first + nb.count; ++q)
+          if (!visit(a.primitives[static_cast<std::size_t>(p)], b.primitives[static_cast<std::size_t>(q)])) return false;
+    } else if (lb || (!la && BvTraits<BVA>::size(na.bv) >= BvTraits<BVB>::size(nb.bv))) {
+      stack.push({na.right(), j});
+      stack.push({na.left(), j});
+    } else {
+      stack.push({i, nb.right()});
+      stack.push({i, nb.left()});
+    }
+  }
+  return true;
+}
+
+/// Visits every unordered pair {id_a, id_b}, id_a != id_b, of primitives of one tree whose
+/// leaves' BVs overlap (pairs within one leaf are always visited). Same callables as
+/// traverse_pair; each pair is visited once.
+template <class BV, class Overlap, class Visit> bool traverse_self(const Bvh<BV>& t, Overlap&& overlap, Visit&& visit) {
+  if (t.empty()) return true;
+  // (i, i) means "pairs inside node i"; (i, j), i != j, means "pairs across nodes i and j".
+  detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
+  stack.push({0, 0});
+  while (!stack.empty()) {
+    const auto [i, j] = stack.pop();
+    const auto& ni = t.nodes[static_cast<std::size_t>(i)];
+    if (i == j) {
+      if (ni.is_leaf()) {
+        for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+          for (std::int32_t q = p + 1; q < ni.first + ni.count; ++q)
+            if (!visit(t.primitives[static_cast<std::size_t>(p)], t.primitives[static_cast<std::size_t>(q)])) return false;
+      } else {
+        stack.push({ni.left(), ni.right()});
+        stack.push({ni.right(), ni.right()});
+        stack.push({ni.left(), ni.left()});
+      }
+      continue;
+    }
+    const auto& nj = t.nodes[static_cast<std::size_t>(j)];
+    if (!overlap(ni.bv, nj.bv)) continue;
+    const bool li = ni.is_leaf(), lj = nj.is_leaf();
+    if (li && lj) {
+      for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+        for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q)
+          if (!visit(t.primitives[static_cast<std::size_t>(p)], t.primitives[static_cast<std::size_t>(q)])) return false;
+    } else if (lj || (!li && BvTraits<BV>::size(ni.bv) >= BvTraits<BV>::size(nj.bv))) {
+      stack.push({ni.right(), j});
+      stack.push({ni.left(), j});
+    } else {
+      stack.push({i, nj.right()});
+      stack.push({i, nj.left()});
+    }
+  }
+  return true;
+}
+
+}  // namespace impact
