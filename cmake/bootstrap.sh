@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# One set-up for both README commands, so they cannot drift apart:
+#   bash cmake/bootstrap.sh bench [impact-collide-bench arguments...]
+#   bash cmake/bootstrap.sh test  [extra ctest arguments...]
+# It installs the Debian packages it needs (apt-get, as root or through sudo), configures a Release
+# build with warnings as errors in build/release (IMPACT_BUILD_DIR overrides), builds everything,
+# then runs the collision benchmark or the whole ctest suite. Set IMPACT_DATA_DIR to a folder that
+# holds meshes/ and ccd-queries/ to run the data-driven tests (they report SKIPPED without it).
+set -euo pipefail
+
+mode="${1:-test}"
+[ $# -gt 0 ] && shift
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libgtest-dev libbenchmark-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  echo "bootstrap: installing ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+build="${IMPACT_BUILD_DIR:-$root/build/release}"
+jobs="$(nproc 2>/dev/null || echo 2)"
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DIMPACT_WARNINGS_AS_ERRORS=ON -DIMPACT_DATA_DIR="${IMPACT_DATA_DIR:-}" ${IMPACT_CMAKE_ARGS:-}
+cmake --build "$build" -j "$jobs"
+
+case "$mode" in
+  bench) exec "$build/benches/impact-collide-bench" "$@" ;;
+  test) exec ctest --test-dir "$build" --output-on-failure -j "$jobs" "$@" ;;
+  *) echo "usage: bash cmake/bootstrap.sh bench|test [args...]" >&2; exit 2 ;;
+esac
