@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The common ground of the broad phases: the object table they read (one slot per scene object:
+/// tight world AABB, body type, sleeping flag, filter), the pair rule they all implement, their
+/// work counters, and the interface every implementation offers.
+///
+/// The pair rule (identical for every broad phase, so their results can be compared as sets):
+/// slots a != b form a pair when
+///   1. at least one of them is *active* (alive, dynamic and awake): static–static,
+///      static–sleeping and sleeping–sleeping pairs are never tested;
+///   2. the filter accepts them: (group_a & mask_b) != 0, (group_b & mask_a) != 0 and the pair is not
+///      on the ignore list (checked before any geometry test);
+///   3. their tight world AABBs overlap (closed boxes, impact::overlap).
+///
+/// Interface of a broad phase `B` over scalar S (checked at compile time by the scene, no virtual
+/// calls; the scene holds one of them in a std::variant and dispatches once per call):
+///   void insert(std::int32_t slot, const ObjectTable<S>&)      a new object
+///   void remove(std::int32_t slot, const ObjectTable<S>&)      before the slot is freed
+///   void moved(std::int32_t slot, const ObjectTable<S>&)       tight box changed (deferred flush)
+///   void activity_changed(std::int32_t slot, const ObjectTable<S>&)  sleeping flag toggled
+///   void filter_changed(std::int32_t slot, const ObjectTable<S>&)    filter or ignore list changed
+///   bool find_pairs(const ObjectTable<S>&, Visit&&, BroadPhaseStats&)
+///        calls visit(slot_a, slot_b) -> bool for every pair of the rule, each once; stops and
+///        returns false when visit returns false.
+#pragma once
+
+#include "impact/core/config.hpp"
+#include "impact/geometry/aabb.hpp"
+
+#include <cstdint>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+namespace impact {
+
+/// Which broad phase a scene uses. All three return the same pair sets.
+enum class BroadPhaseKind : std::uint8_t {
+  AllPairs,       ///< O(active * n) reference
+  StaticDynamic,  ///< static tree built once + cached static overlaps + dynamic tree
+  Hierarchical,   ///< one incremental AABB tree over all objects, self pair traversal
+};
+
+/// Group/mask filter: objects a and b may collide only when (a.group & b.mask) and
+/// (b.group & a.mask) are both non-zero.
+struct CollisionFilter {
+  std::uint32_t group = 1;
+  std::uint32_t mask = 0xffffffffu;
+};
+
+/// Work counters of one broad-phase (and narrow-phase) call. Tests use them to check that work a
+/// scene does not need is skipped.
+struct BroadPhaseStats {
+  std::uint64_t bv_tests = 0;          ///< node–node and node–box tests inside trees
+  std::uint64_t pairs_tested = 0;      ///< object pairs whose tight AABBs were compared
+  std::uint64_t inactive_pairs_tested = 0;  ///< of those, pairs with no active object (always 0)
+  std::uint64_t pairs_filtered = 0;    ///< pairs dropped by group/mask or the ignore list
+  std::uint64_t pairs_found = 0;       ///< pairs handed to the caller
+  std::uint64_t refits = 0;            ///< objects whose bound in a tree was updated
+  std::uint64_t reinserts = 0;         ///< leaves moved in a tree (fattened bound left behind)
+  std::uint64_t static_queries = 0;    ///< dynamic objects queried against the static tree
+  std::uint64_t rebuilds = 0;          ///< whole-tree rebuilds
+  std::uint64_t narrow_tests = 0;      ///< exact shape–shape tests (narrow phase)
+  std::uint64_t contacts = 0;          ///< contacts generated (narrow phase)
+
+  BroadPhaseStats& operator+=(const BroadPhaseStats& o) {
+    bv_tests += o.bv_tests;
+    pairs_tested += o.pairs_tested;
+    inactive_pairs_tested += o.inactive_pairs_tested;
+    pairs_filtered += o.pairs_filtered;
+    pairs_found += o.pairs_found;
+    refits += o.refits;
+    reinserts += o.reinserts;
+    static_queries += o.static_queries;
+    rebuilds += o.rebuilds;
+    narrow_tests += o.narrow_tests;
+    contacts += o.contacts;
+    return *this;
+  }
+};
+
+/// Per-slot object data the broad phases read. Owned by the scene; slots of removed objects are
+/// dead (alive == 0) until reused.
+template <class S> struct ObjectTable {
+  enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
+
+  std::vector<Aabb<S>> box;           ///< tight world AABB
+  std::vector<std::uint8_t> flags;    ///< Flags
+  std::vector<CollisionFilter> filter;
+  std::vector<std::uint32_t> ignore_count;  ///< entries of the ignore list naming this slot
+  std::unordered_set<std::uint64_t> ignored;  ///< pair_key of ignored slot pairs
+
+  std::int32_t size() const { return static_cast<std::int32_t>(flags.size()); }
+  bool alive(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Alive; }
+  bool is_static(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Static; }
+  bool sleeping(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Sleeping; }
+  /// Alive, dynamic and awake.
+  bool active(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] == Alive; }
+
+  static std::uint64_t pair_key(std::int32_t a, std::int32_t b) {
+    if (a > b) std::swap(a, b);
+    return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+  }
+  /// Rule 2 of the pair rule: group/mask and the ignore list.
+  bool accepts(std::int32_t a, std::int32_t b) const {
+    const CollisionFilter& fa = filter[static_cast<std::size_t>(a)];
+    const CollisionFilter& fb = filter[static_cast<std::size_t>(b)];
+    if (!(fa.group & fb.mask) || !(fb.group & fa.mask)) return false;
+    if (ignore_count[static_cast<std::size_t>(a)] && ignore_count[static_cast<std::size_t>(b)] && ignored.count(pair_key(a, b)))
+      return false;
+    return true;
+  }
+};
+
+namespace detail {
+
+/// Rules 2 and 3 for a pair whose activity (rule 1) the caller has established, with counting.
+/// Returns true when the pair is to be reported.
+template <class S> inline bool test_pair(const ObjectTable<S>& t, std::int32_t a, std::int32_t b, BroadPhaseStats& st) {
+  if (!t.accepts(a, b)) {
+    ++st.pairs_filtered;
+    return false;
+  }
+  ++st.pairs_tested;
+  if (IMPACT_UNLIKELY(!t.active(a) && !t.active(b))) ++st.inactive_pairs_tested;
+  return overlap(t.box[static_cast<std::size_t>(a)], t.box[static_cast<std::size_t>(b)]);
+}
+
+}  // namespace detail
+
+}  // namespace impact

@@ -1,0 +1,507 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// DynamicTree: an incremental AABB tree over objects, and HierarchicalBroadPhase, the broad phase
+/// built on it.
+///
+/// The tree lives in one flat node pool with a free list (the build-once `Bvh` of bvh/ cannot grow).
+/// Leaves hold *fattened* boxes: the object's tight box grown by a margin, so an object that moves a
+/// little stays inside its leaf box and costs nothing in the tree. An object that leaves its fat box
+/// is removed and inserted again: the new sibling is chosen by the surface-area cost of the
+/// enlargement (greedy descent, as in the incremental trees of Goldsmith & Salmon 1987 and of Box2D),
+/// and the path to the root is rebalanced by AVL-style rotations on subtree heights. The surface-area
+/// cost of the whole tree is watched; when it degrades past a ratio of its value after the last
+/// rebuild, the tree is rebuilt top-down (median split on the longest axis of the leaf centres).
+/// Leaf node ids are stable across rotations and rebuilds, so callers keep them as handles.
+///
+/// Each node also records whether its subtree holds an *active* leaf (dynamic and awake): pair
+/// traversal skips node pairs with no active leaf on either side, so static–static and sleeping
+/// pairs are never reached. Pair traversal descends the larger node first (FCL's collisionRecurse
+/// rule, written iteratively), for the tree against itself and against another tree.
+#pragma once
+
+#include "impact/broad/broad_phase.hpp"
+#include "impact/bvh/traversal_stack.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace impact {
+
+/// Knobs of the incremental tree, with their defaults.
+struct DynamicTreeOptions {
+  /// A leaf box is the tight box grown on every side by fat_fraction times the object's largest
+  /// extent plus fat_margin (absolute, scene units). Larger values mean fewer reinsertions and
+  /// more candidate node pairs.
+  double fat_fraction = 0.1;
+  double fat_margin = 0.0;
+  /// Rebuild when the tree's surface-area cost exceeds this multiple of its value after the last
+  /// rebuild (checked after every leaves/8 reinsertions).
+  double rebuild_ratio = 1.4;
+};
+
+template <class S> class DynamicTree {
+ public:
+  static constexpr std::int32_t null = -1;
+
+  struct Node {
+    Aabb<S> box;
+    std::int32_t parent = null;
+    std::int32_t child[2] = {null, null};  ///< child[0] == null for leaves
+    std::int32_t object = null;            ///< the caller's payload, leaves only
+    std::int32_t height = 0;               ///< 0 for leaves, -1 for free nodes
+    std::uint8_t active = 0;               ///< the subtree holds an active leaf
+    bool is_leaf() const { return child[0] == null; }
+  };
+
+  explicit DynamicTree(const DynamicTreeOptions& opt = {}) : opt_(opt) {}
+
+  /// Inserts a leaf for `object` with tight box `tight` (stored fattened). Returns the leaf id.
+  std::int32_t insert(std::int32_t object, const Aabb<S>& tight, bool active) {
+    const std::int32_t leaf = allocate();
+    Node& n = nodes_[static_cast<std::size_t>(leaf)];
+    n.box = fatten(tight);
+    n.object = object;
+    n.height = 0;
+    n.active = active;
+    insert_leaf(leaf);
+    ++leaves_;
+    ++changes_;
+    return leaf;
+  }
+
+  /// Removes a leaf returned by insert().
+  void remove(std::int32_t leaf) {
+    remove_leaf(leaf);
+    release(leaf);
+    --leaves_;
+    ++changes_;
+  }
+
+  /// The object's tight box changed. Returns true when it left its fat box and the leaf was
+  /// reinserted; false when the tree did not change.
+  bool update(std::int32_t leaf, const Aabb<S>& tight) {
+    Node& n = nodes_[static_cast<std::size_t>(leaf)];
+    if (contains(n.box, tight)) return false;
+    remove_leaf(leaf);
+    nodes_[static_cast<std::size_t>(leaf)].box = fatten(tight);
+    insert_leaf(leaf);
+    ++changes_;
+    return true;
+  }
+
+  /// Marks a leaf active (dynamic and awake) or not, and updates its ancestors' flags.
+  void set_active(std::int32_t leaf, bool active) {
+    nodes_[static_cast<std::size_t>(leaf)].active = active;
+    for (std::int32_t i = nodes_[static_cast<std::size_t>(leaf)].parent; i != null; i = node(i).parent) {
+      const std::uint8_t a = node(node(i).child[0]).active | node(node(i).child[1]).active;
+      if (a == node(i).active) break;
+      node(i).active = a;
+    }
+  }
+
+  /// Rebuilds when the surface-area cost has degraded (see DynamicTreeOptions::rebuild_ratio).
+  /// Returns true when it rebuilt.
+  bool maybe_rebuild() {
+    if (leaves_ < 4 || changes_ < std::max<std::size_t>(leaves_ / 8, 16)) return false;
+    changes_ = 0;
+    const double cost = sah_cost();
+    if (built_cost_ > 0 && cost <= opt_.rebuild_ratio * built_cost_) return false;
+    rebuild();
+    return true;
+  }
+
+  /// Top-down rebuild over the current leaves (ids unchanged). O(n log n).
+  void rebuild() {
+    std::vector<std::int32_t> leaves;
+    leaves.reserve(leaves_);
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      Node& n = nodes_[i];
+      if (n.height < 0) continue;
+      if (n.is_leaf()) {
+        leaves.push_back(static_cast<std::int32_t>(i));
+      } else {
+        release(static_cast<std::int32_t>(i));
+      }
+    }
+    root_ = leaves.empty() ? null : build_range(leaves.data(), leaves.data() + leaves.size());
+    if (root_ != null) node(root_).parent = null;
+    changes_ = 0;
+    built_cost_ = sah_cost();
+  }
+
+  /// Calls visit(object) for every leaf whose fat box overlaps `box`; stops when visit returns false.
+  template <class Visit> bool query(const Aabb<S>& box, Visit&& visit, BroadPhaseStats& st) const {
+    if (root_ == null) return true;
+    detail::TraversalStack<std::int32_t> stack;
+    stack.push(root_);
+    while (!stack.empty()) {
+      const Node& n = node(stack.pop());
+      ++st.bv_tests;
+      if (!overlap(n.box, box)) continue;
+      if (n.is_leaf()) {
+        if (!visit(n.object)) return false;
+      } else {
+        stack.push(n.child[1]);
+        stack.push(n.child[0]);
+      }
+    }
+    return true;
+  }
+
+  /// Calls visit(object_a, object_b) once for every unordered pair of leaves whose fat boxes
+  /// overlap and of which at least one is active. Larger node first; stops when visit returns false.
+  template <class Visit> bool self_pairs(Visit&& visit, BroadPhaseStats& st) const {
+    if (root_ == null) return true;
+    detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
+    stack.push({root_, root_});
+    while (!stack.empty()) {
+      const auto [i, j] = stack.pop();
+      const Node& ni = node(i);
+      if (i == j) {
+        if (ni.is_leaf() || !ni.active) continue;
+        stack.push({ni.child[0], ni.child[1]});
+        stack.push({ni.child[1], ni.child[1]});
+        stack.push({ni.child[0], ni.child[0]});
+        continue;
+      }
+      const Node& nj = node(j);
+      if (!(ni.active | nj.active)) continue;
+      ++st.bv_tests;
+      if (!overlap(ni.box, nj.box)) continue;
+      if (!descend(i, j, stack))
+        if (!visit(ni.object, nj.object)) return false;
+    }
+    return true;
+  }
+
+  /// Calls visit(object_of_this, object_of_other) for every leaf pair of the two trees whose fat
+  /// boxes overlap and of which at least one is active. Larger node first.
+  template <class Visit> bool cross_pairs(const DynamicTree& other, Visit&& visit, BroadPhaseStats& st) const {
+    if (root_ == null || other.root_ == null) return true;
+    detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
+    stack.push({root_, other.root_});
+    while (!stack.empty()) {
+      const auto [i, j] = stack.pop();
+      const Node& ni = node(i);
+      const Node& nj = other.node(j);
+      if (!(ni.active | nj.active)) continue;
+      ++st.bv_tests;
+      if (!overlap(ni.box, nj.box)) continue;
+      const bool li = ni.is_leaf(), lj = nj.is_leaf();
+      if (li && lj) {
+        if (!visit(ni.object, nj.object)) return false;
+      } else if (lj || (!li && size(ni.box) >= size(nj.box))) {
+        stack.push({ni.child[1], j});
+        stack.push({ni.child[0], j});
+      } else {
+        stack.push({i, nj.child[1]});
+        stack.push({i, nj.child[0]});
+      }
+    }
+    return true;
+  }
+
+  const Node& node(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)]; }
+  std::int32_t root() const { return root_; }
+  std::size_t num_leaves() const { return leaves_; }
+  /// Height of the root (0 for a single leaf, -1 when empty).
+  std::int32_t height() const { return root_ == null ? -1 : node(root_).height; }
+  /// Sum of the surface areas of the inner nodes over the root's: the expected number of inner
+  /// nodes a random ray or box visits; lower is better.
+  double sah_cost() const {
+    if (root_ == null) return 0;
+    double sum = 0;
+    for (const Node& n : nodes_)
+      if (n.height > 0) sum += area(n.box);
+    const double r = area(node(root_).box);
+    return r > 0 ? sum / r : 0;
+  }
+  /// Checks parent links, heights, boxes and activity flags (for tests). O(n).
+  bool valid() const {
+    if (root_ == null) return leaves_ == 0;
+    std::size_t count = 0;
+    std::vector<std::int32_t> stack{root_};
+    if (node(root_).parent != null) return false;
+    while (!stack.empty()) {
+      const std::int32_t i = stack.back();
+      stack.pop_back();
+      const Node& n = node(i);
+      if (n.height < 0) return false;
+      if (n.is_leaf()) {
+        ++count;
+        if (n.height != 0) return false;
+        continue;
+      }
+      const Node& a = node(n.child[0]);
+      const Node& b = node(n.child[1]);
+      if (a.parent != i || b.parent != i) return false;
+      if (n.height != 1 + std::max(a.height, b.height)) return false;
+      if (!contains(n.box, a.box) || !contains(n.box, b.box)) return false;
+      if (n.active != (a.active | b.active)) return false;
+      stack.push_back(n.child[0]);
+      stack.push_back(n.child[1]);
+    }
+    return count == leaves_;
+  }
+
+ private:
+  Node& node(std::int32_t i) { return nodes_[static_cast<std::size_t>(i)]; }
+
+  static bool contains(const Aabb<S>& outer, const Aabb<S>& inner) {
+    return (outer.min.array() <= inner.min.array()).all() && (inner.max.array() <= outer.max.array()).all();
+  }
+  static double area(const Aabb<S>& b) {
+    const Vec3<S> e = b.max - b.min;
+    return double(e.x()) * double(e.y()) + double(e.y()) * double(e.z()) + double(e.z()) * double(e.x());
+  }
+  static S size(const Aabb<S>& b) { return (b.max - b.min).sum(); }
+  Aabb<S> fatten(const Aabb<S>& tight) const {
+    const S m = S(opt_.fat_fraction) * (tight.max - tight.min).maxCoeff() + S(opt_.fat_margin);
+    return {tight.min.array() - m, tight.max.array() + m};
+  }
+
+  /// Pushes the children pairs of (i, j) when one of them is inner; returns false for two leaves.
+  template <class Stack> bool descend(std::int32_t i, std::int32_t j, Stack& stack) const {
+    const Node& ni = node(i);
+    const Node& nj = node(j);
+    const bool li = ni.is_leaf(), lj = nj.is_leaf();
+    if (li && lj) return false;
+    if (lj || (!li && size(ni.box) >= size(nj.box))) {
+      stack.push({ni.child[1], j});
+      stack.push({ni.child[0], j});
+    } else {
+      stack.push({i, nj.child[1]});
+      stack.push({i, nj.child[0]});
+    }
+    return true;
+  }
+
+  std::int32_t allocate() {
+    if (free_ != null) {
+      const std::int32_t i = free_;
+      free_ = node(i).parent;
+      node(i) = Node{};
+      return i;
+    }
+    nodes_.push_back(Node{});
+    return static_cast<std::int32_t>(nodes_.size() - 1);
+  }
+  void release(std::int32_t i) {
+    Node& n = node(i);
+    n.height = -1;
+    n.child[0] = n.child[1] = null;
+    n.parent = free_;
+    free_ = i;
+  }
+
+  /// Box, height and activity of inner node i from its children.
+  void recompute(std::int32_t i) {
+    Node& n = node(i);
+    const Node& a = node(n.child[0]);
+    const Node& b = node(n.child[1]);
+    n.box = merge(a.box, b.box);
+    n.height = 1 + std::max(a.height, b.height);
+    n.active = a.active | b.active;
+  }
+
+  void insert_leaf(std::int32_t leaf) {
+    if (root_ == null) {
+      root_ = leaf;
+      node(leaf).parent = null;
+      return;
+    }
+    // Greedy descent: the sibling whose enlargement costs least in surface area.
+    const Aabb<S> box = node(leaf).box;
+    std::int32_t i = root_;
+    while (!node(i).is_leaf()) {
+      const Node& n = node(i);
+      const double a = area(n.box);
+      const double combined = area(merge(n.box, box));
+      const double here = 2 * combined;          // new parent of (n, leaf)
+      const double inherit = 2 * (combined - a);  // growth every node below pays
+      double cost[2];
+      for (int k = 0; k < 2; ++k) {
+        const Node& c = node(n.child[k]);
+        const double grown = area(merge(c.box, box));
+        cost[k] = (c.is_leaf() ? grown : grown - area(c.box)) + inherit;
+      }
+      if (here < cost[0] && here < cost[1]) break;
+      i = cost[0] <= cost[1] ? n.child[0] : n.child[1];
+    }
+    const std::int32_t sibling = i;
+    const std::int32_t old_parent = node(sibling).parent;
+    const std::int32_t p = allocate();
+    node(p).parent = old_parent;
+    node(p).child[0] = sibling;
+    node(p).child[1] = leaf;
+    node(sibling).parent = p;
+    node(leaf).parent = p;
+    if (old_parent == null) {
+      root_ = p;
+    } else {
+      Node& op = node(old_parent);
+      op.child[op.child[0] == sibling ? 0 : 1] = p;
+    }
+    fix_upwards(p);
+  }
+
+  void remove_leaf(std::int32_t leaf) {
+    if (leaf == root_) {
+      root_ = null;
+      return;
+    }
+    const std::int32_t p = node(leaf).parent;
+    const std::int32_t g = node(p).parent;
+    const std::int32_t sibling = node(p).child[node(p).child[0] == leaf ? 1 : 0];
+    if (g == null) {
+      root_ = sibling;
+      node(sibling).parent = null;
+      release(p);
+    } else {
+      Node& gn = node(g);
+      gn.child[gn.child[0] == p ? 0 : 1] = sibling;
+      node(sibling).parent = g;
+      release(p);
+      fix_upwards(g);
+    }
+    node(leaf).parent = null;
+  }
+
+  void fix_upwards(std::int32_t i) {
+    while (i != null) {
+      i = balance(i);
+      recompute(i);
+      i = node(i).parent;
+    }
+  }
+
+  /// AVL rotation at inner node a when its children's heights differ by more than one: the taller
+  /// child c takes a's place, a keeps c's shorter child, c keeps the taller one. Returns the node
+  /// now at a's position.
+  std::int32_t balance(std::int32_t a) {
+    Node& na = node(a);
+    if (na.is_leaf() || na.height < 2) return a;
+    const std::int32_t h0 = node(na.child[0]).height, h1 = node(na.child[1]).height;
+    int side;
+    if (h1 - h0 > 1) side = 1;
+    else if (h0 - h1 > 1) side = 0;
+    else return a;
+    const std::int32_t c = na.child[side];
+    Node& nc = node(c);
+    const std::int32_t f = nc.child[0], g = nc.child[1];
+    const bool keep_f = node(f).height > node(g).height;
+    const std::int32_t kept = keep_f ? f : g, moved = keep_f ? g : f;
+    // c takes a's place
+    nc.parent = na.parent;
+    if (nc.parent == null) {
+      root_ = c;
+    } else {
+      Node& pn = node(nc.parent);
+      pn.child[pn.child[0] == a ? 0 : 1] = c;
+    }
+    nc.child[0] = a;
+    nc.child[1] = kept;
+    na.parent = c;
+    na.child[side] = moved;
+    node(moved).parent = a;
+    recompute(a);
+    recompute(c);
+    return c;
+  }
+
+  /// Builds inner nodes over the leaves in [first, last) by median split; returns the subtree root.
+  std::int32_t build_range(std::int32_t* first, std::int32_t* last) {
+    const std::ptrdiff_t n = last - first;
+    if (n == 1) return *first;
+    Aabb<S> cbox;
+    for (std::int32_t* p = first; p != last; ++p) cbox.extend(node(*p).box.center());
+    const int axis = cbox.longest_axis();
+    std::int32_t* mid = first + n / 2;
+    std::nth_element(first, mid, last, [&](std::int32_t x, std::int32_t y) {
+      return node(x).box.min[axis] + node(x).box.max[axis] < node(y).box.min[axis] + node(y).box.max[axis];
+    });
+    const std::int32_t l = build_range(first, mid);
+    const std::int32_t r = build_range(mid, last);
+    const std::int32_t p = allocate();
+    node(p).child[0] = l;
+    node(p).child[1] = r;
+    node(l).parent = p;
+    node(r).parent = p;
+    recompute(p);
+    return p;
+  }
+
+  DynamicTreeOptions opt_;
+  std::vector<Node> nodes_;
+  std::int32_t root_ = null;
+  std::int32_t free_ = null;
+  std::size_t leaves_ = 0;
+  std::size_t changes_ = 0;
+  double built_cost_ = 0;
+};
+
+/// The hierarchical broad phase: one DynamicTree over every object (static ones included), pair
+/// traversal of the tree against itself that skips subtrees without active objects. Moved objects
+/// are refitted (reinserted only when they leave their fat box); unmoved ones are not touched.
+template <class S> class HierarchicalBroadPhase {
+ public:
+  explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : tree_(opt) {}
+
+  void insert(std::int32_t slot, const ObjectTable<S>& t) {
+    grow(slot);
+    leaf_[static_cast<std::size_t>(slot)] = tree_.insert(slot, t.box[static_cast<std::size_t>(slot)], t.active(slot));
+  }
+  void remove(std::int32_t slot, const ObjectTable<S>&) {
+    tree_.remove(leaf_[static_cast<std::size_t>(slot)]);
+    leaf_[static_cast<std::size_t>(slot)] = DynamicTree<S>::null;
+  }
+  void moved(std::int32_t slot, const ObjectTable<S>&) {
+    if (!moved_flag_[static_cast<std::size_t>(slot)]) {
+      moved_flag_[static_cast<std::size_t>(slot)] = 1;
+      moved_.push_back(slot);
+    }
+  }
+  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) { tree_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot)); }
+  void filter_changed(std::int32_t, const ObjectTable<S>&) {}
+
+  template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
+    flush(t, st);
+    return tree_.self_pairs(
+        [&](std::int32_t a, std::int32_t b) {
+          if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
+          if (!detail::test_pair(t, a, b, st)) return true;
+          ++st.pairs_found;
+          return bool(visit(a, b));
+        },
+        st);
+  }
+
+  const DynamicTree<S>& tree() const { return tree_; }
+
+ private:
+  void grow(std::int32_t slot) {
+    if (static_cast<std::size_t>(slot) >= leaf_.size()) {
+      leaf_.resize(static_cast<std::size_t>(slot) + 1, DynamicTree<S>::null);
+      moved_flag_.resize(static_cast<std::size_t>(slot) + 1, 0);
+    }
+  }
+  void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
+    for (const std::int32_t slot : moved_) {
+      moved_flag_[static_cast<std::size_t>(slot)] = 0;
+      const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
+      if (leaf == DynamicTree<S>::null) continue;
+      ++st.refits;
+      if (tree_.update(leaf, t.box[static_cast<std::size_t>(slot)])) ++st.reinserts;
+    }
+    moved_.clear();
+    if (tree_.maybe_rebuild()) ++st.rebuilds;
+  }
+
+  DynamicTree<S> tree_;
+  std::vector<std::int32_t> leaf_;
+  std::vector<std::uint8_t> moved_flag_;
+  std::vector<std::int32_t> moved_;
+};
+
+}  // namespace impact

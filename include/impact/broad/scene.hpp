@@ -1,0 +1,357 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Scene<S>: the objects of a simulation (spheres, oriented boxes, meshes, particles; each static
+/// or dynamic, with a user id, a collision filter and a sleeping flag) and the broad phase chosen
+/// for them (BroadPhaseKind), dispatched once per call through a std::variant — never inside the
+/// inner loops.
+///
+///   Scene<double> scene({BroadPhaseKind::StaticDynamic});
+///   scene.add(7, Shape<double>::sphere(0.5), pose);               // dynamic by default
+///   scene.add(8, Shape<double>::mesh_of(bunny), pose2, {BodyType::Static});
+///   scene.set_pose(7, new_pose);                                   // cheap: flushed at the next query
+///   PairResult pairs = scene.find_pairs();                         // broad phase only
+///   auto hits = scene.collide({/*contacts=*/true});                // + narrow phase
+///
+/// Edits validate their input first and throw impact::InvalidInput (NaN or non-rigid poses,
+/// negative or non-finite sizes, unknown or duplicate ids, removing twice); a throwing call leaves
+/// the scene unchanged. Pair semantics are those of broad_phase.hpp: static–static and sleeping
+/// pairs never appear, filtered pairs are dropped before any geometry test.
+#pragma once
+
+#include "impact/broad/all_pairs.hpp"
+#include "impact/broad/dynamic_tree.hpp"
+#include "impact/broad/narrow_dispatch.hpp"
+#include "impact/broad/static_dynamic.hpp"
+#include "impact/core/error.hpp"
+
+#include <string>
+#include <unordered_map>
+#include <variant>
+
+namespace impact {
+
+/// Static objects never move (moving one is allowed but rebuilds the static tree); dynamic ones
+/// may move every step.
+enum class BodyType : std::uint8_t { Static, Dynamic };
+
+/// The caller's name for an object.
+using ObjectId = std::uint64_t;
+
+/// Per-object options at insertion.
+struct ObjectOptions {
+  BodyType body = BodyType::Dynamic;
+  CollisionFilter filter{};
+  bool sleeping = false;  ///< a sleeping dynamic object is only tested against awake ones
+};
+
+struct SceneOptions {
+  BroadPhaseKind broad_phase = BroadPhaseKind::StaticDynamic;
+  DynamicTreeOptions tree{};  ///< the incremental trees (Hierarchical, and StaticDynamic's dynamic part)
+  int static_leaf_size = 2;   ///< objects per leaf of StaticDynamic's static tree
+};
+
+/// Two objects, a < b.
+struct ObjectPair {
+  ObjectId a = 0, b = 0;
+  friend bool operator==(const ObjectPair& x, const ObjectPair& y) { return x.a == y.a && x.b == y.b; }
+  friend bool operator<(const ObjectPair& x, const ObjectPair& y) { return x.a < y.a || (x.a == y.a && x.b < y.b); }
+};
+
+/// Candidate pairs of the broad phase (overlapping world AABBs), in no particular order.
+struct PairResult {
+  std::vector<ObjectPair> pairs;
+  BroadPhaseStats stats;
+};
+
+struct SceneCollideOptions {
+  bool contacts = false;       ///< compute a contact per colliding pair (otherwise only the pairs)
+  bool stop_at_first = false;  ///< boolean query: stop at the first colliding pair
+};
+
+/// A contact between objects a < b; the normal points from a towards b.
+template <class S> struct SceneContact {
+  ObjectId a = 0, b = 0;
+  ShapeContact<S> contact;
+};
+
+template <class S> struct SceneCollideResult {
+  bool colliding = false;
+  std::vector<ObjectPair> pairs;           ///< pairs whose shapes touch
+  std::vector<SceneContact<S>> contacts;   ///< one per pair, when asked for
+  BroadPhaseStats stats;
+};
+
+template <class S> class Scene {
+  static_assert(is_supported_scalar_v<S>, "Scene<S>: S must be float or double");
+
+ public:
+  explicit Scene(const SceneOptions& opt = {}) : opt_(opt) {
+    switch (opt.broad_phase) {
+      case BroadPhaseKind::AllPairs: broad_.template emplace<AllPairsBroadPhase<S>>(); break;
+      case BroadPhaseKind::StaticDynamic: broad_.template emplace<StaticDynamicBroadPhase<S>>(opt.tree, opt.static_leaf_size); break;
+      case BroadPhaseKind::Hierarchical: broad_.template emplace<HierarchicalBroadPhase<S>>(opt.tree); break;
+    }
+  }
+
+  /// Adds an object. For spheres and particles only the pose's translation matters. Throws
+  /// InvalidInput for a duplicate id, a non-finite or non-rigid pose, a negative or non-finite
+  /// size, or a null mesh.
+  void add(ObjectId id, const Shape<S>& shape, const RigidTransform<S>& pose, const ObjectOptions& options = {}) {
+    if (ids_.count(id)) throw InvalidInput("Scene::add: id " + std::to_string(id) + " is already in the scene");
+    check_shape(shape, id);
+    check_pose(pose, "Scene::add", id);
+    Aabb<S> local;
+    if (shape.kind == ShapeKind::Mesh) {
+      const auto& V = shape.mesh->mesh().V;
+      for (Eigen::Index i = 0; i < V.rows(); ++i) local.extend(V.row(i).transpose());
+    }
+    const Aabb<S> box = world_box(shape, local, pose);
+    if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::add: object " + std::to_string(id) + " has non-finite bounds");
+    std::int32_t slot;
+    if (!free_.empty()) {
+      slot = free_.back();
+      free_.pop_back();
+    } else {
+      slot = table_.size();
+      table_.box.emplace_back();
+      table_.flags.push_back(0);
+      table_.filter.emplace_back();
+      table_.ignore_count.push_back(0);
+      objects_.emplace_back();
+    }
+    const auto s = static_cast<std::size_t>(slot);
+    objects_[s] = {id, shape, pose, local};
+    table_.box[s] = box;
+    table_.flags[s] = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
+                                   (options.sleeping ? ObjectTable<S>::Sleeping : 0));
+    table_.filter[s] = options.filter;
+    table_.ignore_count[s] = 0;
+    ids_.emplace(id, slot);
+    ++count_;
+    std::visit([&](auto& b) { b.insert(slot, table_); }, broad_);
+  }
+
+  /// Removes an object. Throws InvalidInput when the id is unknown (also when removed already).
+  void remove(ObjectId id) {
+    const std::int32_t slot = slot_of(id, "Scene::remove");
+    const auto s = static_cast<std::size_t>(slot);
+    std::visit([&](auto& b) { b.remove(slot, table_); }, broad_);
+    if (table_.ignore_count[s]) {
+      for (auto it = table_.ignored.begin(); it != table_.ignored.end();) {
+        const auto x = std::int32_t(*it >> 32), y = std::int32_t(*it & 0xffffffffu);
+        if (x == slot || y == slot) {
+          --table_.ignore_count[static_cast<std::size_t>(x == slot ? y : x)];
+          it = table_.ignored.erase(it);
+        } else {
+          ++it;
+        }
+      }
+      table_.ignore_count[s] = 0;
+    }
+    table_.flags[s] = 0;
+    objects_[s].shape = Shape<S>{};
+    ids_.erase(id);
+    free_.push_back(slot);
+    --count_;
+  }
+
+  /// Moves an object. The broad phase is updated lazily at the next query, once per object however
+  /// often it moved. Throws InvalidInput for an unknown id or a non-finite or non-rigid pose.
+  void set_pose(ObjectId id, const RigidTransform<S>& pose) {
+    const std::int32_t slot = slot_of(id, "Scene::set_pose");
+    check_pose(pose, "Scene::set_pose", id);
+    const auto s = static_cast<std::size_t>(slot);
+    const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, pose);
+    if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
+    objects_[s].pose = pose;
+    table_.box[s] = box;
+    std::visit([&](auto& b) { b.moved(slot, table_); }, broad_);
+  }
+  /// Moves an object by translation only (the rotation is kept).
+  void set_position(ObjectId id, const Vec3<S>& p) {
+    const std::int32_t slot = slot_of(id, "Scene::set_position");
+    set_pose(id, RigidTransform<S>(objects_[static_cast<std::size_t>(slot)].pose.R, p));
+  }
+
+  /// Puts a dynamic object to sleep or wakes it. Sleeping objects are not tested against static
+  /// or sleeping ones. Throws for unknown ids and for static objects.
+  void set_sleeping(ObjectId id, bool sleeping) {
+    const std::int32_t slot = slot_of(id, "Scene::set_sleeping");
+    if (table_.is_static(slot)) throw InvalidInput("Scene::set_sleeping: object " + std::to_string(id) + " is static");
+    auto& f = table_.flags[static_cast<std::size_t>(slot)];
+    const std::uint8_t nf = sleeping ? std::uint8_t(f | ObjectTable<S>::Sleeping) : std::uint8_t(f & ~ObjectTable<S>::Sleeping);
+    if (nf == f) return;
+    f = nf;
+    std::visit([&](auto& b) { b.activity_changed(slot, table_); }, broad_);
+  }
+
+  /// Replaces an object's group/mask filter.
+  void set_filter(ObjectId id, const CollisionFilter& filter) {
+    const std::int32_t slot = slot_of(id, "Scene::set_filter");
+    table_.filter[static_cast<std::size_t>(slot)] = filter;
+    std::visit([&](auto& b) { b.filter_changed(slot, table_); }, broad_);
+  }
+
+  /// Never report the pair {a, b} (removed with either object). Throws for unknown ids or a == b.
+  void ignore_pair(ObjectId a, ObjectId b) {
+    const std::int32_t sa = slot_of(a, "Scene::ignore_pair"), sb = slot_of(b, "Scene::ignore_pair");
+    if (sa == sb) throw InvalidInput("Scene::ignore_pair: both ids are " + std::to_string(a));
+    if (!table_.ignored.insert(ObjectTable<S>::pair_key(sa, sb)).second) return;
+    ++table_.ignore_count[static_cast<std::size_t>(sa)];
+    ++table_.ignore_count[static_cast<std::size_t>(sb)];
+    std::visit(
+        [&](auto& bp) {
+          bp.filter_changed(sa, table_);
+          bp.filter_changed(sb, table_);
+        },
+        broad_);
+  }
+
+  bool contains(ObjectId id) const { return ids_.count(id) != 0; }
+  std::size_t size() const { return count_; }
+  BroadPhaseKind broad_phase() const { return opt_.broad_phase; }
+  /// The object's tight world AABB (what the broad phase compares). Throws for unknown ids.
+  const Aabb<S>& bounds(ObjectId id) const { return table_.box[static_cast<std::size_t>(slot_of(id, "Scene::bounds"))]; }
+  const RigidTransform<S>& pose(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::pose"))].pose; }
+  const Shape<S>& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
+
+  /// Calls visit(ObjectId a, ObjectId b) -> bool (a < b) for every pair of the pair rule
+  /// (broad_phase.hpp), each once, without allocating; stops when visit returns false. Returns
+  /// false when stopped.
+  template <class Visit> bool for_each_pair(Visit&& visit, BroadPhaseStats& stats) {
+    return std::visit(
+        [&](auto& b) {
+          return b.find_pairs(
+              table_,
+              [&](std::int32_t x, std::int32_t y) {
+                ObjectId ia = objects_[static_cast<std::size_t>(x)].id, ib = objects_[static_cast<std::size_t>(y)].id;
+                if (ib < ia) std::swap(ia, ib);
+                return bool(visit(ia, ib));
+              },
+              stats);
+        },
+        broad_);
+  }
+
+  /// The broad-phase pairs: objects whose world AABBs overlap, after the skip rules and filters.
+  PairResult find_pairs() {
+    PairResult r;
+    for_each_pair(
+        [&](ObjectId a, ObjectId b) {
+          r.pairs.push_back({a, b});
+          return true;
+        },
+        r.stats);
+    return r;
+  }
+
+  /// Broad phase, then the narrow phase (narrow_dispatch.hpp) on each candidate pair: the pairs
+  /// whose shapes touch, with contacts when asked for. stop_at_first stops both phases at the first
+  /// colliding pair.
+  SceneCollideResult<S> collide(const SceneCollideOptions& options = {}) {
+    SceneCollideResult<S> r;
+    for_each_pair_slots(
+        [&](std::int32_t x, std::int32_t y) {
+          const Object* oa = &objects_[static_cast<std::size_t>(x)];
+          const Object* ob = &objects_[static_cast<std::size_t>(y)];
+          if (ob->id < oa->id) std::swap(oa, ob);
+          ++r.stats.narrow_tests;
+          ShapeContact<S> c;
+          if (!shapes_intersect(oa->shape, oa->pose, ob->shape, ob->pose, options.contacts ? &c : nullptr)) return true;
+          r.colliding = true;
+          r.pairs.push_back({oa->id, ob->id});
+          if (options.contacts) {
+            ++r.stats.contacts;
+            r.contacts.push_back({oa->id, ob->id, c});
+          }
+          return !options.stop_at_first;
+        },
+        r.stats);
+    return r;
+  }
+
+  /// True when any two objects touch (stops at the first pair found).
+  bool any_collision(BroadPhaseStats* stats = nullptr) {
+    SceneCollideOptions o;
+    o.stop_at_first = true;
+    const auto r = collide(o);
+    if (stats) *stats = r.stats;
+    return r.colliding;
+  }
+
+  /// The broad phase in use, for inspection in tests (e.g. tree validity).
+  template <class B> const B* broad_phase_as() const { return std::get_if<B>(&broad_); }
+
+ private:
+  struct Object {
+    ObjectId id = 0;
+    Shape<S> shape;
+    RigidTransform<S> pose;
+    Aabb<S> local;  ///< meshes: box of the vertices in the mesh frame
+  };
+
+  template <class Visit> bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
+    return std::visit([&](auto& b) { return b.find_pairs(table_, visit, stats); }, broad_);
+  }
+
+  std::int32_t slot_of(ObjectId id, const char* where) const {
+    const auto it = ids_.find(id);
+    if (it == ids_.end()) throw InvalidInput(std::string(where) + ": unknown object id " + std::to_string(id));
+    return it->second;
+  }
+
+  static void check_pose(const RigidTransform<S>& pose, const char* where, ObjectId id) {
+    if (!pose.is_finite()) throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not finite");
+    const S tol = std::sqrt(std::numeric_limits<S>::epsilon());
+    const Mat3<S> e = pose.R.transpose() * pose.R - Mat3<S>::Identity();
+    if (e.cwiseAbs().maxCoeff() > tol || pose.R.determinant() <= S(0))
+      throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not a rotation");
+  }
+
+  static void check_shape(const Shape<S>& shape, ObjectId id) {
+    const std::string who = "Scene::add: object " + std::to_string(id);
+    switch (shape.kind) {
+      case ShapeKind::Sphere:
+      case ShapeKind::Particle:
+        if (!(shape.radius >= S(0)) || !std::isfinite(shape.radius)) throw InvalidInput(who + ": radius must be finite and >= 0");
+        break;
+      case ShapeKind::Box:
+        if (!all_finite(shape.half) || (shape.half.array() < S(0)).any())
+          throw InvalidInput(who + ": half extents must be finite and >= 0");
+        break;
+      case ShapeKind::Mesh:
+        if (!shape.mesh) throw InvalidInput(who + ": null mesh");
+        break;
+    }
+  }
+
+  static Aabb<S> world_box(const Shape<S>& shape, const Aabb<S>& local, const RigidTransform<S>& pose) {
+    switch (shape.kind) {
+      case ShapeKind::Sphere:
+      case ShapeKind::Particle: {
+        const Vec3<S> r = Vec3<S>::Constant(shape.radius);
+        return {pose.t - r, pose.t + r};
+      }
+      case ShapeKind::Box: {
+        const Vec3<S> e = pose.R.cwiseAbs() * shape.half;
+        return {pose.t - e, pose.t + e};
+      }
+      case ShapeKind::Mesh:
+      default: {
+        const Vec3<S> c = pose.apply(local.center());
+        const Vec3<S> e = pose.R.cwiseAbs() * ((local.max - local.min) / S(2));
+        return {c - e, c + e};
+      }
+    }
+  }
+
+  SceneOptions opt_;
+  ObjectTable<S> table_;
+  std::vector<Object> objects_;
+  std::unordered_map<ObjectId, std::int32_t> ids_;
+  std::vector<std::int32_t> free_;
+  std::size_t count_ = 0;
+  std::variant<AllPairsBroadPhase<S>, StaticDynamicBroadPhase<S>, HierarchicalBroadPhase<S>> broad_;
+};
+
+}  // namespace impact
