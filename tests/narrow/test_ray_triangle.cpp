@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: MIT
+// Watertight ray–triangle: agreement with exact orientation predicates on integer rays and
+// triangles away from boundaries (hit/miss, front/back), t and barycentrics against a long double
+// computation, and no leaks through seams of closed meshes (octahedra, rays aimed exactly at
+// vertices and at points of edges, from outside and from inside). Float and double.
+#include "impact/narrow/predicates.hpp"
+#include "impact/narrow/ray_triangle.hpp"
+#include "support/random.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+using namespace impact;
+using namespace impact::test;
+
+namespace {
+
+template <class S> class RayTri : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(RayTri, Scalars);
+
+template <class S> Vec3<S> rand_int_vec(Rng& rng, int r) {
+  return Vec3<S>(S(int(rng.index(2 * r + 1)) - r), S(int(rng.index(2 * r + 1)) - r), S(int(rng.index(2 * r + 1)) - r));
+}
+
+TYPED_TEST(RayTri, AgreesWithExactPredicatesAwayFromBoundaries) {
+  using S = TypeParam;
+  Rng rng(21);
+  int checked = 0, hits = 0;
+  for (int it = 0; it < 200000; ++it) {
+    const Triangle<S> tri(rand_int_vec<S>(rng, 50), rand_int_vec<S>(rng, 50), rand_int_vec<S>(rng, 50));
+    const Vec3<S> o = rand_int_vec<S>(rng, 60), d = rand_int_vec<S>(rng, 80);
+    const Vec3<S> q = o + d;  // exact: the segment of the ray with t_max = 1
+    const int so = orient3d(tri.a, tri.b, tri.c, o), sq = orient3d(tri.a, tri.b, tri.c, q);
+    const int e0 = orient3d(o, q, tri.a, tri.b), e1 = orient3d(o, q, tri.b, tri.c), e2 = orient3d(o, q, tri.c, tri.a);
+    if (so == 0 || sq == 0 || e0 == 0 || e1 == 0 || e2 == 0) continue;  // boundary: either answer is fine
+    const bool expect = so != sq && e0 == e1 && e1 == e2;
+    const auto hit = intersect_ray_triangle(Ray<S>(o, d, S(1)), tri);
+    ++checked;
+    ASSERT_EQ(hit.has_value(), expect) << it;
+    if (!hit) continue;
+    ++hits;
+    EXPECT_EQ(hit->front, so > 0);
+    // long double reference for t
+    using L = long double;
+    const Vec3<L> a = tri.a.template cast<L>(), b = tri.b.template cast<L>(), c = tri.c.template cast<L>();
+    const Vec3<L> n = (b - a).cross(c - a);
+    const L t_ref = n.dot(a - o.template cast<L>()) / n.dot(d.template cast<L>());
+    const double tol = std::is_same_v<S, float> ? 2e-3 : 1e-9;
+    EXPECT_NEAR(double(hit->t), double(t_ref), tol);
+    EXPECT_NEAR(double(hit->u + hit->v + hit->w), 1.0, tol);
+    EXPECT_GE(hit->u, S(0));
+    EXPECT_GE(hit->v, S(0));
+    EXPECT_GE(hit->w, S(0));
+    const Vec3<S> p = hit->u * tri.a + hit->v * tri.b + hit->w * tri.c;
+    EXPECT_LE((p - o - hit->t * d).norm(), tol * 200);
+  }
+  EXPECT_GT(checked, 100000);
+  EXPECT_GT(hits, 2000);
+}
+
+TYPED_TEST(RayTri, TMaxAndParallelAndDegenerate) {
+  using S = TypeParam;
+  using V = Vec3<S>;
+  const Triangle<S> tri(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0));
+  const auto h = intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), 2), V(0, 0, -1)), tri);
+  ASSERT_TRUE(h);
+  EXPECT_NEAR(double(h->t), 2.0, 1e-6);
+  EXPECT_TRUE(h->front);
+  EXPECT_NEAR(double(h->u), 0.6, 1e-6);
+  EXPECT_NEAR(double(h->v), 0.2, 1e-6);
+  EXPECT_NEAR(double(h->w), 0.2, 1e-6);
+  EXPECT_FALSE(intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), 2), V(0, 0, -1), S(1.5)), tri));
+  EXPECT_TRUE(intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), 2), V(0, 0, -1), S(2)), tri));
+  EXPECT_FALSE(intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), 2), V(0, 0, 1)), tri));  // behind
+  const auto back = intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), -2), V(0, 0, 1)), tri);
+  ASSERT_TRUE(back);
+  EXPECT_FALSE(back->front);
+  EXPECT_TRUE(intersect_ray_triangle(Ray<S>(V(S(0.2), S(0.2), 0), V(0, 0, 1)), tri));         // origin on the triangle
+  EXPECT_FALSE(intersect_ray_triangle(Ray<S>(V(-1, S(0.2), 0), V(1, 0, 0)), tri));            // in the plane
+  EXPECT_FALSE(intersect_ray_triangle(Ray<S>(V(0, 0, 1), V(0, 0, 0)), tri));                  // zero direction
+  EXPECT_FALSE(intersect_ray_triangle(Ray<S>(V(S(0.5), 0, 1), V(0, 0, -1)), Triangle<S>(V(0, 0, 0), V(1, 0, 0), V(2, 0, 0))));
+  EXPECT_TRUE(intersect_ray_triangle(Ray<S>(V(1, 0, 1), V(0, 0, -1)), tri));  // exactly through a vertex
+}
+
+/// A closed octahedron (8 triangles, outward normals), optionally rotated, scaled and moved.
+template <class S> std::vector<Triangle<S>> octahedron(const Eigen::Matrix3d& R, double scale, const Eigen::Vector3d& t) {
+  std::array<Vec3<S>, 6> v;
+  const Eigen::Vector3d axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int i = 0; i < 6; ++i) v[std::size_t(i)] = (R * axes[i] * scale + t).cast<S>();
+  std::vector<Triangle<S>> f;
+  for (int sx : {0, 1})
+    for (int sy : {2, 3})
+      for (int sz : {4, 5}) {
+        const bool flip = ((sx == 1) + (sy == 3) + (sz == 5)) % 2 == 1;
+        const auto& a = v[std::size_t(sx)];
+        const auto& b = v[std::size_t(sy)];
+        const auto& c = v[std::size_t(sz)];
+        f.push_back(flip ? Triangle<S>(a, c, b) : Triangle<S>(a, b, c));
+      }
+  return f;
+}
+
+template <class S> int count_hits(const std::vector<Triangle<S>>& mesh, const Ray<S>& ray) {
+  const PreparedRay<S> pr(ray);
+  int n = 0;
+  for (const auto& t : mesh) n += intersect_ray_triangle(pr, t).has_value();
+  return n;
+}
+
+TYPED_TEST(RayTri, NoLeaksThroughSeamsOfClosedMeshes) {
+  using S = TypeParam;
+  Rng rng(22);
+  int leaks = 0, rays = 0;
+  for (int m = 0; m < 50; ++m) {
+    const Eigen::Matrix3d R = m == 0 ? Eigen::Matrix3d::Identity() : rng.rotation();
+    const double scale = m == 0 ? 1.0 : rng.uniform(0.1, 10.0);
+    const Eigen::Vector3d shift = m == 0 ? Eigen::Vector3d::Zero() : rng.vec(-5, 5);
+    const auto mesh = octahedron<S>(R, scale, shift);
+    // orientation check: outward normals
+    const Vec3<S> centre = shift.cast<S>();
+    for (const auto& t : mesh) ASSERT_LT(orient3d(t.a, t.b, t.c, centre), 0);
+    // vertex targets (exact) and points of edges (within rounding)
+    std::vector<Vec3<S>> targets;
+    for (const auto& t : mesh)
+      for (int k = 0; k < 3; ++k) {
+        targets.push_back(t[k]);
+        const Vec3<S> a = t[k], b = t[(k + 1) % 3];
+        for (int s = 1; s < 8; ++s) targets.push_back(a + (S(s) / S(8)) * (b - a));
+      }
+    for (const auto& target : targets) {
+      for (int r = 0; r < 10; ++r) {
+        // from inside through the target: exits through the surface at (or next to) a vertex or edge
+        const Eigen::Vector3d inner = shift + rng.vec(-0.1, 0.1) * scale;
+        const Vec3<S> oi = inner.cast<S>();
+        ++rays;
+        if (count_hits(mesh, Ray<S>(oi, Vec3<S>(target - oi))) < 1) ++leaks;
+        // from outside, passing by the target into the interior point
+        const Eigen::Vector3d tgt = target.template cast<double>();
+        const Vec3<S> o = (inner + 3.0 * (tgt - inner)).template cast<S>();
+        ++rays;
+        if (count_hits(mesh, Ray<S>(o, Vec3<S>(oi - o))) < 1) ++leaks;
+      }
+    }
+    if (m != 0) continue;
+    // axis-aligned octahedron: exact rays from the centre through vertices and edges
+    for (int i = -2; i <= 2; ++i)
+      for (int j = -2; j <= 2; ++j)
+        for (int k = -2; k <= 2; ++k) {
+          if (i == 0 && j == 0 && k == 0) continue;
+          ++rays;
+          if (count_hits(mesh, Ray<S>(Vec3<S>::Zero(), Vec3<S>(S(i), S(j), S(k)))) < 1) ++leaks;
+        }
+    // exact rays from integer points outside through vertices and edge midpoints that then enter
+    // the interior (grazing rays are not a watertightness question)
+    const Vec3<S> exact_targets[] = {Vec3<S>(1, 0, 0), Vec3<S>(0, -1, 0), Vec3<S>(0, 0, 1), Vec3<S>(S(0.5), S(0.5), 0),
+                                     Vec3<S>(0, S(-0.5), S(0.5)), Vec3<S>(S(-0.5), 0, S(-0.5)), Vec3<S>(S(0.25), S(0.75), 0)};
+    for (const auto& target : exact_targets)
+      for (int i = -3; i <= 3; ++i)
+        for (int j = -3; j <= 3; ++j)
+          for (int k = -3; k <= 3; ++k) {
+            const Vec3<S> o{static_cast<S>(i), static_cast<S>(j), static_cast<S>(k)};
+            if (std::abs(i) + std::abs(j) + std::abs(k) <= 1) continue;
+            const Vec3<S> d = target - o;
+            const Vec3<double> probe = (target + d * S(1e-3)).template cast<double>();
+            if (probe.cwiseAbs().sum() > 1 - 1e-6) continue;
+            ++rays;
+            if (count_hits(mesh, Ray<S>(o, d)) < 1) ++leaks;
+          }
+  }
+  EXPECT_EQ(leaks, 0) << "of " << rays << " rays";
+}
+
+}  // namespace
