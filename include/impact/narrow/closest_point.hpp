@@ -88,6 +88,18 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle_edge
   return best;
 }
 
+/// Slivers and degenerate triangles: the face when the projection is inside, else the best edge.
+template <class S> inline TriangleClosestPoint<S> closest_point_on_sliver(const Vec3<S>& x, const Triangle<S>& tri) {
+  const Vec3<S> ab = tri.b - tri.a, ac = tri.c - tri.a, n = ab.cross(ac);
+  const S nn = n.squaredNorm();
+  if (nn > S(0)) {
+    const Vec3<S> q = x - (n.dot(x - tri.a) / nn) * n, aq = q - tri.a;
+    const S wb = n.dot(aq.cross(ac)) / nn, wc = n.dot(ab.cross(aq)) / nn, wa = S(1) - wb - wc;
+    if (wa >= S(0) && wb >= S(0) && wc >= S(0)) return make_tcp(x, Vec3<S>(wa * tri.a + wb * tri.b + wc * tri.c), wa, wb, wc, TriangleFeature::face);
+  }
+  return closest_point_on_triangle_edges(x, tri);
+}
+
 }  // namespace detail
 
 /// Closest point of the closed triangle to x, its barycentric weights and the feature (vertex,
@@ -97,7 +109,9 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle(cons
   using F = TriangleFeature;
   const Vec3<S>&a = tri.a, &b = tri.b, &c = tri.c;
   const Vec3<S> ab = b - a, ac = c - a;
-  if (ab.cross(ac).squaredNorm() == S(0)) return detail::closest_point_on_triangle_edges(x, tri);
+  // slivers (sine of the angle at a below 1e-2) and degenerate triangles: the robust path, as the
+  // region tests below lose accuracy there
+  if (ab.cross(ac).squaredNorm() <= S(1e-4) * ab.squaredNorm() * ac.squaredNorm()) return detail::closest_point_on_sliver(x, tri);
   const Vec3<S> ap = x - a;
   const S d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= S(0) && d2 <= S(0)) return detail::make_tcp(x, a, S(1), S(0), S(0), F::vertex0);
@@ -126,9 +140,9 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle(cons
     return detail::make_tcp(x, Vec3<S>(b + w * (c - b)), S(0), S(1) - w, w, F::edge12);
   }
   const S den = va + vb + vc;
-  if (!(den > S(0))) return detail::closest_point_on_triangle_edges(x, tri);
+  if (!(den > S(0))) return detail::closest_point_on_sliver(x, tri);
   const S v = vb / den, w = vc / den;
-  if (!(v >= S(0) && w >= S(0) && v + w <= S(1))) return detail::closest_point_on_triangle_edges(x, tri);
+  if (!(v >= S(0) && w >= S(0) && v + w <= S(1))) return detail::closest_point_on_sliver(x, tri);
   return detail::make_tcp(x, Vec3<S>(a + v * ab + w * ac), S(1) - v - w, v, w, F::face);
 }
 
