@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: MIT
+// Closest point on a mesh through the BVH against brute force over all triangles, float and
+// double, AABB and sphere trees, under random poses; features, normals and the distance bound.
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/closest_point_mesh.hpp"
+#include "support/data.hpp"
+#include "support/obj_reader.hpp"
+#include "support/random.hpp"
+
+#include <gtest/gtest.h>
+
+namespace impact {
+namespace {
+
+template <class T> class ClosestPointMesh : public ::testing::Test {};
+using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+TYPED_TEST_SUITE(ClosestPointMesh, BVs);
+
+template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n) {
+  using S = typename BvTraits<BV>::Scalar;
+  const MeshBvh<BV> bvh(m);
+  test::Rng rng(seed);
+  Aabb<S> box;
+  for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
+  const double diag = 2 * double(box.half_diagonal());
+  const S tol = std::is_same_v<S, float> ? S(1e-5) * S(diag) : S(1e-12) * S(diag);
+  std::array<int, 3> kinds{0, 0, 0};
+  for (int k = 0; k < n; ++k) {
+    const RigidTransform<S> P = test::random_pose(rng, Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)).cast<S>();
+    const Vec3<S> q = P.apply(box.center() + (rng.vec(-0.8, 0.8) * diag).cast<S>());
+    const auto c = closest_point_on_mesh(bvh, q, P);
+    ASSERT_TRUE(c.has_value());
+    S best = std::numeric_limits<S>::infinity();
+    const Vec3<S> ql = P.inverse().apply(q);
+    for (int t = 0; t < m.num_triangles(); ++t) best = std::min(best, (ql - detail::closest_on_triangle(ql, m.triangle(t)).point).norm());
+    EXPECT_NEAR(c->distance, best, tol) << k;
+    EXPECT_NEAR((q - c->point).norm(), c->distance, tol);
+    // the point lies on the reported triangle, at its barycentric weights
+    const Triangle<S> tri = m.triangle(c->triangle);
+    const Vec3<S> pl = tri.a * c->barycentric[0] + tri.b * c->barycentric[1] + tri.c * c->barycentric[2];
+    EXPECT_LE((P.apply(pl) - c->point).norm(), S(10) * tol);
+    EXPECT_NEAR(c->normal.norm(), S(1), S(1e-4));
+    if (c->feature == TriangleFeature::Face) {
+      ++kinds[0];
+      EXPECT_NEAR(std::abs(c->normal.dot(P.rotate(tri.normal()))), S(1), S(1e-4));
+    } else {
+      ++kinds[is_edge(c->feature) ? 1 : 2];
+      if (c->distance > tol) {
+        EXPECT_NEAR(c->normal.dot((q - c->point) / c->distance), S(1), S(1e-3));
+      }
+    }
+    // a bound below the distance finds nothing; above it finds the same distance
+    ClosestPointOptions<S> o;
+    o.max_distance = best * S(0.9);
+    if (best > tol) {
+      EXPECT_FALSE(closest_point_on_mesh(bvh, q, P, o).has_value());
+    }
+    o.max_distance = best * S(1.1) + tol;
+    const auto c2 = closest_point_on_mesh(bvh, q, P, o);
+    ASSERT_TRUE(c2.has_value());
+    EXPECT_NEAR(c2->distance, best, tol);
+  }
+  EXPECT_GT(kinds[0], 0);
+  EXPECT_GT(kinds[1] + kinds[2], 0);
+}
+
+TYPED_TEST(ClosestPointMesh, MatchesBruteForce) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  check<TypeParam>(make_icosphere<S>(S(1), 2), 11, 300);
+  check<TypeParam>(make_torus<S>(S(1), S(0.3), 24, 12), 12, 300);
+  check<TypeParam>(make_random_soup<S>(300, 13, S(1), S(0.2)), 13, 300);
+}
+
+TYPED_TEST(ClosestPointMesh, MatchesBruteForceOnSpot) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  IMPACT_REQUIRE_DATA(path, "meshes/spot.obj");
+  check<TypeParam>(test::read_obj<S>(path), 14, 200);
+}
+
+TYPED_TEST(ClosestPointMesh, FeaturesOnABox) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const MeshBvh<TypeParam> box(make_box<S>(Vec3<S>::Ones()));
+  auto c = closest_point_on_mesh(box, Vec3<S>(0.2, 0.3, 3));
+  ASSERT_TRUE(c.has_value());
+  EXPECT_NEAR(c->distance, S(2), S(1e-6));
+  EXPECT_NEAR(c->normal.z(), S(1), S(1e-6));
+  c = closest_point_on_mesh(box, Vec3<S>(3, 3, 3));
+  ASSERT_TRUE(c.has_value());
+  EXPECT_TRUE(is_vertex(c->feature));
+  EXPECT_NEAR(c->normal.dot(Vec3<S>::Ones().normalized()), S(1), S(1e-6));
+  c = closest_point_on_mesh(box, Vec3<S>(2, 0.5, 2));
+  ASSERT_TRUE(c.has_value());
+  EXPECT_TRUE(is_edge(c->feature) || c->feature == TriangleFeature::Face);  // the box's diagonal edges split faces
+  EXPECT_NEAR(c->distance, std::sqrt(S(2)), S(1e-6));
+  // a point on the surface: distance 0, normal = the face normal
+  c = closest_point_on_mesh(box, Vec3<S>(0.25, 0.5, 1));
+  ASSERT_TRUE(c.has_value());
+  EXPECT_EQ(c->distance, S(0));
+  EXPECT_NEAR(std::abs(c->normal.z()), S(1), S(1e-6));
+}
+
+}  // namespace
+}  // namespace impact

@@ -1,0 +1,210 @@
+// SPDX-License-Identifier: MIT
+// Ray-mesh first/any hit and swept-sphere-mesh first hit against brute force over all triangles,
+// in float and double, for AABB and sphere trees, under random rigid poses; watertightness at
+// shared edges and vertices; rays parallel to faces; the t = 0 front-side rule.
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/closest_point_mesh.hpp"
+#include "impact/query/ray_mesh.hpp"
+#include "impact/query/swept_sphere_mesh.hpp"
+#include "support/data.hpp"
+#include "support/obj_reader.hpp"
+#include "support/random.hpp"
+
+#include <gtest/gtest.h>
+
+namespace impact {
+namespace {
+
+template <class S> TriangleMesh<S> transformed(const TriangleMesh<S>& m, const RigidTransform<S>& P) {
+  TriangleMesh<S> w = m;
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) w.V.row(i) = P.apply(m.V.row(i).transpose()).transpose();
+  return w;
+}
+
+// Brute force: the same watertight test on every triangle of the mesh given in world coordinates.
+template <class S> std::optional<std::pair<S, int>> brute_first_hit(const TriangleMesh<S>& w, const Ray<S>& ray) {
+  const detail::WatertightRay<S> wr(ray.origin, ray.direction);
+  std::optional<std::pair<S, int>> best;
+  for (int t = 0; t < w.num_triangles(); ++t) {
+    const auto h = detail::watertight_hit(wr, w.triangle(t), best ? best->first : ray.t_max);
+    if (h && (!best || h->first < best->first)) best = std::make_pair(h->first, t);
+  }
+  return best;
+}
+
+template <class T> class RayMesh : public ::testing::Test {};
+using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+TYPED_TEST_SUITE(RayMesh, BVs);
+
+template <class BV> void check_against_brute_force(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n_rays) {
+  using S = typename BvTraits<BV>::Scalar;
+  const MeshBvh<BV> bvh(m);
+  test::Rng rng(seed);
+  Aabb<S> box;
+  for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
+  const S diag = S(2) * box.half_diagonal();
+  const S tol = std::is_same_v<S, float> ? S(2e-4) : S(1e-10);
+  int hits = 0;
+  for (int k = 0; k < n_rays; ++k) {
+    const RigidTransform<S> P = test::random_pose(rng, Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)).cast<S>();
+    const TriangleMesh<S> w = transformed(m, P);
+    const Vec3<S> c = P.apply(box.center());
+    const Vec3<S> o = c + (rng.vec(-1, 1) * double(diag)).cast<S>();
+    const Vec3<S> target = c + (rng.vec(-0.5, 0.5) * double(diag)).cast<S>();
+    const S t_max = k % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform(0.2, 1.2));
+    const Ray<S> ray(o, target - o, t_max);
+    const auto h = ray_mesh_first_hit(bvh, ray, P);
+    const auto b = brute_first_hit(w, ray);
+    ASSERT_EQ(h.has_value(), b.has_value()) << "ray " << k;
+    EXPECT_EQ(ray_mesh_any_hit(bvh, ray, P), b.has_value());
+    if (!h) continue;
+    ++hits;
+    EXPECT_NEAR(h->t, b->first, tol * (S(1) + b->first)) << "ray " << k;
+    EXPECT_LE((h->point - (o + h->t * ray.direction)).norm(), tol * diag);
+    // the reported triangle contains the hit point
+    const Triangle<S> tri = w.triangle(h->triangle);
+    const Vec3<S> q = tri.a * h->barycentric[0] + tri.b * h->barycentric[1] + tri.c * h->barycentric[2];
+    EXPECT_LE((q - h->point).norm(), S(50) * tol * diag);
+    EXPECT_NEAR(std::abs(h->normal.dot(tri.normal())), S(1), S(1e-4));
+  }
+  EXPECT_GT(hits, n_rays / 20);
+}
+
+TYPED_TEST(RayMesh, MatchesBruteForceOnGeneratedMeshes) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  check_against_brute_force<TypeParam>(make_icosphere<S>(S(1), 3), 1, 300);
+  check_against_brute_force<TypeParam>(make_torus<S>(S(1), S(0.3), 24, 12), 2, 300);
+  check_against_brute_force<TypeParam>(make_random_soup<S>(400, 3, S(1), S(0.2)), 3, 300);
+}
+
+TYPED_TEST(RayMesh, MatchesBruteForceOnSpot) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  IMPACT_REQUIRE_DATA(path, "meshes/spot.obj");
+  check_against_brute_force<TypeParam>(test::read_obj<S>(path), 4, 200);
+}
+
+// Rays from inside a closed mesh must hit it whatever their direction, also exactly through
+// vertices and edges (watertightness).
+TYPED_TEST(RayMesh, ClosedMeshIsWatertightAtEdgesAndVertices) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const TriangleMesh<S> m = make_icosphere<S>(S(1), 2);
+  const MeshBvh<TypeParam> bvh(m);
+  for (int i = 0; i < m.num_vertices(); ++i) {
+    const Vec3<S> v = m.vertex(i);
+    EXPECT_TRUE(ray_mesh_first_hit(bvh, Ray<S>(Vec3<S>::Zero(), v)).has_value()) << "vertex " << i;
+  }
+  for (int t = 0; t < m.num_triangles(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3<S> mid = (m.vertex(m.F(t, k)) + m.vertex(m.F(t, (k + 1) % 3))) / S(2);
+      EXPECT_TRUE(ray_mesh_first_hit(bvh, Ray<S>(Vec3<S>::Zero(), mid)).has_value()) << "edge " << t << "," << k;
+      EXPECT_TRUE(ray_mesh_any_hit(bvh, Ray<S>(Vec3<S>::Zero(), mid)));
+    }
+  // A flat grid hit exactly at its shared vertices and edges by axis-aligned rays.
+  const TriangleMesh<S> g = make_grid<S>(8, 8, S(2));
+  const MeshBvh<TypeParam> gb(g);
+  for (int i = 0; i <= 16; ++i)
+    for (int j = 0; j <= 16; ++j) {
+      const Vec3<S> o(S(-1) + S(i) / S(8), S(-1) + S(j) / S(8), S(1));
+      const auto h = ray_mesh_first_hit(gb, Ray<S>(o, Vec3<S>(0, 0, -3)));
+      ASSERT_TRUE(h.has_value()) << i << "," << j;
+      EXPECT_NEAR(h->t, S(1) / S(3), S(1e-6));
+    }
+}
+
+TYPED_TEST(RayMesh, ParallelRaysAndSurfaceStarts) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const MeshBvh<TypeParam> gb(make_grid<S>(4, 4, S(2)));
+  // in the plane of the faces: miss, no NaN
+  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(-2, 0.1, 0), Vec3<S>(4, 0, 0))).has_value());
+  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(-2, 0, 0), Vec3<S>(4, 0, 0))).has_value());
+  // parallel just above: miss
+  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(-2, 0.1, S(1e-6)), Vec3<S>(4, 0, 0))).has_value());
+  // starting exactly on the front (the grid's normal is +z): into the surface hits at 0, away misses
+  const auto in = ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>(0.1, 0, -1), S(1)));
+  ASSERT_TRUE(in.has_value());
+  EXPECT_EQ(in->t, S(0));
+  EXPECT_TRUE(in->front_face);
+  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>(0.1, 0, 1), S(1))).has_value());
+  // from behind, crossing: a two-sided hit with front_face false
+  const auto back = ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, -1), Vec3<S>(0, 0, 2), S(1)));
+  ASSERT_TRUE(back.has_value());
+  EXPECT_FALSE(back->front_face);
+  EXPECT_NEAR(back->t, S(0.5), S(1e-6));
+  // zero direction: no hit
+  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>::Zero(), S(1))).has_value());
+}
+
+// Swept sphere: the BVH query equals the minimum over all triangles, and at the returned time
+// the sphere touches the mesh (distance = r) while just before it does not (checked with an
+// independent brute-force closest point).
+TYPED_TEST(RayMesh, SweptSphereMatchesBruteForceAndTouches) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const TriangleMesh<S> m = make_torus<S>(S(1), S(0.3), 16, 8);
+  const MeshBvh<TypeParam> bvh(m);
+  test::Rng rng(7);
+  const S tol = std::is_same_v<S, float> ? S(2e-3) : S(1e-9);
+  int hits = 0;
+  std::array<int, 3> by_kind{0, 0, 0};
+  for (int k = 0; k < 400; ++k) {
+    const S r = S(rng.uniform(0.01, 0.2));
+    const Vec3<S> o = (rng.vec(-2, 2)).cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0).cast<S>();
+    const Ray<S> ray(o, d, S(1));
+    // skip starts that already overlap (tested separately)
+    S d0 = std::numeric_limits<S>::infinity();
+    for (int t = 0; t < m.num_triangles(); ++t) d0 = std::min(d0, (o - detail::closest_on_triangle(o, m.triangle(t)).point).norm());
+    if (d0 <= r) continue;
+    const auto h = swept_sphere_mesh_first_hit(bvh, ray, r);
+    std::optional<S> bt;
+    for (int t = 0; t < m.num_triangles(); ++t) {
+      const auto bh = detail::swept_sphere_triangle(o, d, r, m.triangle(t), S(1));
+      if (bh && (!bt || bh->t < *bt)) bt = bh->t;
+    }
+    ASSERT_EQ(h.has_value(), bt.has_value());
+    if (!h) continue;
+    ++hits;
+    EXPECT_NEAR(h->t, *bt, tol);
+    ++by_kind[h->feature == TriangleFeature::Face ? 0 : (is_edge(h->feature) ? 1 : 2)];
+    auto dist_at = [&](S t) {
+      S best = std::numeric_limits<S>::infinity();
+      for (int i = 0; i < m.num_triangles(); ++i)
+        best = std::min(best, (ray.at(t) - detail::closest_on_triangle(ray.at(t), m.triangle(i)).point).norm());
+      return best;
+    };
+    EXPECT_NEAR(dist_at(h->t), r, S(10) * tol);
+    if (h->t > S(1e-3)) {
+      EXPECT_GT(dist_at(h->t * S(0.999)), r * (S(1) - S(10) * tol));
+    }
+    EXPECT_NEAR(h->normal.norm(), S(1), S(1e-4));
+    EXPECT_LT(h->normal.dot(d), S(0));
+  }
+  EXPECT_GT(hits, 20);
+  EXPECT_GT(by_kind[0], 0);  // faces
+}
+
+TYPED_TEST(RayMesh, SweptSphereHitsEdgesAndVerticesAndStartsInContact) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const MeshBvh<TypeParam> box(make_box<S>(Vec3<S>::Ones()));
+  const S r = S(0.25);
+  // towards a vertex along the diagonal: first contact at the corner
+  const Vec3<S> o = Vec3<S>::Constant(3);
+  auto h = swept_sphere_mesh_first_hit(box, Ray<S>(o, Vec3<S>::Constant(-2), S(1)), r);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_TRUE(is_vertex(h->feature));
+  EXPECT_NEAR((o + h->t * Vec3<S>::Constant(-2) - Vec3<S>::Ones()).norm(), r, S(1e-5));
+  // towards an edge (x = y = 1)
+  h = swept_sphere_mesh_first_hit(box, Ray<S>(Vec3<S>(3, 3, 0.2), Vec3<S>(-2, -2, 0), S(1)), r);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_TRUE(is_edge(h->feature));
+  EXPECT_NEAR(h->normal.dot(Vec3<S>(1, 1, 0).normalized()), S(1), S(1e-5));
+  // touching a face at t = 0: moving in hits now, moving away does not
+  const Vec3<S> touching(S(0.2), S(0.1), S(1) + r);
+  h = swept_sphere_mesh_first_hit(box, Ray<S>(touching, Vec3<S>(0, 0, -1), S(1)), r);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_EQ(h->t, S(0));
+  EXPECT_FALSE(swept_sphere_mesh_first_hit(box, Ray<S>(touching, Vec3<S>(0, 0, 1), S(1)), r).has_value());
+  EXPECT_FALSE(swept_sphere_mesh_first_hit(box, Ray<S>(touching, Vec3<S>(1, 0, 0), S(0.5)), r).has_value());
+}
+
+}  // namespace
+}  // namespace impact
