@@ -135,7 +135,8 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
       const auto* hi = sc.s[2].template broad_phase_as<HierarchicalBroadPhase<S>>();
       ASSERT_TRUE(sd && hi);
       EXPECT_TRUE(sd->dynamic_tree().valid());
-      EXPECT_TRUE(hi->tree().valid());
+      EXPECT_TRUE(hi->static_tree().valid());
+      EXPECT_TRUE(hi->dynamic_tree().valid());
       // Narrow phase: same colliding pairs from every broad phase.
       const auto c0 = sorted(sc.s[0].collide().pairs);
       for (std::size_t k = 1; k < sc.s.size(); ++k) EXPECT_EQ(sorted(sc.s[k].collide().pairs), c0);
@@ -204,7 +205,7 @@ TYPED_TEST(BroadTyped, UnmovedObjectsAreNotRefittedOrRequeried) {
   }
   const auto sd = sc.s[1].find_pairs().stats;
   EXPECT_EQ(sd.refits, 5u);
-  EXPECT_EQ(sd.static_queries, 5u);
+  EXPECT_LE(sd.static_queries, 5u);  // only those that left their fat box query the static tree
   const auto hi = sc.s[2].find_pairs().stats;
   EXPECT_EQ(hi.refits, 5u);
   EXPECT_LE(hi.reinserts, 5u);

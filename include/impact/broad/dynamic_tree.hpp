@@ -23,6 +23,7 @@
 #include "impact/bvh/traversal_stack.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -38,6 +39,9 @@ struct DynamicTreeOptions {
   /// Rebuild when the tree's surface-area cost exceeds this multiple of its value after the last
   /// rebuild (checked after every leaves/8 reinsertions).
   double rebuild_ratio = 1.4;
+  /// On reinsertion, a leaf box is stretched by this multiple of the displacement since the last
+  /// insertion (capped at the object's size plus fat_margin).
+  double predict = 2.0;
 };
 
 template <class S> class DynamicTree {
@@ -51,16 +55,19 @@ template <class S> class DynamicTree {
     std::int32_t object = null;            ///< the caller's payload, leaves only
     std::int32_t height = 0;               ///< 0 for leaves, -1 for free nodes
     std::uint8_t active = 0;               ///< the subtree holds an active leaf
+    std::uint8_t exact = 0;                ///< leaf stored with its tight box (objects that never move)
     bool is_leaf() const { return child[0] == null; }
   };
 
   explicit DynamicTree(const DynamicTreeOptions& opt = {}) : opt_(opt) {}
 
-  /// Inserts a leaf for `object` with tight box `tight` (stored fattened). Returns the leaf id.
-  std::int32_t insert(std::int32_t object, const Aabb<S>& tight, bool active) {
+  /// Inserts a leaf for `object` with tight box `tight`, stored fattened unless `exact` (for
+  /// objects that are not expected to move). Returns the leaf id.
+  std::int32_t insert(std::int32_t object, const Aabb<S>& tight, bool active, bool exact = false) {
     const std::int32_t leaf = allocate();
     Node& n = nodes_[static_cast<std::size_t>(leaf)];
-    n.box = fatten(tight);
+    n.exact = exact;
+    n.box = exact ? tight : fatten(tight);
     n.object = object;
     n.height = 0;
     n.active = active;
@@ -79,12 +86,26 @@ template <class S> class DynamicTree {
   }
 
   /// The object's tight box changed. Returns true when it left its fat box and the leaf was
-  /// reinserted; false when the tree did not change.
+  /// reinserted; false when the tree did not change. The new fat box is also stretched along the
+  /// displacement since the last insertion (at most by the object's size plus the margin), so an
+  /// object moving steadily is reinserted every few steps rather than every step.
   bool update(std::int32_t leaf, const Aabb<S>& tight) {
     Node& n = nodes_[static_cast<std::size_t>(leaf)];
-    if (contains(n.box, tight)) return false;
+    if (n.exact ? (n.box.min == tight.min && n.box.max == tight.max) : contains(n.box, tight)) return false;
     remove_leaf(leaf);
-    nodes_[static_cast<std::size_t>(leaf)].box = fatten(tight);
+    if (n.exact) {
+      n.box = tight;
+    } else {
+      const Vec3<S> d = tight.center() - n.box.center();
+      Aabb<S> fat = fatten(tight);
+      const S cap = (tight.max - tight.min).maxCoeff() + S(opt_.fat_margin);
+      for (int k = 0; k < 3; ++k) {
+        const S e = std::min(std::abs(d[k]) * S(opt_.predict), cap);
+        if (d[k] > S(0)) fat.max[k] += e;
+        else fat.min[k] -= e;
+      }
+      n.box = fat;
+    }
     insert_leaf(leaf);
     ++changes_;
     return true;
@@ -203,6 +224,8 @@ template <class S> class DynamicTree {
   }
 
   const Node& node(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)]; }
+  /// The (fattened) box stored for leaf or node i.
+  const Aabb<S>& box(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)].box; }
   std::int32_t root() const { return root_; }
   std::size_t num_leaves() const { return leaves_; }
   /// Height of the root (0 for a single leaf, -1 when empty).
@@ -441,20 +464,26 @@ template <class S> class DynamicTree {
   double built_cost_ = 0;
 };
 
-/// The hierarchical broad phase: one DynamicTree over every object (static ones included), pair
-/// traversal of the tree against itself that skips subtrees without active objects. Moved objects
-/// are refitted (reinserted only when they leave their fat box); unmoved ones are not touched.
+/// The hierarchical broad phase: two DynamicTrees, one over the static objects (tight leaves) and
+/// one over the dynamic ones (fattened leaves, sleeping ones flagged inactive). Per call, moved
+/// objects are refitted (reinserted only when they leave their fat box; unmoved ones are not
+/// touched), then the dynamic tree is traversed against itself and against the static tree, larger
+/// node first, skipping node pairs without an active object. Unlike the static/dynamic split,
+/// static objects can be added, removed or moved incrementally without a rebuild.
 template <class S> class HierarchicalBroadPhase {
  public:
-  explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : tree_(opt) {}
+  explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : static_(opt), dynamic_(opt) {}
 
   void insert(std::int32_t slot, const ObjectTable<S>& t) {
     grow(slot);
-    leaf_[static_cast<std::size_t>(slot)] = tree_.insert(slot, t.box[static_cast<std::size_t>(slot)], t.active(slot));
+    const auto s = static_cast<std::size_t>(slot);
+    const bool st = t.is_static(slot);
+    leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box[s], t.active(slot), st);
   }
-  void remove(std::int32_t slot, const ObjectTable<S>&) {
-    tree_.remove(leaf_[static_cast<std::size_t>(slot)]);
-    leaf_[static_cast<std::size_t>(slot)] = DynamicTree<S>::null;
+  void remove(std::int32_t slot, const ObjectTable<S>& t) {
+    const auto s = static_cast<std::size_t>(slot);
+    (t.is_static(slot) ? static_ : dynamic_).remove(leaf_[s]);
+    leaf_[s] = DynamicTree<S>::null;
   }
   void moved(std::int32_t slot, const ObjectTable<S>&) {
     if (!moved_flag_[static_cast<std::size_t>(slot)]) {
@@ -462,22 +491,23 @@ template <class S> class HierarchicalBroadPhase {
       moved_.push_back(slot);
     }
   }
-  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) { tree_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot)); }
+  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) { dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot)); }
   void filter_changed(std::int32_t, const ObjectTable<S>&) {}
 
   template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
     flush(t, st);
-    return tree_.self_pairs(
-        [&](std::int32_t a, std::int32_t b) {
-          if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
-          if (!detail::test_pair(t, a, b, st)) return true;
-          ++st.pairs_found;
-          return bool(visit(a, b));
-        },
-        st);
+    const auto leaf_pair = [&](std::int32_t a, std::int32_t b) {
+      if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
+      if (!detail::test_pair(t, a, b, st)) return true;
+      ++st.pairs_found;
+      return bool(visit(a, b));
+    };
+    if (!dynamic_.self_pairs(leaf_pair, st)) return false;
+    return dynamic_.cross_pairs(static_, leaf_pair, st);
   }
 
-  const DynamicTree<S>& tree() const { return tree_; }
+  const DynamicTree<S>& static_tree() const { return static_; }
+  const DynamicTree<S>& dynamic_tree() const { return dynamic_; }
 
  private:
   void grow(std::int32_t slot) {
@@ -490,15 +520,16 @@ template <class S> class HierarchicalBroadPhase {
     for (const std::int32_t slot : moved_) {
       moved_flag_[static_cast<std::size_t>(slot)] = 0;
       const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
-      if (leaf == DynamicTree<S>::null) continue;
+      if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
       ++st.refits;
-      if (tree_.update(leaf, t.box[static_cast<std::size_t>(slot)])) ++st.reinserts;
+      if ((t.is_static(slot) ? static_ : dynamic_).update(leaf, t.box[static_cast<std::size_t>(slot)])) ++st.reinserts;
     }
     moved_.clear();
-    if (tree_.maybe_rebuild()) ++st.rebuilds;
+    if (static_.maybe_rebuild()) ++st.rebuilds;
+    if (dynamic_.maybe_rebuild()) ++st.rebuilds;
   }
 
-  DynamicTree<S> tree_;
+  DynamicTree<S> static_, dynamic_;
   std::vector<std::int32_t> leaf_;
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;

@@ -101,11 +101,14 @@ template <class S> class Scene {
     check_shape(shape, id);
     check_pose(pose, "Scene::add", id);
     Aabb<S> local;
+    S reach = S(0);
     if (shape.kind == ShapeKind::Mesh) {
       const auto& V = shape.mesh->mesh().V;
       for (Eigen::Index i = 0; i < V.rows(); ++i) local.extend(V.row(i).transpose());
+      const Vec3<S> c = local.center();
+      for (Eigen::Index i = 0; i < V.rows(); ++i) reach = std::max(reach, (V.row(i).transpose() - c).norm());
     }
-    const Aabb<S> box = world_box(shape, local, pose);
+    const Aabb<S> box = world_box(shape, local, reach, pose);
     if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::add: object " + std::to_string(id) + " has non-finite bounds");
     std::int32_t slot;
     if (!free_.empty()) {
@@ -120,7 +123,7 @@ template <class S> class Scene {
       objects_.emplace_back();
     }
     const auto s = static_cast<std::size_t>(slot);
-    objects_[s] = {id, shape, pose, local};
+    objects_[s] = {id, shape, pose, local, reach};
     table_.box[s] = box;
     table_.flags[s] = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
                                    (options.sleeping ? ObjectTable<S>::Sleeping : 0));
@@ -161,7 +164,7 @@ template <class S> class Scene {
     const std::int32_t slot = slot_of(id, "Scene::set_pose");
     check_pose(pose, "Scene::set_pose", id);
     const auto s = static_cast<std::size_t>(slot);
-    const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, pose);
+    const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, objects_[s].reach, pose);
     if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
     objects_[s].pose = pose;
     table_.box[s] = box;
@@ -288,6 +291,7 @@ template <class S> class Scene {
     Shape<S> shape;
     RigidTransform<S> pose;
     Aabb<S> local;  ///< meshes: box of the vertices in the mesh frame
+    S reach = 0;    ///< meshes: largest distance of a vertex from local.center()
   };
 
   template <class Visit> bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
@@ -325,7 +329,10 @@ template <class S> class Scene {
     }
   }
 
-  static Aabb<S> world_box(const Shape<S>& shape, const Aabb<S>& local, const RigidTransform<S>& pose) {
+  /// Tight-enough world box: exact for spheres, particles and boxes; for meshes the intersection
+  /// of the rotated vertex box and the cube around the vertices' bounding sphere (both contain the
+  /// mesh; the first is tighter for elongated meshes, the second for round ones).
+  static Aabb<S> world_box(const Shape<S>& shape, const Aabb<S>& local, S reach, const RigidTransform<S>& pose) {
     switch (shape.kind) {
       case ShapeKind::Sphere:
       case ShapeKind::Particle: {
@@ -339,7 +346,7 @@ template <class S> class Scene {
       case ShapeKind::Mesh:
       default: {
         const Vec3<S> c = pose.apply(local.center());
-        const Vec3<S> e = pose.R.cwiseAbs() * ((local.max - local.min) / S(2));
+        const Vec3<S> e = (pose.R.cwiseAbs() * ((local.max - local.min) / S(2))).cwiseMin(Vec3<S>::Constant(reach));
         return {c - e, c + e};
       }
     }

@@ -2,17 +2,19 @@
 /// \file
 /// StaticDynamicBroadPhase: the static/dynamic split. Static objects go in a flat `Bvh<Aabb>` built
 /// once (top-down, bvh/build_top_down.hpp); dynamic objects (awake or sleeping) go in a
-/// DynamicTree. Per call:
-///   - each dynamic object that moved since the last call is refitted in the dynamic tree and
-///     queried against the static tree once; the static objects it overlaps are cached, so an
-///     object that did not move is never queried against the statics again;
-///   - the cached static overlaps of every awake dynamic object are reported;
+/// DynamicTree with fattened leaves. Per call:
+///   - each dynamic object that moved since the last call is refitted in the dynamic tree; only
+///     when it left its fat box (and so was reinserted) is it queried against the static tree,
+///     with the fat box, and the static objects found are kept as its candidates; otherwise its
+///     candidates are only re-tested against its new tight box. An object that did not move is
+///     neither refitted, nor queried, nor re-tested: its last static pairs are reported as they are;
+///   - sleeping objects' static pairs are not reported (nor recomputed until they wake);
 ///   - dynamic–dynamic pairs come from the self pair traversal of the dynamic tree, which skips
 ///     sleeping–sleeping subtrees.
-/// Static–static pairs are never looked at. O(moved * log static + dynamic pairs + output) per call
-/// instead of O(static * dynamic + dynamic^2). Adding, removing or moving a static object marks the
-/// static tree for a rebuild at the next call, which also re-queries every dynamic object: static
-/// objects are meant to stay put.
+/// Static–static pairs are never looked at. O(reinserted * log static + moved * candidates +
+/// dynamic pairs + output) per call instead of O(static * dynamic + dynamic^2). Adding, removing or
+/// moving a static object marks the static tree for a rebuild at the next call, which also
+/// re-queries every dynamic object: static objects are meant to stay put.
 #pragma once
 
 #include "impact/broad/dynamic_tree.hpp"
@@ -20,6 +22,27 @@
 #include "impact/bvh/traverse.hpp"
 
 namespace impact {
+
+namespace detail {
+/// Spreads the low 10 bits of v so that there are two zero bits between consecutive ones.
+inline std::uint32_t spread_bits3(std::uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+/// 30-bit Morton code of p quantised to 10 bits per axis by (p - lo) * scale (clamped).
+template <class S> inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& scale) {
+  std::uint32_t c[3];
+  for (int k = 0; k < 3; ++k) {
+    const S q = (p[k] - lo[k]) * scale[k];
+    c[k] = q > S(0) ? std::uint32_t(std::min(q, S(1023))) : 0u;
+  }
+  return spread_bits3(c[0]) | (spread_bits3(c[1]) << 1) | (spread_bits3(c[2]) << 2);
+}
+}  // namespace detail
 
 template <class S> class StaticDynamicBroadPhase {
  public:
@@ -37,13 +60,14 @@ template <class S> class StaticDynamicBroadPhase {
     leaf_[s] = dyn_.insert(slot, t.box[s], t.active(slot));
     dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
     dynamics_.push_back(slot);
-    cache_epoch_[s] = 0;
-    cache_[s].clear();
+    cand_epoch_[s] = 0;
+    cand_[s].clear();
+    hits_[s].clear();
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
     if (t.is_static(slot)) {
-      static_dirty_ = true;  // caches naming it are dropped by the rebuild
+      static_dirty_ = true;  // candidates naming it are dropped by the rebuild
       return;
     }
     dyn_.remove(leaf_[s]);
@@ -54,8 +78,9 @@ template <class S> class StaticDynamicBroadPhase {
     dyn_pos_[static_cast<std::size_t>(last)] = pos;
     dynamics_.pop_back();
     dyn_pos_[s] = -1;
-    cache_[s].clear();
-    cache_epoch_[s] = 0;
+    cand_[s].clear();
+    hits_[s].clear();
+    cand_epoch_[s] = 0;
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -63,7 +88,6 @@ template <class S> class StaticDynamicBroadPhase {
       static_dirty_ = true;
       return;
     }
-    cache_epoch_[s] = 0;
     if (!moved_flag_[s]) {
       moved_flag_[s] = 1;
       moved_.push_back(slot);
@@ -73,35 +97,63 @@ template <class S> class StaticDynamicBroadPhase {
     dyn_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
-    if (t.is_static(slot)) ++epoch_;  // every cache may name it
-    else cache_epoch_[static_cast<std::size_t>(slot)] = 0;
+    if (t.is_static(slot)) ++epoch_;  // every candidate list may name it
+    else cand_epoch_[static_cast<std::size_t>(slot)] = 0;
   }
 
   template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
     flush(t, st);
-    // Dynamic against static: cached, re-queried only when stale.
+    // Dynamic against static. Objects whose fat box changed query the static tree, in Morton
+    // order of their centres so that consecutive queries walk the same part of the tree (the
+    // static tree is large: this is what keeps its nodes in cache).
+    need_.clear();
+    for (const std::int32_t a : dynamics_)
+      if (t.active(a) && cand_epoch_[static_cast<std::size_t>(a)] != epoch_) need_.push_back({0u, a});
+    if (!need_.empty() && !static_tree_.empty()) {
+      const Aabb<S>& root = static_tree_.root().bv;
+      const Vec3<S> scale = Vec3<S>::Constant(S(1023)).cwiseQuotient((root.max - root.min).cwiseMax(Vec3<S>::Constant(S(1e-30))));
+      for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box[static_cast<std::size_t>(a)].center(), root.min, scale);
+      std::sort(need_.begin(), need_.end());
+    }
+    for (const auto& [code, a] : need_) {
+      (void)code;
+      const auto sa = static_cast<std::size_t>(a);
+      std::vector<std::int32_t>& cand = cand_[sa];
+      cand.clear();
+      ++st.static_queries;
+      const Aabb<S>& fat = dyn_.box(leaf_[sa]);
+      traverse(
+          static_tree_,
+          [&](const Aabb<S>& bv) {
+            ++st.bv_tests;
+            return overlap(bv, fat);
+          },
+          [&](std::int32_t k) {
+            const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
+            ++st.bv_tests;
+            if (!overlap(t.box[static_cast<std::size_t>(b)], fat)) return true;
+            if (t.accepts(a, b)) cand.push_back(b);
+            else ++st.pairs_filtered;
+            return true;
+          });
+      cand_epoch_[sa] = epoch_;
+      stale_[sa] = 1;
+    }
+    // Hits from the tight box, recomputed only for objects that moved.
     for (const std::int32_t a : dynamics_) {
       if (!t.active(a)) continue;  // sleeping: its static pairs are inactive pairs
       const auto sa = static_cast<std::size_t>(a);
-      std::vector<std::int32_t>& cache = cache_[sa];
-      if (cache_epoch_[sa] != epoch_) {
-        cache.clear();
-        ++st.static_queries;
+      std::vector<std::int32_t>& hits = hits_[sa];
+      if (stale_[sa]) {
+        hits.clear();
         const Aabb<S>& box = t.box[sa];
-        traverse(
-            static_tree_,
-            [&](const Aabb<S>& bv) {
-              ++st.bv_tests;
-              return overlap(bv, box);
-            },
-            [&](std::int32_t k) {
-              const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
-              if (detail::test_pair(t, a, b, st)) cache.push_back(b);
-              return true;
-            });
-        cache_epoch_[sa] = epoch_;
+        for (const std::int32_t b : cand_[sa]) {
+          ++st.pairs_tested;
+          if (overlap(box, t.box[static_cast<std::size_t>(b)])) hits.push_back(b);
+        }
+        stale_[sa] = 0;
       }
-      for (const std::int32_t b : cache) {
+      for (const std::int32_t b : hits) {
         ++st.pairs_found;
         if (!visit(a, b)) return false;
       }
@@ -127,8 +179,10 @@ template <class S> class StaticDynamicBroadPhase {
       leaf_.resize(n, DynamicTree<S>::null);
       dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
-      cache_.resize(n);
-      cache_epoch_.resize(n, 0);
+      cand_.resize(n);
+      hits_.resize(n);
+      cand_epoch_.resize(n, 0);
+      stale_.resize(n, 1);
     }
   }
 
@@ -139,7 +193,11 @@ template <class S> class StaticDynamicBroadPhase {
       const std::int32_t leaf = leaf_[s];
       if (leaf == DynamicTree<S>::null) continue;  // removed (or now static) since it moved
       ++st.refits;
-      if (dyn_.update(leaf, t.box[s])) ++st.reinserts;
+      stale_[s] = 1;
+      if (dyn_.update(leaf, t.box[s])) {
+        ++st.reinserts;
+        cand_epoch_[s] = 0;  // the fat box changed: query the static tree again
+      }
     }
     moved_.clear();
     if (dyn_.maybe_rebuild()) ++st.rebuilds;
@@ -181,8 +239,11 @@ template <class S> class StaticDynamicBroadPhase {
   std::vector<std::int32_t> dynamics_;   // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  std::vector<std::vector<std::int32_t>> cache_;  // dynamic slot -> overlapping static slots
-  std::vector<std::uint32_t> cache_epoch_;
+  std::vector<std::vector<std::int32_t>> cand_;  // dynamic slot -> accepted static slots overlapping its fat box
+  std::vector<std::vector<std::int32_t>> hits_;  // dynamic slot -> those overlapping its tight box
+  std::vector<std::uint32_t> cand_epoch_;        // cand_ valid when equal to epoch_
+  std::vector<std::uint8_t> stale_;              // hits_ must be recomputed from cand_
+  std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query
   std::uint32_t epoch_ = 1;
 };
 

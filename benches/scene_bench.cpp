@@ -1,0 +1,496 @@
+// SPDX-License-Identifier: MIT
+// impact-scene-bench: broad phases on big scenes, against FCL's DynamicAABBTreeCollisionManager,
+// on the same objects in one run.
+//
+//   impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--seed K] [--allpairs-max M]
+//                      [--scaling-max N] [--json FILE]
+//
+// A scene of N objects (70% spheres of radius 0.2..0.8, 30% small meshes: an 80-triangle icosphere
+// and a 144-triangle torus) uniform in a cube sized for 0.1 objects per unit volume; a fraction F is
+// dynamic and moves every step (random velocity up to 0.1 per axis, meshes also rotate). Per step
+// each method gets the new poses of the moved objects and returns the broad-phase pairs: objects
+// whose tight world AABBs overlap, static–static pairs excluded. Methods: impact all-pairs (N <=
+// --allpairs-max), impact static/dynamic split, impact hierarchical (incremental AABB tree), and
+// FCL's dynamic AABB tree manager with fcl::Sphere and fcl::BVHModel<OBBRSS> objects, update() of the
+// moved objects and collide(callback); the callback keeps a pair when it is not static–static and
+// the tight AABBs overlap (FCL bounds rotated meshes by a looser box), so every method must return
+// the same set. Mismatches: pairs in the symmetric difference with the reference (all-pairs when it
+// runs; otherwise static/dynamic, itself checked against FCL), summed over the steps.
+// Then the same for an all-static scene (F = 0), and a scaling table for N = 10^2 .. --scaling-max.
+// Times are CPU time of the bench thread (setup excluded from ms/step), so that a loaded machine
+// does not distort the comparison.
+#include "bench_util.hpp"
+#include "impact/broad/scene.hpp"
+#include "impact/geometry/mesh_generators.hpp"
+#include "support/random.hpp"
+
+#ifdef IMPACT_HAVE_FCL
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/math/bv/OBBRSS.h>
+#endif
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+using namespace impact;
+namespace {
+
+/// CPU time of the calling thread in seconds: the benchmark machine may be shared, and wall time
+/// then measures the neighbours as much as the method. Falls back to wall time off POSIX.
+double cpu_seconds() {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+#else
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+#endif
+}
+
+struct Args {
+  long objects = 100000;
+  double dynamic = 0.1;
+  int steps = 10;
+  std::uint64_t seed = 1;
+  long allpairs_max = 5000;
+  long scaling_max = 100000;
+  std::string json;
+};
+
+[[noreturn]] void usage(const char* msg) {
+  std::fprintf(stderr,
+               "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--seed K] [--allpairs-max M]\n"
+               "                          [--scaling-max N] [--json FILE]\n",
+               msg);
+  std::exit(2);
+}
+
+Args parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
+      return argv[++i];
+    };
+    if (s == "--objects") a.objects = std::atol(next().c_str());
+    else if (s == "--dynamic") a.dynamic = std::atof(next().c_str());
+    else if (s == "--steps") a.steps = std::atoi(next().c_str());
+    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    else if (s == "--allpairs-max") a.allpairs_max = std::atol(next().c_str());
+    else if (s == "--scaling-max") a.scaling_max = std::atol(next().c_str());
+    else if (s == "--json") a.json = next();
+    else if (s == "-h" || s == "--help") usage("");
+    else usage(("unknown option " + s).c_str());
+  }
+  if (a.objects < 2) usage("--objects must be >= 2");
+  if (!(a.dynamic >= 0 && a.dynamic <= 1)) usage("--dynamic must be in [0, 1]");
+  if (a.steps < 1) usage("--steps must be >= 1");
+  return a;
+}
+
+using Mesh = MeshBvh<Sphere<double>>;
+
+struct Meshes {
+  TriangleMesh<double> ico = make_icosphere<double>(0.5, 1);
+  TriangleMesh<double> torus = make_torus<double>(0.45, 0.15, 12, 6);
+  Mesh ico_bvh{ico};
+  Mesh torus_bvh{torus};
+};
+
+/// The scene description shared by every method, and its motion.
+struct World {
+  struct Obj {
+    int kind;  // 0 sphere, 1 icosphere, 2 torus
+    double radius;
+    bool dynamic;
+    RigidTransform<double> pose;
+    Eigen::Vector3d velocity;
+    Eigen::Matrix3d spin;  // rotation applied per step (meshes)
+  };
+  std::vector<Obj> obj;
+  std::vector<std::int32_t> dynamic_ids;
+  double L = 0;
+
+  World(long n, double frac, std::uint64_t seed) {
+    test::Rng rng(seed);
+    L = std::cbrt(double(n) / 0.1);
+    obj.resize(std::size_t(n));
+    for (long i = 0; i < n; ++i) {
+      Obj& o = obj[std::size_t(i)];
+      const double u = rng.uniform();
+      o.kind = u < 0.7 ? 0 : (u < 0.85 ? 1 : 2);
+      o.radius = rng.uniform(0.2, 0.8);
+      o.dynamic = rng.uniform() < frac;
+      o.pose = {o.kind ? rng.rotation() : Eigen::Matrix3d::Identity(), rng.vec(0, L)};
+      o.velocity = rng.vec(-0.1, 0.1);
+      o.spin = Eigen::AngleAxisd(rng.uniform(0, 0.05), rng.vec(-1, 1).normalized()).toRotationMatrix();
+      if (o.dynamic) dynamic_ids.push_back(std::int32_t(i));
+    }
+  }
+  /// Advances every dynamic object by one step (bouncing off the scene cube).
+  void advance() {
+    for (const std::int32_t i : dynamic_ids) {
+      Obj& o = obj[std::size_t(i)];
+      Eigen::Vector3d t = o.pose.t + o.velocity;
+      for (int k = 0; k < 3; ++k)
+        if (t[k] < 0 || t[k] > L) {
+          o.velocity[k] = -o.velocity[k];
+          t[k] = std::min(std::max(t[k], 0.0), L);
+        }
+      o.pose.t = t;
+      if (o.kind) {
+        Eigen::Quaterniond q(o.spin * o.pose.R);
+        o.pose.R = q.normalized().toRotationMatrix();
+      }
+    }
+  }
+};
+
+using PairKeys = std::vector<std::uint64_t>;
+
+std::size_t mismatches(PairKeys a, PairKeys b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  std::size_t i = 0, j = 0, m = 0;
+  while (i < a.size() && j < b.size()) {
+    if (a[i] == b[j]) ++i, ++j;
+    else if (a[i] < b[j]) ++i, ++m;
+    else ++j, ++m;
+  }
+  return m + (a.size() - i) + (b.size() - j);
+}
+
+inline std::uint64_t key(std::uint64_t a, std::uint64_t b) { return a < b ? (a << 32) | b : (b << 32) | a; }
+
+struct Row {
+  std::string method;
+  long objects = 0;
+  double fraction = 0, build_ms = 0, ms_per_step = 0;
+  double pairs = 0;  // mean per step
+  std::size_t mismatches = 0;
+  bool ran = false;
+  BroadPhaseStats stats;  // impact methods: work counters summed over the steps
+};
+
+class ImpactMethod {
+ public:
+  ImpactMethod(BroadPhaseKind kind, const World& w, const Meshes& m) : w_(w), m_(m) {
+    SceneOptions o;
+    o.broad_phase = kind;
+    scene_ = std::make_unique<Scene<double>>(o);
+  }
+  void setup() {
+    for (std::size_t i = 0; i < w_.obj.size(); ++i) {
+      const auto& o = w_.obj[i];
+      const Shape<double> s = o.kind == 0 ? Shape<double>::sphere(o.radius) : Shape<double>::mesh_of(o.kind == 1 ? m_.ico_bvh : m_.torus_bvh);
+      scene_->add(i, s, o.pose, {o.dynamic ? BodyType::Dynamic : BodyType::Static});
+    }
+    PairKeys k;
+    pairs(k);
+  }
+  void step(PairKeys& out) {
+    for (const std::int32_t i : w_.dynamic_ids) scene_->set_pose(ObjectId(i), w_.obj[std::size_t(i)].pose);
+    pairs(out);
+  }
+  BroadPhaseStats total;  ///< summed over the timed steps
+
+ private:
+  void pairs(PairKeys& out) {
+    out.clear();
+    scene_->for_each_pair(
+        [&](ObjectId a, ObjectId b) {
+          out.push_back(key(a, b));
+          return true;
+        },
+        total);
+  }
+  const World& w_;
+  const Meshes& m_;
+  std::unique_ptr<Scene<double>> scene_;
+};
+
+#ifdef IMPACT_HAVE_FCL
+class FclMethod {
+ public:
+  FclMethod(const World& w, const Meshes& m) : w_(w) {
+    ico_ = make_model(m.ico);
+    torus_ = make_model(m.torus);
+  }
+  void setup() {
+    objs_.clear();
+    boxes_.resize(w_.obj.size());
+    for (std::size_t i = 0; i < w_.obj.size(); ++i) {
+      const auto& o = w_.obj[i];
+      std::shared_ptr<fcl::CollisionGeometryd> g;
+      if (o.kind == 0) g = std::make_shared<fcl::Sphered>(o.radius);
+      else g = o.kind == 1 ? ico_ : torus_;
+      auto obj = std::make_unique<fcl::CollisionObjectd>(g, to_fcl(o.pose));
+      obj->setUserData(reinterpret_cast<void*>(i));
+      objs_.push_back(std::move(obj));
+      tight_box(i);
+    }
+    std::vector<fcl::CollisionObjectd*> ptrs;
+    for (auto& o : objs_) ptrs.push_back(o.get());
+    manager_.registerObjects(ptrs);
+    manager_.setup();
+    moved_.clear();
+    for (const std::int32_t i : w_.dynamic_ids) moved_.push_back(objs_[std::size_t(i)].get());
+    PairKeys k;
+    collide(k);
+  }
+  void step(PairKeys& out) {
+    for (const std::int32_t i : w_.dynamic_ids) {
+      fcl::CollisionObjectd* o = objs_[std::size_t(i)].get();
+      o->setTransform(to_fcl(w_.obj[std::size_t(i)].pose));
+      o->computeAABB();
+      tight_box(std::size_t(i));
+    }
+    manager_.update(moved_);
+    collide(out);
+  }
+
+ private:
+  struct Data {
+    const FclMethod* self;
+    PairKeys* out;
+  };
+  static bool callback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
+    auto* d = static_cast<Data*>(data);
+    const auto i = reinterpret_cast<std::size_t>(a->getUserData());
+    const auto j = reinterpret_cast<std::size_t>(b->getUserData());
+    const auto& w = d->self->w_;
+    if (!w.obj[i].dynamic && !w.obj[j].dynamic) return false;
+    if (!overlap(d->self->boxes_[i], d->self->boxes_[j])) return false;
+    d->out->push_back(key(i, j));
+    return false;
+  }
+  void collide(PairKeys& out) {
+    out.clear();
+    Data d{this, &out};
+    manager_.collide(&d, &FclMethod::callback);
+  }
+  /// The same tight world box the scene computes (sphere: centre +- r; mesh: vertex box rotated).
+  void tight_box(std::size_t i) {
+    const auto& o = w_.obj[i];
+    if (o.kind == 0) {
+      boxes_[i] = {o.pose.t.array() - o.radius, o.pose.t.array() + o.radius};
+      return;
+    }
+    const auto& local = o.kind == 1 ? ico_box_ : torus_box_;
+    const Eigen::Vector3d c = o.pose.apply(local.center());
+    const double reach = o.kind == 1 ? ico_reach_ : torus_reach_;
+    const Eigen::Vector3d e = (o.pose.R.cwiseAbs() * ((local.max - local.min) / 2.0)).cwiseMin(Eigen::Vector3d::Constant(reach));
+    boxes_[i] = {c - e, c + e};
+  }
+  std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> make_model(const TriangleMesh<double>& m) {
+    auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+    std::vector<fcl::Vector3d> pts;
+    std::vector<fcl::Triangle> tris;
+    Aabb<double> box;
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+      pts.push_back(m.V.row(i).transpose());
+      box.extend(m.V.row(i).transpose());
+    }
+    for (Eigen::Index t = 0; t < m.F.rows(); ++t)
+      tris.emplace_back(std::size_t(m.F(t, 0)), std::size_t(m.F(t, 1)), std::size_t(m.F(t, 2)));
+    model->beginModel();
+    model->addSubModel(pts, tris);
+    model->endModel();
+    model->computeLocalAABB();
+    double reach = 0;
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) reach = std::max(reach, (m.V.row(i).transpose() - box.center()).norm());
+    (ico_box_.empty() ? ico_reach_ : torus_reach_) = reach;
+    (ico_box_.empty() ? ico_box_ : torus_box_) = box;
+    return model;
+  }
+  static fcl::Transform3d to_fcl(const RigidTransform<double>& x) {
+    fcl::Transform3d t = fcl::Transform3d::Identity();
+    t.linear() = x.R;
+    t.translation() = x.t;
+    return t;
+  }
+
+  const World& w_;
+  std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> ico_, torus_;
+  Aabb<double> ico_box_, torus_box_;
+  double ico_reach_ = 0, torus_reach_ = 0;
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> objs_;
+  std::vector<fcl::CollisionObjectd*> moved_;
+  std::vector<Aabb<double>> boxes_;
+  fcl::DynamicAABBTreeCollisionManagerd manager_;
+};
+#endif
+
+/// Runs every method on one scene for `steps` steps; returns rows (all-pairs first when it ran).
+std::vector<Row> run(long n, double frac, int steps, const Args& args, const Meshes& meshes) {
+  World world(n, frac, args.seed);
+  const bool with_all = n <= args.allpairs_max;
+  ImpactMethod all(BroadPhaseKind::AllPairs, world, meshes), sd(BroadPhaseKind::StaticDynamic, world, meshes),
+      hi(BroadPhaseKind::Hierarchical, world, meshes);
+  std::vector<Row> rows(4);
+  rows[0].method = "impact-all-pairs";
+  rows[1].method = "impact-static-dynamic";
+  rows[2].method = "impact-hierarchical";
+  rows[3].method = "fcl-dynamic-aabb-tree";
+  for (auto& r : rows) {
+    r.objects = n;
+    r.fraction = frac;
+  }
+#ifdef IMPACT_HAVE_FCL
+  FclMethod fcl_m(world, meshes);
+#endif
+  auto time_setup = [](Row& r, auto&& f) {
+    const double t0 = cpu_seconds();
+    f();
+    r.build_ms = 1e3 * (cpu_seconds() - t0);
+    r.ran = true;
+  };
+  if (with_all) time_setup(rows[0], [&] { all.setup(); });
+  time_setup(rows[1], [&] { sd.setup(); });
+  time_setup(rows[2], [&] { hi.setup(); });
+  all.total = sd.total = hi.total = {};
+#ifdef IMPACT_HAVE_FCL
+  time_setup(rows[3], [&] { fcl_m.setup(); });
+#endif
+  std::vector<double> total(4, 0.0);
+  PairKeys k[4];
+  for (int s = 0; s < steps; ++s) {
+    world.advance();
+    auto timed = [&](int m, auto&& f) {
+      const double t0 = cpu_seconds();
+      f(k[m]);
+      total[std::size_t(m)] += cpu_seconds() - t0;
+      rows[std::size_t(m)].pairs += double(k[m].size());
+    };
+    if (with_all) timed(0, [&](PairKeys& o) { all.step(o); });
+    timed(1, [&](PairKeys& o) { sd.step(o); });
+    timed(2, [&](PairKeys& o) { hi.step(o); });
+#ifdef IMPACT_HAVE_FCL
+    timed(3, [&](PairKeys& o) { fcl_m.step(o); });
+#endif
+    const int ref = with_all ? 0 : 1;
+    for (int m = 0; m < 4; ++m) {
+      if (!rows[std::size_t(m)].ran) continue;
+      if (m == ref) {  // the reference is checked against an independent method
+        const int other = with_all ? -1 : (rows[3].ran ? 3 : 2);
+        if (other >= 0) rows[std::size_t(m)].mismatches += mismatches(k[m], k[other]);
+      } else {
+        rows[std::size_t(m)].mismatches += mismatches(k[m], k[ref]);
+      }
+    }
+  }
+  rows[0].stats = all.total;
+  rows[1].stats = sd.total;
+  rows[2].stats = hi.total;
+  for (int m = 0; m < 4; ++m) {
+    rows[std::size_t(m)].ms_per_step = 1e3 * total[std::size_t(m)] / steps;
+    rows[std::size_t(m)].pairs /= steps;
+  }
+  std::vector<Row> out;
+  for (auto& r : rows)
+    if (r.ran) out.push_back(r);
+  return out;
+}
+
+double fcl_ms(const std::vector<Row>& rows) {
+  for (const auto& r : rows)
+    if (r.method.rfind("fcl", 0) == 0) return r.ms_per_step;
+  return 0;
+}
+
+void print_table(const std::vector<Row>& rows, int steps) {
+  const double f = fcl_ms(rows);
+  std::printf("  %-24s %10s %12s %12s %11s %12s | per step: %10s %10s %10s %10s\n", "method", "build ms", "ms/step", "pairs/step",
+              "mismatches", "FCL/method", "bv tests", "aabb tests", "reinserts", "st.queries");
+  for (const auto& r : rows) {
+    char ratio[32] = "-";
+    if (f > 0 && r.ms_per_step > 0) std::snprintf(ratio, sizeof ratio, "%.2fx", f / r.ms_per_step);
+    std::printf("  %-24s %10.2f %12.4f %12.1f %11zu %12s |           %10.0f %10.0f %10.0f %10.0f\n", r.method.c_str(), r.build_ms,
+                r.ms_per_step, r.pairs, r.mismatches, ratio, double(r.stats.bv_tests) / steps, double(r.stats.pairs_tested) / steps,
+                double(r.stats.reinserts) / steps, double(r.stats.static_queries) / steps);
+  }
+}
+
+std::string json_row(const Row& r) {
+  bench::JsonObject o;
+  o.add("method", r.method).add("objects", static_cast<long long>(r.objects)).add("dynamic_fraction", r.fraction);
+  o.add("ms_per_step", r.ms_per_step).add("pairs", r.pairs).add("mismatches", r.mismatches);
+  return o.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  const Meshes meshes;
+#ifndef IMPACT_HAVE_FCL
+  std::printf("note: built without FCL; the FCL column is missing\n");
+#endif
+  std::vector<std::string> json_rows, json_scaling;
+  std::size_t total_mismatches = 0;
+
+  std::printf("impact-scene-bench: %ld objects (70%% spheres, 30%% meshes of 80/144 triangles), %.0f%% dynamic, %d steps, seed %llu\n",
+              args.objects, 100 * args.dynamic, args.steps, static_cast<unsigned long long>(args.seed));
+  std::printf("reference for mismatches: %s\n", args.objects <= args.allpairs_max ? "impact-all-pairs" : "impact-static-dynamic (checked against FCL)");
+  const auto main_rows = run(args.objects, args.dynamic, args.steps, args, meshes);
+  print_table(main_rows, args.steps);
+  for (const auto& r : main_rows) {
+    json_rows.push_back(json_row(r));
+    total_mismatches += r.mismatches;
+  }
+
+  std::printf("\nall-static scene, %ld objects (per step: nothing moves, pairs found again)\n", args.objects);
+  const auto static_rows = run(args.objects, 0.0, args.steps, args, meshes);
+  print_table(static_rows, args.steps);
+  for (const auto& r : static_rows) {
+    json_rows.push_back(json_row(r));
+    total_mismatches += r.mismatches;
+  }
+
+  std::printf("\nscaling, %.0f%% dynamic: ms/step\n", 100 * args.dynamic);
+  std::printf("  %8s %14s %16s %14s %14s %12s\n", "N", "all-pairs", "static-dynamic", "hierarchical", "fcl", "FCL/s-d");
+  for (long n = 100; n <= args.scaling_max; n *= 10) {
+    const auto rows = run(n, args.dynamic, args.steps, args, meshes);
+    double v[4] = {-1, -1, -1, -1};
+    for (const auto& r : rows) {
+      json_scaling.push_back(json_row(r));
+      total_mismatches += r.mismatches;
+      const int m = r.method == "impact-all-pairs" ? 0 : r.method == "impact-static-dynamic" ? 1 : r.method == "impact-hierarchical" ? 2 : 3;
+      v[m] = r.ms_per_step;
+    }
+    auto cell = [](double x) {
+      static char buf[4][32];
+      static int k = 0;
+      k = (k + 1) % 4;
+      if (x < 0) std::snprintf(buf[k], 32, "-");
+      else std::snprintf(buf[k], 32, "%.4f", x);
+      return buf[k];
+    };
+    char ratio[32] = "-";
+    if (v[3] > 0 && v[1] > 0) std::snprintf(ratio, sizeof ratio, "%.2fx", v[3] / v[1]);
+    std::printf("  %8ld %14s %16s %14s %14s %12s\n", n, cell(v[0]), cell(v[1]), cell(v[2]), cell(v[3]), ratio);
+  }
+  std::printf("\ntotal mismatches: %zu\n", total_mismatches);
+
+  if (!args.json.empty()) {
+    bench::JsonObject o;
+    o.add("bench", "impact-scene-bench").add("objects", static_cast<long long>(args.objects)).add("dynamic_fraction", args.dynamic);
+    o.add("steps", args.steps).add("seed", static_cast<long long>(args.seed));
+    o.raw("rows", bench::JsonObject::array(json_rows));
+    o.raw("scaling", bench::JsonObject::array(json_scaling));
+    if (!bench::write_file(args.json, o.str())) {
+      std::fprintf(stderr, "cannot write %s\n", args.json.c_str());
+      return 1;
+    }
+  }
+  return total_mismatches == 0 ? 0 : 3;
+}
