@@ -69,13 +69,13 @@ TYPED_TEST(Closest, PointTriangleAgainstBruteForce) {
     // feature consistency: a vertex feature puts all weight on one vertex, an edge on two
     const int nonzero = (r.barycentric.array() > S(0)).count();
     switch (r.feature) {
-      case TriangleFeature::vertex0:
-      case TriangleFeature::vertex1:
-      case TriangleFeature::vertex2: EXPECT_EQ(nonzero, 1); break;
-      case TriangleFeature::edge01: EXPECT_EQ(r.barycentric[2], S(0)); break;
-      case TriangleFeature::edge12: EXPECT_EQ(r.barycentric[0], S(0)); break;
-      case TriangleFeature::edge20: EXPECT_EQ(r.barycentric[1], S(0)); break;
-      case TriangleFeature::face: break;
+      case TriangleFeatureId::VertexA:
+      case TriangleFeatureId::VertexB:
+      case TriangleFeatureId::VertexC: EXPECT_EQ(nonzero, 1); break;
+      case TriangleFeatureId::EdgeAB: EXPECT_EQ(r.barycentric[2], S(0)); break;
+      case TriangleFeatureId::EdgeBC: EXPECT_EQ(r.barycentric[0], S(0)); break;
+      case TriangleFeatureId::EdgeCA: EXPECT_EQ(r.barycentric[1], S(0)); break;
+      case TriangleFeatureId::Face: break;
     }
   }
 }
@@ -85,14 +85,14 @@ TYPED_TEST(Closest, PointTriangleFeatures) {
   using V = Vec3<S>;
   const Triangle<S> t(V(0, 0, 0), V(2, 0, 0), V(0, 2, 0));
   auto f = [&](const V& x) { return closest_point_on_triangle(x, t); };
-  EXPECT_EQ(f(V(S(0.5), S(0.5), 3)).feature, TriangleFeature::face);
+  EXPECT_EQ(f(V(S(0.5), S(0.5), 3)).feature, TriangleFeatureId::Face);
   EXPECT_NEAR(double(f(V(S(0.5), S(0.5), 3)).squared_distance), 9.0, 1e-5);
-  EXPECT_EQ(f(V(-1, -1, 1)).feature, TriangleFeature::vertex0);
-  EXPECT_EQ(f(V(3, -1, 0)).feature, TriangleFeature::vertex1);
-  EXPECT_EQ(f(V(-1, 3, 0)).feature, TriangleFeature::vertex2);
-  EXPECT_EQ(f(V(1, -1, 0)).feature, TriangleFeature::edge01);
-  EXPECT_EQ(f(V(2, 2, 0)).feature, TriangleFeature::edge12);
-  EXPECT_EQ(f(V(-1, 1, 0)).feature, TriangleFeature::edge20);
+  EXPECT_EQ(f(V(-1, -1, 1)).feature, TriangleFeatureId::VertexA);
+  EXPECT_EQ(f(V(3, -1, 0)).feature, TriangleFeatureId::VertexB);
+  EXPECT_EQ(f(V(-1, 3, 0)).feature, TriangleFeatureId::VertexC);
+  EXPECT_EQ(f(V(1, -1, 0)).feature, TriangleFeatureId::EdgeAB);
+  EXPECT_EQ(f(V(2, 2, 0)).feature, TriangleFeatureId::EdgeBC);
+  EXPECT_EQ(f(V(-1, 1, 0)).feature, TriangleFeatureId::EdgeCA);
   const auto e = f(V(2, 2, 0));
   EXPECT_NEAR(double(e.barycentric[1]), 0.5, 1e-6);
   EXPECT_NEAR(double(e.point.x()), 1.0, 1e-6);

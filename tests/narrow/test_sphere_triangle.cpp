@@ -38,7 +38,7 @@ TYPED_TEST(SphereTri, SweptAnalyticFaceEdgeVertex) {
   auto h = sweep_sphere_triangle(V(1, 1, 2), V(1, 1, -2), r, t);
   ASSERT_TRUE(h);
   EXPECT_NEAR(double(h->time), 0.375, 1e-6);
-  EXPECT_EQ(h->feature, TriangleFeature::face);
+  EXPECT_EQ(h->feature, TriangleFeatureId::Face);
   EXPECT_TRUE(h->normal.isApprox(V(0, 0, 1), S(1e-5)));
   EXPECT_TRUE(h->point.isApprox(V(1, 1, 0), S(1e-5)));
   // from below
@@ -49,20 +49,20 @@ TYPED_TEST(SphereTri, SweptAnalyticFaceEdgeVertex) {
   h = sweep_sphere_triangle(V(2, -2, 0), V(2, 2, 0), r, t);
   ASSERT_TRUE(h);
   EXPECT_NEAR(double(h->time), 0.375, 1e-6);
-  EXPECT_EQ(h->feature, TriangleFeature::edge01);
+  EXPECT_EQ(h->feature, TriangleFeatureId::EdgeAB);
   EXPECT_TRUE(h->point.isApprox(V(2, 0, 0), S(1e-5)));
   EXPECT_TRUE(h->normal.isApprox(V(0, -1, 0), S(1e-5)));
   // edge approached diagonally from above-outside: contact at distance r from the edge
   h = sweep_sphere_triangle(V(2, -1, 1), V(2, 1, -1), r, t);
   ASSERT_TRUE(h);
-  EXPECT_EQ(h->feature, TriangleFeature::edge01);
+  EXPECT_EQ(h->feature, TriangleFeatureId::EdgeAB);
   // centre path y = -1 + 2s, z = 1 - 2s; distance to the x axis = r
   const double s = (2 - std::sqrt(2.0) * 0.5) / 4;  // sqrt(2) |1 - 2s| = r
   EXPECT_NEAR(double(h->time), s, 1e-5);
   // vertex 0 approached along the diagonal from outside
   h = sweep_sphere_triangle(V(-2, -2, 0), V(2, 2, 0), r, t);
   ASSERT_TRUE(h);
-  EXPECT_EQ(h->feature, TriangleFeature::vertex0);
+  EXPECT_EQ(h->feature, TriangleFeatureId::VertexA);
   EXPECT_NEAR(double(h->time), (2 * std::sqrt(2.0) - 0.5) / (4 * std::sqrt(2.0)), 1e-5);
   EXPECT_TRUE(h->point.isApprox(V(0, 0, 0), S(1e-5)) || h->point.norm() < S(1e-5));
   // misses: moving away, passing by, stopping short

@@ -20,13 +20,15 @@
 namespace impact {
 
 /// The feature of a triangle on which a closest point lies.
-enum class TriangleFeature : std::uint8_t { vertex0, vertex1, vertex2, edge01, edge12, edge20, face };
+/// (Same enumerators, in the same order, as query/closest_point_mesh.hpp's TriangleFeatureId, so that the two
+/// can be unified.)
+enum class TriangleFeatureId : std::uint8_t { Face, VertexA, VertexB, VertexC, EdgeAB, EdgeBC, EdgeCA };
 
 /// Closest point of a triangle to a query point.
 template <class S> struct TriangleClosestPoint {
   Vec3<S> point;        ///< the closest point of the closed triangle
   Vec3<S> barycentric;  ///< weights of (a, b, c): point = x a + y b + z c, each in [0, 1], sum 1
-  TriangleFeature feature = TriangleFeature::face;
+  TriangleFeatureId feature = TriangleFeatureId::Face;
   S squared_distance = S(0);
 };
 
@@ -59,7 +61,7 @@ template <class S> inline SegmentClosestPoint<S> closest_point_on_segment(const 
 
 namespace detail {
 
-template <class S> inline TriangleClosestPoint<S> make_tcp(const Vec3<S>& x, const Vec3<S>& point, S wa, S wb, S wc, TriangleFeature f) {
+template <class S> inline TriangleClosestPoint<S> make_tcp(const Vec3<S>& x, const Vec3<S>& point, S wa, S wb, S wc, TriangleFeatureId f) {
   TriangleClosestPoint<S> r;
   r.point = point;
   r.barycentric = Vec3<S>(wa, wb, wc);
@@ -72,8 +74,8 @@ template <class S> inline TriangleClosestPoint<S> make_tcp(const Vec3<S>& x, con
 template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle_edges(const Vec3<S>& x, const Triangle<S>& tri) {
   TriangleClosestPoint<S> best;
   best.squared_distance = std::numeric_limits<S>::infinity();
-  const TriangleFeature edge[3] = {TriangleFeature::edge01, TriangleFeature::edge12, TriangleFeature::edge20};
-  const TriangleFeature vert[3] = {TriangleFeature::vertex0, TriangleFeature::vertex1, TriangleFeature::vertex2};
+  const TriangleFeatureId edge[3] = {TriangleFeatureId::EdgeAB, TriangleFeatureId::EdgeBC, TriangleFeatureId::EdgeCA};
+  const TriangleFeatureId vert[3] = {TriangleFeatureId::VertexA, TriangleFeatureId::VertexB, TriangleFeatureId::VertexC};
   for (int e = 0; e < 3; ++e) {
     const int i = e, j = (e + 1) % 3;
     const auto c = closest_point_on_segment(x, Segment<S>(tri[i], tri[j]));
@@ -81,7 +83,7 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle_edge
       Vec3<S> w = Vec3<S>::Zero();
       w[i] = S(1) - c.t;
       w[j] = c.t;
-      const TriangleFeature f = c.t <= S(0) ? vert[i] : (c.t >= S(1) ? vert[j] : edge[e]);
+      const TriangleFeatureId f = c.t <= S(0) ? vert[i] : (c.t >= S(1) ? vert[j] : edge[e]);
       best = make_tcp(x, c.point, w[0], w[1], w[2], f);
     }
   }
@@ -95,7 +97,7 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_sliver(const 
   if (nn > S(0)) {
     const Vec3<S> q = x - (n.dot(x - tri.a) / nn) * n, aq = q - tri.a;
     const S wb = n.dot(aq.cross(ac)) / nn, wc = n.dot(ab.cross(aq)) / nn, wa = S(1) - wb - wc;
-    if (wa >= S(0) && wb >= S(0) && wc >= S(0)) return make_tcp(x, Vec3<S>(wa * tri.a + wb * tri.b + wc * tri.c), wa, wb, wc, TriangleFeature::face);
+    if (wa >= S(0) && wb >= S(0) && wc >= S(0)) return make_tcp(x, Vec3<S>(wa * tri.a + wb * tri.b + wc * tri.c), wa, wb, wc, TriangleFeatureId::Face);
   }
   return closest_point_on_triangle_edges(x, tri);
 }
@@ -106,7 +108,7 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_sliver(const 
 /// edge, or face interior) it lies on. Degenerate triangles (collinear or coincident vertices) are
 /// handled as the segment or point they are; the feature then names the edge or vertex used.
 template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle(const Vec3<S>& x, const Triangle<S>& tri) {
-  using F = TriangleFeature;
+  using F = TriangleFeatureId;
   const Vec3<S>&a = tri.a, &b = tri.b, &c = tri.c;
   const Vec3<S> ab = b - a, ac = c - a;
   // slivers (sine of the angle at a below 1e-2) and degenerate triangles: the robust path, as the
@@ -114,36 +116,36 @@ template <class S> inline TriangleClosestPoint<S> closest_point_on_triangle(cons
   if (ab.cross(ac).squaredNorm() <= S(1e-4) * ab.squaredNorm() * ac.squaredNorm()) return detail::closest_point_on_sliver(x, tri);
   const Vec3<S> ap = x - a;
   const S d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= S(0) && d2 <= S(0)) return detail::make_tcp(x, a, S(1), S(0), S(0), F::vertex0);
+  if (d1 <= S(0) && d2 <= S(0)) return detail::make_tcp(x, a, S(1), S(0), S(0), F::VertexA);
   const Vec3<S> bp = x - b;
   const S d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= S(0) && d4 <= d3) return detail::make_tcp(x, b, S(0), S(1), S(0), F::vertex1);
+  if (d3 >= S(0) && d4 <= d3) return detail::make_tcp(x, b, S(0), S(1), S(0), F::VertexB);
   const S vc = d1 * d4 - d3 * d2;
   if (vc <= S(0) && d1 >= S(0) && d3 <= S(0)) {
     const S den = d1 - d3;
     const S v = den > S(0) ? std::clamp(d1 / den, S(0), S(1)) : S(0);
-    return detail::make_tcp(x, Vec3<S>(a + v * ab), S(1) - v, v, S(0), F::edge01);
+    return detail::make_tcp(x, Vec3<S>(a + v * ab), S(1) - v, v, S(0), F::EdgeAB);
   }
   const Vec3<S> cp = x - c;
   const S d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= S(0) && d5 <= d6) return detail::make_tcp(x, c, S(0), S(0), S(1), F::vertex2);
+  if (d6 >= S(0) && d5 <= d6) return detail::make_tcp(x, c, S(0), S(0), S(1), F::VertexC);
   const S vb = d5 * d2 - d1 * d6;
   if (vb <= S(0) && d2 >= S(0) && d6 <= S(0)) {
     const S den = d2 - d6;
     const S w = den > S(0) ? std::clamp(d2 / den, S(0), S(1)) : S(0);
-    return detail::make_tcp(x, Vec3<S>(a + w * ac), S(1) - w, S(0), w, F::edge20);
+    return detail::make_tcp(x, Vec3<S>(a + w * ac), S(1) - w, S(0), w, F::EdgeCA);
   }
   const S va = d3 * d6 - d5 * d4;
   if (va <= S(0) && d4 - d3 >= S(0) && d5 - d6 >= S(0)) {
     const S den = (d4 - d3) + (d5 - d6);
     const S w = den > S(0) ? std::clamp((d4 - d3) / den, S(0), S(1)) : S(0);
-    return detail::make_tcp(x, Vec3<S>(b + w * (c - b)), S(0), S(1) - w, w, F::edge12);
+    return detail::make_tcp(x, Vec3<S>(b + w * (c - b)), S(0), S(1) - w, w, F::EdgeBC);
   }
   const S den = va + vb + vc;
   if (!(den > S(0))) return detail::closest_point_on_sliver(x, tri);
   const S v = vb / den, w = vc / den;
   if (!(v >= S(0) && w >= S(0) && v + w <= S(1))) return detail::closest_point_on_sliver(x, tri);
-  return detail::make_tcp(x, Vec3<S>(a + v * ab + w * ac), S(1) - v - w, v, w, F::face);
+  return detail::make_tcp(x, Vec3<S>(a + v * ab + w * ac), S(1) - v - w, v, w, F::Face);
 }
 
 /// Closest pair of points of the closed segments a and b. Zero-length segments are points; for

@@ -27,11 +27,11 @@ template <class S> inline bool sphere_triangle_overlap(const Sphere<S>& sphere, 
 }
 
 /// First contact of a moving sphere with a triangle.
-template <class S> struct SweptSphereHit {
+template <class S> struct SphereTriangleSweepHit {
   S time = S(0);     ///< in [0, 1]: the centre is then p0 + time (p1 - p0)
   Vec3<S> point;     ///< contact point on the triangle
   Vec3<S> normal;    ///< unit normal at the contact, from the triangle towards the sphere centre
-  TriangleFeature feature = TriangleFeature::face;  ///< feature of the triangle touched first
+  TriangleFeatureId feature = TriangleFeatureId::Face;  ///< feature of the triangle touched first
 };
 
 namespace detail {
@@ -52,12 +52,12 @@ template <class S> inline S first_entry_root(S a, S hb, S c) {
 /// the sphere already overlaps at p0 the time is 0. The normal points from the contact point
 /// towards the centre (the face normal, oriented towards p0, when the centre is on the triangle).
 template <class S>
-inline std::optional<SweptSphereHit<S>> sweep_sphere_triangle(const Vec3<S>& p0, const Vec3<S>& p1, S r, const Triangle<S>& tri) {
+inline std::optional<SphereTriangleSweepHit<S>> sweep_sphere_triangle(const Vec3<S>& p0, const Vec3<S>& p1, S r, const Triangle<S>& tri) {
   static_assert(is_supported_scalar_v<S>, "sweep_sphere_triangle: float or double");
   const S rr = r * r;
   const Vec3<S> n_unit = tri.normal();
-  auto make = [&](S time, TriangleFeature hint) {
-    SweptSphereHit<S> h;
+  auto make = [&](S time, TriangleFeatureId hint) {
+    SphereTriangleSweepHit<S> h;
     h.time = time;
     const Vec3<S> c = p0 + time * (p1 - p0);
     const auto cp = closest_point_on_triangle(c, tri);
@@ -78,7 +78,7 @@ inline std::optional<SweptSphereHit<S>> sweep_sphere_triangle(const Vec3<S>& p0,
 
   const Vec3<S> d = p1 - p0;
   S best = S(2);
-  TriangleFeature feature = TriangleFeature::face;
+  TriangleFeatureId feature = TriangleFeatureId::Face;
   // face: the plane offset by r towards the side the centre starts on
   if (n_unit.squaredNorm() > S(0)) {
     const S dist0 = n_unit.dot(p0 - tri.a);
@@ -92,12 +92,12 @@ inline std::optional<SweptSphereHit<S>> sweep_sphere_triangle(const Vec3<S>& p0,
         const Vec3<S> n = tri.scaled_normal();
         const S nn = n.squaredNorm();
         const S wb = n.dot(aq.cross(ac)) / nn, wc = n.dot(ab.cross(aq)) / nn;
-        if (wb >= S(0) && wc >= S(0) && wb + wc <= S(1) && t < best) best = t, feature = TriangleFeature::face;
+        if (wb >= S(0) && wc >= S(0) && wb + wc <= S(1) && t < best) best = t, feature = TriangleFeatureId::Face;
       }
     }
   }
   // edges: infinite cylinders of radius r, contact between the endpoints
-  const TriangleFeature edge_feature[3] = {TriangleFeature::edge01, TriangleFeature::edge12, TriangleFeature::edge20};
+  const TriangleFeatureId edge_feature[3] = {TriangleFeatureId::EdgeAB, TriangleFeatureId::EdgeBC, TriangleFeatureId::EdgeCA};
   for (int k = 0; k < 3; ++k) {
     const Vec3<S>& e0 = tri[k];
     const Vec3<S> e = tri[(k + 1) % 3] - e0;
@@ -113,7 +113,7 @@ inline std::optional<SweptSphereHit<S>> sweep_sphere_triangle(const Vec3<S>& p0,
     if (s >= S(0) && s <= S(1)) best = t, feature = edge_feature[k];
   }
   // vertices: spheres of radius r
-  const TriangleFeature vertex_feature[3] = {TriangleFeature::vertex0, TriangleFeature::vertex1, TriangleFeature::vertex2};
+  const TriangleFeatureId vertex_feature[3] = {TriangleFeatureId::VertexA, TriangleFeatureId::VertexB, TriangleFeatureId::VertexC};
   for (int k = 0; k < 3; ++k) {
     const Vec3<S> m = p0 - tri[k];
     const S t = detail::first_entry_root(d.squaredNorm(), m.dot(d), m.squaredNorm() - rr);
