@@ -461,7 +461,7 @@ TYPED_TEST(BroadTyped, NarrowRandomCrossCheck) {
     S best = std::numeric_limits<S>::infinity();
     for (int t = 0; t < mesh->num_triangles(); ++t) {
       const auto& tri = mesh->triangle(t);
-      best = std::min(best, (detail::closest_on_triangle(lc, tri.a, tri.b, tri.c) - lc).norm());
+      best = std::min(best, std::sqrt(closest_point_on_triangle(lc, tri).squared_distance));
     }
     if (std::abs(best - r) > S(1e-4)) {
       EXPECT_EQ(got, best <= r) << k;
@@ -469,6 +469,28 @@ TYPED_TEST(BroadTyped, NarrowRandomCrossCheck) {
     hits += got;
   }
   EXPECT_GT(hits, 100);
+  // mesh–mesh and box–mesh against brute force over the triangles
+  int mm_hits = 0, bm_hits = 0;
+  const Vec3<S> h(S(0.6), S(0.3), S(0.2));
+  for (int k = 0; k < 1000; ++k) {
+    const auto pa = pose_at<S>(rng.vec(-0.5, 0.5), rng.rotation());
+    const auto pb = pose_at<S>(rng.vec(-1.5, 1.5), rng.rotation());
+    const RigidTransform<S> b_to_a = relative_transform(pa, pb);
+    bool want = false, want_box = false;
+    for (int i = 0; i < mesh->num_triangles(); ++i) {
+      const auto& tb = mesh->triangle(i);
+      const Triangle<S> tb_in_a(b_to_a.apply(tb.a), b_to_a.apply(tb.b), b_to_a.apply(tb.c));
+      for (int j = 0; j < mesh->num_triangles(); ++j) want = want || triangles_intersect(mesh->triangle(j), tb_in_a);
+      // box at pa, mesh at pb: triangle in the box frame
+      want_box = want_box || detail::triangle_box_overlap(tb_in_a.a, tb_in_a.b, tb_in_a.c, h);
+    }
+    EXPECT_EQ(shapes_intersect(Shape<S>::mesh_of(*mesh), pa, Shape<S>::mesh_of(*mesh), pb), want) << k;
+    EXPECT_EQ(shapes_intersect(Shape<S>::box(h), pa, Shape<S>::mesh_of(*mesh), pb), want_box) << k;
+    mm_hits += want;
+    bm_hits += want_box;
+  }
+  EXPECT_GT(mm_hits, 100);
+  EXPECT_GT(bm_hits, 100);
 }
 
 }  // namespace

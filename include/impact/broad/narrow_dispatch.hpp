@@ -7,10 +7,11 @@
 ///   sphere – box                        closest point of the box (exact)
 ///   box – box                           separating axes (impact::overlap on Obb, conservative)
 ///   sphere – mesh, box – mesh           the mesh's tree walked with the other shape in the mesh's
-///                                       frame; triangles tested by closest point (sphere) or
-///                                       separating axes (box)
+///                                       frame; triangles tested by closest point
+///                                       (narrow/closest_point.hpp) or separating axes (box, 13 axes)
 ///   mesh – mesh                         pair traversal of both trees under the relative pose,
-///                                       triangle–triangle separating axes at the leaves
+///                                       exact triangles_intersect (narrow/triangle_triangle.hpp)
+///                                       at the leaves
 /// Meshes are surfaces (as in FCL): a shape entirely inside a closed mesh does not touch it.
 /// Every test counts touching as intersecting. A contact (point, unit normal from a towards b,
 /// depth) is computed only when the caller passes somewhere to put it; for mesh pairs the depth is
@@ -21,6 +22,8 @@
 #include "impact/bvh/traverse.hpp"
 #include "impact/bvh/traverse_pair.hpp"
 #include "impact/geometry/obb.hpp"
+#include "impact/narrow/closest_point.hpp"
+#include "impact/narrow/triangle_triangle.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -80,29 +83,6 @@ template <class S> struct ShapeContact {
 
 namespace detail {
 
-/// Closest point of triangle abc to p (Voronoi regions of vertices, edges, face; Ericson,
-/// Real-Time Collision Detection, 5.1.5). Degenerate triangles fall into the edge/vertex regions.
-template <class S> Vec3<S> closest_on_triangle(const Vec3<S>& p, const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c) {
-  const Vec3<S> ab = b - a, ac = c - a, ap = p - a;
-  const S d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= S(0) && d2 <= S(0)) return a;
-  const Vec3<S> bp = p - b;
-  const S d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= S(0) && d4 <= d3) return b;
-  const S vc = d1 * d4 - d3 * d2;
-  if (vc <= S(0) && d1 >= S(0) && d3 <= S(0)) return a + ab * (d1 / (d1 - d3));
-  const Vec3<S> cp = p - c;
-  const S d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= S(0) && d5 <= d6) return c;
-  const S vb = d5 * d2 - d1 * d6;
-  if (vb <= S(0) && d2 >= S(0) && d6 <= S(0)) return a + ac * (d2 / (d2 - d6));
-  const S va = d3 * d6 - d5 * d4;
-  if (va <= S(0) && (d4 - d3) >= S(0) && (d5 - d6) >= S(0)) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const S denom = va + vb + vc;
-  if (!(denom > S(0))) return a;  // fully degenerate: every region test above failed by rounding
-  return a + ab * (vb / denom) + ac * (vc / denom);
-}
-
 /// Projection interval of n points on axis.
 template <class S> inline void project(const Vec3<S>* pts, int n, const Vec3<S>& axis, S& lo, S& hi) {
   lo = hi = pts[0].dot(axis);
@@ -144,25 +124,6 @@ template <class S> bool triangle_box_overlap(const Vec3<S>& a, const Vec3<S>& b,
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) axes[n++] = Vec3<S>::Unit(i).cross(e[j]);
   return sat_overlap(tri, 3, corners, 8, axes, n);
-}
-
-/// Triangle against triangle by separating axes: both normals, the nine edge–edge directions, and
-/// the in-plane edge normals that decide coplanar pairs.
-template <class S> bool triangles_overlap_sat(const Triangle<S>& p, const Triangle<S>& q) {
-  const Vec3<S> P[3] = {p.a, p.b, p.c}, Q[3] = {q.a, q.b, q.c};
-  const Vec3<S> ep[3] = {p.b - p.a, p.c - p.b, p.a - p.c}, eq[3] = {q.b - q.a, q.c - q.b, q.a - q.c};
-  const Vec3<S> np = ep[0].cross(ep[1]), nq = eq[0].cross(eq[1]);
-  Vec3<S> axes[17];
-  int n = 0;
-  axes[n++] = np;
-  axes[n++] = nq;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) axes[n++] = ep[i].cross(eq[j]);
-  for (int i = 0; i < 3; ++i) {
-    axes[n++] = np.cross(ep[i]);
-    axes[n++] = nq.cross(eq[i]);
-  }
-  return sat_overlap(P, 3, Q, 3, axes, n);
 }
 
 /// Does a sphere (centre c, radius r) meet the closed box centred at the origin with half extents h?
@@ -266,8 +227,9 @@ bool sphere_mesh(const Vec3<S>& c, S r, const MeshBvh<Sphere<S>>& m, const Rigid
       m.tree(), [&](const Sphere<S>& bv) { return overlap(bv, query); },
       [&](std::int32_t k) {
         const Triangle<S>& t = m.triangle(k);
-        const Vec3<S> q = closest_on_triangle(lc, t.a, t.b, t.c);
-        const S d2 = (lc - q).squaredNorm();
+        const auto cp = closest_point_on_triangle(lc, t);
+        const Vec3<S>& q = cp.point;
+        const S d2 = cp.squared_distance;
         if (d2 > r * r) return true;
         hit = true;
         if (out) {
@@ -302,7 +264,7 @@ bool box_mesh(const Vec3<S>& h, const RigidTransform<S>& pb, const MeshBvh<Spher
           Vec3<S> n = cen.squaredNorm() > S(0) ? Vec3<S>(cen.normalized()) : Vec3<S>::UnitZ();  // box towards mesh
           out->normal = pb.rotate(flip ? Vec3<S>(-n) : n);
           out->depth = S(0);
-          out->point = pb.apply(closest_on_triangle(Vec3<S>::Zero().eval(), a, b, c).cwiseMax(-h).cwiseMin(h));
+          out->point = pb.apply(closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(a, b, c)).point.cwiseMax(-h).cwiseMin(h));
         }
         return false;
       });
@@ -320,7 +282,7 @@ bool mesh_mesh(const MeshBvh<Sphere<S>>& ma, const RigidTransform<S>& pa, const 
         const Triangle<S>& ta = ma.triangle(i);
         const Triangle<S>& tb0 = mb.triangle(j);
         const Triangle<S> tb(b_to_a.apply(tb0.a), b_to_a.apply(tb0.b), b_to_a.apply(tb0.c));
-        if (!triangles_overlap_sat(ta, tb)) return true;
+        if (!triangles_intersect(ta, tb)) return true;
         hit = true;
         if (out) {
           Vec3<S> n = ta.normal();
