@@ -36,6 +36,33 @@ inline fcl::Transform3d to_fcl(const RigidTransform<double>& x) {
   return t;
 }
 
+/// A pair of FCL collision objects made once and re-posed per query, so that timing a query does
+/// not include FCL's object set-up (which scans every vertex to compute a local AABB).
+template <class BV> struct FclPair {
+  fcl::CollisionObjectd a, b;
+  FclPair(const std::shared_ptr<fcl::BVHModel<BV>>& ma, const std::shared_ptr<fcl::BVHModel<BV>>& mb) : a(ma), b(mb) {}
+  void set_poses(const RigidTransform<double>& pa, const RigidTransform<double>& pb) {
+    a.setTransform(to_fcl(pa));
+    a.computeAABB();
+    b.setTransform(to_fcl(pb));
+    b.computeAABB();
+  }
+  bool collides() {
+    fcl::CollisionRequestd req;
+    fcl::CollisionResultd res;
+    fcl::collide(&a, &b, req, res);
+    return res.isCollision();
+  }
+  std::vector<std::pair<int, int>> all_pairs(std::size_t max_contacts = 100000000) {
+    fcl::CollisionRequestd req(max_contacts, false);
+    fcl::CollisionResultd res;
+    fcl::collide(&a, &b, req, res);
+    std::vector<std::pair<int, int>> out;
+    for (std::size_t i = 0; i < res.numContacts(); ++i) out.emplace_back(res.getContact(i).b1, res.getContact(i).b2);
+    return out;
+  }
+};
+
 /// FCL's boolean answer with the default request (num_max_contacts = 1, no contacts).
 template <class BV>
 bool fcl_collides(const std::shared_ptr<fcl::BVHModel<BV>>& a, const RigidTransform<double>& pa, const std::shared_ptr<fcl::BVHModel<BV>>& b,

@@ -12,12 +12,13 @@
 namespace impact {
 
 
-/// Visits every pair of primitives (id_a, id_b) whose leaves' BVs overlap.
-/// `overlap(const BVA& a, const BVB& b) -> bool` must be conservative (never false for volumes
-/// that touch). `visit(std::int32_t id_a, std::int32_t id_b) -> bool` returns false to stop.
-/// Returns false when the visitor stopped the walk.
-template <class BVA, class BVB, class Overlap, class Visit>
-bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visit&& visit) {
+/// Visits every pair of primitives (id_a, id_b) whose leaves pass the node test.
+/// `overlap(const BvhNode<BVA>& a, const BvhNode<BVB>& b) -> bool` sees whole nodes, so a query
+/// can test a leaf's primitives directly instead of its BV; it must be conservative (never false
+/// when the primitives below the two nodes can touch). `visit(std::int32_t id_a, std::int32_t id_b)
+/// -> bool` returns false to stop. Returns false when the visitor stopped the walk.
+template <class BVA, class BVB, class NodeOverlap, class Visit>
+bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& overlap, Visit&& visit) {
   if (a.empty() || b.empty()) return true;
   detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
   stack.push({0, 0});
@@ -25,7 +26,7 @@ bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visi
     const auto [i, j] = stack.pop();
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
     const auto& nb = b.nodes[static_cast<std::size_t>(j)];
-    if (!overlap(na.bv, nb.bv)) continue;
+    if (!overlap(na, nb)) continue;
     const bool la = na.is_leaf(), lb = nb.is_leaf();
     if (la && lb) {
       for (std::int32_t p = na.first; p < na.first + na.count; ++p)
@@ -40,6 +41,16 @@ bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visi
     }
   }
   return true;
+}
+
+/// Visits every pair of primitives (id_a, id_b) whose leaves' BVs overlap.
+/// `overlap(const BVA& a, const BVB& b) -> bool` must be conservative (never false for volumes
+/// that touch). `visit(std::int32_t id_a, std::int32_t id_b) -> bool` returns false to stop.
+/// Returns false when the visitor stopped the walk.
+template <class BVA, class BVB, class Overlap, class Visit>
+bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visit&& visit) {
+  return traverse_pair_nodes(
+      a, b, [&](const BvhNode<BVA>& na, const BvhNode<BVB>& nb) { return overlap(na.bv, nb.bv); }, visit);
 }
 
 /// Visits every unordered pair {id_a, id_b}, id_a != id_b, of primitives of one tree whose

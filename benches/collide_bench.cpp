@@ -1,0 +1,245 @@
+// SPDX-License-Identifier: MIT
+// impact-collide-bench: mesh–mesh collision of impact's sphere and AABB trees against FCL's
+// OBBRSS and OBB trees, in one run, on the same meshes and the same random poses.
+//
+//   impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|all]
+//                        [--split middle|median] [--leaf N] [--json FILE]
+//
+// Mesh B defaults to mesh A; without meshes a built-in generated scene is used (a torus against an
+// icosphere). Poses come from tests/support/poses.hpp: A stays at the origin, B gets a uniformly
+// random rotation and a translation uniform in A's bounding box grown by B's bounding radius. For each method it prints build time, median and mean query time,
+// colliding poses, mismatches against FCL OBBRSS (boolean answers, or pair sets in all-pairs mode),
+// mean BV and triangle tests, and the speed ratio FCL OBBRSS / method.
+#include "bench_util.hpp"
+#include "impact/bvh/mesh_bvh.hpp"
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/mesh_collide.hpp"
+#include "support/fcl_oracle.hpp"
+#include "support/poses.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <set>
+
+using namespace impact;
+using impact::bench::Clock;
+using impact::bench::seconds_since;
+
+namespace {
+
+struct Args {
+  std::string mesh_a, mesh_b, json, bv = "all", split = "middle";
+  int poses = 1000, leaf = 1;
+  std::uint64_t seed = 1;
+};
+
+[[noreturn]] void usage(const char* msg) {
+  std::fprintf(stderr,
+               "%s\nusage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|all]\n"
+               "                            [--split middle|median] [--leaf N] [--json FILE]\n",
+               msg);
+  std::exit(2);
+}
+
+Args parse(int argc, char** argv) {
+  Args a;
+  std::vector<std::string> pos;
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
+      return argv[++i];
+    };
+    if (s == "--poses") a.poses = std::atoi(next().c_str());
+    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    else if (s == "--bv") a.bv = next();
+    else if (s == "--json") a.json = next();
+    else if (s == "--split") a.split = next();
+    else if (s == "--leaf") a.leaf = std::atoi(next().c_str());
+    else if (s == "-h" || s == "--help") usage("");
+    else if (!s.empty() && s[0] == '-') usage(("unknown option " + s).c_str());
+    else pos.push_back(s);
+  }
+  if (pos.size() > 2) usage("at most two meshes");
+  if (a.poses < 1) usage("--poses must be >= 1");
+  if (a.leaf < 1) usage("--leaf must be >= 1");
+  if (a.bv != "sphere" && a.bv != "aabb" && a.bv != "all") usage("--bv must be sphere, aabb or all");
+  if (a.split != "middle" && a.split != "median") usage("--split must be middle or median");
+  if (!pos.empty()) a.mesh_a = pos[0];
+  a.mesh_b = pos.size() > 1 ? pos[1] : a.mesh_a;
+  return a;
+}
+
+TriangleMesh<double> load(const std::string& path) {
+#ifdef IMPACT_HAVE_IO
+  return load_mesh<double>(path);
+#else
+  (void)path;
+  usage("this build has no mesh loader (assimp was not found); run without meshes");
+#endif
+}
+
+struct Row {
+  std::string library, bv, query;
+  double build_ms = 0;
+  bench::Summary us;
+  int colliding = 0, mismatches = 0;
+  double bv_tests = -1, tri_tests = -1;
+  double ratio = 0;  // FCL OBBRSS median / this median
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  TriangleMesh<double> A, B;
+  std::string name_a = args.mesh_a.empty() ? "generated:torus" : args.mesh_a;
+  std::string name_b = args.mesh_a.empty() ? "generated:icosphere" : args.mesh_b;
+  try {
+    if (args.mesh_a.empty()) {
+      A = make_torus<double>(1.0, 0.35, 160, 64);
+      B = make_icosphere<double>(0.6, 5);
+    } else {
+      A = load(args.mesh_a);
+      B = args.mesh_b == args.mesh_a ? A : load(args.mesh_b);
+    }
+    validate_mesh(A, name_a);
+    validate_mesh(B, name_b);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "impact-collide-bench: %s\n", e.what());
+    return 1;
+  }
+
+  const std::vector<RigidTransform<double>> poses = impact::test::random_poses_around(A, B, args.poses, args.seed);
+  const RigidTransform<double> id;
+  std::printf("impact-collide-bench: A=%s (%d tris), B=%s (%d tris), %d poses, seed %llu\n", name_a.c_str(), A.num_triangles(),
+              name_b.c_str(), B.num_triangles(), args.poses, static_cast<unsigned long long>(args.seed));
+
+  std::vector<Row> rows;
+  std::vector<char> ref_bool(poses.size());
+  std::vector<std::set<std::pair<int, int>>> ref_pairs(poses.size());
+  double ref_bool_median = 0, ref_all_median = 0;
+
+  // FCL: OBBRSS is the reference, OBB a second peer.
+  auto run_fcl = [&](auto tag, const char* bvname, bool reference) {
+    using FBV = decltype(tag);
+    auto t0 = Clock::now();
+    auto fa = impact::test::make_fcl_model<FBV>(A);
+    auto fb = impact::test::make_fcl_model<FBV>(B);
+    const double build_ms = seconds_since(t0) * 1e3;
+    Row rb_{"fcl", bvname, "boolean", build_ms, {}, 0, 0, -1, -1, 0};
+    Row ra_{"fcl", bvname, "all_pairs", build_ms, {}, 0, 0, -1, -1, 0};
+    std::vector<double> tb, ta;
+    impact::test::FclPair<FBV> objects(fa, fb);
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      auto q0 = Clock::now();
+      objects.set_poses(id, poses[k]);  // timed: impact's queries take the poses as arguments too
+      const bool hit = objects.collides();
+      tb.push_back(seconds_since(q0) * 1e6);
+      q0 = Clock::now();
+      objects.set_poses(id, poses[k]);
+      const auto pairs = objects.all_pairs();
+      ta.push_back(seconds_since(q0) * 1e6);
+      std::set<std::pair<int, int>> ps(pairs.begin(), pairs.end());
+      rb_.colliding += hit;
+      ra_.colliding += !ps.empty();
+      if (reference) {
+        ref_bool[k] = hit;
+        ref_pairs[k] = ps;
+      } else {
+        rb_.mismatches += hit != bool(ref_bool[k]);
+        ra_.mismatches += ps != ref_pairs[k];
+      }
+    }
+    rb_.us = bench::summarize(tb);
+    ra_.us = bench::summarize(ta);
+    if (reference) ref_bool_median = rb_.us.median, ref_all_median = ra_.us.median;
+    rows.push_back(rb_);
+    rows.push_back(ra_);
+  };
+  run_fcl(fcl::OBBRSS<double>{}, "obbrss", true);
+  run_fcl(fcl::OBB<double>{}, "obb", false);
+
+  auto run_impact = [&](auto tag, const char* bvname) {
+    using BV = decltype(tag);
+    MeshBvhConfig cfg;
+    cfg.build.leaf_size = args.leaf;
+    cfg.build.split = args.split == "median" ? SplitRule::CentroidMedian : SplitRule::SpatialMiddle;
+    auto t0 = Clock::now();
+    MeshBvh<BV> ma(A, cfg);
+    MeshBvh<BV> mb(B, cfg);
+    const double build_ms = seconds_since(t0) * 1e3;
+    Row rb_{"impact", bvname, "boolean", build_ms, {}, 0, 0, 0, 0, 0};
+    Row ra_{"impact", bvname, "all_pairs", build_ms, {}, 0, 0, 0, 0, 0};
+    std::vector<double> tb, ta;
+    CollideOptions all;
+    all.all_pairs = true;
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      QueryStats st;
+      auto q0 = Clock::now();
+      const bool hit = collides(ma, id, mb, poses[k], &st);
+      tb.push_back(seconds_since(q0) * 1e6);
+      rb_.bv_tests += double(st.bv_tests);
+      rb_.tri_tests += double(st.primitive_tests);
+      q0 = Clock::now();
+      const auto res = collide(ma, id, mb, poses[k], all);
+      ta.push_back(seconds_since(q0) * 1e6);
+      ra_.bv_tests += double(res.stats.bv_tests);
+      ra_.tri_tests += double(res.stats.primitive_tests);
+      std::set<std::pair<int, int>> ps(res.pairs.begin(), res.pairs.end());
+      rb_.colliding += hit;
+      ra_.colliding += !ps.empty();
+      rb_.mismatches += hit != bool(ref_bool[k]);
+      ra_.mismatches += ps != ref_pairs[k];
+    }
+    for (Row* r : {&rb_, &ra_}) {
+      r->bv_tests /= double(poses.size());
+      r->tri_tests /= double(poses.size());
+    }
+    rb_.us = bench::summarize(tb);
+    ra_.us = bench::summarize(ta);
+    rows.push_back(rb_);
+    rows.push_back(ra_);
+  };
+  if (args.bv == "sphere" || args.bv == "all") run_impact(Sphere<double>{}, "sphere");
+  if (args.bv == "aabb" || args.bv == "all") run_impact(Aabb<double>{}, "aabb");
+
+  for (Row& r : rows) r.ratio = (r.query == "boolean" ? ref_bool_median : ref_all_median) / std::max(r.us.median, 1e-9);
+
+  std::printf("\n%-7s %-7s %-10s %10s %11s %11s %9s %10s %12s %12s %13s\n", "library", "bv", "query", "build_ms", "median_us",
+              "mean_us", "colliding", "mismatch", "bv_tests", "tri_tests", "fcl/this(med)");
+  for (const Row& r : rows) {
+    char bvt[32] = "-", trt[32] = "-";
+    if (r.bv_tests >= 0) std::snprintf(bvt, sizeof bvt, "%.1f", r.bv_tests);
+    if (r.tri_tests >= 0) std::snprintf(trt, sizeof trt, "%.1f", r.tri_tests);
+    std::printf("%-7s %-7s %-10s %10.2f %11.2f %11.2f %9d %10d %12s %12s %13.2f\n", r.library.c_str(), r.bv.c_str(), r.query.c_str(),
+                r.build_ms, r.us.median, r.us.mean, r.colliding, r.mismatches, bvt, trt, r.ratio);
+  }
+  std::printf("\nmismatches: boolean answers (or all-pairs pair sets) that differ from FCL OBBRSS on the same pose.\n");
+
+  int total_mismatch = 0;
+  for (const Row& r : rows)
+    if (r.library == "impact") total_mismatch += r.mismatches;
+
+  if (!args.json.empty()) {
+    std::vector<std::string> items;
+    for (const Row& r : rows) {
+      bench::JsonObject o;
+      o.add("library", r.library).add("bv", r.bv).add("query", r.query).add("build_ms", r.build_ms).add("median_us", r.us.median);
+      o.add("mean_us", r.us.mean).add("p99_us", r.us.p99).add("max_us", r.us.max).add("colliding", r.colliding).add("mismatches", r.mismatches);
+      if (r.bv_tests >= 0) o.add("bv_tests_mean", r.bv_tests).add("tri_tests_mean", r.tri_tests);
+      o.add("speedup_vs_fcl_obbrss", r.ratio);
+      items.push_back(o.str());
+    }
+    bench::JsonObject top;
+    top.add("mesh_a", name_a).add("mesh_b", name_b).add("poses", args.poses).add("seed", static_cast<long long>(args.seed));
+    top.add("split", args.split).add("leaf_size", args.leaf).raw("results", bench::JsonObject::array(items));
+    if (!bench::write_file(args.json, top.str())) {
+      std::fprintf(stderr, "impact-collide-bench: cannot write %s\n", args.json.c_str());
+      return 1;
+    }
+  }
+  if (total_mismatch) std::printf("WARNING: %d impact answers differ from FCL OBBRSS (see the mismatch column)\n", total_mismatch);
+  return 0;
+}

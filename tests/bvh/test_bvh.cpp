@@ -1,0 +1,235 @@
+// SPDX-License-Identifier: MIT
+// The hierarchy: structural invariants of the top-down build (every triangle in exactly one leaf,
+// leaf sizes, each node's BV holds all its triangles' vertices), termination on degenerate input,
+// refit after deformation, and the traversals against brute force: pair traversal under random
+// rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere and AABB,
+// float and double, both split rules.
+#include "impact/bvh/mesh_bvh.hpp"
+#include "impact/bvh/traverse.hpp"
+#include "impact/query/mesh_collide.hpp"
+#include "support/brute_force.hpp"
+#include "support/meshes.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace impact;
+using namespace impact::test;
+
+namespace {
+
+template <class BV> struct Case {
+  using Bv = BV;
+};
+
+/// Checks that node i's BV holds every vertex of every triangle below it; returns the triangle count.
+template <class BV> std::int32_t check_node(const MeshBvh<BV>& m, std::int32_t i, std::vector<int>& seen, int leaf_size, int& leaves) {
+  using S = typename BvTraits<BV>::Scalar;
+  const auto& tree = m.tree();
+  const auto& node = tree.nodes[static_cast<std::size_t>(i)];
+  std::vector<std::int32_t> prims;
+  // collect primitives below i
+  {
+    std::vector<std::int32_t> stack{i};
+    while (!stack.empty()) {
+      auto k = stack.back();
+      stack.pop_back();
+      const auto& n = tree.nodes[static_cast<std::size_t>(k)];
+      if (n.is_leaf())
+        for (auto p = n.first; p < n.first + n.count; ++p) prims.push_back(tree.primitives[static_cast<std::size_t>(p)]);
+      else
+        stack.push_back(n.left()), stack.push_back(n.right());
+    }
+  }
+  const S slack = S(1e-5) * (std::is_same_v<S, float> ? S(10) : S(1e-6));
+  for (auto p : prims) {
+    const Triangle<S>& t = m.triangle(p);
+    for (int v = 0; v < 3; ++v) {
+      const Vec3<S> x = t[v];
+      if constexpr (std::is_same_v<BV, Sphere<S>>) {
+        EXPECT_LE((x - node.bv.center).norm(), node.bv.radius + slack);
+      } else {
+        EXPECT_TRUE(node.bv.contains(x));
+      }
+    }
+  }
+  if (node.is_leaf()) {
+    ++leaves;
+    EXPECT_LE(node.count, leaf_size);
+    for (auto p = node.first; p < node.first + node.count; ++p) ++seen[static_cast<std::size_t>(tree.primitives[static_cast<std::size_t>(p)])];
+  } else {
+    EXPECT_GT(node.left(), i);
+    check_node(m, node.left(), seen, leaf_size, leaves);
+    check_node(m, node.right(), seen, leaf_size, leaves);
+  }
+  return static_cast<std::int32_t>(prims.size());
+}
+
+}  // namespace
+
+template <class BV> class BvhTest : public ::testing::Test {};
+using BvTypes = ::testing::Types<Sphere<float>, Sphere<double>, Aabb<float>, Aabb<double>>;
+TYPED_TEST_SUITE(BvhTest, BvTypes);
+
+TYPED_TEST(BvhTest, BuildInvariants) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  const auto mesh = random_soup<S>(500, 1);
+  for (SplitRule rule : {SplitRule::SpatialMiddle, SplitRule::CentroidMedian}) {
+    for (int leaf : {1, 2, 4, 8}) {
+      MeshBvhConfig cfg;
+      cfg.build.split = rule;
+      cfg.build.leaf_size = leaf;
+      MeshBvh<BV> m(mesh, cfg);
+      std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
+      int leaves = 0;
+      EXPECT_EQ(check_node(m, 0, seen, leaf, leaves), 500);
+      for (int s : seen) ASSERT_EQ(s, 1);
+      EXPECT_EQ(static_cast<std::size_t>(2 * leaves - 1), m.tree().nodes.size());
+      // leaf positions map back to distinct rows of F
+      std::vector<int> rows(500, 0);
+      for (std::int32_t k = 0; k < 500; ++k) ++rows[static_cast<std::size_t>(m.triangle_id(k))];
+      for (int r : rows) ASSERT_EQ(r, 1);
+    }
+  }
+}
+
+TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  // 64 copies of one triangle: all centroids equal
+  TriangleMesh<S> m;
+  m.V.resize(3, 3);
+  m.V << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  m.F.resize(64, 3);
+  for (int t = 0; t < 64; ++t) m.F.row(t) << 0, 1, 2;
+  MeshBvh<BV> tree(m);
+  EXPECT_EQ(bvh_stats(tree.tree()).leaves, 64u);
+  // zero-area triangles (all three vertices equal) are allowed
+  TriangleMesh<S> z;
+  z.V = Vertices<S>::Zero(1, 3);
+  z.F = Faces::Zero(10, 3);
+  MeshBvh<BV> zt(z);
+  EXPECT_EQ(bvh_stats(zt.tree()).leaves, 10u);
+  EXPECT_TRUE(collides(zt, RigidTransform<S>{}, tree, RigidTransform<S>{}));
+}
+
+TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  const auto ma = random_soup<S>(300, 11, 1.0, 0.12);
+  const auto mb = random_soup<S>(200, 12, 1.0, 0.12);
+  MeshBvh<BV> a(ma), b(mb);
+  Rng rng(99);
+  int colliding = 0;
+  for (int pose = 0; pose < 30; ++pose) {
+    const RigidTransform<S> pa = random_pose(rng, Eigen::Vector3d::Constant(-1.0), Eigen::Vector3d::Constant(1.0)).template cast<S>();
+    const RigidTransform<S> pb = random_pose(rng, Eigen::Vector3d::Constant(-1.8), Eigen::Vector3d::Constant(1.8)).template cast<S>();
+    const auto expected = brute_force_pairs(ma, pa, mb, pb);
+    CollideOptions opt;
+    opt.all_pairs = true;
+    const auto got = collide(a, pa, b, pb, opt);
+    ASSERT_EQ(sorted(got.pairs), expected) << "pose " << pose;
+    EXPECT_EQ(got.colliding, !expected.empty());
+    EXPECT_EQ(collides(a, pa, b, pb), !expected.empty());
+    colliding += !expected.empty();
+  }
+  EXPECT_GT(colliding, 5);  // the poses exercise both answers
+  EXPECT_LT(colliding, 30);
+}
+
+TYPED_TEST(BvhTest, SelfTraversalMatchesBruteForce) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  for (int leaf : {1, 3}) {
+    auto mesh = random_soup<S>(400, 5, 1.0, 0.15);
+    // share some vertices so adjacency exclusion is exercised
+    for (int t = 1; t < 400; t += 7) mesh.F(t, 0) = mesh.F(t - 1, 1);
+    MeshBvhConfig cfg;
+    cfg.build.leaf_size = leaf;
+    MeshBvh<BV> m(mesh, cfg);
+    CollideOptions opt;
+    opt.all_pairs = true;
+    const auto got = self_collide(m, opt);
+    const auto expected = brute_force_self_pairs(mesh);
+    ASSERT_FALSE(expected.empty());
+    EXPECT_EQ(sorted(got.pairs), expected);
+  }
+}
+
+TYPED_TEST(BvhTest, RefitFollowsDeformation) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  auto mesh = random_soup<S>(300, 21, 1.0, 0.1);
+  auto other = random_soup<S>(300, 22, 1.0, 0.1);
+  for (RefitMode mode : {RefitMode::Merge, RefitMode::Fit}) {
+    MeshBvh<BV> a(mesh), b(other);
+    Rng rng(5);
+    for (int step = 0; step < 5; ++step) {
+      Vertices<S> V = a.mesh().V;
+      for (Eigen::Index i = 0; i < V.rows(); ++i) V.row(i) += (rng.vec(-0.05, 0.05) + Eigen::Vector3d(0.02, 0, 0)).cast<S>().transpose();
+      a.set_vertices(V, mode);
+      std::vector<int> seen(300, 0);
+      int leaves = 0;
+      check_node(a, 0, seen, 1, leaves);
+      CollideOptions opt;
+      opt.all_pairs = true;
+      const TriangleMesh<S> moved(V, mesh.F);
+      EXPECT_EQ(sorted(collide(a, RigidTransform<S>{}, b, RigidTransform<S>{}, opt).pairs),
+                brute_force_pairs(moved, RigidTransform<S>{}, other, RigidTransform<S>{}));
+    }
+  }
+}
+
+TEST(MeshBvhInput, BadInputThrowsWithReason) {
+  Vertices<double> V(3, 3);
+  V << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  Faces F(1, 3);
+  F << 0, 1, 2;
+  EXPECT_NO_THROW(MeshBvh<Sphere<double>>(V, F));
+  auto expect_throw = [](const Vertices<double>& v, const Faces& f, const std::string& needle) {
+    try {
+      MeshBvh<Sphere<double>> m(v, f);
+      ADD_FAILURE() << "no exception for " << needle;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  Vertices<double> nan = V;
+  nan(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  expect_throw(nan, F, "vertex 1");
+  Vertices<double> inf = V;
+  inf(2, 0) = -std::numeric_limits<double>::infinity();
+  expect_throw(inf, F, "NaN or infinite");
+  Faces out = F;
+  out(0, 2) = 3;
+  expect_throw(V, out, "index 3");
+  Faces neg = F;
+  neg(0, 0) = -1;
+  expect_throw(V, neg, "index -1");
+  expect_throw(V, Faces(0, 3), "empty");
+  expect_throw(Vertices<double>(0, 3), F, "empty");
+  // set_vertices validates too, and leaves the model usable
+  MeshBvh<Sphere<double>> m(V, F);
+  EXPECT_THROW(m.set_vertices(nan), InvalidInput);
+  EXPECT_THROW(m.set_vertices(Vertices<double>::Zero(5, 3)), InvalidInput);
+  EXPECT_TRUE(all_finite(m.mesh().V));
+}
+
+TEST(BvhSingleTree, TraverseVisitsExactlyTheOverlappingPrimitives) {
+  const auto mesh = random_soup<double>(1000, 3);
+  MeshBvh<Sphere<double>> m(mesh);
+  const Sphere<double> probe(Eigen::Vector3d(0.2, -0.1, 0.3), 0.4);
+  std::vector<int> got;
+  traverse(
+      m.tree(), [&](const Sphere<double>& s) { return overlap(s, probe); },
+      [&](std::int32_t k) {
+        const auto& t = m.triangle(k);
+        if ((t.centroid() - probe.center).norm() <= probe.radius) got.push_back(m.triangle_id(k));
+        return true;
+      });
+  std::vector<int> expected;
+  for (int t = 0; t < mesh.num_triangles(); ++t)
+    if ((mesh.triangle(t).centroid() - probe.center).norm() <= probe.radius) expected.push_back(t);
+  EXPECT_EQ(sorted(got), expected);
+  EXPECT_FALSE(expected.empty());
+}
