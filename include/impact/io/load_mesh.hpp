@@ -9,6 +9,7 @@
 
 #include "impact/core/error.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
+#include "impact/io/file_checks.hpp"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -93,15 +94,18 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
 /// meshes of the scene, each under its node transform (see LoadOptions), concatenated in a
 /// depth-first walk of the scene graph; polygons are triangulated by assimp, point and line
 /// primitives are ignored, and vertices no triangle uses are dropped. Zero-area triangles are
-/// kept. Winding is the file's. With merge_duplicate_vertices (the default) exactly equal
+/// kept. Winding is the file's. Coordinates pass through assimp's ai_real, which is float in
+/// the usual (and Debian's) builds, so a double mesh carries float-rounded values. With merge_duplicate_vertices (the default) exactly equal
 /// positions are welded, giving for example 2,930 vertices for Keenan Crane's spot.obj where
 /// assimp alone reports 3,441.
 ///
 /// The result passes validate_mesh. Throws InvalidInput, with the path and the reason in the
 /// message, when the file does not exist, is not a regular file, cannot be read, is empty, cannot
 /// be parsed (assimp's error text is included), contains no triangles, has a NaN or infinite
-/// coordinate (or one that overflows S), has a face index out of range, or holds more than
-/// INT_MAX vertices or triangles. Never prints.
+/// coordinate (or one that overflows S), has a face index out of range, is a PLY or OFF file
+/// shorter than its header declares, or holds more than INT_MAX vertices or triangles. A text
+/// file cut at a line boundary that is still a valid file (OBJ has no declared counts) cannot be
+/// told from a complete one. Never prints.
 template <class S> TriangleMesh<S> load_mesh(const std::string& path, const LoadOptions& options = {}) {
   static_assert(is_supported_scalar_v<S>, "load_mesh: S must be float or double");
   namespace fs = std::filesystem;
@@ -112,6 +116,7 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
   if (fs::is_directory(st)) detail::load_error(path, "is a directory, not a mesh file");
   if (!std::ifstream(path, std::ios::binary).good()) detail::load_error(path, "file cannot be opened for reading");
   if (fs::is_regular_file(st) && fs::file_size(path, ec) == 0 && !ec) detail::load_error(path, "file is empty");
+  detail::check_mesh_file(path);  // PLY and OFF defects assimp would hang on or hide
 
   // No JoinIdenticalVertices when welding by position ourselves: it would only cost time.
   unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
