@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Options and result of the continuous collision tests (vertex_face_ccd, edge_edge_ccd): the
+/// minimum separation, the time window, the tolerance that bounds false positives and the work
+/// budget go in; hit, a conservative time of impact, the contact parameters and flags come out.
+#pragma once
+
+#include <cstdint>
+
+namespace impact {
+
+/// Inputs of vertex_face_ccd and edge_edge_ccd. Lengths are in the units of the coordinates.
+struct CcdOptions {
+  /// d >= 0: a contact is any time at which the two primitives come within distance d.
+  double min_separation = 0.0;
+  /// The tests look at t in [0, t_max], 0 < t_max <= 1 (t = 1 is the end of the step).
+  double t_max = 1.0;
+  /// Bounds the false positives: a hit is only reported once the search has found a piece of the
+  /// (t, u, v) domain on which the primitives are everywhere within min_separation + tolerance
+  /// (up to the floating-point error bound, about 1e-13 times the coordinate magnitude).
+  /// Smaller is tighter and slower. Never affects the no-false-negative guarantee.
+  double tolerance = 1e-6;
+  /// Work budget: the number of (t, u, v) boxes the search may examine. When it runs out the test
+  /// reports a hit at the earliest time not yet excluded, with CcdResult::budget_exhausted set.
+  std::int64_t max_iterations = 20000;
+};
+
+/// Output of vertex_face_ccd and edge_edge_ccd.
+/// - hit == false guarantees that for every t in [0, t_max] the two primitives (closed triangle,
+///   closed segments) are farther apart than min_separation: no false negatives, ever.
+/// - hit == true: toi is never later than the first time at which the primitives come within
+///   min_separation (if they do at all), and at time toi the primitives are within
+///   min_separation + tolerance of each other (except when budget_exhausted, which only promises
+///   that no contact happens before toi).
+template <class S> struct CcdResult {
+  bool hit = false;
+  /// Conservative time of impact in [0, t_max]; t_max when there is no hit.
+  S toi = S(1);
+  /// Contact parameters at toi. Vertex-face: the triangle point is (1-u-v) f0 + u f1 + v f2.
+  /// Edge-edge: the points are a0 + u (a1 - a0) and b0 + v (b1 - b0). Approximate (the centre of
+  /// the last box of the search), meaningful only when hit.
+  S u = S(0), v = S(0);
+  /// The budget ran out: toi is the earliest time not yet excluded, the hit may be false.
+  bool budget_exhausted = false;
+  /// Number of (t, u, v) boxes examined.
+  std::int64_t iterations = 0;
+};
+
+}  // namespace impact
