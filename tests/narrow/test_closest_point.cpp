@@ -37,7 +37,7 @@ template <class S> double brute_triangle(const Vec3<S>& x, const Triangle<S>& t)
   const Vec3<double> p = x.template cast<double>(), a = t.a.template cast<double>(), b = t.b.template cast<double>(),
                      c = t.c.template cast<double>();
   double best = 1e300;
-  const int n = 120;
+  const int n = 100;
   for (int i = 0; i <= n; ++i)
     for (int j = 0; i + j <= n; ++j) {
       const double u = double(i) / n, v = double(j) / n;
@@ -46,14 +46,14 @@ template <class S> double brute_triangle(const Vec3<S>& x, const Triangle<S>& t)
   // edges, densely
   const Vec3<double> vs[3] = {a, b, c};
   for (int e = 0; e < 3; ++e)
-    for (int i = 0; i <= 2000; ++i) best = std::min(best, (vs[e] + (double(i) / 2000) * (vs[(e + 1) % 3] - vs[e]) - p).squaredNorm());
+    for (int i = 0; i <= 1000; ++i) best = std::min(best, (vs[e] + (double(i) / 1000) * (vs[(e + 1) % 3] - vs[e]) - p).squaredNorm());
   return best;
 }
 
 TYPED_TEST(Closest, PointTriangleAgainstBruteForce) {
   using S = TypeParam;
   Rng rng(31);
-  for (int it = 0; it < 600; ++it) {
+  for (int it = 0; it < 400; ++it) {
     const Triangle<S> t = random_triangle<S>(rng, it % 6 == 5 ? 0 : it % 6);
     const Vec3<S> x = rng.vec(-2, 2).cast<S>();
     const auto r = closest_point_on_triangle(x, t);
@@ -135,7 +135,7 @@ template <class S> Segment<S> random_segment(Rng& rng, int kind, const Segment<S
 TYPED_TEST(Closest, SegmentSegmentAgainstBruteForce) {
   using S = TypeParam;
   Rng rng(32);
-  for (int it = 0; it < 2000; ++it) {
+  for (int it = 0; it < 600; ++it) {
     const Segment<S> a(rng.vec(-1, 1).cast<S>(), rng.vec(-1, 1).cast<S>());
     Segment<S> sa = it % 11 == 0 ? Segment<S>(a.p, a.p) : a;
     const Segment<S> sb = random_segment<S>(rng, it % 4, sa);
@@ -144,8 +144,8 @@ TYPED_TEST(Closest, SegmentSegmentAgainstBruteForce) {
     const Segment<double> da(sa.p.template cast<double>(), sa.q.template cast<double>());
     const Segment<double> db(sb.p.template cast<double>(), sb.q.template cast<double>());
     double brute = 1e300;
-    for (int i = 0; i <= 4000; ++i) brute = std::min(brute, closest_point_on_segment(da.at(double(i) / 4000), db).squared_distance);
-    for (int i = 0; i <= 4000; ++i) brute = std::min(brute, closest_point_on_segment(db.at(double(i) / 4000), da).squared_distance);
+    for (int i = 0; i <= 2000; ++i) brute = std::min(brute, closest_point_on_segment(da.at(double(i) / 2000), db).squared_distance);
+    for (int i = 0; i <= 2000; ++i) brute = std::min(brute, closest_point_on_segment(db.at(double(i) / 2000), da).squared_distance);
     EXPECT_LE(double(r.squared_distance), brute * (1 + tol_for<S>(1)) + tol_for<S>(4)) << it;
     EXPECT_GE(r.s, S(0));
     EXPECT_LE(r.s, S(1));

@@ -30,7 +30,7 @@ TYPED_TEST(RayTri, AgreesWithExactPredicatesAwayFromBoundaries) {
   using S = TypeParam;
   Rng rng(21);
   int checked = 0, hits = 0;
-  for (int it = 0; it < 200000; ++it) {
+  for (int it = 0; it < 100000; ++it) {
     const Triangle<S> tri(rand_int_vec<S>(rng, 50), rand_int_vec<S>(rng, 50), rand_int_vec<S>(rng, 50));
     const Vec3<S> o = rand_int_vec<S>(rng, 60), d = rand_int_vec<S>(rng, 80);
     const Vec3<S> q = o + d;  // exact: the segment of the ray with t_max = 1
@@ -58,8 +58,8 @@ TYPED_TEST(RayTri, AgreesWithExactPredicatesAwayFromBoundaries) {
     const Vec3<S> p = hit->u * tri.a + hit->v * tri.b + hit->w * tri.c;
     EXPECT_LE((p - o - hit->t * d).norm(), tol * 200);
   }
-  EXPECT_GT(checked, 100000);
-  EXPECT_GT(hits, 2000);
+  EXPECT_GT(checked, 50000);
+  EXPECT_GT(hits, 1000);
 }
 
 TYPED_TEST(RayTri, TMaxAndParallelAndDegenerate) {

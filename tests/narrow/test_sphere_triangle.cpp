@@ -85,9 +85,9 @@ template <class S> double dist(const Vec3<S>& c, const Triangle<S>& t) {
 TYPED_TEST(SphereTri, SweptAgainstTimeSampling) {
   using S = TypeParam;
   Rng rng(41);
-  const int samples = 4000;
+  const int samples = 2000;
   int hits = 0;
-  for (int it = 0; it < 1500; ++it) {
+  for (int it = 0; it < 800; ++it) {
     Triangle<S> t(rng.vec(-1, 1).cast<S>(), rng.vec(-1, 1).cast<S>(), rng.vec(-1, 1).cast<S>());
     if (it % 7 == 1) t.c = t.a + S(0.5) * (t.b - t.a);  // collinear
     if (it % 7 == 2) t.c = t.b = t.a;                   // point
@@ -123,7 +123,7 @@ TYPED_TEST(SphereTri, SweptAgainstTimeSampling) {
     EXPECT_NEAR(double(h->normal.norm()), 1.0, 1e-4);
     EXPECT_NEAR(dist(h->point, t), 0.0, 1e-5);
   }
-  EXPECT_GT(hits, 200);
+  EXPECT_GT(hits, 100);
 }
 
 }  // namespace

@@ -34,11 +34,10 @@ namespace impact {
 /// A triangle prepared for many intersection tests against other triangles (the caller holds one
 /// triangle of mesh A and tests many of mesh B): its plane and filter terms are computed once.
 template <class S> struct PreparedTriangle {
-  Triangle<S> triangle;
-  OrientPlane plane;
+  OrientPlane plane;  ///< the vertices (in double), the rounded normal and the filter terms
 
   PreparedTriangle() = default;
-  explicit PreparedTriangle(const Triangle<S>& t) : triangle(t), plane(t.a, t.b, t.c) {}
+  explicit PreparedTriangle(const Triangle<S>& t) : plane(t.a, t.b, t.c) {}
 };
 
 namespace detail {
