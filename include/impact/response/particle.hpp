@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Particle: a point or a small ball moving under the step functions of particle_step.hpp.
+#pragma once
+
+#include "impact/core/types.hpp"
+
+namespace impact {
+
+/// A particle: centre position, velocity and radius (0 for a point particle; a ball of that
+/// radius otherwise, tested as a swept sphere). Units are the caller's (length, length/time).
+template <class S> struct Particle {
+  Vec3<S> position = Vec3<S>::Zero();
+  Vec3<S> velocity = Vec3<S>::Zero();
+  S radius = S(0);  ///< >= 0
+};
+
+}  // namespace impact

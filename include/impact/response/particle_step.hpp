@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Advancing particles by one time step against a ColliderSet, with either overshooting strategy;
+/// both share respond() (response.hpp).
+///
+/// Free flight is integrated exactly for a constant acceleration g: x += v dt + g dt^2 / 2,
+/// v += g dt. The path of a step is tested as the chord from x to the end point.
+///
+/// Backtracking (Strategy::Backtrack, continuous):
+///  1. cast the chord (a ray for point particles, a swept sphere for particles with a radius)
+///     against every backtracking collider and keep the first hit, at fraction s of the chord;
+///  2. move the particle to the hit, backed off along the chord so that it ends `offset` away
+///     from the surface along the normal (or at the chord's start if that is nearer): the
+///     particle only ever stands on the collision-free part of a chord, so it never enters a
+///     surface, also at concave corners and seams;
+///  3. respond with the velocity at the time of impact and the collider's velocity there;
+///  4. repeat for the rest of the step with the new velocity, at most `max_iterations` times.
+///  Budget policy: when the budget runs out with time left, the particle stops at the last safe
+///  point (the backed-off position of its last impact), keeps its post-response velocity, and the
+///  rest of the step is dropped (StepStats::budget_exhausted counts it). It is never left inside.
+///  Resting contact: an impact slower than the rest speed (response.hpp) with gravity pushing into
+///  the surface makes the contact active for the rest of the step: the normal parts of the
+///  velocity and of g are removed, Coulomb friction acts with the normal force |g . n| (static
+///  when |g_t| <= mu |g . n| and the particle is still), so a settled particle has velocity zero.
+///
+/// Projection (Strategy::Project, quick and dirty): after the unconstrained step, each projection
+/// collider reports whether the particle ended on the wrong side or within its radius; the
+/// particle moves to the closest surface point + (radius + offset) along the normal, and its
+/// velocity gets the same response. Repeated for up to `max_iterations` passes over the colliders.
+/// Projection cannot see thin geometry crossed within one step: that is what backtracking is for.
+///
+/// The offset is scale-aware: offset_ulps * epsilon(S) * (|x|_inf + collider scale + |chord|_inf)
+/// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
+/// size in float and 6e-14 in double, well above the rounding of a hit point and well below any
+/// physical length.
+#pragma once
+
+#include "impact/response/collider.hpp"
+#include "impact/response/particle.hpp"
+#include "impact/response/response.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace impact {
+
+/// Options of a particle step. The strategy is the system's default; a collider whose own
+/// strategy is not Inherit overrides it.
+template <class S> struct StepOptions {
+  Strategy strategy = Strategy::Backtrack;
+  Vec3<S> gravity = Vec3<S>::Zero();  ///< constant acceleration
+  /// Backtracking: impacts handled per particle per step; projection: passes over the colliders.
+  int max_iterations = 16;
+  /// Resting threshold: rest speed = rest_speed + rest_speed_factor * |gravity| * dt.
+  S rest_speed = S(0);
+  S rest_speed_factor = S(2);
+  /// Scale-aware surface offset in units of epsilon(S) (see the file comment).
+  S offset_ulps = S(256);
+  /// Absolute surface offset; used instead of offset_ulps when > 0.
+  S surface_offset = S(0);
+};
+
+/// Counters of one or more particle steps.
+struct StepStats {
+  std::size_t impacts = 0;            ///< backtracking impacts handled
+  std::size_t projections = 0;        ///< projections applied
+  std::size_t particles_hit = 0;      ///< particle-steps with at least one impact or projection
+  std::size_t budget_exhausted = 0;   ///< particle-steps that ran out of iterations
+  void operator+=(const StepStats& o) {
+    impacts += o.impacts;
+    projections += o.projections;
+    particles_hit += o.particles_hit;
+    budget_exhausted += o.budget_exhausted;
+  }
+};
+
+namespace detail {
+
+/// The default leg observer: does nothing.
+struct NoLegObserver {
+  template <class V> void operator()(const V&, const V&) const {}
+};
+
+template <class S> inline S surface_offset(const StepOptions<S>& o, const Vec3<S>& x, S scale, const Vec3<S>& d) {
+  if (o.surface_offset > S(0)) return o.surface_offset;
+  return o.offset_ulps * std::numeric_limits<S>::epsilon() * (x.cwiseAbs().maxCoeff() + scale + d.cwiseAbs().maxCoeff()) +
+         std::numeric_limits<S>::min();
+}
+
+inline Strategy effective(Strategy own, Strategy system) { return own == Strategy::Inherit ? system : own; }
+
+/// First hit of the particle's chord x -> x + d, travelled during [tau0, tau0 + len] of the step,
+/// against one collider; updates `best` (a contact whose time is the chord fraction) and `scale`.
+template <class C, class S>
+inline void first_hit_one(const C& c, int index, const Vec3<S>& x, const Vec3<S>& d, S r, S tau0, S len, S& best_t,
+                          std::optional<Contact<S>>& best, S& scale) {
+  std::optional<LocalHit<S>> h;
+  if (!c.motion.moving()) {
+    const RigidTransform<S>& P = c.motion.pose;
+    h = c.local_first_hit(P.R.transpose() * (x - P.t), P.R.transpose() * d, r, best_t);
+    if (!h || (best && h->t >= best_t)) return;
+    Contact<S> k;
+    k.time = h->t;
+    k.point = P.apply(h->point);
+    k.normal = P.R * h->normal;
+    k.collider_velocity.setZero();
+    k.material = c.material;
+    k.collider = index;
+    best = k;
+  } else {
+    const RigidTransform<S> P0 = c.motion.at(tau0), P1 = c.motion.at(tau0 + len);
+    const Vec3<S> o = P0.R.transpose() * (x - P0.t);
+    const Vec3<S> e = P1.R.transpose() * (x + d - P1.t);
+    h = c.local_first_hit(o, e - o, r, best_t);
+    if (!h || (best && h->t >= best_t)) return;
+    const S tau = tau0 + h->t * len;
+    const RigidTransform<S> Ph = c.motion.at(tau);
+    Contact<S> k;
+    k.time = h->t;
+    k.point = Ph.apply(h->point);
+    k.normal = Ph.R * h->normal;
+    k.collider_velocity = c.motion.velocity_at(k.point, tau);
+    k.material = c.material;
+    k.collider = index;
+    best = k;
+  }
+  best_t = h->t;
+  scale = c.scale();
+}
+
+/// Time of impact within a leg of length `left` starting at x with velocity v and acceleration
+/// a: the chord's hit fraction s refined on the parabola against the tangent plane at the hit,
+/// n . (x + v tau + a tau^2 / 2 - p) = 0 (exact for planes; second order otherwise), so that the
+/// velocity at impact follows free flight exactly. Falls back to s * left when the refined root is
+/// not in [0, left].
+template <class S> inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, const Vec3<S>& a, const Contact<S>& c, S s, S left) {
+  const S chord = s * left;
+  const S c2 = a.dot(c.normal) / S(2);
+  if (c2 == S(0)) return chord;
+  const S c0 = (x - c.point).dot(c.normal), c1 = (v - c.collider_velocity).dot(c.normal);
+  const S disc = c1 * c1 - S(4) * c2 * c0;
+  if (!(disc >= S(0)) || !(c0 >= S(0))) return chord;
+  const S sq = std::sqrt(disc);
+  // the smaller non-negative root, computed without cancellation
+  const S q = c1 >= S(0) ? -(c1 + sq) / S(2) : -(c1 - sq) / S(2);
+  S r1 = q != S(0) ? c0 / q : std::numeric_limits<S>::infinity();
+  S r2 = q / c2;
+  if (r1 > r2) std::swap(r1, r2);
+  const S tau = r1 >= S(0) ? r1 : r2;
+  if (!(tau >= S(0) && tau <= left)) return chord;
+  return tau;
+}
+
+}  // namespace detail
+
+/// Advances one particle by dt against the colliders (see the file comment). `on_leg(from, to)`
+/// is called for every straight piece of path the particle actually travels during
+/// backtracking, for audits and visualisation. Returns this particle-step's counters.
+template <class S, class BV, class LegObserver = detail::NoLegObserver>
+StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt,
+                        LegObserver&& on_leg = {}) {
+  StepStats st;
+  const S rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
+  ResponseOptions<S> ropt;
+  ropt.rest_speed = rest;
+  const Vec3<S> x_start = p.position;
+  Vec3<S> x = p.position, v = p.velocity;
+  S tau_now = S(0), left = dt;
+  Vec3<S> active[3];
+  int n_active = 0;
+  S mu_rest = S(0);
+  const bool moving = colliders.any_moving();  // a particle at rest can still be hit
+  for (int it = 0;; ++it) {
+    // acceleration and velocity constrained by the resting contacts of this step
+    Vec3<S> a = opt.gravity;
+    S fn = S(0);
+    for (int pass = 0; pass < 2 && n_active > 0; ++pass)
+      for (int k = 0; k < n_active; ++k) {
+        const S an = a.dot(active[k]);
+        if (an < S(0)) a -= an * active[k], fn -= an;
+        const S vn = v.dot(active[k]);
+        if (vn < S(0)) v -= vn * active[k];
+      }
+    if (n_active > 0 && mu_rest > S(0) && fn > S(0)) {
+      const S vl = v.norm(), al = a.norm();
+      if (vl == S(0)) {
+        if (al <= mu_rest * fn) a.setZero();
+        else a -= (mu_rest * fn / al) * a;
+      } else {
+        a -= (mu_rest * fn / vl) * v;
+        if ((v + a * left).dot(v) < S(0)) a = -v / left;  // stops within the leg
+      }
+    }
+    const Vec3<S> d = v * left + (left * left / S(2)) * a;
+    if ((d.squaredNorm() == S(0) && !moving) || !(left > S(0))) {
+      v += a * left;
+      break;
+    }
+    if (it == opt.max_iterations) {
+      ++st.budget_exhausted;  // policy: stay at the last safe point, drop the rest of the step
+      break;
+    }
+    std::optional<Contact<S>> hit;
+    S best_t = S(1), scale = S(0);
+    colliders.for_each([&](const auto& c, int index) {
+      if (detail::effective(c.strategy, opt.strategy) == Strategy::Backtrack)
+        detail::first_hit_one(c, index, x, d, p.radius, tau_now, left, best_t, hit, scale);
+    });
+    if (!hit) {
+      on_leg(x, Vec3<S>(x + d));
+      x += d;
+      v += a * left;
+      break;
+    }
+    const S s = hit->time;
+    const S dn = -d.dot(hit->normal);
+    const S delta = detail::surface_offset(opt, hit->point, scale, d);
+    const S s_safe = dn > S(0) ? std::max(s - delta / dn, S(0)) : S(0);
+    const Vec3<S> x_leg = x;
+    const Vec3<S> x_new = x + s_safe * d;
+    on_leg(x, x_new);
+    x = x_new;
+    const S tau = detail::impact_time(x_leg, v, a, *hit, s, left);
+    const ResponseResult<S> r = respond(Vec3<S>(v + a * tau), hit->normal, hit->collider_velocity, hit->material, ropt);
+    v = r.velocity;
+    if (r.resting && opt.gravity.dot(hit->normal) < S(0) && n_active < 3) {
+      active[n_active++] = hit->normal;
+      mu_rest = std::max(mu_rest, hit->material.friction);
+    }
+    ++st.impacts;
+    tau_now += tau;
+    left -= tau;
+  }
+  // projection colliders
+  bool any_projection = false;
+  for (int pass = 0; pass < opt.max_iterations; ++pass) {
+    bool moved = false;
+    colliders.for_each([&](const auto& c, int) {
+      if (detail::effective(c.strategy, opt.strategy) != Strategy::Project) return;
+      const RigidTransform<S> P1 = c.motion.moving() ? c.motion.at(dt) : c.motion.pose;
+      const RigidTransform<S>& P0 = c.motion.pose;
+      const Vec3<S> q = P1.R.transpose() * (x - P1.t);
+      const Vec3<S> q0 = P0.R.transpose() * (x_start - P0.t);
+      const S delta = detail::surface_offset(opt, x, c.scale(), Vec3<S>(x - x_start));
+      const auto pen = c.local_penetration(q, q0, p.radius, delta);
+      if (!pen) return;
+      x = P1.apply(pen->target);
+      const Vec3<S> n = P1.R * pen->normal;
+      const Vec3<S> vc = c.motion.moving() ? c.motion.velocity_at(P1.apply(pen->point), dt) : Vec3<S>::Zero();
+      v = respond(v, n, vc, c.material, ropt).velocity;
+      ++st.projections;
+      moved = true;
+    });
+    if (!moved) break;
+    any_projection = true;
+  }
+  if (st.impacts > 0 || any_projection) st.particles_hit = 1;
+  p.position = x;
+  p.velocity = v;
+  return st;
+}
+
+/// Advances every particle by dt (each independently, in order). Returns the summed counters.
+template <class S, class BV>
+StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
+  StepStats st;
+  for (auto& p : particles) st += step_particle(p, colliders, dt, opt);
+  return st;
+}
+
+}  // namespace impact
