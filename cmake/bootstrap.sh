@@ -4,8 +4,8 @@
 #   bash cmake/bootstrap.sh bench [impact-collide-bench arguments...]
 #   bash cmake/bootstrap.sh test  [extra ctest arguments...]
 # It installs the Debian packages it needs (apt-get, as root or through sudo), configures a Release
-# build with warnings as errors in build/release (IMPACT_BUILD_DIR overrides), builds everything,
-# then runs the collision benchmark or the whole ctest suite. Set IMPACT_DATA_DIR to a folder that
+# build with warnings as errors in build/release (IMPACT_BUILD_DIR overrides), then builds and runs
+# the collision benchmark, or builds everything and runs the whole ctest suite. Set IMPACT_DATA_DIR to a folder that
 # holds meshes/ and ccd-queries/ to run the data-driven tests (they report SKIPPED without it).
 set -euo pipefail
 
@@ -30,10 +30,12 @@ build="${IMPACT_BUILD_DIR:-$root/build/release}"
 jobs="$(nproc 2>/dev/null || echo 2)"
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DIMPACT_WARNINGS_AS_ERRORS=ON -DIMPACT_DATA_DIR="${IMPACT_DATA_DIR:-}" ${IMPACT_CMAKE_ARGS:-}
-cmake --build "$build" -j "$jobs"
-
 case "$mode" in
-  bench) exec "$build/benches/impact-collide-bench" "$@" ;;
-  test) exec ctest --test-dir "$build" --output-on-failure -j "$jobs" "$@" ;;
+  bench)
+    cmake --build "$build" -j "$jobs" --target impact-collide-bench
+    exec "$build/benches/impact-collide-bench" "$@" ;;
+  test)
+    cmake --build "$build" -j "$jobs"
+    exec ctest --test-dir "$build" --output-on-failure -j "$jobs" "$@" ;;
   *) echo "usage: bash cmake/bootstrap.sh bench|test [args...]" >&2; exit 2 ;;
 esac
