@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Micro-benchmarks of the narrow-phase primitives on fixed, seeded sets of primitive pairs:
-// triangles_intersect (plain and with the first triangle prepared) on intersecting and on disjoint
-// pairs whose bounding spheres overlap (the pairs a BVH leaf test sees), FCL's
-// Intersect<double>::intersect_Triangle on the same pairs when FCL is available, watertight
-// ray–triangle and closest point on triangle. `--json FILE` writes Google Benchmark's JSON report.
+// triangles_intersect on intersecting and on disjoint pairs whose bounding spheres overlap (the
+// pairs a BVH leaf test sees), and on leaf-like groups (one triangle against 16 neighbours, plain
+// and with the first triangle prepared); FCL's Intersect<double>::intersect_Triangle on the same
+// pairs when FCL is available; watertight ray–triangle and closest point on triangle. `--json FILE` writes Google Benchmark's JSON report.
 #include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/ray_triangle.hpp"
 #include "impact/narrow/triangle_triangle.hpp"
@@ -81,31 +81,83 @@ void BM_impact_tri_tri_float(benchmark::State& state) {
 }
 BENCHMARK(BM_impact_tri_tri_float)->ArgName("intersecting")->Arg(1)->Arg(0);
 
-/// One prepared triangle of "mesh A" against 16 triangles of "mesh B" (the leaf-pair pattern).
-void BM_impact_tri_tri_prepared(benchmark::State& state) {
-  const PairSet& s = pairs(state.range(0) != 0);
-  std::size_t i = 0, hits = 0;
-  for (auto _ : state) {
-    const PreparedTriangle<double> pa(s.a[i]);
-    for (std::size_t k = 0; k < 16; ++k) hits += triangles_intersect(pa, s.b[(i + k) % kPairs]);
-    i = (i + 16) % kPairs;
-  }
-  benchmark::DoNotOptimize(hits);
-  state.SetItemsProcessed(std::int64_t(state.iterations()) * 16);
-}
-BENCHMARK(BM_impact_tri_tri_prepared)->ArgName("intersecting")->Arg(1)->Arg(0);
+/// Leaf-like groups: each triangle of "mesh A" against 16 nearby triangles of "mesh B" whose
+/// bounding spheres overlap it (about a tenth of them intersect), the pattern of a BVH leaf pair.
+struct LeafSet {
+  std::vector<Triangle<double>> a, b;  // b[16 g + k] is tested against a[g]
+  std::size_t intersecting = 0;
+};
 
-void BM_impact_tri_tri_unprepared16(benchmark::State& state) {
-  const PairSet& s = pairs(state.range(0) != 0);
-  std::size_t i = 0, hits = 0;
+const LeafSet& leaves() {
+  static const LeafSet set = [] {
+    test::Rng rng(5);
+    LeafSet s;
+    auto radius = [](const Triangle<double>& t) {
+      const Eigen::Vector3d c = t.centroid();
+      return std::max({(t.a - c).norm(), (t.b - c).norm(), (t.c - c).norm()});
+    };
+    while (s.a.size() < kPairs / 16) {
+      const Eigen::Vector3d ca = rng.vec(-1, 1);
+      const Triangle<double> ta(ca + rng.vec(-0.5, 0.5), ca + rng.vec(-0.5, 0.5), ca + rng.vec(-0.5, 0.5));
+      s.a.push_back(ta);
+      for (int k = 0; k < 16;) {
+        const Eigen::Vector3d cb = ca + rng.vec(-0.6, 0.6);
+        const Triangle<double> tb(cb + rng.vec(-0.5, 0.5), cb + rng.vec(-0.5, 0.5), cb + rng.vec(-0.5, 0.5));
+        if ((ta.centroid() - tb.centroid()).norm() > radius(ta) + radius(tb)) continue;
+        s.b.push_back(tb);
+        s.intersecting += triangles_intersect(ta, tb);
+        ++k;
+      }
+    }
+    return s;
+  }();
+  return set;
+}
+
+/// One prepared triangle against its 16 leaf partners.
+void BM_leaf_impact_prepared(benchmark::State& state) {
+  const LeafSet& s = leaves();
+  std::size_t g = 0, hits = 0;
   for (auto _ : state) {
-    for (std::size_t k = 0; k < 16; ++k) hits += triangles_intersect(s.a[i], s.b[(i + k) % kPairs]);
-    i = (i + 16) % kPairs;
+    const PreparedTriangle<double> pa(s.a[g]);
+    for (std::size_t k = 0; k < 16; ++k) hits += triangles_intersect(pa, s.b[16 * g + k]);
+    g = (g + 1) % s.a.size();
+  }
+  benchmark::DoNotOptimize(hits);
+  state.SetItemsProcessed(std::int64_t(state.iterations()) * 16);
+  state.counters["intersecting_fraction"] = double(s.intersecting) / double(s.b.size());
+}
+BENCHMARK(BM_leaf_impact_prepared);
+
+void BM_leaf_impact(benchmark::State& state) {
+  const LeafSet& s = leaves();
+  std::size_t g = 0, hits = 0;
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < 16; ++k) hits += triangles_intersect(s.a[g], s.b[16 * g + k]);
+    g = (g + 1) % s.a.size();
   }
   benchmark::DoNotOptimize(hits);
   state.SetItemsProcessed(std::int64_t(state.iterations()) * 16);
 }
-BENCHMARK(BM_impact_tri_tri_unprepared16)->ArgName("intersecting")->Arg(1)->Arg(0);
+BENCHMARK(BM_leaf_impact);
+
+#ifdef IMPACT_HAVE_FCL
+void BM_leaf_fcl(benchmark::State& state) {
+  const LeafSet& s = leaves();
+  std::size_t g = 0, hits = 0;
+  for (auto _ : state) {
+    const Triangle<double>& a = s.a[g];
+    for (std::size_t k = 0; k < 16; ++k) {
+      const Triangle<double>& b = s.b[16 * g + k];
+      hits += fcl::detail::Intersect<double>::intersect_Triangle(a.a, a.b, a.c, b.a, b.b, b.c);
+    }
+    g = (g + 1) % s.a.size();
+  }
+  benchmark::DoNotOptimize(hits);
+  state.SetItemsProcessed(std::int64_t(state.iterations()) * 16);
+}
+BENCHMARK(BM_leaf_fcl);
+#endif
 
 void BM_impact_triangle_intersection_contact(benchmark::State& state) {
   const PairSet& s = pairs(true);
