@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <ostream>
 #include <set>
 #include <string>
 #include <vector>
@@ -224,6 +225,8 @@ struct DataMesh {
   int welded_vertices;  // exactly equal positions merged, unreferenced vertices dropped
   bool closed;          // closed, manifold and outward-oriented after welding
 };
+
+void PrintTo(const DataMesh& d, std::ostream* os) { *os << d.file; }
 
 // Counts from the data folder's README (stanford-bunny: 34,834 referenced of 35,947 vertices;
 // ogre: 62,194 vertices with 9 duplicate positions).
