@@ -2,7 +2,7 @@
 // triangles_intersect against an exact integer separating-axis oracle: random small-integer
 // triangles (dense in coincidences: shared vertices and edges, coplanar, collinear and point
 // triangles), constructed touching and coplanar configurations, near-coplanar perturbations with
-// large coordinates, power-of-two scalings; the prepared-triangle form; triangle_intersection's
+// large coordinates, power-of-two scalings, one-ulp moves off touching contact; the prepared form; triangle_intersection's
 // point and segment lie on both triangles. Float and double.
 #include "impact/narrow/triangle_triangle.hpp"
 #include "int_oracle.hpp"
@@ -169,6 +169,34 @@ TYPED_TEST(TriTri, HandPickedCases) {
   EXPECT_TRUE(triangles_intersect(t, Triangle<S>(V(S(0.5), S(0.5), -1), V(S(0.5), S(0.5), 1), V(S(0.5), S(0.5), 1))));  // segment through
   EXPECT_TRUE(triangles_intersect(t, Triangle<S>(V(S(0.2), S(0.2), 0), V(S(0.2), S(0.2), 0), V(S(0.2), S(0.2), 0))));  // point inside
   EXPECT_FALSE(triangles_intersect(t, Triangle<S>(V(S(0.2), S(0.2), 1), V(S(0.2), S(0.2), 1), V(S(0.2), S(0.2), 1))));  // point above
+}
+
+TYPED_TEST(TriTri, UlpPerturbationsOfTouchingConfigurations) {
+  using S = TypeParam;
+  Rng rng(16);
+  int wrong = 0;
+  for (int it = 0; it < 3000; ++it) {
+    // A in the plane coordinate[axis] = h, B with one vertex on A's interior, the others above it;
+    // that vertex moved by one ulp up (disjoint), not at all (touching) or one ulp down (crossing)
+    const int axis = int(rng.index(3)), i = (axis + 1) % 3, j = (axis + 2) % 3;
+    const S h = S(1 + rng.index(64)) * S(0.25);
+    auto point = [&](S u, S v, S w) {
+      Vec3<S> p;
+      p[i] = u, p[j] = v, p[axis] = w;
+      return p;
+    };
+    const S scale = S(1 + rng.index(8));
+    const Triangle<S> a(point(0, 0, h), point(4 * scale, 0, h), point(0, 4 * scale, h));
+    const S u = S(1 + rng.index(7)) * S(0.125) * scale, v = S(1 + rng.index(7)) * S(0.125) * scale;  // u + v < 4 scale
+    for (int d = -1; d <= 1; ++d) {
+      const S w = d == 0 ? h : std::nextafter(h, d > 0 ? S(100) : S(-100));
+      const Triangle<S> b(point(u, v, w), point(u + 1, v - 3, h + 2), point(u - 2, v + 1, h + S(0.5)));
+      const bool expect = d <= 0;
+      wrong += triangles_intersect(a, b) != expect;
+      wrong += triangles_intersect(b, a) != expect;
+    }
+  }
+  EXPECT_EQ(wrong, 0);
 }
 
 template <class S> S dist_to_tri(const Vec3<S>& p, const Triangle<S>& t) {
