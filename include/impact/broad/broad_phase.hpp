@@ -80,22 +80,36 @@ struct BroadPhaseStats {
 };
 
 /// Per-slot object data the broad phases read. Owned by the scene; slots of removed objects are
-/// dead (alive == 0) until reused.
+/// dead (alive == 0) until reused. One 64-byte record per slot (for double): the broad phases read
+/// the box, flags and filter of random slots together.
 template <class S> struct ObjectTable {
   enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
 
-  std::vector<Aabb<S>> box;           ///< tight world AABB
-  std::vector<std::uint8_t> flags;    ///< Flags
-  std::vector<CollisionFilter> filter;
-  std::vector<std::uint32_t> ignore_count;  ///< entries of the ignore list naming this slot
+  struct Record {
+    Aabb<S> box;                     ///< tight world AABB
+    CollisionFilter filter;
+    std::uint32_t ignore_count = 0;  ///< entries of the ignore list naming this slot
+    std::uint8_t flags = 0;          ///< Flags
+  };
+  std::vector<Record> records;
   std::unordered_set<std::uint64_t> ignored;  ///< pair_key of ignored slot pairs
 
-  std::int32_t size() const { return static_cast<std::int32_t>(flags.size()); }
-  bool alive(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Alive; }
-  bool is_static(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Static; }
-  bool sleeping(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] & Sleeping; }
+  std::int32_t size() const { return static_cast<std::int32_t>(records.size()); }
+  void push_back() { records.emplace_back(); }
+  const Aabb<S>& box(std::int32_t i) const { return records[static_cast<std::size_t>(i)].box; }
+  Aabb<S>& box(std::int32_t i) { return records[static_cast<std::size_t>(i)].box; }
+  std::uint8_t flags(std::int32_t i) const { return records[static_cast<std::size_t>(i)].flags; }
+  std::uint8_t& flags(std::int32_t i) { return records[static_cast<std::size_t>(i)].flags; }
+  const CollisionFilter& filter(std::int32_t i) const { return records[static_cast<std::size_t>(i)].filter; }
+  CollisionFilter& filter(std::int32_t i) { return records[static_cast<std::size_t>(i)].filter; }
+  std::uint32_t ignore_count(std::int32_t i) const { return records[static_cast<std::size_t>(i)].ignore_count; }
+  std::uint32_t& ignore_count(std::int32_t i) { return records[static_cast<std::size_t>(i)].ignore_count; }
+
+  bool alive(std::int32_t i) const { return flags(i) & Alive; }
+  bool is_static(std::int32_t i) const { return flags(i) & Static; }
+  bool sleeping(std::int32_t i) const { return flags(i) & Sleeping; }
   /// Alive, dynamic and awake.
-  bool active(std::int32_t i) const { return flags[static_cast<std::size_t>(i)] == Alive; }
+  bool active(std::int32_t i) const { return flags(i) == Alive; }
 
   static std::uint64_t pair_key(std::int32_t a, std::int32_t b) {
     if (a > b) std::swap(a, b);
@@ -103,11 +117,10 @@ template <class S> struct ObjectTable {
   }
   /// Rule 2 of the pair rule: group/mask and the ignore list.
   bool accepts(std::int32_t a, std::int32_t b) const {
-    const CollisionFilter& fa = filter[static_cast<std::size_t>(a)];
-    const CollisionFilter& fb = filter[static_cast<std::size_t>(b)];
-    if (!(fa.group & fb.mask) || !(fb.group & fa.mask)) return false;
-    if (ignore_count[static_cast<std::size_t>(a)] && ignore_count[static_cast<std::size_t>(b)] && ignored.count(pair_key(a, b)))
-      return false;
+    const Record& ra = records[static_cast<std::size_t>(a)];
+    const Record& rb = records[static_cast<std::size_t>(b)];
+    if (!(ra.filter.group & rb.filter.mask) || !(rb.filter.group & ra.filter.mask)) return false;
+    if (IMPACT_UNLIKELY(ra.ignore_count && rb.ignore_count) && ignored.count(pair_key(a, b))) return false;
     return true;
   }
 };
@@ -122,8 +135,10 @@ template <class S> inline bool test_pair(const ObjectTable<S>& t, std::int32_t a
     return false;
   }
   ++st.pairs_tested;
-  if (IMPACT_UNLIKELY(!t.active(a) && !t.active(b))) ++st.inactive_pairs_tested;
-  return overlap(t.box[static_cast<std::size_t>(a)], t.box[static_cast<std::size_t>(b)]);
+  const auto& ra = t.records[static_cast<std::size_t>(a)];
+  const auto& rb = t.records[static_cast<std::size_t>(b)];
+  st.inactive_pairs_tested += (ra.flags != ObjectTable<S>::Alive) & (rb.flags != ObjectTable<S>::Alive);
+  return overlap(ra.box, rb.box);
 }
 
 }  // namespace detail

@@ -48,15 +48,16 @@ template <class S> class DynamicTree {
  public:
   static constexpr std::int32_t null = -1;
 
-  struct Node {
+  /// One cache line for double (64 bytes): box, links, height and flags.
+  struct alignas(sizeof(S) == 8 ? 64 : 8) Node {
     Aabb<S> box;
     std::int32_t parent = null;
-    std::int32_t child[2] = {null, null};  ///< child[0] == null for leaves
-    std::int32_t object = null;            ///< the caller's payload, leaves only
-    std::int32_t height = 0;               ///< 0 for leaves, -1 for free nodes
+    std::int32_t child[2] = {null, null};  ///< child[0] == null for leaves; a leaf keeps its object in child[1]
+    std::int16_t height = 0;               ///< 0 for leaves, -1 for free nodes
     std::uint8_t active = 0;               ///< the subtree holds an active leaf
     std::uint8_t exact = 0;                ///< leaf stored with its tight box (objects that never move)
     bool is_leaf() const { return child[0] == null; }
+    std::int32_t object() const { return child[1]; }  ///< the caller's payload (leaves)
   };
 
   explicit DynamicTree(const DynamicTreeOptions& opt = {}) : opt_(opt) {}
@@ -68,7 +69,7 @@ template <class S> class DynamicTree {
     Node& n = nodes_[static_cast<std::size_t>(leaf)];
     n.exact = exact;
     n.box = exact ? tight : fatten(tight);
-    n.object = object;
+    n.child[1] = object;
     n.height = 0;
     n.active = active;
     insert_leaf(leaf);
@@ -139,12 +140,14 @@ template <class S> class DynamicTree {
     for (std::size_t i = 0; i < nodes_.size(); ++i) {
       Node& n = nodes_[i];
       if (n.height < 0) continue;
-      if (n.is_leaf()) {
-        leaves.push_back(static_cast<std::int32_t>(i));
-      } else {
-        release(static_cast<std::int32_t>(i));
-      }
+      if (n.is_leaf()) leaves.push_back(static_cast<std::int32_t>(i));
+      else n.height = -1;
     }
+    // Free list in ascending order, so that the pre-order build below lays parents before
+    // children and left subtrees next to their parents.
+    free_ = null;
+    for (std::size_t i = nodes_.size(); i-- > 0;)
+      if (nodes_[i].height < 0) release(static_cast<std::int32_t>(i));
     root_ = leaves.empty() ? null : build_range(leaves.data(), leaves.data() + leaves.size());
     if (root_ != null) node(root_).parent = null;
     changes_ = 0;
@@ -161,7 +164,7 @@ template <class S> class DynamicTree {
       ++st.bv_tests;
       if (!overlap(n.box, box)) continue;
       if (n.is_leaf()) {
-        if (!visit(n.object)) return false;
+        if (!visit(n.object())) return false;
       } else {
         stack.push(n.child[1]);
         stack.push(n.child[0]);
@@ -191,7 +194,7 @@ template <class S> class DynamicTree {
       ++st.bv_tests;
       if (!overlap(ni.box, nj.box)) continue;
       if (!descend(i, j, stack))
-        if (!visit(ni.object, nj.object)) return false;
+        if (!visit(ni.object(), nj.object())) return false;
     }
     return true;
   }
@@ -211,7 +214,7 @@ template <class S> class DynamicTree {
       if (!overlap(ni.box, nj.box)) continue;
       const bool li = ni.is_leaf(), lj = nj.is_leaf();
       if (li && lj) {
-        if (!visit(ni.object, nj.object)) return false;
+        if (!visit(ni.object(), nj.object())) return false;
       } else if (lj || (!li && size(ni.box) >= size(nj.box))) {
         stack.push({ni.child[1], j});
         stack.push({ni.child[0], j});
@@ -324,7 +327,7 @@ template <class S> class DynamicTree {
     const Node& a = node(n.child[0]);
     const Node& b = node(n.child[1]);
     n.box = merge(a.box, b.box);
-    n.height = 1 + std::max(a.height, b.height);
+    n.height = static_cast<std::int16_t>(1 + std::max(a.height, b.height));
     n.active = a.active | b.active;
   }
 
@@ -437,8 +440,9 @@ template <class S> class DynamicTree {
   std::int32_t build_range(std::int32_t* first, std::int32_t* last) {
     const std::ptrdiff_t n = last - first;
     if (n == 1) return *first;
+    const std::int32_t p = allocate();  // before the children: pre-order layout
     Aabb<S> cbox;
-    for (std::int32_t* p = first; p != last; ++p) cbox.extend(node(*p).box.center());
+    for (std::int32_t* q = first; q != last; ++q) cbox.extend(node(*q).box.center());
     const int axis = cbox.longest_axis();
     std::int32_t* mid = first + n / 2;
     std::nth_element(first, mid, last, [&](std::int32_t x, std::int32_t y) {
@@ -446,7 +450,6 @@ template <class S> class DynamicTree {
     });
     const std::int32_t l = build_range(first, mid);
     const std::int32_t r = build_range(mid, last);
-    const std::int32_t p = allocate();
     node(p).child[0] = l;
     node(p).child[1] = r;
     node(l).parent = p;
@@ -478,7 +481,7 @@ template <class S> class HierarchicalBroadPhase {
     grow(slot);
     const auto s = static_cast<std::size_t>(slot);
     const bool st = t.is_static(slot);
-    leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box[s], t.active(slot), st);
+    leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box(s), t.active(slot), st);
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -522,7 +525,7 @@ template <class S> class HierarchicalBroadPhase {
       const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
       if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
       ++st.refits;
-      if ((t.is_static(slot) ? static_ : dynamic_).update(leaf, t.box[static_cast<std::size_t>(slot)])) ++st.reinserts;
+      if ((t.is_static(slot) ? static_ : dynamic_).update(leaf, t.box(slot))) ++st.reinserts;
     }
     moved_.clear();
     if (static_.maybe_rebuild()) ++st.rebuilds;

@@ -116,19 +116,16 @@ template <class S> class Scene {
       free_.pop_back();
     } else {
       slot = table_.size();
-      table_.box.emplace_back();
-      table_.flags.push_back(0);
-      table_.filter.emplace_back();
-      table_.ignore_count.push_back(0);
+      table_.push_back();
       objects_.emplace_back();
     }
     const auto s = static_cast<std::size_t>(slot);
     objects_[s] = {id, shape, pose, local, reach};
-    table_.box[s] = box;
-    table_.flags[s] = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
+    table_.box(slot) = box;
+    table_.flags(slot) = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
                                    (options.sleeping ? ObjectTable<S>::Sleeping : 0));
-    table_.filter[s] = options.filter;
-    table_.ignore_count[s] = 0;
+    table_.filter(slot) = options.filter;
+    table_.ignore_count(slot) = 0;
     ids_.emplace(id, slot);
     ++count_;
     std::visit([&](auto& b) { b.insert(slot, table_); }, broad_);
@@ -139,19 +136,19 @@ template <class S> class Scene {
     const std::int32_t slot = slot_of(id, "Scene::remove");
     const auto s = static_cast<std::size_t>(slot);
     std::visit([&](auto& b) { b.remove(slot, table_); }, broad_);
-    if (table_.ignore_count[s]) {
+    if (table_.ignore_count(slot)) {
       for (auto it = table_.ignored.begin(); it != table_.ignored.end();) {
         const auto x = std::int32_t(*it >> 32), y = std::int32_t(*it & 0xffffffffu);
         if (x == slot || y == slot) {
-          --table_.ignore_count[static_cast<std::size_t>(x == slot ? y : x)];
+          --table_.ignore_count(x == slot ? y : x);
           it = table_.ignored.erase(it);
         } else {
           ++it;
         }
       }
-      table_.ignore_count[s] = 0;
+      table_.ignore_count(slot) = 0;
     }
-    table_.flags[s] = 0;
+    table_.flags(slot) = 0;
     objects_[s].shape = Shape<S>{};
     ids_.erase(id);
     free_.push_back(slot);
@@ -167,7 +164,7 @@ template <class S> class Scene {
     const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, objects_[s].reach, pose);
     if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
     objects_[s].pose = pose;
-    table_.box[s] = box;
+    table_.box(slot) = box;
     std::visit([&](auto& b) { b.moved(slot, table_); }, broad_);
   }
   /// Moves an object by translation only (the rotation is kept).
@@ -181,7 +178,7 @@ template <class S> class Scene {
   void set_sleeping(ObjectId id, bool sleeping) {
     const std::int32_t slot = slot_of(id, "Scene::set_sleeping");
     if (table_.is_static(slot)) throw InvalidInput("Scene::set_sleeping: object " + std::to_string(id) + " is static");
-    auto& f = table_.flags[static_cast<std::size_t>(slot)];
+    auto& f = table_.flags(slot);
     const std::uint8_t nf = sleeping ? std::uint8_t(f | ObjectTable<S>::Sleeping) : std::uint8_t(f & ~ObjectTable<S>::Sleeping);
     if (nf == f) return;
     f = nf;
@@ -191,7 +188,7 @@ template <class S> class Scene {
   /// Replaces an object's group/mask filter.
   void set_filter(ObjectId id, const CollisionFilter& filter) {
     const std::int32_t slot = slot_of(id, "Scene::set_filter");
-    table_.filter[static_cast<std::size_t>(slot)] = filter;
+    table_.filter(slot) = filter;
     std::visit([&](auto& b) { b.filter_changed(slot, table_); }, broad_);
   }
 
@@ -200,8 +197,8 @@ template <class S> class Scene {
     const std::int32_t sa = slot_of(a, "Scene::ignore_pair"), sb = slot_of(b, "Scene::ignore_pair");
     if (sa == sb) throw InvalidInput("Scene::ignore_pair: both ids are " + std::to_string(a));
     if (!table_.ignored.insert(ObjectTable<S>::pair_key(sa, sb)).second) return;
-    ++table_.ignore_count[static_cast<std::size_t>(sa)];
-    ++table_.ignore_count[static_cast<std::size_t>(sb)];
+    ++table_.ignore_count(sa);
+    ++table_.ignore_count(sb);
     std::visit(
         [&](auto& bp) {
           bp.filter_changed(sa, table_);
@@ -214,7 +211,7 @@ template <class S> class Scene {
   std::size_t size() const { return count_; }
   BroadPhaseKind broad_phase() const { return opt_.broad_phase; }
   /// The object's tight world AABB (what the broad phase compares). Throws for unknown ids.
-  const Aabb<S>& bounds(ObjectId id) const { return table_.box[static_cast<std::size_t>(slot_of(id, "Scene::bounds"))]; }
+  const Aabb<S>& bounds(ObjectId id) const { return table_.box(slot_of(id, "Scene::bounds")); }
   const RigidTransform<S>& pose(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::pose"))].pose; }
   const Shape<S>& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
 

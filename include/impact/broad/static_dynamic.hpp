@@ -57,7 +57,7 @@ template <class S> class StaticDynamicBroadPhase {
       static_dirty_ = true;
       return;
     }
-    leaf_[s] = dyn_.insert(slot, t.box[s], t.active(slot));
+    leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
     dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
     dynamics_.push_back(slot);
     cand_epoch_[s] = 0;
@@ -112,7 +112,7 @@ template <class S> class StaticDynamicBroadPhase {
     if (!need_.empty() && !static_tree_.empty()) {
       const Aabb<S>& root = static_tree_.root().bv;
       const Vec3<S> scale = Vec3<S>::Constant(S(1023)).cwiseQuotient((root.max - root.min).cwiseMax(Vec3<S>::Constant(S(1e-30))));
-      for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box[static_cast<std::size_t>(a)].center(), root.min, scale);
+      for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box(a).center(), root.min, scale);
       std::sort(need_.begin(), need_.end());
     }
     for (const auto& [code, a] : need_) {
@@ -131,7 +131,7 @@ template <class S> class StaticDynamicBroadPhase {
           [&](std::int32_t k) {
             const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
             ++st.bv_tests;
-            if (!overlap(t.box[static_cast<std::size_t>(b)], fat)) return true;
+            if (!overlap(t.box(b), fat)) return true;
             if (t.accepts(a, b)) cand.push_back(b);
             else ++st.pairs_filtered;
             return true;
@@ -146,10 +146,10 @@ template <class S> class StaticDynamicBroadPhase {
       std::vector<std::int32_t>& hits = hits_[sa];
       if (stale_[sa]) {
         hits.clear();
-        const Aabb<S>& box = t.box[sa];
+        const Aabb<S>& box = t.box(sa);
         for (const std::int32_t b : cand_[sa]) {
           ++st.pairs_tested;
-          if (overlap(box, t.box[static_cast<std::size_t>(b)])) hits.push_back(b);
+          if (overlap(box, t.box(b))) hits.push_back(b);
         }
         stale_[sa] = 0;
       }
@@ -194,7 +194,7 @@ template <class S> class StaticDynamicBroadPhase {
       if (leaf == DynamicTree<S>::null) continue;  // removed (or now static) since it moved
       ++st.refits;
       stale_[s] = 1;
-      if (dyn_.update(leaf, t.box[s])) {
+      if (dyn_.update(leaf, t.box(s))) {
         ++st.reinserts;
         cand_epoch_[s] = 0;  // the fat box changed: query the static tree again
       }
@@ -213,7 +213,7 @@ template <class S> class StaticDynamicBroadPhase {
     for (std::int32_t i = 0; i < t.size(); ++i)
       if (t.alive(i) && t.is_static(i)) {
         static_slots_.push_back(i);
-        centers.push_back(t.box[static_cast<std::size_t>(i)].center());
+        centers.push_back(t.box(i).center());
       }
     BuildConfig cfg;
     cfg.leaf_size = static_leaf_size_;
@@ -221,7 +221,7 @@ template <class S> class StaticDynamicBroadPhase {
         centers,
         [&](const std::int32_t* ids, std::size_t n) {
           Aabb<S> b;
-          for (std::size_t k = 0; k < n; ++k) b.extend(t.box[static_cast<std::size_t>(static_slots_[static_cast<std::size_t>(ids[k])])]);
+          for (std::size_t k = 0; k < n; ++k) b.extend(t.box(static_slots_[static_cast<std::size_t>(ids[k])]));
           return b;
         },
         cfg);
