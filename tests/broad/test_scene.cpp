@@ -52,6 +52,10 @@ template <class S> struct Scenes {
   }
 };
 
+static_assert(is_broad_phase_v<AllPairsBroadPhase<float>, float>);
+static_assert(is_broad_phase_v<HierarchicalBroadPhase<double>, double>);
+static_assert(!is_broad_phase_v<DynamicTree<double>, double>);
+
 template <class S> class BroadTyped : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(BroadTyped, Scalars);

@@ -28,6 +28,7 @@
 #include "impact/geometry/aabb.hpp"
 
 #include <cstdint>
+#include <type_traits>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -141,6 +142,23 @@ template <class S> inline bool test_pair(const ObjectTable<S>& t, std::int32_t a
   return overlap(ra.box, rb.box);
 }
 
+template <class B, class S, class = void> struct is_broad_phase : std::false_type {};
+template <class B, class S>
+struct is_broad_phase<
+    B, S,
+    std::void_t<decltype(std::declval<B&>().insert(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
+                decltype(std::declval<B&>().remove(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
+                decltype(std::declval<B&>().moved(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
+                decltype(std::declval<B&>().activity_changed(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
+                decltype(std::declval<B&>().filter_changed(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
+                decltype(bool(std::declval<B&>().find_pairs(std::declval<const ObjectTable<S>&>(),
+                                                            std::declval<bool (&)(std::int32_t, std::int32_t)>(),
+                                                            std::declval<BroadPhaseStats&>())))>> : std::true_type {};
+
 }  // namespace detail
+
+/// True when B offers the broad-phase interface described at the top of this file (the C++17
+/// stand-in for a concept; the scene static_asserts it for every implementation it holds).
+template <class B, class S> inline constexpr bool is_broad_phase_v = detail::is_broad_phase<B, S>::value;
 
 }  // namespace impact

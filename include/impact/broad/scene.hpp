@@ -83,6 +83,9 @@ template <class S> struct SceneCollideResult {
 
 template <class S> class Scene {
   static_assert(is_supported_scalar_v<S>, "Scene<S>: S must be float or double");
+  static_assert(is_broad_phase_v<AllPairsBroadPhase<S>, S> && is_broad_phase_v<StaticDynamicBroadPhase<S>, S> &&
+                    is_broad_phase_v<HierarchicalBroadPhase<S>, S>,
+                "every broad phase implements the interface of broad_phase.hpp");
 
  public:
   explicit Scene(const SceneOptions& opt = {}) : opt_(opt) {
