@@ -81,14 +81,16 @@ inline CcdQuery make_ccd_query(const double (&p0)[4][3], const double (&p1)[4][3
 }
 
 /// Number of extra exclusion directions per box (besides the three axes).
-inline constexpr int kCcdDirections = 2;
+inline constexpr int kCcdDirections = 3;
 
 /// Corner values of F on a box: f[c][axis] with corner c = 4 it + 2 iu + iv (it, iu, iv in {0, 1}
 /// for the low/high ends of t, u, v), and two directions used as extra exclusion axes:
 ///  - the plane normal at the box's start time (cross product of the two edge vectors), which
 ///    separates coplanar motion and crossing edges;
 ///  - the part of F at the centre of the box's start face orthogonal to the longest edge, which
-///    separates parallel edges and degenerate (collinear) triangles, where the normal vanishes.
+///    separates parallel edges and degenerate (collinear) triangles, where the normal vanishes;
+///  - F at that centre itself: near the closest approach it is the direction of the separation, so
+///    n . F > d |n| is a tight test against a minimum separation d > 0.
 /// Any direction gives a valid exclusion; these are chosen to make it effective.
 template <bool VertexFace> inline void ccd_corners(const CcdQuery& q, const CcdBox& b, double (&f)[8][3], double (&dir)[kCcdDirections][3]) {
   const double ts[2] = {b.t0, b.t1};
@@ -142,7 +144,10 @@ template <bool VertexFace> inline void ccd_corners(const CcdQuery& q, const CcdB
   for (int i = 0; i < 3; ++i) fc[i] = 0.25 * ((f[0][i] + f[1][i]) + (f[2][i] + f[3][i]));
   const double ee = edge[0] * edge[0] + edge[1] * edge[1] + edge[2] * edge[2];
   const double s = ee > 0.0 ? (fc[0] * edge[0] + fc[1] * edge[1] + fc[2] * edge[2]) / ee : 0.0;
-  for (int i = 0; i < 3; ++i) dir[1][i] = fc[i] - s * edge[i];
+  for (int i = 0; i < 3; ++i) {
+    dir[1][i] = fc[i] - s * edge[i];
+    dir[2][i] = fc[i];
+  }
 }
 
 /// The search. p0/p1: the 4 points at t = 0 and t = 1 (vertex-face: p, f0, f1, f2; edge-edge:
@@ -214,7 +219,11 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
     // Acceptance: a corner of the start face, inside the domain, where the primitives are within
     // d + tolerance. Every earlier time is excluded, so toi = t0 is conservative.
     const double tm = 0.5 * (b.t0 + b.t1), um = 0.5 * (b.u0 + b.u1), vm = 0.5 * (b.v0 + b.v1);
+    // Or the whole box is within the tolerance in every component: since it is not excluded,
+    // every point of it is then within d + sqrt(3) tolerance (this is what ends the search when
+    // d > 0, where the distance only grazes d at the first contact).
     int accept = -1;
+    if (hi[0] - lo[0] <= opt.tolerance && hi[1] - lo[1] <= opt.tolerance && hi[2] - lo[2] <= opt.tolerance) accept = 0;
     for (int c = 0; c < 4 && accept < 0; ++c) {
       const double cu = (c >> 1) ? b.u1 : b.u0, cv = (c & 1) ? b.v1 : b.v0;
       if (VertexFace && cu + cv > 1.0) continue;
@@ -253,7 +262,10 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
           l0 = std::min(l0, x0), h0 = std::max(h0, x0);
           l1 = std::min(l1, x1), h1 = std::max(h1, x1);
           lm = std::min(lm, xm), hm = std::max(hm, xm);
-          if (j < 3) wdim[k] = std::max(wdim[k], std::abs(x1 - x0));
+          // Widths that guide the split when no half can be excluded: the components of F for
+          // d = 0; for d > 0 the radial direction (F at the centre), whose variation is small
+          // in (u, v) near the closest approach and large in t, which favours time splits there.
+          if (d > 0.0 ? j == 2 + kCcdDirections : j < 3) wdim[k] = std::max(wdim[k], std::abs(x1 - x0));
         }
         const bool ex0 = std::min(l0, lm) > tj || std::max(h0, hm) < -tj;
         const bool ex1 = std::min(l1, lm) > tj || std::max(h1, hm) < -tj;

@@ -1,0 +1,227 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Mesh-level continuous collision detection for deforming triangle meshes whose vertices move
+/// linearly over a time step: a BVH over the triangles' swept AABBs (start and end positions,
+/// grown by half the minimum separation so that two primitives that come within d have
+/// overlapping boxes), refitted between steps instead of rebuilt; a pair traversal (two meshes)
+/// or self traversal (one mesh) over it; and, for each pair of overlapping triangles, the
+/// vertex-face and edge-edge tests (vertex_face_ccd, edge_edge_ccd) on the distinct primitive
+/// pairs they give. Self CCD skips adjacent primitives: a vertex against a face it belongs to and
+/// two edges sharing a vertex. Conservative like the primitive tests: no contact is missed.
+#pragma once
+
+#include "impact/bvh/build_top_down.hpp"
+#include "impact/bvh/refit.hpp"
+#include "impact/bvh/traverse_pair.hpp"
+#include "impact/ccd/edge_edge.hpp"
+#include "impact/ccd/swept_volume.hpp"
+#include "impact/ccd/vertex_face.hpp"
+#include "impact/geometry/triangle_mesh.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace impact {
+
+/// One step of a deforming mesh: positions at t = 0 and t = 1 and the (fixed) triangles.
+/// Non-owning; the arrays must outlive the view.
+template <class S> struct MeshMotion {
+  const Vertices<S>* start = nullptr;
+  const Vertices<S>* end = nullptr;
+  const Faces* faces = nullptr;
+
+  Vec3<S> p0(int v) const { return start->row(v).transpose(); }
+  Vec3<S> p1(int v) const { return end->row(v).transpose(); }
+};
+
+/// Validates a step (same vertex count at both ends, finite coordinates, indices in range) and
+/// returns its view. Throws InvalidInput.
+template <class S> MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
+  validate_mesh(start, faces, "mesh motion (start)");
+  validate_mesh(end, faces, "mesh motion (end)");
+  if (start.rows() != end.rows()) throw InvalidInput("mesh motion: start and end have different vertex counts");
+  return {&start, &end, &faces};
+}
+
+/// The BVH over a mesh's triangles with swept AABBs for one step, grown by `inflate` (half the
+/// minimum separation). Build once; call refit() for each new step (same triangles).
+template <class S> struct SweptMeshBvh {
+  Bvh<Aabb<S>> tree;
+  S inflate = S(0);
+
+  /// Builds the tree top-down over the triangles' swept-box centres.
+  static SweptMeshBvh build(const MeshMotion<S>& m, S inflate_by = S(0), const BuildConfig& cfg = {}) {
+    SweptMeshBvh b;
+    b.inflate = inflate_by;
+    const auto nf = static_cast<std::size_t>(m.faces->rows());
+    std::vector<Vec3<S>> centroids(nf);
+    for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), inflate_by).center();
+    b.tree = build_top_down<Aabb<S>>(centroids, fitter(m, inflate_by), cfg);
+    return b;
+  }
+  /// Updates the boxes for a new step of the same mesh (same faces); the topology is kept.
+  void refit(const MeshMotion<S>& m) { impact::refit(tree, fitter(m, inflate), RefitMode::Merge); }
+
+  /// Swept box of triangle f over the step.
+  static Aabb<S> triangle_box(const MeshMotion<S>& m, int f, S inflate_by) {
+    const Vec3<S> a[3] = {m.p0((*m.faces)(f, 0)), m.p0((*m.faces)(f, 1)), m.p0((*m.faces)(f, 2))};
+    const Vec3<S> b[3] = {m.p1((*m.faces)(f, 0)), m.p1((*m.faces)(f, 1)), m.p1((*m.faces)(f, 2))};
+    return swept_aabb(a, b, inflate_by);
+  }
+
+ private:
+  static auto fitter(const MeshMotion<S>& m, S inflate_by) {
+    return [m, inflate_by](const std::int32_t* ids, std::size_t n) {
+      Aabb<S> box;
+      for (std::size_t k = 0; k < n; ++k) box.extend(triangle_box(m, ids[k], inflate_by));
+      return box;
+    };
+  }
+};
+
+enum class MeshCcdKind { VertexFace, EdgeEdge };
+
+/// One colliding primitive pair. Vertex-face: `vertex` of mesh `vertex_mesh` (0 = first, 1 =
+/// second; 0 for self CCD) against `face` of the other mesh. Edge-edge: edge (a0, a1) of the
+/// first mesh against edge (b0, b1) of the second (vertex ids, a0 < a1, b0 < b1).
+template <class S> struct MeshCcdContact {
+  MeshCcdKind kind = MeshCcdKind::VertexFace;
+  int vertex_mesh = 0;
+  std::int32_t vertex = -1, face = -1;
+  std::int32_t a0 = -1, a1 = -1, b0 = -1, b1 = -1;
+  CcdResult<S> result;
+};
+
+template <class S> struct MeshCcdResult {
+  std::vector<MeshCcdContact<S>> contacts;  ///< every primitive pair that hit (all of them, not just the first)
+  bool hit = false;
+  S toi = S(1);                             ///< the earliest toi over the contacts (t_max without a hit)
+  std::size_t triangle_pairs = 0;           ///< overlapping swept-box pairs visited
+  std::size_t primitive_tests = 0;          ///< vertex-face and edge-edge tests run
+};
+
+namespace detail {
+
+// Distinct primitive pairs gathered from overlapping triangle pairs: (vertex_mesh, vertex, face)
+// and (a0, a1, b0, b1), then sorted and deduplicated before testing.
+struct MeshCcdCandidates {
+  std::vector<std::array<std::int32_t, 3>> vf;
+  std::vector<std::array<std::int32_t, 4>> ee;
+
+  void add_triangle_pair(const Faces& fa, std::int32_t ta, const Faces& fb, std::int32_t tb, bool self) {
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t va = fa(ta, k), vb = fb(tb, k);
+      if (!self || (va != fb(tb, 0) && va != fb(tb, 1) && va != fb(tb, 2))) vf.push_back({0, va, tb});
+      if (!self || (vb != fa(ta, 0) && vb != fa(ta, 1) && vb != fa(ta, 2))) vf.push_back({self ? 0 : 1, vb, ta});
+    }
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        std::int32_t a0 = fa(ta, i), a1 = fa(ta, (i + 1) % 3), b0 = fb(tb, j), b1 = fb(tb, (j + 1) % 3);
+        if (a0 > a1) std::swap(a0, a1);
+        if (b0 > b1) std::swap(b0, b1);
+        if (self) {
+          if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;  // adjacent (or the same edge)
+          if (std::make_pair(a0, a1) > std::make_pair(b0, b1)) {
+            std::swap(a0, b0);
+            std::swap(a1, b1);
+          }
+        }
+        ee.push_back({a0, a1, b0, b1});
+      }
+  }
+  void finish() {
+    std::sort(vf.begin(), vf.end());
+    vf.erase(std::unique(vf.begin(), vf.end()), vf.end());
+    std::sort(ee.begin(), ee.end());
+    ee.erase(std::unique(ee.begin(), ee.end()), ee.end());
+  }
+};
+
+template <class S>
+MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt) {
+  c.finish();
+  MeshCcdResult<S> r;
+  r.toi = static_cast<S>(opt.t_max);
+  auto record = [&](MeshCcdContact<S> k) {
+    r.hit = true;
+    r.toi = std::min(r.toi, k.result.toi);
+    r.contacts.push_back(k);
+  };
+  for (const auto& [mesh, v, f] : c.vf) {
+    const MeshMotion<S>& mv = mesh == 0 ? a : b;
+    const MeshMotion<S>& mf = mesh == 0 ? b : a;
+    const Faces& F = *mf.faces;
+    const auto res = vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)), mf.p1(F(f, 1)), mf.p1(F(f, 2)), opt);
+    ++r.primitive_tests;
+    if (res.hit) {
+      MeshCcdContact<S> k;
+      k.kind = MeshCcdKind::VertexFace;
+      k.vertex_mesh = mesh;
+      k.vertex = v;
+      k.face = f;
+      k.result = res;
+      record(k);
+    }
+  }
+  for (const auto& [a0, a1, b0, b1] : c.ee) {
+    const auto res = edge_edge_ccd(a.p0(a0), a.p0(a1), b.p0(b0), b.p0(b1), a.p1(a0), a.p1(a1), b.p1(b0), b.p1(b1), opt);
+    ++r.primitive_tests;
+    if (res.hit) {
+      MeshCcdContact<S> k;
+      k.kind = MeshCcdKind::EdgeEdge;
+      k.a0 = a0, k.a1 = a1, k.b0 = b0, k.b1 = b1;
+      k.result = res;
+      record(k);
+    }
+  }
+  return r;
+}
+
+}  // namespace detail
+
+/// CCD between two deforming meshes over one step. `ta`, `tb`: their swept trees for this step
+/// (built or refitted with inflate >= opt.min_separation / 2). Returns every vertex-face pair (in
+/// both directions) and edge-edge pair that comes within opt.min_separation, with the earliest
+/// toi. No false negatives (see CcdResult); hits may include near misses within the tolerance.
+template <class S>
+MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, const MeshMotion<S>& b, const SweptMeshBvh<S>& tb,
+                          const CcdOptions& opt = {}) {
+  IMPACT_ASSERT(double(ta.inflate) * 2 >= opt.min_separation && double(tb.inflate) * 2 >= opt.min_separation);
+  detail::MeshCcdCandidates c;
+  std::size_t pairs = 0;
+  traverse_pair(
+      ta.tree, tb.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
+      [&](std::int32_t fa, std::int32_t fb) {
+        ++pairs;
+        c.add_triangle_pair(*a.faces, fa, *b.faces, fb, false);
+        return true;
+      });
+  auto r = detail::run_mesh_ccd(c, a, b, opt);
+  r.triangle_pairs = pairs;
+  return r;
+}
+
+/// Self CCD of one deforming mesh over one step, skipping adjacent primitives (a vertex against a
+/// face containing it, edges sharing a vertex). Vertex-face contacts have vertex_mesh 0; edge
+/// pairs are reported once with (a0, a1) < (b0, b1).
+template <class S> MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}) {
+  IMPACT_ASSERT(double(t.inflate) * 2 >= opt.min_separation);
+  detail::MeshCcdCandidates c;
+  std::size_t pairs = 0;
+  traverse_self(
+      t.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
+      [&](std::int32_t fa, std::int32_t fb) {
+        ++pairs;
+        c.add_triangle_pair(*m.faces, fa, *m.faces, fb, true);
+        return true;
+      });
+  auto r = detail::run_mesh_ccd(c, m, m, opt);
+  r.triangle_pairs = pairs;
+  return r;
+}
+
+}  // namespace impact
