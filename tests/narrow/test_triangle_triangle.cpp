@@ -2,8 +2,8 @@
 // triangles_intersect against an exact integer separating-axis oracle: random small-integer
 // triangles (dense in coincidences: shared vertices and edges, coplanar, collinear and point
 // triangles), constructed touching and coplanar configurations, near-coplanar perturbations with
-// large coordinates, power-of-two scalings, one-ulp moves off touching contact; the prepared form; triangle_intersection's
-// point and segment lie on both triangles. Float and double.
+// large coordinates, power-of-two scalings, one-ulp moves off touching contact; the prepared form;
+// triangle_intersection's point and segment lie on both triangles. Float and double.
 #include "impact/narrow/triangle_triangle.hpp"
 #include "int_oracle.hpp"
 #include "support/random.hpp"

@@ -26,6 +26,7 @@
 
 namespace impact {
 namespace detail {
+namespace expansion {
 
 /// x + y = a + b exactly, |y| <= ulp(x) / 2.
 inline void two_sum(double a, double b, double& x, double& y) {
@@ -116,6 +117,8 @@ inline int orient3d_exact(const double* a, const double* b, const double* c, con
   return det.sign();
 }
 
+}  // namespace expansion
+
 /// Shewchuk's stage-A relative error bounds, rounded up generously (epsilon = 2^-53).
 inline constexpr double orient3d_bound = (8.0 + 64.0 * 0x1p-53) * 0x1p-53;
 inline constexpr double orient2d_bound = (4.0 + 32.0 * 0x1p-53) * 0x1p-53;
@@ -140,7 +143,7 @@ inline int orient3d_double(const double* a, const double* b, const double* c, co
   const double p[3] = {std::fabs(uy * vz) + std::fabs(uz * vy), std::fabs(uz * vx) + std::fabs(ux * vz),
                        std::fabs(ux * vy) + std::fabs(uy * vx)};
   const int s = orient3d_filtered(a, n, p, d);
-  return s != 2 ? s : orient3d_exact(a, b, c, d);
+  return s != 2 ? s : expansion::orient3d_exact(a, b, c, d);
 }
 
 inline int orient2d_double(double ax, double ay, double bx, double by, double cx, double cy) {
@@ -150,7 +153,7 @@ inline int orient2d_double(double ax, double ay, double bx, double by, double cx
   if (det > bound) return 1;
   if (-det > bound) return -1;
   if (l == 0.0 && r == 0.0) return 0;
-  return orient2d_exact(ax, ay, bx, by, cx, cy);
+  return expansion::orient2d_exact(ax, ay, bx, by, cx, cy);
 }
 
 }  // namespace detail
@@ -192,7 +195,7 @@ struct OrientPlane {
   /// Exact orient3d(a, b, c, d).
   int orient(const double* d) const {
     const int s = detail::orient3d_filtered(a, n, p, d);
-    return s != 2 ? s : detail::orient3d_exact(a, b, c, d);
+    return s != 2 ? s : detail::expansion::orient3d_exact(a, b, c, d);
   }
   template <class S> int orient(const Vec3<S>& d) const {
     const double pd[3] = {double(d.x()), double(d.y()), double(d.z())};

@@ -40,7 +40,7 @@ template <class S> struct PreparedTriangle {
   explicit PreparedTriangle(const Triangle<S>& t) : plane(t.a, t.b, t.c) {}
 };
 
-namespace detail {
+namespace detail::tri_tri {
 
 // ---- 2D (projection dropping axis k: coordinates i = k + 1, j = k + 2 mod 3) -------------------
 
@@ -204,26 +204,26 @@ template <class S> inline void to_double(const Triangle<S>& t, double (&out)[3][
 
 inline bool all_same_strict(const int* s) { return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0); }
 
-}  // namespace detail
+}  // namespace detail::tri_tri
 
 /// Exact: true when the closed triangles share at least one point (see the file comment). The
 /// prepared form of a is reused across calls; b is any triangle.
 template <class S> inline bool triangles_intersect(const PreparedTriangle<S>& a, const Triangle<S>& b) {
   static_assert(is_supported_scalar_v<S>, "triangles_intersect: float or double");
   double bv[3][3];
-  detail::to_double(b, bv);
+  detail::tri_tri::to_double(b, bv);
   int sb[3];
   for (int k = 0; k < 3; ++k) sb[k] = a.plane.orient(bv[k]);
-  if (detail::all_same_strict(sb)) return false;
+  if (detail::tri_tri::all_same_strict(sb)) return false;
   const OrientPlane pb(b.a, b.b, b.c);
   const double* pa[3] = {a.plane.a, a.plane.b, a.plane.c};
   int sa[3];
   for (int k = 0; k < 3; ++k) sa[k] = pb.orient(pa[k]);
-  if (detail::all_same_strict(sa)) return false;
+  if (detail::tri_tri::all_same_strict(sa)) return false;
   const double* pbv[3] = {bv[0], bv[1], bv[2]};
   if ((sb[0] == 0 && sb[1] == 0 && sb[2] == 0) || (sa[0] == 0 && sa[1] == 0 && sa[2] == 0))
-    return detail::tri_tri_degenerate_or_coplanar(pa, pbv);
-  return detail::tri_tri_straddling(pa, pbv, sa, sb);
+    return detail::tri_tri::tri_tri_degenerate_or_coplanar(pa, pbv);
+  return detail::tri_tri::tri_tri_straddling(pa, pbv, sa, sb);
 }
 
 /// Exact: true when the closed triangles a and b share at least one point. Touching counts;
@@ -241,7 +241,7 @@ template <class S> struct TriangleContact {
   Vec3<S> normal_b;  ///< unit normal of b; zero if b is degenerate
 };
 
-namespace detail {
+namespace detail::tri_tri {
 
 /// Points where the triangle t (exact signs s, floating distances d) meets the other plane.
 inline int plane_cut(const double* const* t, const int* s, const double* d, double (&out)[3][3]) {
@@ -262,7 +262,7 @@ inline int plane_cut(const double* const* t, const int* s, const double* d, doub
   return m;
 }
 
-}  // namespace detail
+}  // namespace detail::tri_tri
 
 /// Intersection of two triangles: nullopt exactly when triangles_intersect is false; otherwise a
 /// point of the intersection and both unit normals. For transversal (non-coplanar, non-degenerate)
@@ -272,8 +272,8 @@ inline int plane_cut(const double* const* t, const int* s, const double* d, doub
 template <class S> std::optional<TriangleContact<S>> triangle_intersection(const Triangle<S>& a, const Triangle<S>& b) {
   if (!triangles_intersect(a, b)) return std::nullopt;
   double av[3][3], bv[3][3];
-  detail::to_double(a, av);
-  detail::to_double(b, bv);
+  detail::tri_tri::to_double(a, av);
+  detail::tri_tri::to_double(b, bv);
   const double* pa[3] = {av[0], av[1], av[2]};
   const double* pb[3] = {bv[0], bv[1], bv[2]};
   TriangleContact<S> out;
@@ -288,7 +288,7 @@ template <class S> std::optional<TriangleContact<S>> triangle_intersection(const
     double da[3], db[3];
     for (int k = 0; k < 3; ++k) da[k] = nb.dot(ta[k] - tb.a), db[k] = na.dot(tb[k] - ta.a);
     double ca[3][3], cb[3][3];
-    const int ma = detail::plane_cut(pa, sa, da, ca), mb = detail::plane_cut(pb, sb, db, cb);
+    const int ma = detail::tri_tri::plane_cut(pa, sa, da, ca), mb = detail::tri_tri::plane_cut(pb, sb, db, cb);
     const Vec3<double> dir = na.cross(nb);
     auto at = [](const double* x) { return Vec3<double>(x[0], x[1], x[2]); };
     auto interval = [&](double (&c)[3][3], int m, Vec3<double>& lo, Vec3<double>& hi, double& tlo, double& thi) {
