@@ -115,8 +115,8 @@ template <class S> class StaticDynamicBroadPhase {
       for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box(a).center(), root.min, scale);
       std::sort(need_.begin(), need_.end());
     }
-    for (const auto& [code, a] : need_) {
-      (void)code;
+    for (const auto& item : need_) {
+      const std::int32_t a = item.second;
       const auto sa = static_cast<std::size_t>(a);
       std::vector<std::int32_t>& cand = cand_[sa];
       cand.clear();
