@@ -41,11 +41,15 @@ class SplitMix64 {
   std::uint64_t state_;
 };
 
-inline void require_generator(bool ok, const char* fn, const std::string& why) {
+namespace generators {
+
+inline void require(bool ok, const char* fn, const std::string& why) {
   if (!ok) throw InvalidInput(std::string(fn) + ": " + why);
 }
 
-inline double pi() { return 3.14159265358979323846; }
+inline constexpr double pi = 3.14159265358979323846;
+
+}  // namespace generators
 
 }  // namespace detail
 
@@ -54,8 +58,8 @@ inline double pi() { return 3.14159265358979323846; }
 /// clockwise seen from outside). Vertices: slices*(stacks-1) + 2; triangles: 2*slices*(stacks-1).
 /// Throws InvalidInput on radius <= 0 or too few segments.
 template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int stacks = 16) {
-  detail::require_generator(radius > S(0), "make_uv_sphere", "radius must be positive");
-  detail::require_generator(slices >= 3 && stacks >= 2, "make_uv_sphere", "needs slices >= 3 and stacks >= 2");
+  detail::generators::require(radius > S(0), "make_uv_sphere", "radius must be positive");
+  detail::generators::require(slices >= 3 && stacks >= 2, "make_uv_sphere", "needs slices >= 3 and stacks >= 2");
   const int rings = stacks - 1;
   TriangleMesh<S> m;
   m.V.resize(slices * rings + 2, 3);
@@ -66,9 +70,9 @@ template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int
   m.V.row(south) << S(0), S(0), -radius;
   auto ring_vertex = [slices](int i, int j) { return 1 + i * slices + (j % slices); };
   for (int i = 0; i < rings; ++i) {
-    const double theta = detail::pi() * (i + 1) / stacks;
+    const double theta = detail::generators::pi * (i + 1) / stacks;
     for (int j = 0; j < slices; ++j) {
-      const double phi = 2 * detail::pi() * j / slices;
+      const double phi = 2 * detail::generators::pi * j / slices;
       m.V.row(ring_vertex(i, j)) << static_cast<S>(r * std::sin(theta) * std::cos(phi)),
           static_cast<S>(r * std::sin(theta) * std::sin(phi)), static_cast<S>(r * std::cos(theta));
     }
@@ -91,8 +95,8 @@ template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int
 /// sphere. Outward-oriented. Triangles: 20 * 4^subdivisions; vertices: 10 * 4^subdivisions + 2.
 /// Throws InvalidInput on radius <= 0 or subdivisions outside [0, 10].
 template <class S> TriangleMesh<S> make_icosphere(S radius, int subdivisions = 3) {
-  detail::require_generator(radius > S(0), "make_icosphere", "radius must be positive");
-  detail::require_generator(subdivisions >= 0 && subdivisions <= 10, "make_icosphere", "subdivisions must be in [0, 10]");
+  detail::generators::require(radius > S(0), "make_icosphere", "radius must be positive");
+  detail::generators::require(subdivisions >= 0 && subdivisions <= 10, "make_icosphere", "subdivisions must be in [0, 10]");
   const double g = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<Eigen::Vector3d> P = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
                                     {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
@@ -136,16 +140,16 @@ template <class S> TriangleMesh<S> make_icosphere(S radius, int subdivisions = 3
 /// around the tube. Outward-oriented. Vertices: nu*nv; triangles: 2*nu*nv; enclosed volume tends
 /// to 2 pi^2 R r^2. Throws InvalidInput on invalid radii or too few segments.
 template <class S> TriangleMesh<S> make_torus(S R, S r, int nu = 48, int nv = 24) {
-  detail::require_generator(r > S(0) && R > r, "make_torus", "needs 0 < r < R");
-  detail::require_generator(nu >= 3 && nv >= 3, "make_torus", "needs nu >= 3 and nv >= 3");
+  detail::generators::require(r > S(0) && R > r, "make_torus", "needs 0 < r < R");
+  detail::generators::require(nu >= 3 && nv >= 3, "make_torus", "needs nu >= 3 and nv >= 3");
   TriangleMesh<S> m;
   m.V.resize(nu * nv, 3);
   m.F.resize(2 * nu * nv, 3);
   auto id = [nu, nv](int i, int j) { return (i % nu) * nv + (j % nv); };
   for (int i = 0; i < nu; ++i) {
-    const double theta = 2 * detail::pi() * i / nu;
+    const double theta = 2 * detail::generators::pi * i / nu;
     for (int j = 0; j < nv; ++j) {
-      const double phi = 2 * detail::pi() * j / nv;
+      const double phi = 2 * detail::generators::pi * j / nv;
       const double rho = static_cast<double>(R) + static_cast<double>(r) * std::cos(phi);
       m.V.row(id(i, j)) << static_cast<S>(rho * std::cos(theta)), static_cast<S>(rho * std::sin(theta)),
           static_cast<S>(static_cast<double>(r) * std::sin(phi));
@@ -167,8 +171,8 @@ template <class S> TriangleMesh<S> make_torus(S R, S r, int nu = 48, int nv = 24
 /// major in x (vertex (i, j) is i + j*(nx+1)); triangles: 2*nx*ny. Throws InvalidInput on
 /// nx < 1, ny < 1 or size <= 0.
 template <class S> TriangleMesh<S> make_grid(int nx, int ny, S size = S(1)) {
-  detail::require_generator(nx >= 1 && ny >= 1, "make_grid", "needs nx >= 1 and ny >= 1");
-  detail::require_generator(size > S(0), "make_grid", "size must be positive");
+  detail::generators::require(nx >= 1 && ny >= 1, "make_grid", "needs nx >= 1 and ny >= 1");
+  detail::generators::require(size > S(0), "make_grid", "size must be positive");
   TriangleMesh<S> m;
   m.V.resize((nx + 1) * (ny + 1), 3);
   m.F.resize(2 * nx * ny, 3);
@@ -193,7 +197,7 @@ template <class S> TriangleMesh<S> make_grid(int nx, int ny, S size = S(1)) {
 /// that axis (bit 0: x, bit 1: y, bit 2: z), -h otherwise. Throws InvalidInput on a non-positive
 /// half extent.
 template <class S> TriangleMesh<S> make_box(const Vec3<S>& half_extents) {
-  detail::require_generator((half_extents.array() > S(0)).all(), "make_box", "half extents must be positive");
+  detail::generators::require((half_extents.array() > S(0)).all(), "make_box", "half extents must be positive");
   TriangleMesh<S> m;
   m.V.resize(8, 3);
   for (int k = 0; k < 8; ++k)
@@ -215,8 +219,8 @@ template <class S> TriangleMesh<S> make_box(const Vec3<S>& half_extents) {
 /// every platform (SplitMix64, computed in double then cast to S). Throws InvalidInput on n < 1,
 /// extent < 0 or tri_size <= 0.
 template <class S> TriangleMesh<S> make_random_soup(int n, std::uint64_t seed, S extent = S(1), S tri_size = S(0.1)) {
-  detail::require_generator(n >= 1, "make_random_soup", "needs n >= 1");
-  detail::require_generator(extent >= S(0) && tri_size > S(0), "make_random_soup", "needs extent >= 0 and tri_size > 0");
+  detail::generators::require(n >= 1, "make_random_soup", "needs n >= 1");
+  detail::generators::require(extent >= S(0) && tri_size > S(0), "make_random_soup", "needs extent >= 0 and tri_size > 0");
   detail::SplitMix64 rng(seed);
   const double e = static_cast<double>(extent), h = 0.5 * static_cast<double>(tri_size);
   TriangleMesh<S> m;

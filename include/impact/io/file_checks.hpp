@@ -20,15 +20,15 @@
 #include <string>
 #include <vector>
 
-namespace impact::detail {
+namespace impact::detail::mesh_file {
 
-[[noreturn]] inline void file_check_error(const std::string& path, const std::string& why) {
+[[noreturn]] inline void fail(const std::string& path, const std::string& why) {
   throw InvalidInput("load_mesh: '" + path + "': " + why);
 }
 
 inline std::string read_all_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) file_check_error(path, "file cannot be opened for reading");
+  if (!in) fail(path, "file cannot be opened for reading");
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
@@ -122,7 +122,7 @@ inline void check_ply(const std::string& path, const std::string& data) {
     }
     header.push_back(line);
   }
-  if (!ended) file_check_error(path, "cannot be parsed: truncated or malformed PLY header (no end_header line)");
+  if (!ended) fail(path, "cannot be parsed: truncated or malformed PLY header (no end_header line)");
 
   enum class Format { unknown, ascii, little, big } format = Format::unknown;
   std::vector<PlyElement> elements;
@@ -133,10 +133,10 @@ inline void check_ply(const std::string& path, const std::string& data) {
       if (tok[1] == "ascii") format = Format::ascii;
       else if (tok[1] == "binary_little_endian") format = Format::little;
       else if (tok[1] == "binary_big_endian") format = Format::big;
-      else file_check_error(path, "cannot be parsed: unknown PLY format '" + tok[1] + "'");
+      else fail(path, "cannot be parsed: unknown PLY format '" + tok[1] + "'");
     } else if (tok[0] == "element" && tok.size() == 3) {
       long long n = 0;
-      if (!parse_integer(tok[2], n) || n < 0) file_check_error(path, "cannot be parsed: bad PLY element count '" + tok[2] + "'");
+      if (!parse_integer(tok[2], n) || n < 0) fail(path, "cannot be parsed: bad PLY element count '" + tok[2] + "'");
       elements.push_back({tok[1], static_cast<std::uint64_t>(n), {}});
     } else if (tok[0] == "property" && !elements.empty()) {
       PlyProperty p;
@@ -146,31 +146,31 @@ inline void check_ply(const std::string& path, const std::string& data) {
         p.value_type = ply_type(tok[3]);
         p.name = tok[4];
         if (p.count_type.size == 0 || p.count_type.is_float || p.value_type.size == 0)
-          file_check_error(path, "cannot be parsed: bad PLY list property '" + header[i] + "'");
+          fail(path, "cannot be parsed: bad PLY list property '" + header[i] + "'");
       } else if (tok.size() == 3) {
         p.value_type = ply_type(tok[1]);
         p.name = tok[2];
-        if (p.value_type.size == 0) file_check_error(path, "cannot be parsed: unknown PLY property type '" + tok[1] + "'");
+        if (p.value_type.size == 0) fail(path, "cannot be parsed: unknown PLY property type '" + tok[1] + "'");
       } else {
-        file_check_error(path, "cannot be parsed: malformed PLY property line '" + header[i] + "'");
+        fail(path, "cannot be parsed: malformed PLY property line '" + header[i] + "'");
       }
       elements.back().properties.push_back(p);
     } else {
       return;  // something this check does not know: leave it to assimp
     }
   }
-  if (format == Format::unknown) file_check_error(path, "cannot be parsed: PLY header has no format line");
+  if (format == Format::unknown) fail(path, "cannot be parsed: PLY header has no format line");
 
   std::uint64_t num_vertices = 0;
   for (const auto& e : elements)
     if (e.name == "vertex") num_vertices = e.count;
   auto truncated = [&](const PlyElement& e, std::uint64_t item) {
-    file_check_error(path, "cannot be parsed: truncated PLY file, data ends in element '" + e.name + "' (item " +
+    fail(path, "cannot be parsed: truncated PLY file, data ends in element '" + e.name + "' (item " +
                                std::to_string(item) + " of " + std::to_string(e.count) + ")");
   };
   auto check_index = [&](long long idx, std::uint64_t face) {
     if (idx < 0 || static_cast<std::uint64_t>(idx) >= num_vertices)
-      file_check_error(path, "face " + std::to_string(face) + " has vertex index " + std::to_string(idx) + " outside [0, " +
+      fail(path, "face " + std::to_string(face) + " has vertex index " + std::to_string(idx) + " outside [0, " +
                                  std::to_string(num_vertices) + ")");
   };
 
@@ -193,13 +193,13 @@ inline void check_ply(const std::string& path, const std::string& data) {
           if (!prop.is_list) continue;
           long long n = 0;
           if (!parse_integer(tok, n) || n < 0)
-            file_check_error(path, "cannot be parsed: bad list length '" + tok + "' in PLY element '" + e.name + "'");
+            fail(path, "cannot be parsed: bad list length '" + tok + "' in PLY element '" + e.name + "'");
           const bool indices = is_face_index_list(e, prop);
           for (long long k = 0; k < n; ++k) {
             if (!next_token(tok)) truncated(e, i);
             if (indices) {
               long long idx = 0;
-              if (!parse_integer(tok, idx)) file_check_error(path, "cannot be parsed: bad vertex index '" + tok + "' in face " + std::to_string(i));
+              if (!parse_integer(tok, idx)) fail(path, "cannot be parsed: bad vertex index '" + tok + "' in face " + std::to_string(i));
               check_index(idx, i);
             }
           }
@@ -234,11 +234,11 @@ inline void check_ply(const std::string& path, const std::string& data) {
         if (size - pos < static_cast<std::uint64_t>(prop.count_type.size)) truncated(e, i);
         const long long n = ply_read_integer(bytes + pos, prop.count_type, big);
         pos += static_cast<std::uint64_t>(prop.count_type.size);
-        if (n < 0) file_check_error(path, "cannot be parsed: negative list length in PLY element '" + e.name + "'");
+        if (n < 0) fail(path, "cannot be parsed: negative list length in PLY element '" + e.name + "'");
         const auto vsize = static_cast<std::uint64_t>(prop.value_type.size);
         if (static_cast<std::uint64_t>(n) > (size - pos) / vsize) truncated(e, i);
         if (is_face_index_list(e, prop)) {
-          if (prop.value_type.is_float) file_check_error(path, "cannot be parsed: PLY face indices of a floating-point type");
+          if (prop.value_type.is_float) fail(path, "cannot be parsed: PLY face indices of a floating-point type");
           for (long long k = 0; k < n; ++k) check_index(ply_read_integer(bytes + pos + static_cast<std::uint64_t>(k) * vsize, prop.value_type, big), i);
         }
         pos += static_cast<std::uint64_t>(n) * vsize;
@@ -273,31 +273,31 @@ inline void check_off(const std::string& path, const std::string& data) {
   std::vector<std::string> counts(lines[0].begin() + 1, lines[0].end());
   if (!counts.empty() && counts[0] == "BINARY") return;
   if (counts.empty()) {
-    if (li >= lines.size()) file_check_error(path, "cannot be parsed: truncated OFF file (no counts line)");
+    if (li >= lines.size()) fail(path, "cannot be parsed: truncated OFF file (no counts line)");
     counts = lines[li++];
   }
   long long nv = 0, nf = 0;
   if (counts.size() < 2 || !parse_integer(counts[0], nv) || !parse_integer(counts[1], nf)) return;
-  if (nv < 0 || nf < 0) file_check_error(path, "cannot be parsed: negative OFF vertex or face count");
+  if (nv < 0 || nf < 0) fail(path, "cannot be parsed: negative OFF vertex or face count");
   if (static_cast<long long>(lines.size() - li) < nv)
-    file_check_error(path, "cannot be parsed: truncated OFF file, " + std::to_string(lines.size() - li) + " vertex lines of " +
+    fail(path, "cannot be parsed: truncated OFF file, " + std::to_string(lines.size() - li) + " vertex lines of " +
                                std::to_string(nv) + " declared");
   li += static_cast<std::size_t>(nv);
   for (long long f = 0; f < nf; ++f, ++li) {
     if (li >= lines.size())
-      file_check_error(path, "cannot be parsed: truncated OFF file, " + std::to_string(f) + " face lines of " + std::to_string(nf) +
+      fail(path, "cannot be parsed: truncated OFF file, " + std::to_string(f) + " face lines of " + std::to_string(nf) +
                                  " declared");
     const auto& tok = lines[li];
     long long n = 0;
-    if (!parse_integer(tok[0], n) || n < 0) file_check_error(path, "cannot be parsed: bad OFF face line " + std::to_string(f));
+    if (!parse_integer(tok[0], n) || n < 0) fail(path, "cannot be parsed: bad OFF face line " + std::to_string(f));
     if (static_cast<long long>(tok.size()) - 1 < n)
-      file_check_error(path, "cannot be parsed: OFF face " + std::to_string(f) + " lists fewer indices than its count");
+      fail(path, "cannot be parsed: OFF face " + std::to_string(f) + " lists fewer indices than its count");
     for (long long k = 1; k <= n; ++k) {
       long long idx = 0;
       if (!parse_integer(tok[static_cast<std::size_t>(k)], idx))
-        file_check_error(path, "cannot be parsed: bad vertex index '" + tok[static_cast<std::size_t>(k)] + "' in OFF face " + std::to_string(f));
+        fail(path, "cannot be parsed: bad vertex index '" + tok[static_cast<std::size_t>(k)] + "' in OFF face " + std::to_string(f));
       if (idx < 0 || idx >= nv)
-        file_check_error(path, "face " + std::to_string(f) + " has vertex index " + std::to_string(idx) + " outside [0, " +
+        fail(path, "face " + std::to_string(f) + " has vertex index " + std::to_string(idx) + " outside [0, " +
                                    std::to_string(nv) + ")");
     }
   }
@@ -324,12 +324,12 @@ inline void check_stl(const std::string& path, const std::string& data) {
   const std::size_t line_start = data.find_last_of("\r\n", e == 0 ? 0 : e - 1);
   const std::string last = lower_ascii(data.substr(line_start == std::string::npos ? 0 : line_start + 1, e));
   if (split_tokens(last).empty() || split_tokens(last)[0] != "endsolid")
-    file_check_error(path, "cannot be parsed: truncated ASCII STL file (does not end with an endsolid line)");
+    fail(path, "cannot be parsed: truncated ASCII STL file (does not end with an endsolid line)");
 }
 
 /// Runs the check that fits the file, chosen by its first bytes (PLY magic) or its extension and
 /// (OFF, STL). Other formats pass through untouched.
-inline void check_mesh_file(const std::string& path) {
+inline void check(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   char head[4] = {0, 0, 0, 0};
   in.read(head, 4);
@@ -345,4 +345,4 @@ inline void check_mesh_file(const std::string& path) {
   }
 }
 
-}  // namespace impact::detail
+}  // namespace impact::detail::mesh_file

@@ -41,9 +41,9 @@ struct LoadOptions {
   bool apply_node_transforms = true;
 };
 
-namespace detail {
+namespace detail::loader {
 
-[[noreturn]] inline void load_error(const std::string& path, const std::string& why) {
+[[noreturn]] inline void fail(const std::string& path, const std::string& why) {
   throw InvalidInput("load_mesh: '" + path + "': " + why);
 }
 
@@ -88,7 +88,7 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
   return out;
 }
 
-}  // namespace detail
+}  // namespace detail::loader
 
 /// Loads every triangle of the file at `path` into one mesh of scalar S (float or double): all
 /// meshes of the scene, each under its node transform (see LoadOptions), concatenated in a
@@ -109,14 +109,14 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
 template <class S> TriangleMesh<S> load_mesh(const std::string& path, const LoadOptions& options = {}) {
   static_assert(is_supported_scalar_v<S>, "load_mesh: S must be float or double");
   namespace fs = std::filesystem;
-  if (path.empty()) detail::load_error(path, "empty path");
+  if (path.empty()) detail::loader::fail(path, "empty path");
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (!fs::exists(st)) detail::load_error(path, "file does not exist");
-  if (fs::is_directory(st)) detail::load_error(path, "is a directory, not a mesh file");
-  if (!std::ifstream(path, std::ios::binary).good()) detail::load_error(path, "file cannot be opened for reading");
-  if (fs::is_regular_file(st) && fs::file_size(path, ec) == 0 && !ec) detail::load_error(path, "file is empty");
-  detail::check_mesh_file(path);  // PLY and OFF defects assimp would hang on or hide
+  if (!fs::exists(st)) detail::loader::fail(path, "file does not exist");
+  if (fs::is_directory(st)) detail::loader::fail(path, "is a directory, not a mesh file");
+  if (!std::ifstream(path, std::ios::binary).good()) detail::loader::fail(path, "file cannot be opened for reading");
+  if (fs::is_regular_file(st) && fs::file_size(path, ec) == 0 && !ec) detail::loader::fail(path, "file is empty");
+  detail::mesh_file::check(path);  // PLY, OFF and STL defects assimp would hang on or hide
 
   // No JoinIdenticalVertices when welding by position ourselves: it would only cost time.
   unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
@@ -126,22 +126,22 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
   try {
     scene = importer.ReadFile(path, flags);
   } catch (const std::exception& e) {
-    detail::load_error(path, std::string("cannot be parsed: ") + e.what());
+    detail::loader::fail(path, std::string("cannot be parsed: ") + e.what());
   } catch (...) {
-    detail::load_error(path, "cannot be parsed: unknown error inside assimp");
+    detail::loader::fail(path, "cannot be parsed: unknown error inside assimp");
   }
   if (scene == nullptr) {
     const std::string err = importer.GetErrorString();
-    detail::load_error(path, "cannot be parsed: " + (err.empty() ? std::string("assimp returned no scene") : err));
+    detail::loader::fail(path, "cannot be parsed: " + (err.empty() ? std::string("assimp returned no scene") : err));
   }
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr)
-    detail::load_error(path, "contains no triangles (no meshes in the file)");
+    detail::loader::fail(path, "contains no triangles (no meshes in the file)");
 
   std::vector<S> coords;  // x y z per output vertex
   std::vector<int> faces;  // 3 per output triangle
-  std::unordered_map<std::array<S, 3>, int, detail::PositionHash<S>> welded;
+  std::unordered_map<std::array<S, 3>, int, detail::loader::PositionHash<S>> welded;
   std::vector<int> local;  // per-instance map from assimp vertex index to output vertex, -1 = not yet
-  const auto instances = detail::mesh_instances(*scene, options.apply_node_transforms);
+  const auto instances = detail::loader::mesh_instances(*scene, options.apply_node_transforms);
   std::size_t point_or_line_faces = 0;
   for (std::size_t inst = 0; inst < instances.size(); ++inst) {
     const unsigned mi = instances[inst].first;
@@ -158,7 +158,7 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
       for (unsigned k = 0; k < 3; ++k) {
         const unsigned vi = face.mIndices[k];
         if (vi >= mesh->mNumVertices)
-          detail::load_error(path, "mesh " + std::to_string(mi) + " face " + std::to_string(f) + " has vertex index " +
+          detail::loader::fail(path, "mesh " + std::to_string(mi) + " face " + std::to_string(f) + " has vertex index " +
                                        std::to_string(vi) + " out of range [0, " + std::to_string(mesh->mNumVertices) + ")");
         int& out = local[vi];
         if (out < 0) {
@@ -166,9 +166,9 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
           const Eigen::Vector4d p = M * Eigen::Vector4d(double(v.x), double(v.y), double(v.z), 1.0);
           const std::array<S, 3> q{static_cast<S>(p[0]) + S(0), static_cast<S>(p[1]) + S(0), static_cast<S>(p[2]) + S(0)};
           if (!all_finite(Vec3<S>(q[0], q[1], q[2])))
-            detail::load_error(path, "mesh " + std::to_string(mi) + " vertex " + std::to_string(vi) +
+            detail::loader::fail(path, "mesh " + std::to_string(mi) + " vertex " + std::to_string(vi) +
                                          " has a NaN or infinite coordinate (or one too large for the scalar type)");
-          if (coords.size() / 3 >= static_cast<std::size_t>(INT_MAX)) detail::load_error(path, "more than INT_MAX vertices");
+          if (coords.size() / 3 >= static_cast<std::size_t>(INT_MAX)) detail::loader::fail(path, "more than INT_MAX vertices");
           const int next = static_cast<int>(coords.size() / 3);
           if (options.merge_duplicate_vertices) {
             // q holds +0 for -0 (x + 0 == +0 for x == -0), so equal positions hash equally.
@@ -181,12 +181,12 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
           coords.insert(coords.end(), q.begin(), q.end());
         }
       }
-      if (faces.size() / 3 >= static_cast<std::size_t>(INT_MAX)) detail::load_error(path, "more than INT_MAX triangles");
+      if (faces.size() / 3 >= static_cast<std::size_t>(INT_MAX)) detail::loader::fail(path, "more than INT_MAX triangles");
       for (unsigned k = 0; k < 3; ++k) faces.push_back(local[face.mIndices[k]]);
     }
   }
   if (faces.empty())
-    detail::load_error(path, point_or_line_faces ? "contains no triangles (only points or lines)" : "contains no triangles");
+    detail::loader::fail(path, point_or_line_faces ? "contains no triangles (only points or lines)" : "contains no triangles");
 
   TriangleMesh<S> result;
   result.V = Eigen::Map<const Vertices<S>>(coords.data(), static_cast<Eigen::Index>(coords.size() / 3), 3);
