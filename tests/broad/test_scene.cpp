@@ -124,7 +124,15 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
           }
         } else if (live.size() > 1) {
           const ObjectId a = live[rng.index(live.size())], b = live[rng.index(live.size())];
-          if (a != b) sc.each([&](Scene<S>& s) { s.ignore_pair(a, b); });
+          if (a != b) {
+            if (rng.uniform() < 0.7) sc.each([&](Scene<S>& s) { s.ignore_pair(a, b); });
+            else sc.each([&](Scene<S>& s) { s.unignore_pair(a, b); });
+          }
+        }
+        if (rng.uniform() < 0.03 && !live.empty()) {  // change a filter
+          const ObjectId id = live[rng.index(live.size())];
+          const CollisionFilter f{1u + std::uint32_t(rng.index(3)), 0xffffffffu ^ std::uint32_t(rng.index(4))};
+          sc.each([&](Scene<S>& s) { s.set_filter(id, f); });
         }
       }
       const auto ref = sorted(sc.s[0].find_pairs().pairs);
@@ -265,6 +273,17 @@ TYPED_TEST(BroadTyped, FilteredPairsDroppedBeforeGeometry) {
     s.add(3, Shape<S>::sphere(S(1)), pose_at<S>(Eigen::Vector3d::Zero()), {BodyType::Static, {1u, 1u}});
   });
   for (auto& s : sc.s) EXPECT_EQ(s.collide().pairs, (std::vector<ObjectPair>{{1, 3}}));
+  // ignore, then unignore; then a filter change on the static object
+  for (auto& s : sc.s) {
+    s.ignore_pair(3, 1);
+    EXPECT_TRUE(s.find_pairs().pairs.empty());
+    s.unignore_pair(1, 3);
+    EXPECT_EQ(s.find_pairs().pairs, (std::vector<ObjectPair>{{1, 3}}));
+    s.set_filter(3, {1u, 0u});
+    EXPECT_TRUE(s.find_pairs().pairs.empty());
+    s.set_filter(3, {1u, 1u});
+    EXPECT_EQ(s.find_pairs().pairs, (std::vector<ObjectPair>{{1, 3}}));
+  }
 }
 
 TYPED_TEST(BroadTyped, BooleanQueryStopsAtFirstHitAndContactsOnlyWhenAsked) {

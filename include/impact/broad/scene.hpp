@@ -195,19 +195,24 @@ template <class S> class Scene {
     std::visit([&](auto& b) { b.filter_changed(slot, table_); }, broad_);
   }
 
-  /// Never report the pair {a, b} (removed with either object). Throws for unknown ids or a == b.
+  /// Never report the pair {a, b} (forgotten when either object is removed). Throws for unknown
+  /// ids or a == b.
   void ignore_pair(ObjectId a, ObjectId b) {
     const std::int32_t sa = slot_of(a, "Scene::ignore_pair"), sb = slot_of(b, "Scene::ignore_pair");
     if (sa == sb) throw InvalidInput("Scene::ignore_pair: both ids are " + std::to_string(a));
     if (!table_.ignored.insert(ObjectTable<S>::pair_key(sa, sb)).second) return;
     ++table_.ignore_count(sa);
     ++table_.ignore_count(sb);
-    std::visit(
-        [&](auto& bp) {
-          bp.filter_changed(sa, table_);
-          bp.filter_changed(sb, table_);
-        },
-        broad_);
+    pair_filter_changed(sa, sb);
+  }
+  /// Reports the pair {a, b} again after ignore_pair. Throws for unknown ids; a pair that was not
+  /// ignored is left alone.
+  void unignore_pair(ObjectId a, ObjectId b) {
+    const std::int32_t sa = slot_of(a, "Scene::unignore_pair"), sb = slot_of(b, "Scene::unignore_pair");
+    if (!table_.ignored.erase(ObjectTable<S>::pair_key(sa, sb))) return;
+    --table_.ignore_count(sa);
+    --table_.ignore_count(sb);
+    pair_filter_changed(sa, sb);
   }
 
   bool contains(ObjectId id) const { return ids_.count(id) != 0; }
@@ -293,6 +298,17 @@ template <class S> class Scene {
     Aabb<S> local;  ///< meshes: box of the vertices in the mesh frame
     S reach = 0;    ///< meshes: largest distance of a vertex from local.center()
   };
+
+  /// The ignore list changed for the pair (sa, sb): only its dynamic members can hold cached
+  /// results about it (static–static pairs are never reported).
+  void pair_filter_changed(std::int32_t sa, std::int32_t sb) {
+    std::visit(
+        [&](auto& bp) {
+          if (!table_.is_static(sa)) bp.filter_changed(sa, table_);
+          if (!table_.is_static(sb)) bp.filter_changed(sb, table_);
+        },
+        broad_);
+  }
 
   template <class Visit> bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
     return std::visit([&](auto& b) { return b.find_pairs(table_, visit, stats); }, broad_);
