@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -618,6 +619,35 @@ TEST(LoadMeshErrors, MutatedFilesLoadOrThrowInvalidInput) {
   }
   EXPECT_GT(rejected, 0);
   EXPECT_EQ(loaded + rejected, 360);
+}
+
+TEST(LoadMesh, AssimpTestModelsLoadOrThrowInvalidInput) {
+  // Debian's assimp-testmodels package: assimp's own sample files, some deliberately broken
+  // (invalid/, truncated, NaN/Inf, point clouds). Each must load into a valid mesh or throw
+  // InvalidInput naming the file.
+  const fs::path root = "/usr/share/assimp/models";
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) GTEST_SKIP() << root << " missing (Debian package assimp-testmodels)";
+  const std::set<std::string> exts = {".obj", ".stl", ".ply", ".off", ".gltf", ".glb", ".dae"};
+  int loaded = 0, rejected = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(root, ec)) {
+    if (!entry.is_regular_file()) continue;
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (!exts.count(ext)) continue;
+    const std::string path = entry.path().string();
+    try {
+      const auto m = load_mesh<float>(path);
+      EXPECT_NO_THROW(validate_mesh(m)) << path;
+      ++loaded;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << path << ": unexpected exception type: " << e.what();
+    }
+  }
+  EXPECT_GT(loaded, 50) << rejected << " rejected";
 }
 
 }  // namespace
