@@ -144,6 +144,15 @@ inline std::optional<S> ray_bv_entry(const Vec3<S>& o, const Vec3<S>& d, const V
   return ray_sphere_entry(o, d, Sphere<S>(s.center, s.radius + margin), t_max);
 }
 
+/// Conservative box-versus-BV prefilter (false only when they are certainly disjoint).
+template <class S> inline bool may_overlap(const Aabb<S>& seg, const Aabb<S>& b) {
+  return (seg.min.array() <= b.max.array()).all() && (b.min.array() <= seg.max.array()).all();
+}
+template <class S> inline bool may_overlap(const Aabb<S>& seg, const Sphere<S>& s) {
+  const Vec3<S> q = s.center.cwiseMax(seg.min).cwiseMin(seg.max);
+  return (q - s.center).squaredNorm() <= s.radius * s.radius * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
+}
+
 template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
 }
@@ -168,10 +177,19 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   S best = ray.t_max;
   std::int32_t best_leaf = -1;
   Vec3<S> best_bary;
+  // a finite ray's own box rejects most nodes before the slab test
+  const bool finite = ray.t_max < std::numeric_limits<S>::infinity();
+  Aabb<S> seg;
+  if (finite) {
+    const Vec3<S> e = o + ray.t_max * d;
+    const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+    seg = Aabb<S>(o.cwiseMin(e).array() - pad, o.cwiseMax(e).array() + pad);
+  }
   traverse_nearest(
       mesh.tree(),
-      [&](const BV& bv) {
+      [&](const BV& bv) -> std::optional<S> {
         if (stats) ++stats->node_tests;
+        if (finite && !detail::may_overlap(seg, bv)) return std::nullopt;
         return detail::ray_bv_entry(o, d, inv, bv, best);
       },
       [&]() { return best; },

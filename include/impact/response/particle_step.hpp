@@ -35,6 +35,7 @@
 /// physical length.
 #pragma once
 
+#include "impact/bvh/traverse.hpp"
 #include "impact/response/collider.hpp"
 #include "impact/response/particle.hpp"
 #include "impact/response/response.hpp"
@@ -42,6 +43,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 namespace impact {
@@ -60,6 +62,12 @@ template <class S> struct StepOptions {
   S offset_ulps = S(256);
   /// Absolute surface offset; used instead of offset_ulps when > 0.
   S surface_offset = S(0);
+  /// Free-ball cache (Particle::free_radius) for static meshes under backtracking: when a leg
+  /// leaves the particle's free ball, a new ball, at most free_ball_factor times the leg's length,
+  /// is found from a lower bound of the distance to the meshes (refresh_free_ball); legs inside
+  /// the ball skip the mesh ray casts. Conservative (a leg is skipped only when no mesh surface
+  /// is within its reach); 0 disables it.
+  S free_ball_factor = S(8);
 };
 
 /// Counters of one or more particle steps.
@@ -130,6 +138,44 @@ inline void first_hit_one(const C& c, int index, const Vec3<S>& x, const Vec3<S>
   scale = c.scale();
 }
 
+template <class C> struct IsMeshCollider : std::false_type {};
+template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
+
+/// Refreshes the particle's free ball at its current centre x for a leg of length len: a ball
+/// around x, up to factor * len, clear of every static backtracking mesh. The radius is a cheap
+/// lower bound of the distance to each mesh: the walk descends only into nodes whose box
+/// contains x; any other node bounds its triangles by its box's distance, and the leaves that
+/// contain x give exact triangle distances. Conservative, O(depth) per mesh.
+template <class S, class BV>
+inline void refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
+  S R = opt.free_ball_factor * len + p.radius;  // bound on the distance of the centre to any surface
+  for (const auto& c : colliders.meshes) {
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
+    const RigidTransform<S>& P = c.motion.pose;
+    const Vec3<S> q = P.R.transpose() * (x - P.t);
+    traverse(
+        c.mesh->tree(),
+        [&](const BV& bv) {
+          const S d2 = squared_distance_to_bv(q, bv);
+          if (d2 >= R * R) return false;
+          if (d2 > S(0)) {
+            R = std::sqrt(d2);
+            return false;
+          }
+          return true;
+        },
+        [&](std::int32_t k) {
+          R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
+          return true;
+        });
+  }
+  R -= p.radius;
+  // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
+  R = R * (S(1) - S(64) * std::numeric_limits<S>::epsilon()) - S(64) * std::numeric_limits<S>::epsilon() * x.cwiseAbs().maxCoeff();
+  p.free_center = x;
+  p.free_radius = R > S(0) ? R : S(0);
+}
+
 /// Time of impact within a leg of length `left` starting at x with velocity v and acceleration
 /// a: the chord's hit fraction s refined on the parabola against the tangent plane at the hit,
 /// n . (x + v tau + a tau^2 / 2 - p) = 0 (exact for planes; second order otherwise), so that the
@@ -172,6 +218,7 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
   int n_active = 0;
   S mu_rest = S(0);
   const bool moving = colliders.any_moving();  // a particle at rest can still be hit
+  const bool use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
   for (int it = 0;; ++it) {
     // acceleration and velocity constrained by the resting contacts of this step
     Vec3<S> a = opt.gravity;
@@ -202,9 +249,23 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
       ++st.budget_exhausted;  // policy: stay at the last safe point, drop the rest of the step
       break;
     }
+    bool meshes_clear = false;
+    if (use_free_ball) {
+      const Vec3<S> e = x + d;
+      const S R2 = p.free_radius * p.free_radius;
+      auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
+      meshes_clear = in_ball(x) && in_ball(e);
+      if (!meshes_clear) {
+        detail::refresh_free_ball(p, x, d.norm(), colliders, opt);
+        meshes_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
+      }
+    }
     std::optional<Contact<S>> hit;
     S best_t = S(1), scale = S(0);
     colliders.for_each([&](const auto& c, int index) {
+      if constexpr (detail::IsMeshCollider<std::decay_t<decltype(c)>>::value) {
+        if (meshes_clear) return;
+      }
       if (detail::effective(c.strategy, opt.strategy) == Strategy::Backtrack)
         detail::first_hit_one(c, index, x, d, p.radius, tau_now, left, best_t, hit, scale);
     });

@@ -1,0 +1,260 @@
+// SPDX-License-Identifier: MIT
+// impact-particles-bench: particles against a triangle mesh, run time against error.
+//
+//   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
+//                          [--ref-particles R] [--substeps K] [--free-ball F] [--seed X] [--json FILE]
+//
+// Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
+// mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
+// displacement per step is about 1% of the box diagonal, under gravity (-y), inside a container
+// box slightly larger than the mesh's box, with an elastic material (restitution 1, no friction)
+// so that energy should be conserved. The same initial particles run with
+//  - backtrack:  continuous stepping, BVH first-hit ray casts;
+//  - project:    unconstrained step, then projection to the closest surface point (BVH);
+//  - naive:      backtracking with every triangle tested (a one-leaf tree), for the first M
+//                particles;
+//  - reference:  backtracking with K sub-steps per step, for the first R particles: the
+//                accuracy reference of the position errors.
+// --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache).
+// Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
+// escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
+// particle changed sides, or a particle outside the container), the mean and max distance to the
+// reference's final positions, the mean relative energy error, and the share of particle-steps
+// with at least one impact.
+#include "bench_util.hpp"
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/response/particle_step.hpp"
+#include "support/obj_reader.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <random>
+#include <string>
+
+using namespace impact;
+using impact::bench::Clock;
+using impact::bench::seconds_since;
+
+namespace {
+
+using S = double;
+using BV = Aabb<S>;
+
+struct Args {
+  std::string mesh, json;
+  int particles = 20000, steps = 100, naive_particles = 100, ref_particles = 1000, substeps = 16;
+  double dt = 1e-2, free_ball = 8;
+  std::uint64_t seed = 1;
+};
+
+struct Row {
+  std::string method;
+  int particles = 0, steps = 0;
+  double rate = 0, pos_err_mean = 0, pos_err_max = 0, energy_rel_err = 0, impact_share = 0;
+  int escaped = 0;
+};
+
+/// Crossings of the segment a -> b with the mesh (every triangle hit, watertight rule).
+int crossings(const MeshBvh<BV>& m, const Vec3<S>& a, const Vec3<S>& b) {
+  const Vec3<S> d = b - a;
+  if (d.squaredNorm() == 0) return 0;
+  const detail::WatertightRay<S> wr(a, d);
+  const Vec3<S> inv = detail::safe_inverse(d);
+  int n = 0;
+  traverse(
+      m.tree(), [&](const BV& bv) { return detail::ray_box_entry(a, inv, bv, S(1)).has_value(); },
+      [&](std::int32_t k) {
+        n += detail::watertight_hit(wr, m.triangle(k), S(1)).has_value() ? 1 : 0;
+        return true;
+      });
+  return n;
+}
+
+/// CPU time of this thread: the machine may be shared, and the stepping is single-threaded.
+double thread_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+double energy(const Particle<S>& p, const Vec3<S>& g, const Vec3<S>& origin) { return 0.5 * p.velocity.squaredNorm() - g.dot(p.position - origin); }
+
+struct RunResult {
+  std::vector<Particle<S>> final;
+  double seconds = 0;
+  int escaped = 0;
+  double energy_rel_err = 0;
+  double impact_share = 0;
+};
+
+RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const MeshBvh<BV>& audit_mesh, const Aabb<S>& container,
+              const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit) {
+  RunResult r;
+  std::vector<double> e0(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
+  std::vector<char> escaped(ps.size(), 0);
+  std::vector<Vec3<S>> before(ps.size());
+  StepStats st;
+  const double h = dt / substeps;
+  for (int s = 0; s < steps; ++s) {
+    for (std::size_t i = 0; i < ps.size(); ++i) before[i] = ps[i].position;
+    const double t0 = thread_seconds();
+    for (int k = 0; k < substeps; ++k) st += step_particles(ps, cs, h, opt);
+    r.seconds += thread_seconds() - t0;
+    if (!audit) continue;
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      if (escaped[i]) continue;
+      if (!container.contains(ps[i].position) || crossings(audit_mesh, before[i], ps[i].position) % 2 == 1) escaped[i] = 1;
+    }
+  }
+  double err = 0;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    r.escaped += escaped[i];
+    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
+  }
+  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  r.impact_share = double(st.particles_hit) / (double(ps.size()) * steps * substeps);
+  r.final = std::move(ps);
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  auto usage = [] {
+    std::fprintf(stderr,
+                 "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
+                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--seed X] [--json FILE]\n");
+    return 2;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (s == "--particles" && (v = next())) a.particles = std::max(1, std::atoi(v));
+    else if (s == "--steps" && (v = next())) a.steps = std::max(1, std::atoi(v));
+    else if (s == "--dt" && (v = next())) a.dt = std::atof(v);
+    else if (s == "--naive-particles" && (v = next())) a.naive_particles = std::max(0, std::atoi(v));
+    else if (s == "--ref-particles" && (v = next())) a.ref_particles = std::max(0, std::atoi(v));
+    else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
+    else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
+    else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
+    else if (s == "--json" && (v = next())) a.json = v;
+    else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
+    else return usage();
+  }
+  if (!(a.dt > 0)) return usage();
+
+  TriangleMesh<S> mesh;
+  try {
+    if (a.mesh.empty()) {
+      mesh = make_torus<S>(1.0, 0.4, 192, 96);
+    } else {
+#ifdef IMPACT_HAVE_IO
+      mesh = load_mesh<S>(a.mesh);
+#else
+      mesh = impact::test::read_obj<S>(a.mesh);
+#endif
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "impact-particles-bench: %s\n", e.what());
+    return 1;
+  }
+  const std::string mesh_name = a.mesh.empty() ? "generated:torus" : a.mesh;
+
+  const MeshBvh<BV> bvh(mesh);
+  MeshBvhConfig one_leaf;
+  one_leaf.build.leaf_size = mesh.num_triangles();
+  const MeshBvh<BV> flat(mesh, one_leaf);
+
+  Aabb<S> box;
+  for (int i = 0; i < mesh.num_vertices(); ++i) box.extend(mesh.vertex(i));
+  const double diag = 2 * box.half_diagonal();
+  const Aabb<S> container(box.min.array() - 0.05 * diag, box.max.array() + 0.05 * diag);
+  const double speed = 0.01 * diag / a.dt;
+
+  // initial particles: uniform in the mesh's box, random directions, speed ~1% of the diagonal
+  // per step (0.5x to 1.5x)
+  std::mt19937_64 gen(a.seed);
+  auto uni = [&](double lo, double hi) { return lo + (hi - lo) * (double(gen() >> 11) * 0x1.0p-53); };
+  std::vector<Particle<S>> ps(static_cast<std::size_t>(a.particles));
+  for (auto& p : ps) {
+    for (int k = 0; k < 3; ++k) p.position[k] = uni(box.min[k], box.max[k]);
+    Vec3<S> dir;
+    do dir = Vec3<S>(uni(-1, 1), uni(-1, 1), uni(-1, 1));
+    while (dir.squaredNorm() > 1 || dir.squaredNorm() < 1e-6);
+    p.velocity = dir.normalized() * speed * uni(0.5, 1.5);
+  }
+
+  StepOptions<S> opt;
+  opt.free_ball_factor = a.free_ball;
+  opt.gravity = Vec3<S>(0, -speed / (50 * a.dt), 0);  // changes the speed by its own size in 50 steps
+  const Material<S> elastic = Material<S>::elastic();
+  auto scene = [&](const MeshBvh<BV>& m, Strategy st) {
+    ColliderSet<S, BV> cs;
+    cs.meshes.emplace_back(m, ColliderSide::TwoSided, elastic);
+    cs.boxes.emplace_back(container, ColliderSide::Inside, elastic);
+    cs.meshes[0].strategy = st;
+    cs.boxes[0].strategy = Strategy::Backtrack;
+    return cs;
+  };
+  const auto cs_bt = scene(bvh, Strategy::Backtrack), cs_pr = scene(bvh, Strategy::Project), cs_naive = scene(flat, Strategy::Backtrack);
+
+  const int n_ref = std::min(a.ref_particles, a.particles);
+  const int n_naive = std::min(a.naive_particles, a.particles);
+  std::vector<Particle<S>> ref_init(ps.begin(), ps.begin() + n_ref), naive_init(ps.begin(), ps.begin() + n_naive);
+
+  std::printf("impact-particles-bench: %s, %d triangles, %d particles x %d steps, dt %g, speed %.3g (%.2f%% of the diagonal per step)\n",
+              mesh_name.c_str(), mesh.num_triangles(), a.particles, a.steps, a.dt, speed, 100 * speed * a.dt / diag);
+  const RunResult ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true);
+  const RunResult bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true);
+  const RunResult pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true);
+  const RunResult nv = run(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, true);
+
+  auto row = [&](const char* method, const RunResult& r, int n, int substeps) {
+    Row w;
+    w.method = method;
+    w.particles = n;
+    w.steps = a.steps;
+    w.rate = double(n) * a.steps * substeps / std::max(r.seconds, 1e-12);
+    w.escaped = r.escaped;
+    w.energy_rel_err = r.energy_rel_err;
+    w.impact_share = r.impact_share;
+    std::vector<double> e;
+    for (int i = 0; i < std::min<int>(n, n_ref); ++i)
+      e.push_back((r.final[static_cast<std::size_t>(i)].position - ref.final[static_cast<std::size_t>(i)].position).norm());
+    const auto sm = bench::summarize(e);
+    w.pos_err_mean = sm.mean;
+    w.pos_err_max = sm.max;
+    return w;
+  };
+  const std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
+                                 row("reference", ref, n_ref, a.substeps)};
+  std::printf("%-10s %9s %6s %16s %8s %12s %12s %14s %12s\n", "method", "particles", "steps", "particle_steps/s", "escaped",
+              "pos_err_mean", "pos_err_max", "energy_rel_err", "impact_share");
+  std::vector<std::string> items;
+  for (const auto& w : rows) {
+    std::printf("%-10s %9d %6d %16.4g %8d %12.4g %12.4g %14.4g %12.3f\n", w.method.c_str(), w.particles, w.steps, w.rate, w.escaped,
+                w.pos_err_mean, w.pos_err_max, w.energy_rel_err, w.impact_share);
+    bench::JsonObject o;
+    o.add("method", w.method).add("particles", w.particles).add("steps", w.steps).add("particle_steps_per_s", w.rate);
+    o.add("escaped", w.escaped).add("pos_err_mean", w.pos_err_mean).add("pos_err_max", w.pos_err_max).add("energy_rel_err", w.energy_rel_err);
+    o.add("impact_share", w.impact_share);
+    items.push_back(o.str());
+  }
+  std::printf("share of particle-steps with an impact (backtrack): %.1f%%; backtrack / naive speed: %.0fx; reference: %d sub-steps\n",
+              100 * bt.impact_share, rows[0].rate / std::max(rows[2].rate, 1e-300), a.substeps);
+  if (!a.json.empty()) {
+    bench::JsonObject top;
+    top.add("bench", "impact-particles-bench").add("mesh", mesh_name).add("triangles", mesh.num_triangles()).add("dt", a.dt);
+    top.add("substeps", a.substeps).add("diagonal", diag);
+    top.raw("rows", bench::JsonObject::array(items));
+    if (!bench::write_file(a.json, top.str())) {
+      std::fprintf(stderr, "impact-particles-bench: cannot write %s\n", a.json.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
