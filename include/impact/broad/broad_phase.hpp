@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// The common ground of the broad phases: the object table they read (one slot per scene object:
-/// tight world AABB, body type, sleeping flag, filter), the pair rule they all implement, their
+/// world AABB, body type, sleeping flag, filter), the pair rule they all implement, their
 /// work counters, and the interface every implementation offers.
 ///
 /// The pair rule (identical for every broad phase, so their results can be compared as sets):
@@ -9,8 +9,10 @@
 ///   1. at least one of them is *active* (alive, dynamic and awake): static–static,
 ///      static–sleeping and sleeping–sleeping pairs are never tested;
 ///   2. the filter accepts them: (group_a & mask_b) != 0, (group_b & mask_a) != 0 and the pair is not
-///      on the ignore list (checked before any geometry test);
-///   3. their tight world AABBs overlap (closed boxes, impact::overlap).
+///      on the ignore list (checked before the pair's own AABB test and any narrow-phase test;
+///      only tree-node tests, which concern many objects at once, come earlier);
+///   3. their world AABBs overlap (closed boxes, impact::overlap). These are the boxes the scene
+///      computes (Scene::bounds): exact for spheres, particles and boxes, conservative for meshes.
 ///
 /// Interface of a broad phase `B` over scalar S (checked at compile time by the scene, no virtual
 /// calls; the scene holds one of them in a std::variant and dispatches once per call):
@@ -37,9 +39,9 @@ namespace impact {
 
 /// Which broad phase a scene uses. All three return the same pair sets.
 enum class BroadPhaseKind : std::uint8_t {
-  AllPairs,       ///< O(active * n) reference
-  StaticDynamic,  ///< static tree built once + cached static overlaps + dynamic tree
-  Hierarchical,   ///< one incremental AABB tree over all objects, self pair traversal
+  AllPairs,       ///< O(active * n) reference (all_pairs.hpp)
+  StaticDynamic,  ///< static tree built once, cached static candidates, dynamic tree (static_dynamic.hpp)
+  Hierarchical,   ///< incremental AABB trees for static and dynamic objects, self and cross pair traversal (dynamic_tree.hpp)
 };
 
 /// Group/mask filter: objects a and b may collide only when (a.group & b.mask) and
@@ -87,7 +89,7 @@ template <class S> struct ObjectTable {
   enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
 
   struct Record {
-    Aabb<S> box;                     ///< tight world AABB
+    Aabb<S> box;                     ///< world AABB of the object itself (never fattened)
     CollisionFilter filter;
     std::uint32_t ignore_count = 0;  ///< entries of the ignore list naming this slot
     std::uint8_t flags = 0;          ///< Flags

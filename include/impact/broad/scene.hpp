@@ -218,7 +218,8 @@ template <class S> class Scene {
   bool contains(ObjectId id) const { return ids_.count(id) != 0; }
   std::size_t size() const { return count_; }
   BroadPhaseKind broad_phase() const { return opt_.broad_phase; }
-  /// The object's tight world AABB (what the broad phase compares). Throws for unknown ids.
+  /// The object's world AABB, what the broad phase compares: exact for spheres, particles and
+  /// boxes, conservative for meshes. Throws for unknown ids.
   const Aabb<S>& bounds(ObjectId id) const { return table_.box(slot_of(id, "Scene::bounds")); }
   const RigidTransform<S>& pose(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::pose"))].pose; }
   const Shape<S>& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
