@@ -12,6 +12,30 @@
 namespace impact {
 
 
+namespace detail {
+/// One step of pair traversal for nodes i (tree a) and j (tree b) that passed the node test: hand
+/// a leaf pair to the visitor, or push the children of the larger node (the inner one if the
+/// other is a leaf). Returns false when the visitor stopped the walk.
+template <class BVA, class BVB, class Stack, class Visit>
+bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::int32_t j, Stack& stack, Visit& visit) {
+  const auto& na = a.nodes[static_cast<std::size_t>(i)];
+  const auto& nb = b.nodes[static_cast<std::size_t>(j)];
+  const bool la = na.is_leaf(), lb = nb.is_leaf();
+  if (la && lb) {
+    for (std::int32_t p = na.first; p < na.first + na.count; ++p)
+      for (std::int32_t q = nb.first; q < nb.first + nb.count; ++q)
+        if (!visit(a.primitives[static_cast<std::size_t>(p)], b.primitives[static_cast<std::size_t>(q)])) return false;
+  } else if (lb || (!la && BvTraits<BVA>::size(na.bv) >= BvTraits<BVB>::size(nb.bv))) {
+    stack.push({na.right(), j});
+    stack.push({na.left(), j});
+  } else {
+    stack.push({i, nb.right()});
+    stack.push({i, nb.left()});
+  }
+  return true;
+}
+}  // namespace detail
+
 /// Visits every pair of primitives (id_a, id_b) whose leaves pass the node test.
 /// `overlap(const BvhNode<BVA>& a, const BvhNode<BVB>& b) -> bool` sees whole nodes, so a query
 /// can test a leaf's primitives directly instead of its BV; it must be conservative (never false
@@ -27,18 +51,7 @@ bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& ove
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
     const auto& nb = b.nodes[static_cast<std::size_t>(j)];
     if (!overlap(na, nb)) continue;
-    const bool la = na.is_leaf(), lb = nb.is_leaf();
-    if (la && lb) {
-      for (std::int32_t p = na.first; p < na.first + na.count; ++p)
-        for (std::int32_t q = nb.first; q < nb.first + nb.count; ++q)
-          if (!visit(a.primitives[static_cast<std::size_t>(p)], b.primitives[static_cast<std::size_t>(q)])) return false;
-    } else if (lb || (!la && BvTraits<BVA>::size(na.bv) >= BvTraits<BVB>::size(nb.bv))) {
-      stack.push({na.right(), j});
-      stack.push({na.left(), j});
-    } else {
-      stack.push({i, nb.right()});
-      stack.push({i, nb.left()});
-    }
+    if (!detail::visit_or_split(a, b, i, j, stack, visit)) return false;
   }
   return true;
 }
@@ -76,20 +89,8 @@ template <class BV, class Overlap, class Visit> bool traverse_self(const Bvh<BV>
       }
       continue;
     }
-    const auto& nj = t.nodes[static_cast<std::size_t>(j)];
-    if (!overlap(ni.bv, nj.bv)) continue;
-    const bool li = ni.is_leaf(), lj = nj.is_leaf();
-    if (li && lj) {
-      for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
-        for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q)
-          if (!visit(t.primitives[static_cast<std::size_t>(p)], t.primitives[static_cast<std::size_t>(q)])) return false;
-    } else if (lj || (!li && BvTraits<BV>::size(ni.bv) >= BvTraits<BV>::size(nj.bv))) {
-      stack.push({ni.right(), j});
-      stack.push({ni.left(), j});
-    } else {
-      stack.push({i, nj.right()});
-      stack.push({i, nj.left()});
-    }
+    if (!overlap(ni.bv, t.nodes[static_cast<std::size_t>(j)].bv)) continue;
+    if (!detail::visit_or_split(t, t, i, j, stack, visit)) return false;
   }
   return true;
 }
