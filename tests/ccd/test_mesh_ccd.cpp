@@ -108,8 +108,8 @@ TYPED_TEST(MeshCcdTest, TwoMeshesMatchBruteForce) {
     const impact::Vertices<S> B0 = jitter<S>(B.V, rng, S(0.02), S(0)), B1 = jitter<S>(B.V, rng, S(0.02), S(-0.05));
     auto ma = impact::make_mesh_motion(A0, A1, A.F);
     auto mb = impact::make_mesh_motion(B0, B1, B.F);
-    auto ta = impact::SweptMeshBvh<S>::build(ma, S(d / 2));
-    auto tb = impact::SweptMeshBvh<S>::build(mb, S(d / 2));
+    auto ta = impact::SweptMeshBvh<S>::build(ma, d);
+    auto tb = impact::SweptMeshBvh<S>::build(mb, d);
     auto r = impact::mesh_ccd(ma, ta, mb, tb, o);
     const auto bf = brute_force(ma, mb, false, o);
     EXPECT_FALSE(bf.empty());
@@ -136,7 +136,7 @@ TYPED_TEST(MeshCcdTest, SelfMatchesBruteForce) {
     // Crumple: vertices move by up to 1.5 grid cells, so the sheet passes through itself.
     const impact::Vertices<S> V0 = A.V, V1 = jitter<S>(A.V, rng, S(0.3), S(0));
     auto m = impact::make_mesh_motion(V0, V1, A.F);
-    auto t = impact::SweptMeshBvh<S>::build(m, S(d / 2));
+    auto t = impact::SweptMeshBvh<S>::build(m, d);
     auto r = impact::mesh_self_ccd(m, t, o);
     const auto bf = brute_force(m, m, true, o);
     EXPECT_FALSE(bf.empty());

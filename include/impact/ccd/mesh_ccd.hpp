@@ -20,7 +20,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -47,20 +49,23 @@ template <class S> MeshMotion<S> make_mesh_motion(const Vertices<S>& start, cons
   return {&start, &end, &faces};
 }
 
-/// The BVH over a mesh's triangles with swept AABBs for one step, grown by `inflate` (half the
-/// minimum separation). Build once; call refit() for each new step (same triangles).
+/// The BVH over a mesh's triangles with swept AABBs for one step, grown by half the minimum
+/// separation (rounded up in S). Build once; call refit() for each new step (same triangles).
 template <class S> struct SweptMeshBvh {
   Bvh<Aabb<S>> tree;
-  S inflate = S(0);
+  S inflate = S(0);  ///< >= min_separation / 2 exactly
 
-  /// Builds the tree top-down over the triangles' swept-box centres.
-  static SweptMeshBvh build(const MeshMotion<S>& m, S inflate_by = S(0), const BuildConfig& cfg = {}) {
+  /// Builds the tree top-down over the triangles' swept-box centres, for queries with a minimum
+  /// separation up to `min_separation` (>= 0).
+  static SweptMeshBvh build(const MeshMotion<S>& m, double min_separation = 0.0, const BuildConfig& cfg = {}) {
+    IMPACT_ASSERT(min_separation >= 0.0);
     SweptMeshBvh b;
-    b.inflate = inflate_by;
+    b.inflate = static_cast<S>(min_separation / 2);
+    if (static_cast<double>(b.inflate) * 2 < min_separation) b.inflate = std::nextafter(b.inflate, std::numeric_limits<S>::infinity());
     const auto nf = static_cast<std::size_t>(m.faces->rows());
     std::vector<Vec3<S>> centroids(nf);
-    for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), inflate_by).center();
-    b.tree = build_top_down<Aabb<S>>(centroids, fitter(m, inflate_by), cfg);
+    for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), b.inflate).center();
+    b.tree = build_top_down<Aabb<S>>(centroids, fitter(m, b.inflate), cfg);
     return b;
   }
   /// Updates the boxes for a new step of the same mesh (same faces); the topology is kept.
@@ -184,7 +189,7 @@ MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, cons
 }  // namespace detail
 
 /// CCD between two deforming meshes over one step. `ta`, `tb`: their swept trees for this step
-/// (built or refitted with inflate >= opt.min_separation / 2). Returns every vertex-face pair (in
+/// (built for a minimum separation >= opt.min_separation, then refitted). Returns every vertex-face pair (in
 /// both directions) and edge-edge pair that comes within opt.min_separation, with the earliest
 /// toi. No false negatives (see CcdResult); hits may include near misses within the tolerance.
 template <class S>

@@ -15,9 +15,9 @@ struct CcdOptions {
   double min_separation = 0.0;
   /// The tests look at t in [0, t_max], 0 < t_max <= 1 (t = 1 is the end of the step).
   double t_max = 1.0;
-  /// Bounds the false positives: a hit is only reported once the search has found a piece of the
-  /// (t, u, v) domain on which the primitives are everywhere within min_separation + tolerance
-  /// (up to the floating-point error bound, about 1e-13 times the coordinate magnitude).
+  /// Bounds the false positives: a hit is only reported once the search has found a time toi,
+  /// with every earlier time excluded, at which the primitives are within
+  /// min_separation + 2 tolerance (up to rounding, about 1e-15 times the coordinate magnitude).
   /// Smaller is tighter and slower. Never affects the no-false-negative guarantee.
   double tolerance = 1e-6;
   /// Work budget: the number of (t, u, v) boxes the search may examine. When it runs out the test
@@ -32,8 +32,8 @@ struct CcdOptions {
 ///   closed segments) are farther apart than min_separation: no false negatives, ever.
 /// - hit == true: toi is never later than the first time at which the primitives come within
 ///   min_separation (if they do at all), and at time toi the primitives are within
-///   min_separation + tolerance of each other (except when budget_exhausted, which only promises
-///   that no contact happens before toi).
+///   min_separation + 2 tolerance of each other (except when budget_exhausted, which only
+///   promises that no contact happens before toi). Near misses closer than that are hits.
 template <class S> struct CcdResult {
   bool hit = false;
   /// Conservative time of impact in [0, t_max]; t_max when there is no hit.

@@ -15,11 +15,16 @@
 ///
 /// Boxes are processed in order of their earliest time (ties: deeper boxes first), so the first
 /// box that cannot be excluded and is within tolerance gives a time of impact no later than the
-/// true one: every earlier time has been covered by excluded boxes. Splits are adaptive: the
-/// variable along which F changes most on the box is halved. The idea follows the inclusion-based
-/// method of Wang et al., "A Large Scale Benchmark and an Inclusion-Based Algorithm for Continuous
-/// Collision Detection" (ACM TOG 2021), with best-first ordering in t, adaptive splits and an
-/// extra exclusion direction (the plane normal) for coplanar motion.
+/// true one: every earlier time has been covered by excluded boxes. Splits are adaptive: a
+/// variable whose halving lets a half be excluded, else the one along which F changes most.
+/// The idea follows the inclusion-based method of Wang et al., "A Large Scale Benchmark and an
+/// Inclusion-Based Algorithm for Continuous Collision Detection" (ACM TOG 2021), with best-first
+/// ordering in t, adaptive splits and extra exclusion directions (plane normal, separation
+/// direction) for coplanar motion, parallel edges and minimum separations.
+///
+/// The error bounds assume IEEE-754 double arithmetic (any rounding mode; contraction into FMA is
+/// fine since it only removes roundings). Value-changing optimisations such as -ffast-math
+/// (reassociation) void the guarantee.
 #pragma once
 
 #include "impact/ccd/options.hpp"
