@@ -14,6 +14,8 @@ mode="${1:-test}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libgtest-dev libbenchmark-dev)
+# the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
+[ "$mode" = test ] && packages+=(assimp-testmodels)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -4,6 +4,10 @@
 add_library(impact_warnings INTERFACE)
 if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
   target_compile_options(impact_warnings INTERFACE -Wall -Wextra -Wpedantic -Wshadow)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    # GoogleTest's TYPED_TEST_SUITE passes an empty variadic argument
+    target_compile_options(impact_warnings INTERFACE -Wno-gnu-zero-variadic-macro-arguments)
+  endif()
   if(IMPACT_WARNINGS_AS_ERRORS)
     target_compile_options(impact_warnings INTERFACE -Werror)
   endif()

@@ -70,8 +70,15 @@ if(MODE STREQUAL "install")
   if(NOT targets_text MATCHES "impact::impact")
     message(FATAL_ERROR "impactTargets.cmake does not define impact::impact")
   endif()
-  if(REQUIRE_IO AND NOT targets_text MATCHES "impact::io")
-    message(FATAL_ERROR "impactTargets.cmake does not define impact::io although the build has it")
+  if(REQUIRE_IO)
+    # impact::io has its own export set, loaded by impactConfig.cmake only where assimp is found
+    if(NOT EXISTS "${config_dir}/impactIoTargets.cmake")
+      message(FATAL_ERROR "impactIoTargets.cmake is not installed although the build has impact::io")
+    endif()
+    file(READ "${config_dir}/impactIoTargets.cmake" io_text)
+    if(NOT io_text MATCHES "impact::io")
+      message(FATAL_ERROR "impactIoTargets.cmake does not define impact::io")
+    endif()
   endif()
 
   # relocatable: no path of the source tree, the build tree or the prefix inside installed files
