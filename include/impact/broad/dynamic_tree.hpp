@@ -8,8 +8,8 @@
 /// little stays inside its leaf box and costs nothing in the tree. An object that leaves its fat box
 /// is removed and inserted again: the new sibling is chosen by the surface-area cost of the
 /// enlargement (greedy descent, as in the incremental trees of Goldsmith & Salmon 1987 and of Box2D),
-/// and the path to the root is rebalanced by AVL-style rotations on subtree heights. The surface-area
-/// cost of the whole tree is watched; when it degrades past a ratio of its value after the last
+/// and the path to the root is improved by surface-area tree rotations (Kopta et al. 2012). The
+/// surface-area cost of the whole tree is watched; when it degrades past a ratio of its value after the last
 /// rebuild, the tree is rebuilt top-down (median split on the longest axis of the leaf centres).
 /// Leaf node ids are stable across rotations and rebuilds, so callers keep them as handles.
 ///
@@ -396,44 +396,44 @@ template <class S> class DynamicTree {
 
   void fix_upwards(std::int32_t i) {
     while (i != null) {
-      i = balance(i);
+      rotate(i);
       recompute(i);
       i = node(i).parent;
     }
   }
 
-  /// AVL rotation at inner node a when its children's heights differ by more than one: the taller
-  /// child c takes a's place, a keeps c's shorter child, c keeps the taller one. Returns the node
-  /// now at a's position.
-  std::int32_t balance(std::int32_t a) {
-    Node& na = node(a);
-    if (na.is_leaf() || na.height < 2) return a;
-    const std::int32_t h0 = node(na.child[0]).height, h1 = node(na.child[1]).height;
-    int side;
-    if (h1 - h0 > 1) side = 1;
-    else if (h0 - h1 > 1) side = 0;
-    else return a;
-    const std::int32_t c = na.child[side];
-    Node& nc = node(c);
-    const std::int32_t f = nc.child[0], g = nc.child[1];
-    const bool keep_f = node(f).height > node(g).height;
-    const std::int32_t kept = keep_f ? f : g, moved = keep_f ? g : f;
-    // c takes a's place
-    nc.parent = na.parent;
-    if (nc.parent == null) {
-      root_ = c;
-    } else {
-      Node& pn = node(nc.parent);
-      pn.child[pn.child[0] == a ? 0 : 1] = c;
+  /// Surface-area tree rotation at inner node a (Kopta et al., "Fast, effective BVH updates for
+  /// animated scenes", I3D 2012): swap one child of a with a grandchild under the other child
+  /// when that shrinks the other child's surface area, most shrinking swap first. Unlike
+  /// height-balancing (AVL) rotations this never groups distant nodes; a rebuild bounds the depth.
+  void rotate(std::int32_t a) {
+    if (node(a).is_leaf()) return;
+    const std::int32_t b = node(a).child[0], c = node(a).child[1];
+    double best = 0;
+    int kind = -1;  // 0/1: b <-> c.child[k]; 2/3: c <-> b.child[k - 2]
+    for (int side = 0; side < 2; ++side) {
+      const std::int32_t keep = side == 0 ? b : c;   // stays a child of a, moves down
+      const std::int32_t under = side == 0 ? c : b;  // the child whose children are candidates
+      const Node& nu = node(under);
+      if (nu.is_leaf()) continue;
+      const double current = area(nu.box);
+      for (int k = 0; k < 2; ++k) {
+        const double cost = area(merge(node(keep).box, node(nu.child[1 - k]).box)) - current;
+        if (cost < best) {
+          best = cost;
+          kind = 2 * side + k;
+        }
+      }
     }
-    nc.child[0] = a;
-    nc.child[1] = kept;
-    na.parent = c;
-    na.child[side] = moved;
-    node(moved).parent = a;
-    recompute(a);
-    recompute(c);
-    return c;
+    if (kind < 0) return;
+    const int k = kind & 1;
+    const std::int32_t keep = kind < 2 ? b : c, under = kind < 2 ? c : b;
+    const std::int32_t g = node(under).child[k];
+    node(under).child[k] = keep;
+    node(keep).parent = under;
+    node(a).child[kind < 2 ? 0 : 1] = g;
+    node(g).parent = a;
+    recompute(under);
   }
 
   /// Builds inner nodes over the leaves in [first, last) by median split; returns the subtree root.
