@@ -2,7 +2,7 @@
 // impact-particles-bench: particles against a triangle mesh, run time against error.
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
-//                          [--ref-particles R] [--substeps K] [--free-ball F] [--seed X] [--json FILE]
+//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -15,7 +15,8 @@
 //                particles;
 //  - reference:  backtracking with K sub-steps per step, for the first R particles: the
 //                accuracy reference of the position errors.
-// --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache).
+// --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache); --sort-every N
+// reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never).
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
 // escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
 // particle changed sides, or a particle outside the container), the mean and max distance to the
@@ -43,8 +44,9 @@ using BV = Aabb<S>;
 
 struct Args {
   std::string mesh, json;
-  int particles = 20000, steps = 100, naive_particles = 100, ref_particles = 1000, substeps = 16;
+  int particles = 20000, steps = 100, naive_particles = 20, ref_particles = 1000, substeps = 16;
   double dt = 1e-2, free_ball = 8;
+  int sort_every = 10;
   std::uint64_t seed = 1;
 };
 
@@ -89,8 +91,10 @@ struct RunResult {
 };
 
 RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const MeshBvh<BV>& audit_mesh, const Aabb<S>& container,
-              const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit) {
+              const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every) {
   RunResult r;
+  std::vector<std::uint32_t> id(ps.size());  // id[i]: the initial index of the particle now at i
+  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
   std::vector<double> e0(ps.size());
   for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
   std::vector<char> escaped(ps.size(), 0);
@@ -98,6 +102,25 @@ RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const M
   StepStats st;
   const double h = dt / substeps;
   for (int s = 0; s < steps; ++s) {
+    if (sort_every > 0 && s % sort_every == 0) {
+      const double t0 = thread_seconds();
+      const auto order = spatial_order(ps);
+      std::vector<Particle<S>> sorted(ps.size());
+      std::vector<std::uint32_t> sorted_id(ps.size());
+      std::vector<char> sorted_esc(ps.size());
+      std::vector<double> sorted_e0(ps.size());
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        sorted[i] = ps[order[i]];
+        sorted_id[i] = id[order[i]];
+        sorted_esc[i] = escaped[order[i]];
+        sorted_e0[i] = e0[order[i]];
+      }
+      ps.swap(sorted);
+      id.swap(sorted_id);
+      escaped.swap(sorted_esc);
+      e0.swap(sorted_e0);
+      r.seconds += thread_seconds() - t0;
+    }
     for (std::size_t i = 0; i < ps.size(); ++i) before[i] = ps[i].position;
     const double t0 = thread_seconds();
     for (int k = 0; k < substeps; ++k) st += step_particles(ps, cs, h, opt);
@@ -115,7 +138,8 @@ RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const M
   }
   r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
   r.impact_share = double(st.particles_hit) / (double(ps.size()) * steps * substeps);
-  r.final = std::move(ps);
+  r.final.resize(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];  // back in the initial order
   return r;
 }
 
@@ -126,7 +150,7 @@ int main(int argc, char** argv) {
   auto usage = [] {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
-                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--seed X] [--json FILE]\n");
+                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -140,6 +164,7 @@ int main(int argc, char** argv) {
     else if (s == "--ref-particles" && (v = next())) a.ref_particles = std::max(0, std::atoi(v));
     else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
     else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
+    else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
     else if (s == "--json" && (v = next())) a.json = v;
     else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
@@ -208,10 +233,10 @@ int main(int argc, char** argv) {
 
   std::printf("impact-particles-bench: %s, %d triangles, %d particles x %d steps, dt %g, speed %.3g (%.2f%% of the diagonal per step)\n",
               mesh_name.c_str(), mesh.num_triangles(), a.particles, a.steps, a.dt, speed, 100 * speed * a.dt / diag);
-  const RunResult ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true);
-  const RunResult bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true);
-  const RunResult pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true);
-  const RunResult nv = run(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, true);
+  const RunResult ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true, a.sort_every);
+  const RunResult bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
+  const RunResult pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
+  const RunResult nv = run(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
 
   auto row = [&](const char* method, const RunResult& r, int n, int substeps) {
     Row w;

@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -409,6 +410,41 @@ TYPED_TEST(Particles, RadiusAgainstFacesEdgesAndVertices) {
   for (int s = 0; s < 40; ++s) step_particle(p, solid, S(0.1), opt);
   EXPECT_GT(p.velocity.dot(Vec3<S>::Ones()), S(0));  // came back along the diagonal
   EXPECT_NEAR(p.velocity.norm(), std::sqrt(S(3)), S(1e-4));
+}
+
+// The free-ball cache only skips ray casts that cannot hit: trajectories are identical with and
+// without it. spatial_order is a permutation.
+TYPED_TEST(Particles, FreeBallCacheIsExactAndSpatialOrderIsAPermutation) {
+  using S = TypeParam;
+  const MeshBvh<Aabb<S>> bvh(make_torus<S>(S(1), S(0.4), 32, 16));
+  ColliderSet<S> cs;
+  cs.meshes.emplace_back(bvh, ColliderSide::TwoSided, Material<S>{S(0.9), S(0.1)});
+  cs.boxes.emplace_back(Aabb<S>(Vec3<S>(-2, -2, -1), Vec3<S>(2, 2, 1)), ColliderSide::Inside, Material<S>::elastic());
+  test::Rng rng(61);
+  std::vector<Particle<S>> a(200);
+  for (auto& p : a) {
+    p.position = rng.in_box(Eigen::Vector3d(-1.5, -1.5, -0.5), Eigen::Vector3d(1.5, 1.5, 0.5)).template cast<S>();
+    p.velocity = (rng.vec(-1, 1) * 2.0).template cast<S>();
+    p.radius = rng.uniform() < 0.5 ? S(0) : S(0.02);
+  }
+  std::vector<Particle<S>> b = a;
+  StepOptions<S> with, without;
+  with.gravity = without.gravity = Vec3<S>(0, 0, S(-3));
+  without.free_ball_factor = S(0);
+  std::size_t hits = 0;
+  for (int s = 0; s < 200; ++s) {
+    hits += step_particles(a, cs, S(0.01), with).impacts;
+    step_particles(b, cs, S(0.01), without);
+  }
+  EXPECT_GT(hits, 50u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].position, b[i].position) << i;
+    EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
+  }
+  const auto order = spatial_order(a);
+  std::vector<int> seen(a.size(), 0);
+  for (auto i : order) ++seen[i];
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
 }
 
 }  // namespace

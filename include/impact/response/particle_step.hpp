@@ -13,7 +13,9 @@
 ///     from the surface along the normal (or at the chord's start if that is nearer): the
 ///     particle only ever stands on the collision-free part of a chord, so it never enters a
 ///     surface, also at concave corners and seams;
-///  3. respond with the velocity at the time of impact and the collider's velocity there;
+///  3. respond with the velocity at the time of impact (the chord's hit time refined on the
+///     free-flight parabola against the tangent plane at the hit, so bounces on planes are exact
+///     up to rounding) and the collider's velocity there;
 ///  4. repeat for the rest of the step with the new velocity, at most `max_iterations` times.
 ///  Budget policy: when the budget runs out with time left, the particle stops at the last safe
 ///  point (the backed-off position of its last impact), keeps its post-response velocity, and the
@@ -29,6 +31,10 @@
 /// velocity gets the same response. Repeated for up to `max_iterations` passes over the colliders.
 /// Projection cannot see thin geometry crossed within one step: that is what backtracking is for.
 ///
+/// Speed: legs that stay inside a particle's free ball (Particle::free_radius, a conservative
+/// clearance from the static meshes) skip the mesh ray casts (StepOptions::free_ball_factor), and
+/// spatial_order() gives a cache-friendly order for large particle sets.
+///
 /// The offset is scale-aware: offset_ulps * epsilon(S) * (|x|_inf + collider scale + |chord|_inf)
 /// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
 /// size in float and 6e-14 in double, well above the rounding of a hit point and well below any
@@ -43,6 +49,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <utility>
 #include <type_traits>
 #include <vector>
 
@@ -321,6 +329,39 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
   p.position = x;
   p.velocity = v;
   return st;
+}
+
+/// A permutation of the particles along a Morton (Z-order) curve over their bounding box, 21 bits
+/// per axis. Stepping particles in this order makes consecutive queries touch the same tree nodes
+/// (better cache use on large meshes); reorder every few steps, since particles drift apart.
+/// O(n log n).
+template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Particle<S>>& particles) {
+  Aabb<S> box;
+  for (const auto& p : particles) box.extend(p.position);
+  const Vec3<S> ext = box.extent().cwiseMax(Vec3<S>::Constant(std::numeric_limits<S>::min()));
+  auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(particles.size());
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    std::uint64_t code = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double t = double((particles[i].position[k] - box.min[k]) / ext[k]);
+      const auto q = static_cast<std::uint64_t>(std::min(std::max(t, 0.0), 1.0) * 2097151.0);
+      code |= spread(q) << k;
+    }
+    keys[i] = {code, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::uint32_t> order(particles.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) order[i] = keys[i].second;
+  return order;
 }
 
 /// Advances every particle by dt (each independently, in order). Returns the summed counters.
