@@ -38,9 +38,10 @@ template <class S> struct CcdResult {
   bool hit = false;
   /// Conservative time of impact in [0, t_max]; t_max when there is no hit.
   S toi = S(1);
-  /// Contact parameters at toi. Vertex-face: the triangle point is (1-u-v) f0 + u f1 + v f2.
-  /// Edge-edge: the points are a0 + u (a1 - a0) and b0 + v (b1 - b0). Approximate (the centre of
-  /// the last box of the search), meaningful only when hit.
+  /// Contact parameters at toi, meaningful only when hit. Vertex-face: the triangle point is
+  /// (1-u-v) f0 + u f1 + v f2. Edge-edge: the points are a0 + u (a1 - a0) and b0 + v (b1 - b0).
+  /// Unless budget_exhausted, the primitives' points at (toi, u, v) are within
+  /// min_separation + 2 tolerance of each other.
   S u = S(0), v = S(0);
   /// The budget ran out: toi is the earliest time not yet excluded, the hit may be false.
   bool budget_exhausted = false;
