@@ -262,10 +262,15 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
       const Vec3<S> e = x + d;
       const S R2 = p.free_radius * p.free_radius;
       auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
-      meshes_clear = in_ball(x) && in_ball(e);
-      if (!meshes_clear) {
-        detail::refresh_free_ball(p, x, d.norm(), colliders, opt);
+      if (p.free_radius > S(0)) {
+        meshes_clear = in_ball(x) && in_ball(e);
+      } else if (p.free_radius < S(0) && in_ball(x)) {
+        // cooling down: the last refresh here found a surface too near to help, do not retry yet
+      } else {
+        const S len = d.norm();
+        detail::refresh_free_ball(p, x, len, colliders, opt);
         meshes_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
+        if (!meshes_clear) p.free_radius = -S(2) * len;  // a surface is near: retry two legs away
       }
     }
     std::optional<Contact<S>> hit;
