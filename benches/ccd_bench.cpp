@@ -89,7 +89,8 @@ void collect(const std::string& dir, std::vector<QuerySet>& sets) {
   namespace fs = std::filesystem;
   std::vector<std::string> files;
   std::error_code ec;
-  if (fs::is_regular_file(dir, ec)) files.push_back(dir);
+  if (fs::is_regular_file(dir, ec))
+    files.push_back(dir);
   else
     for (const auto& e : fs::recursive_directory_iterator(dir, ec))
       if (e.path().extension() == ".csv") files.push_back(e.path().string());
@@ -130,8 +131,10 @@ void generate(std::size_t n, std::vector<QuerySet>& sets) {
         const double tc = T(rng), a = T(rng), b = T(rng) * (1 - a);
         Eigen::Vector3d at[4];
         for (auto& p : at) p = rnd();
-        if (kind == "vertex-face") at[0] = (1 - a - b) * at[1] + a * at[2] + b * at[3];
-        else at[0] = at[2] + b * (at[3] - at[2]) - a * (at[1] - at[0]);
+        if (kind == "vertex-face")
+          at[0] = (1 - a - b) * at[1] + a * at[2] + b * at[3];
+        else
+          at[0] = at[2] + b * (at[3] - at[2]) - a * (at[1] - at[0]);
         for (int k = 0; k < 4; ++k) {
           const Eigen::Vector3d vel = rnd();
           q.points[std::size_t(k)] = at[k] - tc * vel;
@@ -160,8 +163,8 @@ std::string json_row(const Row& r, bool with_file) {
 }
 
 void print_row(const Row& r) {
-  std::printf("%-52s %-12s %8zu %9zu %6zu %6zu %10.3f %10.3f %10.3f\n", r.file.c_str(), r.kind.c_str(), r.queries, r.positives, r.fp, r.fn, r.mean,
-              r.p99, r.max);
+  std::printf("%-52s %-12s %8zu %9zu %6zu %6zu %10.3f %10.3f %10.3f\n", r.file.c_str(), r.kind.c_str(), r.queries, r.positives,
+              r.fp, r.fn, r.mean, r.p99, r.max);
 }
 
 }  // namespace
@@ -181,26 +184,37 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--json") json = next();
-    else if (a == "--min-separation") opt.min_separation = std::stod(next());
-    else if (a == "--tolerance") opt.tolerance = std::stod(next());
-    else if (a == "--max-iterations") opt.max_iterations = std::stoll(next());
-    else if (a == "--repeat") g_repeat = std::max(1, std::stoi(next()));
-    else if (a == "--generated") generated = std::stoul(next());
-    else if (a == "--no-sweep") sweep = false;
+    if (a == "--json")
+      json = next();
+    else if (a == "--min-separation")
+      opt.min_separation = std::stod(next());
+    else if (a == "--tolerance")
+      opt.tolerance = std::stod(next());
+    else if (a == "--max-iterations")
+      opt.max_iterations = std::stoll(next());
+    else if (a == "--repeat")
+      g_repeat = std::max(1, std::stoi(next()));
+    else if (a == "--generated")
+      generated = std::stoul(next());
+    else if (a == "--no-sweep")
+      sweep = false;
     else if (a == "--help" || a == "-h") {
-      std::printf("usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--repeat R] [--generated N] [--no-sweep]\n");
+      std::printf(
+          "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--repeat R] "
+          "[--generated N] [--no-sweep]\n");
       return 0;
     } else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
-    } else dirs.push_back(a);
+    } else
+      dirs.push_back(a);
   }
   std::vector<QuerySet> sets;
   try {
     if (dirs.empty() && generated == 0) {
       const char* d = std::getenv("IMPACT_DATA_DIR");
-      if (d && *d && std::filesystem::is_directory(std::string(d) + "/ccd-queries")) dirs.push_back(std::string(d) + "/ccd-queries");
+      if (d && *d && std::filesystem::is_directory(std::string(d) + "/ccd-queries"))
+        dirs.push_back(std::string(d) + "/ccd-queries");
     }
     for (const auto& d : dirs) collect(d, sets);
   } catch (const std::exception& e) {
@@ -212,13 +226,15 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "impact-ccd-bench: no query files found\n");
       return 1;
     }
-    std::printf("no query files: using %zu generated queries per kind (truth unknown, FP/FN not counted)\n", generated ? generated : 2000);
+    std::printf("no query files: using %zu generated queries per kind (truth unknown, FP/FN not counted)\n",
+                generated ? generated : 2000);
     generate(generated ? generated : 2000, sets);
   }
 
-  std::printf("tolerance %g, min_separation %g, max_iterations %lld, time = min of %d runs per query\n", opt.tolerance, opt.min_separation,
-              static_cast<long long>(opt.max_iterations), g_repeat);
-  std::printf("%-52s %-12s %8s %9s %6s %6s %10s %10s %10s\n", "file", "kind", "queries", "positives", "FP", "FN", "mean_us", "p99_us", "max_us");
+  std::printf("tolerance %g, min_separation %g, max_iterations %lld, time = min of %d runs per query\n", opt.tolerance,
+              opt.min_separation, static_cast<long long>(opt.max_iterations), g_repeat);
+  std::printf("%-52s %-12s %8s %9s %6s %6s %10s %10s %10s\n", "file", "kind", "queries", "positives", "FP", "FN", "mean_us",
+              "p99_us", "max_us");
   std::vector<std::string> results, totals, sweeps;
   for (const auto& s : sets) {
     const Row r = run_set(s, opt);
@@ -236,11 +252,13 @@ int main(int argc, char** argv) {
 
   if (sweep) {
     std::printf("\nsweep: time and false positives against tolerance and min separation (FN = misses of d = 0 contacts)\n");
-    std::printf("%10s %14s %-12s %8s %6s %6s %10s %10s %10s\n", "tolerance", "min_sep", "kind", "queries", "FP", "FN", "mean_us", "p99_us", "max_us");
+    std::printf("%10s %14s %-12s %8s %6s %6s %10s %10s %10s\n", "tolerance", "min_sep", "kind", "queries", "FP", "FN", "mean_us",
+                "p99_us", "max_us");
     struct P {
       double tol, d;
     };
-    const P grid[] = {{1e-3, 0}, {1e-4, 0}, {1e-5, 0}, {1e-6, 0}, {1e-7, 0}, {1e-8, 0}, {1e-6, 1e-8}, {1e-6, 1e-6}, {1e-6, 1e-4}, {1e-6, 1e-3}};
+    const P grid[] = {{1e-3, 0}, {1e-4, 0},    {1e-5, 0},    {1e-6, 0},    {1e-7, 0},
+                      {1e-8, 0}, {1e-6, 1e-8}, {1e-6, 1e-6}, {1e-6, 1e-4}, {1e-6, 1e-3}};
     for (const P& g : grid)
       for (const std::string kind : {"vertex-face", "edge-edge"}) {
         impact::CcdOptions o = opt;
@@ -248,7 +266,8 @@ int main(int argc, char** argv) {
         o.min_separation = g.d;
         const Row r = total(sets, kind, o);
         if (r.queries == 0) continue;
-        std::printf("%10.0e %14.0e %-12s %8zu %6zu %6zu %10.3f %10.3f %10.3f\n", g.tol, g.d, kind.c_str(), r.queries, r.fp, r.fn, r.mean, r.p99, r.max);
+        std::printf("%10.0e %14.0e %-12s %8zu %6zu %6zu %10.3f %10.3f %10.3f\n", g.tol, g.d, kind.c_str(), r.queries, r.fp, r.fn,
+                    r.mean, r.p99, r.max);
         impact::bench::JsonObject j;
         j.add("tolerance", g.tol).add("min_separation", g.d).raw("row", json_row(r, false));
         sweeps.push_back(j.str());

@@ -21,8 +21,8 @@ TEST(CcdQueryReader, ExactConversion) {
   EXPECT_EQ(v, -5.0);
   EXPECT_TRUE(impact::test::exact_ratio_to_double("0", "8", v));
   EXPECT_EQ(v, 0.0);
-  EXPECT_FALSE(impact::test::exact_ratio_to_double("1", "3", v));        // not a binary fraction
-  EXPECT_FALSE(impact::test::exact_ratio_to_double("1", "0", v));        // division by zero
+  EXPECT_FALSE(impact::test::exact_ratio_to_double("1", "3", v));                 // not a binary fraction
+  EXPECT_FALSE(impact::test::exact_ratio_to_double("1", "0", v));                 // division by zero
   EXPECT_FALSE(impact::test::exact_ratio_to_double("9007199254740993", "1", v));  // 2^53 + 1: 54 bits
   EXPECT_TRUE(impact::test::exact_ratio_to_double("9007199254740992", "1", v));   // 2^53
   EXPECT_EQ(v, 9007199254740992.0);
@@ -57,7 +57,8 @@ KindStats run_kind(const std::string& root, const std::string& kind) {
       ++i;
     }
   }
-  std::printf("[ccd-queries] %-12s queries %zu positives %zu false positives %zu false negatives %zu\n", kind.c_str(), s.queries, s.positives, s.fp, s.fn);
+  std::printf("[ccd-queries] %-12s queries %zu positives %zu false positives %zu false negatives %zu\n", kind.c_str(), s.queries,
+              s.positives, s.fp, s.fn);
   return s;
 }
 

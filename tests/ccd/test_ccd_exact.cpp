@@ -66,10 +66,23 @@ struct Constructed {
   const char* trap = "";
 };
 
-enum class Trap { Generic, CoplanarAxis, CoplanarTilted, Degenerate, Shared, ZeroMotion, Boundary, Grazing, Parallel, ZeroLength, Count };
+enum class Trap {
+  Generic,
+  CoplanarAxis,
+  CoplanarTilted,
+  Degenerate,
+  Shared,
+  ZeroMotion,
+  Boundary,
+  Grazing,
+  Parallel,
+  ZeroLength,
+  Count
+};
 
 const char* trap_name(Trap t) {
-  static const char* names[] = {"generic", "coplanar-axis", "coplanar-tilted", "degenerate", "shared", "zero-motion", "boundary", "grazing", "parallel", "zero-length"};
+  static const char* names[] = {"generic",     "coplanar-axis", "coplanar-tilted", "degenerate", "shared",
+                                "zero-motion", "boundary",      "grazing",         "parallel",   "zero-length"};
   return names[int(t)];
 }
 
@@ -79,7 +92,9 @@ class Generator {
 
   std::int64_t rint(std::int64_t lo, std::int64_t hi) { return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng_); }
   /// Random integer vector, each coordinate a multiple of 16 in [-range, range].
-  IV rv() { return {16 * rint(-range_ / 16, range_ / 16), 16 * rint(-range_ / 16, range_ / 16), 16 * rint(-range_ / 16, range_ / 16)}; }
+  IV rv() {
+    return {16 * rint(-range_ / 16, range_ / 16), 16 * rint(-range_ / 16, range_ / 16), 16 * rint(-range_ / 16, range_ / 16)};
+  }
   IV small(std::int64_t r) { return {rint(-r, r), rint(-r, r), rint(-r, r)}; }
 
   /// Positions `at` (the 4 points at time t* = tnum/16) and velocities w: start = at - t* w,
@@ -137,9 +152,12 @@ class Generator {
         break;
       case Trap::Boundary: {
         const int which = int(rint(0, 2));
-        if (which == 0) b = 8 - a;  // on edge f1-f2
-        else if (which == 1) a = 0;  // on edge f0-f2
-        else b = 0;                  // on edge f0-f1
+        if (which == 0)
+          b = 8 - a;  // on edge f1-f2
+        else if (which == 1)
+          a = 0;  // on edge f0-f2
+        else
+          b = 0;  // on edge f0-f1
         break;
       }
       case Trap::Grazing: {
@@ -152,10 +170,10 @@ class Generator {
         for (int k = 1; k < 4; ++k) w[k] = {0, 0, 0};
         const std::int64_t sp = 16 * rint(1, 8);
         if (rint(0, 1)) {
-          a = 8, b = 0;            // at f1 = (s, 0, 0), moving along (1, 1): outside before and after
+          a = 8, b = 0;  // at f1 = (s, 0, 0), moving along (1, 1): outside before and after
           w[0] = {sp, sp, 0};
         } else {
-          a = b = 0;               // at f0, moving along (1, -1) and crossing the plane: z changes
+          a = b = 0;  // at f0, moving along (1, -1) and crossing the plane: z changes
           w[0] = {sp, -sp, sp};
         }
         break;
@@ -225,8 +243,10 @@ class Generator {
       at[2] = mul(rv(), 8);
       if (trap == Trap::CoplanarAxis) at[2][2] = 0;
       const int which = trap == Trap::Boundary ? int(rint(1, 2)) : int(rint(0, 2));
-      if (which == 0) at[3] = sub(mul(P, 2), at[2]);
-      else if (which == 1) at[3] = P;
+      if (which == 0)
+        at[3] = sub(mul(P, 2), at[2]);
+      else if (which == 1)
+        at[3] = P;
       else {
         at[3] = at[2];
         at[2] = P;
@@ -242,7 +262,8 @@ class Generator {
 };
 
 /// The query in scalar S, scaled by 2^-shift; checks the conversion is exact.
-template <class S> std::array<impact::Vec3<S>, 8> to_points(const IntCcdQuery& q, int shift) {
+template <class S>
+std::array<impact::Vec3<S>, 8> to_points(const IntCcdQuery& q, int shift) {
   std::array<impact::Vec3<S>, 8> p;
   for (std::size_t k = 0; k < 8; ++k)
     for (std::size_t i = 0; i < 3; ++i) {
@@ -253,7 +274,8 @@ template <class S> std::array<impact::Vec3<S>, 8> to_points(const IntCcdQuery& q
   return p;
 }
 
-template <class S> impact::CcdResult<S> run(const IntCcdQuery& q, int shift, const impact::CcdOptions& o = {}) {
+template <class S>
+impact::CcdResult<S> run(const IntCcdQuery& q, int shift, const impact::CcdOptions& o = {}) {
   const auto p = to_points<S>(q, shift);
   if (q.vertex_face) return impact::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
   return impact::edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
@@ -267,14 +289,18 @@ std::string describe(const IntCcdQuery& q) {
 
 /// Constructed contacts: hit with toi <= t*. `range` bounds the integer coordinates, `shift`
 /// scales them into S (float needs range < 2^24).
-template <class S> void constructed_contacts(std::int64_t range, int shift, int per_trap, std::uint64_t seed) {
+template <class S>
+void constructed_contacts(std::int64_t range, int shift, int per_trap, std::uint64_t seed) {
   Generator g(seed, range);
-  const Trap vf_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::CoplanarTilted, Trap::Degenerate, Trap::Shared, Trap::ZeroMotion, Trap::Boundary, Trap::Grazing};
-  const Trap ee_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::Parallel, Trap::Shared, Trap::ZeroLength, Trap::ZeroMotion, Trap::Boundary};
+  const Trap vf_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::CoplanarTilted, Trap::Degenerate,
+                           Trap::Shared,  Trap::ZeroMotion,   Trap::Boundary,       Trap::Grazing};
+  const Trap ee_traps[] = {Trap::Generic,    Trap::CoplanarAxis, Trap::Parallel, Trap::Shared,
+                           Trap::ZeroLength, Trap::ZeroMotion,   Trap::Boundary};
   int checked = 0;
   per_trap = std::max(1, per_trap / kCountDivisor);
   for (int vf = 0; vf < 2; ++vf)
-    for (const Trap t : vf ? std::vector<Trap>(std::begin(vf_traps), std::end(vf_traps)) : std::vector<Trap>(std::begin(ee_traps), std::end(ee_traps)))
+    for (const Trap t : vf ? std::vector<Trap>(std::begin(vf_traps), std::end(vf_traps))
+                           : std::vector<Trap>(std::begin(ee_traps), std::end(ee_traps)))
       for (int i = 0; i < per_trap; ++i) {
         const Constructed c = vf ? g.vertex_face(t) : g.edge_edge(t);
         // The construction is exact: F vanishes at (t*, u*, v*) (checked through the reference
@@ -309,7 +335,8 @@ TEST(CcdExact, ConstructionIsExact) {
 }
 
 /// Random queries (and perturbed contacts): every "no hit" must be proven by the reference.
-template <class S> void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed, bool perturb_contacts) {
+template <class S>
+void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed, bool perturb_contacts) {
   Generator g(seed, range);
   count = std::max(2, count / kCountDivisor);
   int no_hit = 0, hits = 0, proven_fp = 0;
@@ -320,8 +347,10 @@ template <class S> void random_queries(std::int64_t range, int shift, int count,
     if (perturb_contacts) {
       // A contact moved by one unit (2^-shift) along a random axis: touching within an ulp-scale gap.
       const int trap_count = vf ? 8 : 7;
-      const Trap vf_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::CoplanarTilted, Trap::Degenerate, Trap::Shared, Trap::ZeroMotion, Trap::Boundary, Trap::Grazing};
-      const Trap ee_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::Parallel, Trap::Shared, Trap::ZeroLength, Trap::ZeroMotion, Trap::Boundary};
+      const Trap vf_traps[] = {Trap::Generic, Trap::CoplanarAxis, Trap::CoplanarTilted, Trap::Degenerate,
+                               Trap::Shared,  Trap::ZeroMotion,   Trap::Boundary,       Trap::Grazing};
+      const Trap ee_traps[] = {Trap::Generic,    Trap::CoplanarAxis, Trap::Parallel, Trap::Shared,
+                               Trap::ZeroLength, Trap::ZeroMotion,   Trap::Boundary};
       const Trap t = vf ? vf_traps[g.rint(0, trap_count - 1)] : ee_traps[g.rint(0, trap_count - 1)];
       Constructed c = vf ? g.vertex_face(t) : g.edge_edge(t);
       q = c.q;
@@ -337,14 +366,15 @@ template <class S> void random_queries(std::int64_t range, int shift, int count,
     if (!r.hit) {
       ++no_hit;
       const auto proof = impact::test::certify_no_contact(q, dirs, 2000000);
-      ASSERT_EQ(proof, ExactAnswer::NoContact) << "no hit reported but the exact reference cannot exclude a contact: " << describe(q);
+      ASSERT_EQ(proof, ExactAnswer::NoContact)
+          << "no hit reported but the exact reference cannot exclude a contact: " << describe(q);
     } else {
       ++hits;
       if (impact::test::certify_no_contact(q, dirs, 400) == ExactAnswer::NoContact) ++proven_fp;
     }
   }
-  std::printf("[exact] %s: %d queries, %d no-hit (all proven), %d hits of which %d proven false positives\n", perturb_contacts ? "perturbed contacts" : "random",
-              count, no_hit, hits, proven_fp);
+  std::printf("[exact] %s: %d queries, %d no-hit (all proven), %d hits of which %d proven false positives\n",
+              perturb_contacts ? "perturbed contacts" : "random", count, no_hit, hits, proven_fp);
   ::testing::Test::RecordProperty("proven_false_positives", proven_fp);
 }
 

@@ -11,14 +11,17 @@
 
 namespace {
 
-template <class S> using V = impact::Vec3<S>;
+template <class S>
+using V = impact::Vec3<S>;
 
-template <class S> class CcdOptionsTest : public ::testing::Test {};
+template <class S>
+class CcdOptionsTest : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(CcdOptionsTest, Scalars);
 
 // Static unit triangle in z = 0; the point falls from z = 1 - 2 c ... through the plane at time c.
-template <class S> impact::CcdResult<S> falling_point(S x, S y, S z0, S z1, const impact::CcdOptions& o) {
+template <class S>
+impact::CcdResult<S> falling_point(S x, S y, S z0, S z1, const impact::CcdOptions& o) {
   const V<S> f0(0, 0, 0), f1(1, 0, 0), f2(0, 1, 0);
   return impact::vertex_face_ccd(V<S>(x, y, z0), f0, f1, f2, V<S>(x, y, z1), f0, f1, f2, o);
 }

@@ -11,13 +11,15 @@
 
 namespace {
 
-template <class S> struct Sheet {
+template <class S>
+struct Sheet {
   impact::Vertices<S> V;
   impact::Faces F;
 };
 
 /// An n x n grid sheet in the plane z = z0, side 1, offset by (ox, oy).
-template <class S> Sheet<S> sheet(int n, S z0, S ox, S oy) {
+template <class S>
+Sheet<S> sheet(int n, S z0, S ox, S oy) {
   Sheet<S> m;
   m.V.resize(n * n, 3);
   for (int i = 0; i < n; ++i)
@@ -33,7 +35,8 @@ template <class S> Sheet<S> sheet(int n, S z0, S ox, S oy) {
   return m;
 }
 
-template <class S> impact::Vertices<S> jitter(const impact::Vertices<S>& V, std::mt19937& rng, S amount, S dz) {
+template <class S>
+impact::Vertices<S> jitter(const impact::Vertices<S>& V, std::mt19937& rng, S amount, S dz) {
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   impact::Vertices<S> W = V;
   for (Eigen::Index i = 0; i < W.rows(); ++i) {
@@ -56,16 +59,21 @@ std::set<std::array<std::int32_t, 2>> unique_edges(const impact::Faces& F) {
 
 using Key = std::array<std::int32_t, 5>;  // kind, then ids
 
-template <class S> std::set<Key> keys(const impact::MeshCcdResult<S>& r) {
+template <class S>
+std::set<Key> keys(const impact::MeshCcdResult<S>& r) {
   std::set<Key> k;
   for (const auto& c : r.contacts) {
-    if (c.kind == impact::MeshCcdKind::VertexFace) k.insert({0, c.vertex_mesh, c.vertex, c.face, 0});
-    else k.insert({1, c.a0, c.a1, c.b0, c.b1});
+    if (c.kind == impact::MeshCcdKind::VertexFace)
+      k.insert({0, c.vertex_mesh, c.vertex, c.face, 0});
+    else
+      k.insert({1, c.a0, c.a1, c.b0, c.b1});
   }
   return k;
 }
 
-template <class S> std::set<Key> brute_force(const impact::MeshMotion<S>& a, const impact::MeshMotion<S>& b, bool self, const impact::CcdOptions& o) {
+template <class S>
+std::set<Key> brute_force(const impact::MeshMotion<S>& a, const impact::MeshMotion<S>& b, bool self,
+                          const impact::CcdOptions& o) {
   std::set<Key> k;
   auto vf = [&](int mesh, const impact::MeshMotion<S>& mv, const impact::MeshMotion<S>& mf) {
     std::set<std::int32_t> verts;
@@ -75,8 +83,8 @@ template <class S> std::set<Key> brute_force(const impact::MeshMotion<S>& a, con
     for (std::int32_t v : verts)
       for (std::int32_t f = 0; f < F.rows(); ++f) {
         if (self && (F(f, 0) == v || F(f, 1) == v || F(f, 2) == v)) continue;
-        const auto r = impact::vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)), mf.p1(F(f, 1)),
-                                               mf.p1(F(f, 2)), o);
+        const auto r = impact::vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)),
+                                               mf.p1(F(f, 1)), mf.p1(F(f, 2)), o);
         if (r.hit) k.insert({0, mesh, v, f, 0});
       }
   };
@@ -86,13 +94,15 @@ template <class S> std::set<Key> brute_force(const impact::MeshMotion<S>& a, con
   for (const auto& x : ea)
     for (const auto& y : eb) {
       if (self && (x[0] == y[0] || x[0] == y[1] || x[1] == y[0] || x[1] == y[1] || !(x < y))) continue;
-      const auto r = impact::edge_edge_ccd(a.p0(x[0]), a.p0(x[1]), b.p0(y[0]), b.p0(y[1]), a.p1(x[0]), a.p1(x[1]), b.p1(y[0]), b.p1(y[1]), o);
+      const auto r = impact::edge_edge_ccd(a.p0(x[0]), a.p0(x[1]), b.p0(y[0]), b.p0(y[1]), a.p1(x[0]), a.p1(x[1]), b.p1(y[0]),
+                                           b.p1(y[1]), o);
       if (r.hit) k.insert({1, x[0], x[1], y[0], y[1]});
     }
   return k;
 }
 
-template <class S> class MeshCcdTest : public ::testing::Test {};
+template <class S>
+class MeshCcdTest : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(MeshCcdTest, Scalars);
 

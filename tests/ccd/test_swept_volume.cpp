@@ -9,7 +9,8 @@
 
 namespace {
 
-template <class S> class SweptVolumeTest : public ::testing::Test {};
+template <class S>
+class SweptVolumeTest : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(SweptVolumeTest, Scalars);
 

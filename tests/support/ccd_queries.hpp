@@ -106,18 +106,22 @@ inline std::vector<CcdQueryRecord> read_ccd_queries(const std::string& path) {
     std::stringstream ss(line);
     std::string c;
     while (std::getline(ss, c, ',')) cols.push_back(c);
-    if (cols.size() != 7) throw std::runtime_error(path + ": row " + std::to_string(row + 1) + " has " + std::to_string(cols.size()) + " columns");
+    if (cols.size() != 7)
+      throw std::runtime_error(path + ": row " + std::to_string(row + 1) + " has " + std::to_string(cols.size()) + " columns");
     const std::size_t k = row % 8;
     for (int i = 0; i < 3; ++i) {
       double v = 0;
       if (!exact_ratio_to_double(cols[2 * i], cols[2 * i + 1], v))
-        throw std::runtime_error(path + ": row " + std::to_string(row + 1) + ": " + cols[2 * i] + "/" + cols[2 * i + 1] + " is not an exact double");
+        throw std::runtime_error(path + ": row " + std::to_string(row + 1) + ": " + cols[2 * i] + "/" + cols[2 * i + 1] +
+                                 " is not an exact double");
       q.points[k][i] = v;
     }
     const bool truth = cols[6] == "1";
     if (!truth && cols[6] != "0") throw std::runtime_error(path + ": bad truth value " + cols[6]);
-    if (k == 0) q.truth = truth;
-    else if (q.truth != truth) throw std::runtime_error(path + ": truth differs inside a query at row " + std::to_string(row + 1));
+    if (k == 0)
+      q.truth = truth;
+    else if (q.truth != truth)
+      throw std::runtime_error(path + ": truth differs inside a query at row " + std::to_string(row + 1));
     if (k == 7) out.push_back(q);
     ++row;
   }

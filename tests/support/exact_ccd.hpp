@@ -164,7 +164,8 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
     std::array<std::int64_t, 3> nb{0, 0, 0}, mb{0, 0, 0};
     {
       const long double t = std::ldexp((long double)b.n[0], -A);
-      const long double uc = std::ldexp((long double)(2 * b.n[1] + 1), -B - 1), vc = std::ldexp((long double)(2 * b.n[2] + 1), -C - 1);
+      const long double uc = std::ldexp((long double)(2 * b.n[1] + 1), -B - 1),
+                        vc = std::ldexp((long double)(2 * b.n[2] + 1), -C - 1);
       long double x[4][3];
       for (int k = 0; k < 4; ++k)
         for (int i = 0; i < 3; ++i) {

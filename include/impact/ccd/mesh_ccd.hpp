@@ -31,7 +31,8 @@ namespace impact {
 
 /// One step of a deforming mesh: positions at t = 0 and t = 1 and the (fixed) triangles.
 /// Non-owning; the arrays must outlive the view.
-template <class S> struct MeshMotion {
+template <class S>
+struct MeshMotion {
   const Vertices<S>* start = nullptr;
   const Vertices<S>* end = nullptr;
   const Faces* faces = nullptr;
@@ -42,7 +43,8 @@ template <class S> struct MeshMotion {
 
 /// Validates a step (same vertex count at both ends, finite coordinates, indices in range) and
 /// returns its view. Throws InvalidInput.
-template <class S> MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
+template <class S>
+MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
   validate_mesh(start, faces, "mesh motion (start)");
   validate_mesh(end, faces, "mesh motion (end)");
   if (start.rows() != end.rows()) throw InvalidInput("mesh motion: start and end have different vertex counts");
@@ -51,7 +53,8 @@ template <class S> MeshMotion<S> make_mesh_motion(const Vertices<S>& start, cons
 
 /// The BVH over a mesh's triangles with swept AABBs for one step, grown by half the minimum
 /// separation (rounded up in S). Build once; call refit() for each new step (same triangles).
-template <class S> struct SweptMeshBvh {
+template <class S>
+struct SweptMeshBvh {
   Bvh<Aabb<S>> tree;
   S inflate = S(0);  ///< >= min_separation / 2 exactly
 
@@ -61,7 +64,8 @@ template <class S> struct SweptMeshBvh {
     IMPACT_ASSERT(min_separation >= 0.0);
     SweptMeshBvh b;
     b.inflate = static_cast<S>(min_separation / 2);
-    if (static_cast<double>(b.inflate) * 2 < min_separation) b.inflate = std::nextafter(b.inflate, std::numeric_limits<S>::infinity());
+    if (static_cast<double>(b.inflate) * 2 < min_separation)
+      b.inflate = std::nextafter(b.inflate, std::numeric_limits<S>::infinity());
     const auto nf = static_cast<std::size_t>(m.faces->rows());
     std::vector<Vec3<S>> centroids(nf);
     for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), b.inflate).center();
@@ -93,7 +97,8 @@ enum class MeshCcdKind { VertexFace, EdgeEdge };
 /// One colliding primitive pair. Vertex-face: `vertex` of mesh `vertex_mesh` (0 = first, 1 =
 /// second; 0 for self CCD) against `face` of the other mesh. Edge-edge: edge (a0, a1) of the
 /// first mesh against edge (b0, b1) of the second (vertex ids, a0 < a1, b0 < b1).
-template <class S> struct MeshCcdContact {
+template <class S>
+struct MeshCcdContact {
   MeshCcdKind kind = MeshCcdKind::VertexFace;
   int vertex_mesh = 0;
   std::int32_t vertex = -1, face = -1;
@@ -101,12 +106,13 @@ template <class S> struct MeshCcdContact {
   CcdResult<S> result;
 };
 
-template <class S> struct MeshCcdResult {
+template <class S>
+struct MeshCcdResult {
   std::vector<MeshCcdContact<S>> contacts;  ///< every primitive pair that hit (all of them, not just the first)
   bool hit = false;
-  S toi = S(1);                             ///< the earliest toi over the contacts (t_max without a hit)
-  std::size_t triangle_pairs = 0;           ///< overlapping swept-box pairs visited
-  std::size_t primitive_tests = 0;          ///< vertex-face and edge-edge tests run
+  S toi = S(1);                     ///< the earliest toi over the contacts (t_max without a hit)
+  std::size_t triangle_pairs = 0;   ///< overlapping swept-box pairs visited
+  std::size_t primitive_tests = 0;  ///< vertex-face and edge-edge tests run
 };
 
 namespace detail {
@@ -160,7 +166,8 @@ MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, cons
     const MeshMotion<S>& mv = mesh == 0 ? a : b;
     const MeshMotion<S>& mf = mesh == 0 ? b : a;
     const Faces& F = *mf.faces;
-    const auto res = vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)), mf.p1(F(f, 1)), mf.p1(F(f, 2)), opt);
+    const auto res = vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)),
+                                     mf.p1(F(f, 1)), mf.p1(F(f, 2)), opt);
     ++r.primitive_tests;
     if (res.hit) {
       MeshCcdContact<S> k;
@@ -213,7 +220,8 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
 /// Self CCD of one deforming mesh over one step, skipping adjacent primitives (a vertex against a
 /// face containing it, edges sharing a vertex). Vertex-face contacts have vertex_mesh 0; edge
 /// pairs are reported once with (a0, a1) < (b0, b1).
-template <class S> MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}) {
+template <class S>
+MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}) {
   IMPACT_ASSERT(double(t.inflate) * 2 >= opt.min_separation);
   detail::MeshCcdCandidates c;
   std::size_t pairs = 0;

@@ -34,7 +34,8 @@ struct CcdOptions {
 ///   min_separation (if they do at all), and at time toi the primitives are within
 ///   min_separation + 2 tolerance of each other (except when budget_exhausted, which only
 ///   promises that no contact happens before toi). Near misses closer than that are hits.
-template <class S> struct CcdResult {
+template <class S>
+struct CcdResult {
   bool hit = false;
   /// Conservative time of impact in [0, t_max]; t_max when there is no hit.
   S toi = S(1);

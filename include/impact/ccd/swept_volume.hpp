@@ -20,7 +20,8 @@ namespace impact {
 /// The axis-aligned box around the n points at t = 0 (`start`) and t = 1 (`end`), grown by
 /// `inflate` >= 0 (the minimum separation) and rounded outwards. Any point of the swept primitive
 /// within `inflate` of it lies inside. O(n).
-template <class S> Aabb<S> swept_aabb(const Vec3<S>* start, const Vec3<S>* end, std::size_t n, S inflate = S(0)) {
+template <class S>
+Aabb<S> swept_aabb(const Vec3<S>* start, const Vec3<S>* end, std::size_t n, S inflate = S(0)) {
   Aabb<S> box;
   for (std::size_t k = 0; k < n; ++k) {
     box.extend(start[k]);
@@ -39,7 +40,8 @@ template <class S> Aabb<S> swept_aabb(const Vec3<S>* start, const Vec3<S>* end, 
 /// A sphere around the n points at t = 0 and t = 1, grown by `inflate` >= 0: centred at the middle
 /// of their box, with the largest distance to a point as radius, padded for rounding. Not the
 /// smallest sphere, but cheap and conservative. O(n).
-template <class S> Sphere<S> swept_sphere(const Vec3<S>* start, const Vec3<S>* end, std::size_t n, S inflate = S(0)) {
+template <class S>
+Sphere<S> swept_sphere(const Vec3<S>* start, const Vec3<S>* end, std::size_t n, S inflate = S(0)) {
   const Aabb<S> box = swept_aabb(start, end, n, S(0));
   const Vec3<S> c = box.center();
   S r2 = S(0);
@@ -53,7 +55,10 @@ template <class S> Sphere<S> swept_sphere(const Vec3<S>* start, const Vec3<S>* e
 }
 
 /// Swept box of a moving vertex (p0 at t = 0, p1 at t = 1).
-template <class S> Aabb<S> swept_aabb(const Vec3<S>& p0, const Vec3<S>& p1, S inflate = S(0)) { return swept_aabb(&p0, &p1, 1, inflate); }
+template <class S>
+Aabb<S> swept_aabb(const Vec3<S>& p0, const Vec3<S>& p1, S inflate = S(0)) {
+  return swept_aabb(&p0, &p1, 1, inflate);
+}
 
 /// Swept box of a moving edge or triangle given by its N vertices at t = 0 and t = 1.
 template <class S, std::size_t N>

@@ -23,9 +23,8 @@ namespace impact {
 /// (detail/inclusion.hpp). float inputs are computed in double. Cost: at most opt.max_iterations
 /// boxes (about 0.1 us each); on exhaustion a conservative hit is reported.
 template <class S>
-CcdResult<S> vertex_face_ccd(const Vec3<S>& p0, const Vec3<S>& f00, const Vec3<S>& f10, const Vec3<S>& f20,
-                             const Vec3<S>& p1, const Vec3<S>& f01, const Vec3<S>& f11, const Vec3<S>& f21,
-                             const CcdOptions& opt = {}) {
+CcdResult<S> vertex_face_ccd(const Vec3<S>& p0, const Vec3<S>& f00, const Vec3<S>& f10, const Vec3<S>& f20, const Vec3<S>& p1,
+                             const Vec3<S>& f01, const Vec3<S>& f11, const Vec3<S>& f21, const CcdOptions& opt = {}) {
   static_assert(is_supported_scalar_v<S>, "vertex_face_ccd: S must be float or double");
   double a[4][3], b[4][3];
   detail::ccd_load(p0, f00, f10, f20, a);

@@ -46,9 +46,7 @@ struct CcdBox {
 
 /// Heap order: the box with the smallest t0 first; among equal t0 the deeper box first.
 struct CcdBoxLater {
-  bool operator()(const CcdBox& a, const CcdBox& b) const {
-    return a.t0 > b.t0 || (a.t0 == b.t0 && a.depth < b.depth);
-  }
+  bool operator()(const CcdBox& a, const CcdBox& b) const { return a.t0 > b.t0 || (a.t0 == b.t0 && a.depth < b.depth); }
 };
 
 /// The four moving points of a query in double: x0 at t = 0 and dx = x1 - x0 (rounded),
@@ -62,8 +60,6 @@ struct CcdQuery {
 
 /// Absolute floor of the error bounds, covering underflow of products (far below any real input).
 inline constexpr double kCcdTinyError = 1e-290;
-
-
 
 /// Forward error bound of one component of F at any (t, u, v) in [0,1]^3 computed as in
 /// ccd_eval_box from coordinates bounded by m in magnitude. With u = 2^-53 the unit roundoff,
@@ -97,7 +93,8 @@ inline constexpr int kCcdDirections = 3;
 ///  - F at that centre itself: near the closest approach it is the direction of the separation, so
 ///    n . F > d |n| is a tight test against a minimum separation d > 0.
 /// Any direction gives a valid exclusion; these are chosen to make it effective.
-template <bool VertexFace> inline void ccd_corners(const CcdQuery& q, const CcdBox& b, double (&f)[8][3], double (&dir)[kCcdDirections][3]) {
+template <bool VertexFace>
+inline void ccd_corners(const CcdQuery& q, const CcdBox& b, double (&f)[8][3], double (&dir)[kCcdDirections][3]) {
   const double ts[2] = {b.t0, b.t1};
   const double us[2] = {b.u0, b.u1};
   const double vs[2] = {b.v0, b.v1};
@@ -204,7 +201,8 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
       const double* n = dir[k];
       // n . F is multilinear too (n is fixed on the box); error: |n|_1-weighted F error plus the
       // rounding of the dot product, below 2^-43 sum |n_i| mag_i (see error_bound).
-      err[3 + k] = std::ldexp(std::abs(n[0]) * q.mag[0] + std::abs(n[1]) * q.mag[1] + std::abs(n[2]) * q.mag[2], -43) + kCcdTinyError;
+      err[3 + k] =
+          std::ldexp(std::abs(n[0]) * q.mag[0] + std::abs(n[1]) * q.mag[1] + std::abs(n[2]) * q.mag[2], -43) + kCcdTinyError;
       // |F| <= d implies |n . F| <= d |n|.
       thr[3 + k] = d > 0.0 ? d * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * (1.0 + 16.0 * eps) : 0.0;
     }
@@ -234,7 +232,7 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
       if (VertexFace && cu + cv > 1.0) continue;
       if (f[c][0] * f[c][0] + f[c][1] * f[c][1] + f[c][2] * f[c][2] <= acc) accept = c;
     }
-    const bool can_t = tm > b.t0 && tm < b.t1, can_u = um > b.u0 && um < b.u1, can_v = vm > b.v0 && vm < b.v1;
+    const bool can_t = tm > b.t0 && tm<b.t1, can_u = um> b.u0 && um<b.u1, can_v = vm> b.v0 && vm < b.v1;
     const bool budget = it >= opt.max_iterations;
     if (accept >= 0 || budget || !(can_t || can_u || can_v)) {
       r.hit = true;
@@ -302,7 +300,8 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
 }
 
 /// Copies four Vec3-like points into a plain array of doubles.
-template <class P> inline void ccd_load(const P& a, const P& b, const P& c, const P& e, double (&out)[4][3]) {
+template <class P>
+inline void ccd_load(const P& a, const P& b, const P& c, const P& e, double (&out)[4][3]) {
   for (int i = 0; i < 3; ++i) {
     out[0][i] = static_cast<double>(a[i]);
     out[1][i] = static_cast<double>(b[i]);
@@ -312,7 +311,8 @@ template <class P> inline void ccd_load(const P& a, const P& b, const P& c, cons
 }
 
 /// Converts a double result to scalar S, rounding the time of impact down so it stays conservative.
-template <class S> inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
+template <class S>
+inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
   CcdResult<S> o;
   o.hit = r.hit;
   S t = static_cast<S>(r.toi);
