@@ -369,9 +369,9 @@ TYPED_TEST(BroadTyped, BadInputThrowsAndLeavesSceneUnchanged) {
 TEST(DynamicTree, RandomEditsStayValidAndBalanced) {
   Rng rng(5);
   DynamicTree<double> tree;
-  std::vector<std::int32_t> leaf(2000, -1);
-  std::vector<Aabb<double>> box(2000);
-  for (int i = 0; i < 2000; ++i) {
+  std::vector<std::int32_t> leaf(1000, -1);
+  std::vector<Aabb<double>> box(1000);
+  for (int i = 0; i < 1000; ++i) {
     const Eigen::Vector3d c = rng.vec(0, 50), e = rng.vec(0, 1);
     box[std::size_t(i)] = {c - e, c + e};
     leaf[std::size_t(i)] = tree.insert(i, box[std::size_t(i)], i % 2 == 0);
@@ -382,11 +382,11 @@ TEST(DynamicTree, RandomEditsStayValidAndBalanced) {
     rebuilt.rebuild();
     ASSERT_TRUE(rebuilt.valid());
     EXPECT_LE(tree.sah_cost(), 1.5 * rebuilt.sah_cost());
-    EXPECT_LE(tree.height(), 3 * 11);
+    EXPECT_LE(tree.height(), 3 * 10);
   }
   for (int round = 0; round < 20; ++round) {
     for (int k = 0; k < 100; ++k) {
-      const std::size_t i = rng.index(2000);
+      const std::size_t i = rng.index(1000);
       if (leaf[i] >= 0 && rng.uniform() < 0.2) {
         tree.remove(leaf[i]);
         leaf[i] = -1;
@@ -408,11 +408,12 @@ TEST(DynamicTree, RandomEditsStayValidAndBalanced) {
           return true;
         },
         st);
-    for (int a = 0; a < 2000; ++a)
-      for (int b = a + 1; b < 2000; ++b)
+    for (int a = 0; a < 1000; ++a)
+      for (int b = a + 1; b < 1000; ++b)
         if (leaf[std::size_t(a)] >= 0 && leaf[std::size_t(b)] >= 0 && (a % 2 == 0 || b % 2 == 0) &&
             overlap(box[std::size_t(a)], box[std::size_t(b)]))
           want.insert({a, b});
+    EXPECT_FALSE(want.empty());
     ASSERT_EQ(got, want);
   }
   tree.rebuild();
