@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <memory>
 #include <set>
+#include <tuple>
 
 using namespace impact;
 using impact::test::Rng;
@@ -474,6 +475,16 @@ TYPED_TEST(BroadTyped, NarrowDispatch) {
   EXPECT_TRUE(shapes_intersect(msh, at(0), msh, at(2.0)));  // vertex on vertex
   EXPECT_FALSE(shapes_intersect(msh, at(0), msh, at(2.1)));
   EXPECT_TRUE(shapes_intersect(msh, at(0), msh, pose_at<S>(Eigen::Vector3d(1.5, 0, 0), rz)));
+  // contacts of the mesh pairs: unit normals pointing from the first shape towards the second
+  for (const auto& [sa, sb, pb] : {std::make_tuple(box, msh, at(1.9)), std::make_tuple(msh, box, at(1.9)), std::make_tuple(msh, msh, at(1.9)),
+                                   std::make_tuple(sph, msh, at(1.45)), std::make_tuple(msh, sph, at(1.45))}) {
+    ShapeContact<S> k;
+    ASSERT_TRUE(shapes_intersect(sa, at(0), sb, pb, &k));
+    EXPECT_NEAR(double(k.normal.norm()), 1.0, 1e-5);
+    EXPECT_GT(double(k.normal.x()), 0.0);
+    EXPECT_TRUE(all_finite(k.point));
+    EXPECT_GE(double(k.depth), 0.0);
+  }
 }
 
 // Narrow tests agree with brute force over the triangles (sphere–mesh) and with sampling (box–box).
