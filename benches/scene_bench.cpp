@@ -34,8 +34,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <cstdlib>
+#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
@@ -81,15 +81,24 @@ Args parse(int argc, char** argv) {
       if (i + 1 >= argc) usage(("missing value after " + s).c_str());
       return argv[++i];
     };
-    if (s == "--objects") a.objects = std::atol(next().c_str());
-    else if (s == "--dynamic") a.dynamic = std::atof(next().c_str());
-    else if (s == "--steps") a.steps = std::atoi(next().c_str());
-    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
-    else if (s == "--allpairs-max") a.allpairs_max = std::atol(next().c_str());
-    else if (s == "--scaling-max") a.scaling_max = std::atol(next().c_str());
-    else if (s == "--json") a.json = next();
-    else if (s == "-h" || s == "--help") usage("");
-    else usage(("unknown option " + s).c_str());
+    if (s == "--objects")
+      a.objects = std::atol(next().c_str());
+    else if (s == "--dynamic")
+      a.dynamic = std::atof(next().c_str());
+    else if (s == "--steps")
+      a.steps = std::atoi(next().c_str());
+    else if (s == "--seed")
+      a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    else if (s == "--allpairs-max")
+      a.allpairs_max = std::atol(next().c_str());
+    else if (s == "--scaling-max")
+      a.scaling_max = std::atol(next().c_str());
+    else if (s == "--json")
+      a.json = next();
+    else if (s == "-h" || s == "--help")
+      usage("");
+    else
+      usage(("unknown option " + s).c_str());
   }
   if (a.objects < 2) usage("--objects must be >= 2");
   if (!(a.dynamic >= 0 && a.dynamic <= 1)) usage("--dynamic must be in [0, 1]");
@@ -162,9 +171,12 @@ std::size_t mismatches(PairKeys a, PairKeys b) {
   std::sort(b.begin(), b.end());
   std::size_t i = 0, j = 0, m = 0;
   while (i < a.size() && j < b.size()) {
-    if (a[i] == b[j]) ++i, ++j;
-    else if (a[i] < b[j]) ++i, ++m;
-    else ++j, ++m;
+    if (a[i] == b[j])
+      ++i, ++j;
+    else if (a[i] < b[j])
+      ++i, ++m;
+    else
+      ++j, ++m;
   }
   return m + (a.size() - i) + (b.size() - j);
 }
@@ -191,7 +203,8 @@ class ImpactMethod {
   void setup() {
     for (std::size_t i = 0; i < w_.obj.size(); ++i) {
       const auto& o = w_.obj[i];
-      const Shape<double> s = o.kind == 0 ? Shape<double>::sphere(o.radius) : Shape<double>::mesh_of(o.kind == 1 ? m_.ico_bvh : m_.torus_bvh);
+      const Shape<double> s =
+          o.kind == 0 ? Shape<double>::sphere(o.radius) : Shape<double>::mesh_of(o.kind == 1 ? m_.ico_bvh : m_.torus_bvh);
       scene_->add(i, s, o.pose, {o.dynamic ? BodyType::Dynamic : BodyType::Static});
     }
     PairKeys k;
@@ -231,8 +244,10 @@ class FclMethod {
     for (std::size_t i = 0; i < w_.obj.size(); ++i) {
       const auto& o = w_.obj[i];
       std::shared_ptr<fcl::CollisionGeometryd> g;
-      if (o.kind == 0) g = std::make_shared<fcl::Sphered>(o.radius);
-      else g = o.kind == 1 ? ico_ : torus_;
+      if (o.kind == 0)
+        g = std::make_shared<fcl::Sphered>(o.radius);
+      else
+        g = o.kind == 1 ? ico_ : torus_;
       auto obj = std::make_unique<fcl::CollisionObjectd>(g, to_fcl(o.pose));
       obj->setUserData(reinterpret_cast<void*>(i));
       objs_.push_back(std::move(obj));
@@ -415,8 +430,8 @@ void print_table(const std::vector<Row>& rows, int steps) {
     char ratio[32] = "-";
     if (f > 0 && r.ms_per_step > 0) std::snprintf(ratio, sizeof ratio, "%.2fx", f / r.ms_per_step);
     std::printf("  %-24s %10.2f %12.4f %12.1f %11zu %12s |           %10.0f %10.0f %10.0f %10.0f\n", r.method.c_str(), r.build_ms,
-                r.ms_per_step, r.pairs, r.mismatches, ratio, double(r.stats.bv_tests) / steps, double(r.stats.pairs_tested) / steps,
-                double(r.stats.reinserts) / steps, double(r.stats.static_queries) / steps);
+                r.ms_per_step, r.pairs, r.mismatches, ratio, double(r.stats.bv_tests) / steps,
+                double(r.stats.pairs_tested) / steps, double(r.stats.reinserts) / steps, double(r.stats.static_queries) / steps);
   }
 }
 
@@ -438,9 +453,11 @@ int main(int argc, char** argv) {
   std::vector<std::string> json_rows, json_scaling;
   std::size_t total_mismatches = 0;
 
-  std::printf("impact-scene-bench: %ld objects (70%% spheres, 30%% meshes of 80/144 triangles), %.0f%% dynamic, %d steps, seed %llu\n",
-              args.objects, 100 * args.dynamic, args.steps, static_cast<unsigned long long>(args.seed));
-  std::printf("reference for mismatches: %s\n", args.objects <= args.allpairs_max ? "impact-all-pairs" : "impact-static-dynamic (checked against FCL)");
+  std::printf(
+      "impact-scene-bench: %ld objects (70%% spheres, 30%% meshes of 80/144 triangles), %.0f%% dynamic, %d steps, seed %llu\n",
+      args.objects, 100 * args.dynamic, args.steps, static_cast<unsigned long long>(args.seed));
+  std::printf("reference for mismatches: %s\n",
+              args.objects <= args.allpairs_max ? "impact-all-pairs" : "impact-static-dynamic (checked against FCL)");
   const auto main_rows = run(args.objects, args.dynamic, args.steps, args, meshes);
   print_table(main_rows, args.steps);
   for (const auto& r : main_rows) {
@@ -464,15 +481,20 @@ int main(int argc, char** argv) {
     for (const auto& r : rows) {
       json_scaling.push_back(json_row(r));
       total_mismatches += r.mismatches;
-      const int m = r.method == "impact-all-pairs" ? 0 : r.method == "impact-static-dynamic" ? 1 : r.method == "impact-hierarchical" ? 2 : 3;
+      const int m = r.method == "impact-all-pairs"        ? 0
+                    : r.method == "impact-static-dynamic" ? 1
+                    : r.method == "impact-hierarchical"   ? 2
+                                                          : 3;
       v[m] = r.ms_per_step;
     }
     auto cell = [](double x) {
       static char buf[4][32];
       static int k = 0;
       k = (k + 1) % 4;
-      if (x < 0) std::snprintf(buf[k], 32, "-");
-      else std::snprintf(buf[k], 32, "%.4f", x);
+      if (x < 0)
+        std::snprintf(buf[k], 32, "-");
+      else
+        std::snprintf(buf[k], 32, "%.4f", x);
       return buf[k];
     };
     char ratio[32] = "-";
@@ -483,7 +505,9 @@ int main(int argc, char** argv) {
 
   if (!args.json.empty()) {
     bench::JsonObject o;
-    o.add("bench", "impact-scene-bench").add("objects", static_cast<long long>(args.objects)).add("dynamic_fraction", args.dynamic);
+    o.add("bench", "impact-scene-bench")
+        .add("objects", static_cast<long long>(args.objects))
+        .add("dynamic_fraction", args.dynamic);
     o.add("steps", args.steps).add("seed", static_cast<long long>(args.seed));
     o.raw("rows", bench::JsonObject::array(json_rows));
     o.raw("scaling", bench::JsonObject::array(json_scaling));

@@ -18,7 +18,8 @@ using impact::test::Rng;
 
 namespace {
 
-template <class S> std::unique_ptr<MeshBvh<Sphere<S>>> octahedron(S r) {
+template <class S>
+std::unique_ptr<MeshBvh<Sphere<S>>> octahedron(S r) {
   Vertices<S> V(6, 3);
   V << r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r;
   Faces F(8, 3);
@@ -26,7 +27,8 @@ template <class S> std::unique_ptr<MeshBvh<Sphere<S>>> octahedron(S r) {
   return std::make_unique<MeshBvh<Sphere<S>>>(V, F);
 }
 
-template <class S> RigidTransform<S> pose_at(const Eigen::Vector3d& t, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
+template <class S>
+RigidTransform<S> pose_at(const Eigen::Vector3d& t, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
   // Orthonormalise after the cast so float poses pass the rotation check.
   Eigen::Quaternion<S> q(R.cast<S>());
   q.normalize();
@@ -39,7 +41,8 @@ std::vector<ObjectPair> sorted(std::vector<ObjectPair> v) {
 }
 
 /// The same edits applied to one scene per broad phase.
-template <class S> struct Scenes {
+template <class S>
+struct Scenes {
   std::vector<Scene<S>> s;
   Scenes() {
     for (auto k : {BroadPhaseKind::AllPairs, BroadPhaseKind::StaticDynamic, BroadPhaseKind::Hierarchical}) {
@@ -48,7 +51,8 @@ template <class S> struct Scenes {
       s.emplace_back(o);
     }
   }
-  template <class F> void each(F&& f) {
+  template <class F>
+  void each(F&& f) {
     for (auto& x : s) f(x);
   }
 };
@@ -57,7 +61,8 @@ static_assert(is_broad_phase_v<AllPairsBroadPhase<float>, float>);
 static_assert(is_broad_phase_v<HierarchicalBroadPhase<double>, double>);
 static_assert(!is_broad_phase_v<DynamicTree<double>, double>);
 
-template <class S> class BroadTyped : public ::testing::Test {};
+template <class S>
+class BroadTyped : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(BroadTyped, Scalars);
 
@@ -112,8 +117,9 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
           live.erase(live.begin() + std::ptrdiff_t(k));
         } else if (u < 0.9 && !live.empty()) {
           const ObjectId id = live[rng.index(live.size())];
-          const RigidTransform<S> p = rng.uniform() < 0.8 ? pose_at<S>(sc.s[0].pose(id).t.template cast<double>() + rng.vec(-1, 1), rng.rotation())
-                                                          : pose_at<S>(rng.vec(0, L), rng.rotation());
+          const RigidTransform<S> p =
+              rng.uniform() < 0.8 ? pose_at<S>(sc.s[0].pose(id).t.template cast<double>() + rng.vec(-1, 1), rng.rotation())
+                                  : pose_at<S>(rng.vec(0, L), rng.rotation());
           sc.each([&](Scene<S>& s) { s.set_pose(id, p); });
         } else if (u < 0.95 && !live.empty()) {
           const ObjectId id = live[rng.index(live.size())];
@@ -126,8 +132,10 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
         } else if (live.size() > 1) {
           const ObjectId a = live[rng.index(live.size())], b = live[rng.index(live.size())];
           if (a != b) {
-            if (rng.uniform() < 0.7) sc.each([&](Scene<S>& s) { s.ignore_pair(a, b); });
-            else sc.each([&](Scene<S>& s) { s.unignore_pair(a, b); });
+            if (rng.uniform() < 0.7)
+              sc.each([&](Scene<S>& s) { s.ignore_pair(a, b); });
+            else
+              sc.each([&](Scene<S>& s) { s.unignore_pair(a, b); });
           }
         }
         if (rng.uniform() < 0.03 && !live.empty()) {  // change a filter
@@ -476,8 +484,9 @@ TYPED_TEST(BroadTyped, NarrowDispatch) {
   EXPECT_FALSE(shapes_intersect(msh, at(0), msh, at(2.1)));
   EXPECT_TRUE(shapes_intersect(msh, at(0), msh, pose_at<S>(Eigen::Vector3d(1.5, 0, 0), rz)));
   // contacts of the mesh pairs: unit normals pointing from the first shape towards the second
-  for (const auto& [sa, sb, pb] : {std::make_tuple(box, msh, at(1.9)), std::make_tuple(msh, box, at(1.9)), std::make_tuple(msh, msh, at(1.9)),
-                                   std::make_tuple(sph, msh, at(1.45)), std::make_tuple(msh, sph, at(1.45))}) {
+  for (const auto& [sa, sb, pb] :
+       {std::make_tuple(box, msh, at(1.9)), std::make_tuple(msh, box, at(1.9)), std::make_tuple(msh, msh, at(1.9)),
+        std::make_tuple(sph, msh, at(1.45)), std::make_tuple(msh, sph, at(1.45))}) {
     ShapeContact<S> k;
     ASSERT_TRUE(shapes_intersect(sa, at(0), sb, pb, &k));
     EXPECT_NEAR(double(k.normal.norm()), 1.0, 1e-5);
@@ -497,7 +506,8 @@ TYPED_TEST(BroadTyped, NarrowRandomCrossCheck) {
     const auto pose = pose_at<S>(rng.vec(-0.5, 0.5), rng.rotation());
     const Vec3<S> c = rng.vec(-2, 2).cast<S>();
     const S r = S(rng.uniform(0, 1));
-    const bool got = shapes_intersect(Shape<S>::sphere(r), RigidTransform<S>(Mat3<S>::Identity(), c), Shape<S>::mesh_of(*mesh), pose);
+    const bool got =
+        shapes_intersect(Shape<S>::sphere(r), RigidTransform<S>(Mat3<S>::Identity(), c), Shape<S>::mesh_of(*mesh), pose);
     const Vec3<S> lc = pose.R.transpose() * (c - pose.t);
     S best = std::numeric_limits<S>::infinity();
     for (int t = 0; t < mesh->num_triangles(); ++t) {

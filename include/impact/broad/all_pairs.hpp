@@ -9,7 +9,8 @@
 
 namespace impact {
 
-template <class S> class AllPairsBroadPhase {
+template <class S>
+class AllPairsBroadPhase {
  public:
   void insert(std::int32_t, const ObjectTable<S>&) {}
   void remove(std::int32_t, const ObjectTable<S>&) {}
@@ -18,7 +19,8 @@ template <class S> class AllPairsBroadPhase {
   void filter_changed(std::int32_t, const ObjectTable<S>&) {}
 
   /// Visits every pair of the pair rule (broad_phase.hpp) once. O(active * n).
-  template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
+  template <class Visit>
+  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
     active_.clear();
     inactive_.clear();
     for (std::int32_t i = 0; i < t.size(); ++i) {

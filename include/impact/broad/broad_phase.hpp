@@ -54,17 +54,17 @@ struct CollisionFilter {
 /// Work counters of one broad-phase (and narrow-phase) call. Tests use them to check that work a
 /// scene does not need is skipped.
 struct BroadPhaseStats {
-  std::uint64_t bv_tests = 0;          ///< node–node and node–box tests inside trees
-  std::uint64_t pairs_tested = 0;      ///< object pairs whose tight AABBs were compared
+  std::uint64_t bv_tests = 0;               ///< node–node and node–box tests inside trees
+  std::uint64_t pairs_tested = 0;           ///< object pairs whose tight AABBs were compared
   std::uint64_t inactive_pairs_tested = 0;  ///< of those, pairs with no active object (always 0)
-  std::uint64_t pairs_filtered = 0;    ///< pairs dropped by group/mask or the ignore list
-  std::uint64_t pairs_found = 0;       ///< pairs handed to the caller
-  std::uint64_t refits = 0;            ///< objects whose bound in a tree was updated
-  std::uint64_t reinserts = 0;         ///< leaves moved in a tree (fattened bound left behind)
-  std::uint64_t static_queries = 0;    ///< dynamic objects queried against the static tree
-  std::uint64_t rebuilds = 0;          ///< whole-tree rebuilds
-  std::uint64_t narrow_tests = 0;      ///< exact shape–shape tests (narrow phase)
-  std::uint64_t contacts = 0;          ///< contacts generated (narrow phase)
+  std::uint64_t pairs_filtered = 0;         ///< pairs dropped by group/mask or the ignore list
+  std::uint64_t pairs_found = 0;            ///< pairs handed to the caller
+  std::uint64_t refits = 0;                 ///< objects whose bound in a tree was updated
+  std::uint64_t reinserts = 0;              ///< leaves moved in a tree (fattened bound left behind)
+  std::uint64_t static_queries = 0;         ///< dynamic objects queried against the static tree
+  std::uint64_t rebuilds = 0;               ///< whole-tree rebuilds
+  std::uint64_t narrow_tests = 0;           ///< exact shape–shape tests (narrow phase)
+  std::uint64_t contacts = 0;               ///< contacts generated (narrow phase)
 
   BroadPhaseStats& operator+=(const BroadPhaseStats& o) {
     bv_tests += o.bv_tests;
@@ -85,11 +85,12 @@ struct BroadPhaseStats {
 /// Per-slot object data the broad phases read. Owned by the scene; slots of removed objects are
 /// dead (alive == 0) until reused. One 64-byte record per slot (for double): the broad phases read
 /// the box, flags and filter of random slots together.
-template <class S> struct ObjectTable {
+template <class S>
+struct ObjectTable {
   enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
 
   struct Record {
-    Aabb<S> box;                     ///< world AABB of the object itself (never fattened)
+    Aabb<S> box;  ///< world AABB of the object itself (never fattened)
     CollisionFilter filter;
     std::uint32_t ignore_count = 0;  ///< entries of the ignore list naming this slot
     std::uint8_t flags = 0;          ///< Flags
@@ -132,7 +133,8 @@ namespace detail {
 
 /// Rules 2 and 3 for a pair whose activity (rule 1) the caller has established, with counting.
 /// Returns true when the pair is to be reported.
-template <class S> inline bool test_pair(const ObjectTable<S>& t, std::int32_t a, std::int32_t b, BroadPhaseStats& st) {
+template <class S>
+inline bool test_pair(const ObjectTable<S>& t, std::int32_t a, std::int32_t b, BroadPhaseStats& st) {
   if (!t.accepts(a, b)) {
     ++st.pairs_filtered;
     return false;
@@ -144,7 +146,8 @@ template <class S> inline bool test_pair(const ObjectTable<S>& t, std::int32_t a
   return overlap(ra.box, rb.box);
 }
 
-template <class B, class S, class = void> struct is_broad_phase : std::false_type {};
+template <class B, class S, class = void>
+struct is_broad_phase : std::false_type {};
 template <class B, class S>
 struct is_broad_phase<
     B, S,
@@ -161,6 +164,7 @@ struct is_broad_phase<
 
 /// True when B offers the broad-phase interface described at the top of this file (the C++17
 /// stand-in for a concept; the scene static_asserts it for every implementation it holds).
-template <class B, class S> inline constexpr bool is_broad_phase_v = detail::is_broad_phase<B, S>::value;
+template <class B, class S>
+inline constexpr bool is_broad_phase_v = detail::is_broad_phase<B, S>::value;
 
 }  // namespace impact

@@ -44,7 +44,8 @@ struct DynamicTreeOptions {
   double predict = 2.0;
 };
 
-template <class S> class DynamicTree {
+template <class S>
+class DynamicTree {
  public:
   static constexpr std::int32_t null = -1;
 
@@ -102,8 +103,10 @@ template <class S> class DynamicTree {
       const S cap = (tight.max - tight.min).maxCoeff() + S(opt_.fat_margin);
       for (int k = 0; k < 3; ++k) {
         const S e = std::min(std::abs(d[k]) * S(opt_.predict), cap);
-        if (d[k] > S(0)) fat.max[k] += e;
-        else fat.min[k] -= e;
+        if (d[k] > S(0))
+          fat.max[k] += e;
+        else
+          fat.min[k] -= e;
       }
       n.box = fat;
     }
@@ -140,8 +143,10 @@ template <class S> class DynamicTree {
     for (std::size_t i = 0; i < nodes_.size(); ++i) {
       Node& n = nodes_[i];
       if (n.height < 0) continue;
-      if (n.is_leaf()) leaves.push_back(static_cast<std::int32_t>(i));
-      else n.height = -1;
+      if (n.is_leaf())
+        leaves.push_back(static_cast<std::int32_t>(i));
+      else
+        n.height = -1;
     }
     // Free list in ascending order, so that the pre-order build below lays parents before
     // children and left subtrees next to their parents.
@@ -155,7 +160,8 @@ template <class S> class DynamicTree {
   }
 
   /// Calls visit(object) for every leaf whose fat box overlaps `box`; stops when visit returns false.
-  template <class Visit> bool query(const Aabb<S>& box, Visit&& visit, BroadPhaseStats& st) const {
+  template <class Visit>
+  bool query(const Aabb<S>& box, Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null) return true;
     detail::TraversalStack<std::int32_t> stack;
     stack.push(root_);
@@ -175,7 +181,8 @@ template <class S> class DynamicTree {
 
   /// Calls visit(object_a, object_b) once for every unordered pair of leaves whose fat boxes
   /// overlap and of which at least one is active. Larger node first; stops when visit returns false.
-  template <class Visit> bool self_pairs(Visit&& visit, BroadPhaseStats& st) const {
+  template <class Visit>
+  bool self_pairs(Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null) return true;
     detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
     stack.push({root_, root_});
@@ -201,7 +208,8 @@ template <class S> class DynamicTree {
 
   /// Calls visit(object_of_this, object_of_other) for every leaf pair of the two trees whose fat
   /// boxes overlap and of which at least one is active. Larger node first.
-  template <class Visit> bool cross_pairs(const DynamicTree& other, Visit&& visit, BroadPhaseStats& st) const {
+  template <class Visit>
+  bool cross_pairs(const DynamicTree& other, Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null || other.root_ == null) return true;
     detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
     stack.push({root_, other.root_});
@@ -288,7 +296,8 @@ template <class S> class DynamicTree {
   }
 
   /// Pushes the children pairs of (i, j) when one of them is inner; returns false for two leaves.
-  template <class Stack> bool descend(std::int32_t i, std::int32_t j, Stack& stack) const {
+  template <class Stack>
+  bool descend(std::int32_t i, std::int32_t j, Stack& stack) const {
     const Node& ni = node(i);
     const Node& nj = node(j);
     const bool li = ni.is_leaf(), lj = nj.is_leaf();
@@ -344,7 +353,7 @@ template <class S> class DynamicTree {
       const Node& n = node(i);
       const double a = area(n.box);
       const double combined = area(merge(n.box, box));
-      const double here = 2 * combined;          // new parent of (n, leaf)
+      const double here = 2 * combined;           // new parent of (n, leaf)
       const double inherit = 2 * (combined - a);  // growth every node below pays
       double cost[2];
       for (int k = 0; k < 2; ++k) {
@@ -473,7 +482,8 @@ template <class S> class DynamicTree {
 /// touched), then the dynamic tree is traversed against itself and against the static tree, larger
 /// node first, skipping node pairs without an active object. Unlike the static/dynamic split,
 /// static objects can be added, removed or moved incrementally without a rebuild.
-template <class S> class HierarchicalBroadPhase {
+template <class S>
+class HierarchicalBroadPhase {
  public:
   explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : static_(opt), dynamic_(opt) {}
 
@@ -494,10 +504,13 @@ template <class S> class HierarchicalBroadPhase {
       moved_.push_back(slot);
     }
   }
-  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) { dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot)); }
+  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
+  }
   void filter_changed(std::int32_t, const ObjectTable<S>&) {}
 
-  template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
+  template <class Visit>
+  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
     flush(t, st);
     const auto leaf_pair = [&](std::int32_t a, std::int32_t b) {
       if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves

@@ -36,13 +36,14 @@ enum class ShapeKind : std::uint8_t { Sphere, Box, Mesh, Particle };
 /// A scene object's shape in its own frame (the pose places it). Spheres and particles are centred
 /// on the pose's origin; a box has half extents along the pose's axes; a mesh is shared by pointer
 /// and must outlive every scene holding it.
-template <class S> struct Shape {
+template <class S>
+struct Shape {
   using MeshType = MeshBvh<Sphere<S>>;
 
   ShapeKind kind = ShapeKind::Particle;
-  S radius = S(0);                     ///< spheres and particles, >= 0
-  Vec3<S> half = Vec3<S>::Zero();      ///< boxes, >= 0 per axis
-  const MeshType* mesh = nullptr;      ///< meshes
+  S radius = S(0);                 ///< spheres and particles, >= 0
+  Vec3<S> half = Vec3<S>::Zero();  ///< boxes, >= 0 per axis
+  const MeshType* mesh = nullptr;  ///< meshes
 
   static Shape sphere(S r) {
     Shape s;
@@ -75,7 +76,8 @@ template <class S> struct Shape {
 
 /// A contact between two shapes, in world coordinates. `normal` is a unit vector pointing from the
 /// first shape towards the second; `depth` >= 0 is how far they interpenetrate along it.
-template <class S> struct ShapeContact {
+template <class S>
+struct ShapeContact {
   Vec3<S> point = Vec3<S>::Zero();
   Vec3<S> normal = Vec3<S>::UnitZ();
   S depth = S(0);
@@ -84,7 +86,8 @@ template <class S> struct ShapeContact {
 namespace detail {
 
 /// Projection interval of n points on axis.
-template <class S> inline void project(const Vec3<S>* pts, int n, const Vec3<S>& axis, S& lo, S& hi) {
+template <class S>
+inline void project(const Vec3<S>* pts, int n, const Vec3<S>& axis, S& lo, S& hi) {
   lo = hi = pts[0].dot(axis);
   for (int i = 1; i < n; ++i) {
     const S d = pts[i].dot(axis);
@@ -112,7 +115,8 @@ inline bool sat_overlap(const Vec3<S>* a, int na, const Vec3<S>* b, int nb, cons
 }
 
 /// Triangle against an axis-aligned box centred at the origin with half extents h (13 axes).
-template <class S> bool triangle_box_overlap(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c, const Vec3<S>& h) {
+template <class S>
+bool triangle_box_overlap(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c, const Vec3<S>& h) {
   const Vec3<S> tri[3] = {a, b, c};
   Vec3<S> corners[8];
   for (int i = 0; i < 8; ++i) corners[i] = Vec3<S>((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
@@ -127,12 +131,14 @@ template <class S> bool triangle_box_overlap(const Vec3<S>& a, const Vec3<S>& b,
 }
 
 /// Does a sphere (centre c, radius r) meet the closed box centred at the origin with half extents h?
-template <class S> inline bool sphere_box_local(const Vec3<S>& c, S r, const Vec3<S>& h) {
+template <class S>
+inline bool sphere_box_local(const Vec3<S>& c, S r, const Vec3<S>& h) {
   const Vec3<S> q = c.cwiseMax(-h).cwiseMin(h);
   return (c - q).squaredNorm() <= r * r;
 }
 
-template <class S> bool sphere_sphere(const Vec3<S>& ca, S ra, const Vec3<S>& cb, S rb, ShapeContact<S>* out) {
+template <class S>
+bool sphere_sphere(const Vec3<S>& ca, S ra, const Vec3<S>& cb, S rb, ShapeContact<S>* out) {
   const Vec3<S> d = cb - ca;
   const S r = ra + rb;
   const S d2 = d.squaredNorm();
@@ -176,7 +182,8 @@ bool sphere_box(const Vec3<S>& c, S r, const Vec3<S>& half, const RigidTransform
 
 /// Box a against box b; contact by the axis of least overlap among the 15 SAT axes.
 template <class S>
-bool box_box(const Vec3<S>& ha, const RigidTransform<S>& pa, const Vec3<S>& hb, const RigidTransform<S>& pb, ShapeContact<S>* out) {
+bool box_box(const Vec3<S>& ha, const RigidTransform<S>& pa, const Vec3<S>& hb, const RigidTransform<S>& pb,
+             ShapeContact<S>* out) {
   Obb<S> a, b;
   a.center = pa.t;
   a.axes = pa.R;
@@ -219,7 +226,8 @@ bool box_box(const Vec3<S>& ha, const RigidTransform<S>& pa, const Vec3<S>& hb, 
 
 /// A round shape (centre c in world, radius r) against a mesh surface.
 template <class S>
-bool sphere_mesh(const Vec3<S>& c, S r, const MeshBvh<Sphere<S>>& m, const RigidTransform<S>& pm, bool flip, ShapeContact<S>* out) {
+bool sphere_mesh(const Vec3<S>& c, S r, const MeshBvh<Sphere<S>>& m, const RigidTransform<S>& pm, bool flip,
+                 ShapeContact<S>* out) {
   const Vec3<S> lc = pm.R.transpose() * (c - pm.t);
   const Sphere<S> query(lc, r);
   bool hit = false;
@@ -264,7 +272,8 @@ bool box_mesh(const Vec3<S>& h, const RigidTransform<S>& pb, const MeshBvh<Spher
           Vec3<S> n = cen.squaredNorm() > S(0) ? Vec3<S>(cen.normalized()) : Vec3<S>::UnitZ();  // box towards mesh
           out->normal = pb.rotate(flip ? Vec3<S>(-n) : n);
           out->depth = S(0);
-          out->point = pb.apply(closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(a, b, c)).point.cwiseMax(-h).cwiseMin(h));
+          out->point =
+              pb.apply(closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(a, b, c)).point.cwiseMax(-h).cwiseMin(h));
         }
         return false;
       });
@@ -272,8 +281,8 @@ bool box_mesh(const Vec3<S>& h, const RigidTransform<S>& pb, const MeshBvh<Spher
 }
 
 template <class S>
-bool mesh_mesh(const MeshBvh<Sphere<S>>& ma, const RigidTransform<S>& pa, const MeshBvh<Sphere<S>>& mb, const RigidTransform<S>& pb,
-               ShapeContact<S>* out) {
+bool mesh_mesh(const MeshBvh<Sphere<S>>& ma, const RigidTransform<S>& pa, const MeshBvh<Sphere<S>>& mb,
+               const RigidTransform<S>& pb, ShapeContact<S>* out) {
   const RigidTransform<S> b_to_a = relative_transform(pa, pb);
   bool hit = false;
   traverse_pair(

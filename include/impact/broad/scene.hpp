@@ -69,19 +69,22 @@ struct SceneCollideOptions {
 };
 
 /// A contact between objects a < b; the normal points from a towards b.
-template <class S> struct SceneContact {
+template <class S>
+struct SceneContact {
   ObjectId a = 0, b = 0;
   ShapeContact<S> contact;
 };
 
-template <class S> struct SceneCollideResult {
+template <class S>
+struct SceneCollideResult {
   bool colliding = false;
-  std::vector<ObjectPair> pairs;           ///< pairs whose shapes touch
-  std::vector<SceneContact<S>> contacts;   ///< one per pair, when asked for
+  std::vector<ObjectPair> pairs;          ///< pairs whose shapes touch
+  std::vector<SceneContact<S>> contacts;  ///< one per pair, when asked for
   BroadPhaseStats stats;
 };
 
-template <class S> class Scene {
+template <class S>
+class Scene {
   static_assert(is_supported_scalar_v<S>, "Scene<S>: S must be float or double");
   static_assert(is_broad_phase_v<AllPairsBroadPhase<S>, S> && is_broad_phase_v<StaticDynamicBroadPhase<S>, S> &&
                     is_broad_phase_v<HierarchicalBroadPhase<S>, S>,
@@ -90,9 +93,15 @@ template <class S> class Scene {
  public:
   explicit Scene(const SceneOptions& opt = {}) : opt_(opt) {
     switch (opt.broad_phase) {
-      case BroadPhaseKind::AllPairs: broad_.template emplace<AllPairsBroadPhase<S>>(); break;
-      case BroadPhaseKind::StaticDynamic: broad_.template emplace<StaticDynamicBroadPhase<S>>(opt.tree, opt.static_leaf_size); break;
-      case BroadPhaseKind::Hierarchical: broad_.template emplace<HierarchicalBroadPhase<S>>(opt.tree); break;
+      case BroadPhaseKind::AllPairs:
+        broad_.template emplace<AllPairsBroadPhase<S>>();
+        break;
+      case BroadPhaseKind::StaticDynamic:
+        broad_.template emplace<StaticDynamicBroadPhase<S>>(opt.tree, opt.static_leaf_size);
+        break;
+      case BroadPhaseKind::Hierarchical:
+        broad_.template emplace<HierarchicalBroadPhase<S>>(opt.tree);
+        break;
     }
   }
 
@@ -112,7 +121,8 @@ template <class S> class Scene {
       for (Eigen::Index i = 0; i < V.rows(); ++i) reach = std::max(reach, (V.row(i).transpose() - c).norm());
     }
     const Aabb<S> box = world_box(shape, local, reach, pose);
-    if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::add: object " + std::to_string(id) + " has non-finite bounds");
+    if (!all_finite(box.min) || !all_finite(box.max))
+      throw InvalidInput("Scene::add: object " + std::to_string(id) + " has non-finite bounds");
     std::int32_t slot;
     if (!free_.empty()) {
       slot = free_.back();
@@ -126,7 +136,7 @@ template <class S> class Scene {
     objects_[s] = {id, shape, pose, local, reach};
     table_.box(slot) = box;
     table_.flags(slot) = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
-                                   (options.sleeping ? ObjectTable<S>::Sleeping : 0));
+                                      (options.sleeping ? ObjectTable<S>::Sleeping : 0));
     table_.filter(slot) = options.filter;
     table_.ignore_count(slot) = 0;
     ids_.emplace(id, slot);
@@ -165,7 +175,8 @@ template <class S> class Scene {
     check_pose(pose, "Scene::set_pose", id);
     const auto s = static_cast<std::size_t>(slot);
     const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, objects_[s].reach, pose);
-    if (!all_finite(box.min) || !all_finite(box.max)) throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
+    if (!all_finite(box.min) || !all_finite(box.max))
+      throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
     objects_[s].pose = pose;
     table_.box(slot) = box;
     std::visit([&](auto& b) { b.moved(slot, table_); }, broad_);
@@ -227,7 +238,8 @@ template <class S> class Scene {
   /// Calls visit(ObjectId a, ObjectId b) -> bool (a < b) for every pair of the pair rule
   /// (broad_phase.hpp), each once, without allocating; stops when visit returns false. Returns
   /// false when stopped.
-  template <class Visit> bool for_each_pair(Visit&& visit, BroadPhaseStats& stats) {
+  template <class Visit>
+  bool for_each_pair(Visit&& visit, BroadPhaseStats& stats) {
     return std::visit(
         [&](auto& b) {
           return b.find_pairs(
@@ -289,7 +301,10 @@ template <class S> class Scene {
   }
 
   /// The broad phase in use, for inspection in tests (e.g. tree validity).
-  template <class B> const B* broad_phase_as() const { return std::get_if<B>(&broad_); }
+  template <class B>
+  const B* broad_phase_as() const {
+    return std::get_if<B>(&broad_);
+  }
 
  private:
   struct Object {
@@ -311,7 +326,8 @@ template <class S> class Scene {
         broad_);
   }
 
-  template <class Visit> bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
+  template <class Visit>
+  bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
     return std::visit([&](auto& b) { return b.find_pairs(table_, visit, stats); }, broad_);
   }
 

@@ -34,7 +34,8 @@ inline std::uint32_t spread_bits3(std::uint32_t v) {
   return v;
 }
 /// 30-bit Morton code of p quantised to 10 bits per axis by (p - lo) * scale (clamped).
-template <class S> inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& scale) {
+template <class S>
+inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& scale) {
   std::uint32_t c[3];
   for (int k = 0; k < 3; ++k) {
     const S q = (p[k] - lo[k]) * scale[k];
@@ -44,7 +45,8 @@ template <class S> inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3
 }
 }  // namespace detail
 
-template <class S> class StaticDynamicBroadPhase {
+template <class S>
+class StaticDynamicBroadPhase {
  public:
   /// `tree` configures the dynamic tree; `static_leaf_size` the static tree's leaves.
   explicit StaticDynamicBroadPhase(const DynamicTreeOptions& tree = {}, int static_leaf_size = 2)
@@ -97,11 +99,14 @@ template <class S> class StaticDynamicBroadPhase {
     dyn_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
-    if (t.is_static(slot)) ++epoch_;  // every candidate list may name it
-    else cand_epoch_[static_cast<std::size_t>(slot)] = 0;
+    if (t.is_static(slot))
+      ++epoch_;  // every candidate list may name it
+    else
+      cand_epoch_[static_cast<std::size_t>(slot)] = 0;
   }
 
-  template <class Visit> bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
+  template <class Visit>
+  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
     flush(t, st);
     // Dynamic against static. Objects whose fat box changed query the static tree, in Morton
     // order of their centres so that consecutive queries walk the same part of the tree (the
@@ -132,8 +137,10 @@ template <class S> class StaticDynamicBroadPhase {
             const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
             ++st.bv_tests;
             if (!overlap(t.box(b), fat)) return true;
-            if (t.accepts(a, b)) cand.push_back(b);
-            else ++st.pairs_filtered;
+            if (t.accepts(a, b))
+              cand.push_back(b);
+            else
+              ++st.pairs_filtered;
             return true;
           });
       cand_epoch_[sa] = epoch_;
@@ -234,15 +241,15 @@ template <class S> class StaticDynamicBroadPhase {
   Bvh<Aabb<S>> static_tree_;
   std::vector<std::int32_t> static_slots_;  // static tree primitive id -> slot
   bool static_dirty_ = false;
-  std::vector<std::int32_t> leaf_;       // slot -> dynamic tree leaf
-  std::vector<std::int32_t> dyn_pos_;    // slot -> index in dynamics_
-  std::vector<std::int32_t> dynamics_;   // dynamic slots
+  std::vector<std::int32_t> leaf_;      // slot -> dynamic tree leaf
+  std::vector<std::int32_t> dyn_pos_;   // slot -> index in dynamics_
+  std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  std::vector<std::vector<std::int32_t>> cand_;  // dynamic slot -> accepted static slots overlapping its fat box
-  std::vector<std::vector<std::int32_t>> hits_;  // dynamic slot -> those overlapping its tight box
-  std::vector<std::uint32_t> cand_epoch_;        // cand_ valid when equal to epoch_
-  std::vector<std::uint8_t> stale_;              // hits_ must be recomputed from cand_
+  std::vector<std::vector<std::int32_t>> cand_;               // dynamic slot -> accepted static slots overlapping its fat box
+  std::vector<std::vector<std::int32_t>> hits_;               // dynamic slot -> those overlapping its tight box
+  std::vector<std::uint32_t> cand_epoch_;                     // cand_ valid when equal to epoch_
+  std::vector<std::uint8_t> stale_;                           // hits_ must be recomputed from cand_
   std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query
   std::uint32_t epoch_ = 1;
 };
