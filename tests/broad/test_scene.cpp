@@ -365,6 +365,9 @@ TYPED_TEST(BroadTyped, BadInputThrowsAndLeavesSceneUnchanged) {
     EXPECT_FALSE(s.contains(4));
     EXPECT_EQ(s.pose(1).t, pose1.t);
     EXPECT_EQ(sorted(s.find_pairs().pairs), before);
+    // A rotation rounded to float is still a rotation for a double scene.
+    const Eigen::Matrix3f rf = Eigen::AngleAxisf(0.3f, Eigen::Vector3f(1, 2, 3).normalized()).toRotationMatrix();
+    EXPECT_NO_THROW(s.set_pose(3, RigidTransform<S>(rf.cast<S>(), Vec3<S>(0, 1, 0))));
     // Removing twice
     s.remove(3);
     EXPECT_THROW(s.remove(3), InvalidInput);

@@ -106,7 +106,8 @@ class Scene {
   }
 
   /// Adds an object. For spheres and particles only the pose's translation matters. Throws
-  /// InvalidInput for a duplicate id, a non-finite or non-rigid pose, a negative or non-finite
+  /// InvalidInput for a duplicate id, a non-finite or non-rigid pose (R^T R off the identity by
+  /// more than sqrt(eps) for float, 1e-6 for double, or det R <= 0), a negative or non-finite
   /// size, or a null mesh.
   void add(ObjectId id, const Shape<S>& shape, const RigidTransform<S>& pose, const ObjectOptions& options = {}) {
     if (ids_.count(id)) throw InvalidInput("Scene::add: id " + std::to_string(id) + " is already in the scene");
@@ -339,7 +340,8 @@ class Scene {
 
   static void check_pose(const RigidTransform<S>& pose, const char* where, ObjectId id) {
     if (!pose.is_finite()) throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not finite");
-    const S tol = std::sqrt(std::numeric_limits<S>::epsilon());
+    // R^T R = I within sqrt(eps) (float) or 1e-6 (double: rotations converted from float pass).
+    const S tol = std::max(std::sqrt(std::numeric_limits<S>::epsilon()), S(1e-6));
     const Mat3<S> e = pose.R.transpose() * pose.R - Mat3<S>::Identity();
     if (e.cwiseAbs().maxCoeff() > tol || pose.R.determinant() <= S(0))
       throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not a rotation");
