@@ -9,6 +9,20 @@
 
 #include <gtest/gtest.h>
 
+#if defined(__SANITIZE_ADDRESS__)
+#define IMPACT_TEST_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define IMPACT_TEST_SANITIZED 1
+#endif
+#endif
+#ifndef IMPACT_TEST_SANITIZED
+#define IMPACT_TEST_SANITIZED 0
+#endif
+
+// Fewer samples under the sanitizers (CI), the full count in Release.
+constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+
 namespace impact {
 namespace {
 
@@ -20,6 +34,7 @@ template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV> bvh(m);
   test::Rng rng(seed);
+  n /= kSampleDivisor;
   Aabb<S> box;
   for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
   const double diag = 2 * double(box.half_diagonal());
