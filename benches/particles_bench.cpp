@@ -2,7 +2,7 @@
 // impact-particles-bench: particles against a triangle mesh, run time against error.
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
-//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--seed X] [--json FILE]
+//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -16,7 +16,8 @@
 //  - reference:  backtracking with K sub-steps per step, for the first R particles: the
 //                accuracy reference of the position errors.
 // --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache); --sort-every N
-// reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never).
+// reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never);
+// --float runs everything in single precision (double by default).
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
 // escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
 // particle changed sides, or a particle outside the container), the mean and max distance to the
@@ -39,14 +40,12 @@ using impact::bench::seconds_since;
 
 namespace {
 
-using S = double;
-using BV = Aabb<S>;
-
 struct Args {
   std::string mesh, json;
   int particles = 20000, steps = 100, naive_particles = 20, ref_particles = 1000, substeps = 16;
   double dt = 1e-2, free_ball = 8;
   int sort_every = 10;
+  bool use_float = false;
   std::uint64_t seed = 1;
 };
 
@@ -58,7 +57,8 @@ struct Row {
 };
 
 /// Crossings of the segment a -> b with the mesh (every triangle hit, watertight rule).
-int crossings(const MeshBvh<BV>& m, const Vec3<S>& a, const Vec3<S>& b) {
+template <class S> int crossings(const MeshBvh<Aabb<S>>& m, const Vec3<S>& a, const Vec3<S>& b) {
+  using BV = Aabb<S>;
   const Vec3<S> d = b - a;
   if (d.squaredNorm() == 0) return 0;
   const detail::WatertightRay<S> wr(a, d);
@@ -80,9 +80,11 @@ double thread_seconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-double energy(const Particle<S>& p, const Vec3<S>& g, const Vec3<S>& origin) { return 0.5 * p.velocity.squaredNorm() - g.dot(p.position - origin); }
+template <class S> double energy(const Particle<S>& p, const Vec3<S>& g, const Vec3<S>& origin) {
+  return 0.5 * double(p.velocity.squaredNorm()) - double(g.dot(p.position - origin));
+}
 
-struct RunResult {
+template <class S> struct RunResult {
   std::vector<Particle<S>> final;
   double seconds = 0;
   int escaped = 0;
@@ -90,9 +92,10 @@ struct RunResult {
   double impact_share = 0;
 };
 
-RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const MeshBvh<BV>& audit_mesh, const Aabb<S>& container,
-              const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every) {
-  RunResult r;
+template <class S>
+RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+                 const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every) {
+  RunResult<S> r;
   std::vector<std::uint32_t> id(ps.size());  // id[i]: the initial index of the particle now at i
   for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
   std::vector<double> e0(ps.size());
@@ -100,7 +103,7 @@ RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const M
   std::vector<char> escaped(ps.size(), 0);
   std::vector<Vec3<S>> before(ps.size());
   StepStats st;
-  const double h = dt / substeps;
+  const S h = S(dt / substeps);
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
@@ -145,33 +148,8 @@ RunResult run(std::vector<Particle<S>> ps, const ColliderSet<S, BV>& cs, const M
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  Args a;
-  auto usage = [] {
-    std::fprintf(stderr,
-                 "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
-                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--seed X] [--json FILE]\n");
-    return 2;
-  };
-  for (int i = 1; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (s == "--particles" && (v = next())) a.particles = std::max(1, std::atoi(v));
-    else if (s == "--steps" && (v = next())) a.steps = std::max(1, std::atoi(v));
-    else if (s == "--dt" && (v = next())) a.dt = std::atof(v);
-    else if (s == "--naive-particles" && (v = next())) a.naive_particles = std::max(0, std::atoi(v));
-    else if (s == "--ref-particles" && (v = next())) a.ref_particles = std::max(0, std::atoi(v));
-    else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
-    else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
-    else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
-    else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
-    else if (s == "--json" && (v = next())) a.json = v;
-    else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
-    else return usage();
-  }
-  if (!(a.dt > 0)) return usage();
-
+template <class S> int run_all(const Args& a) {
+  using BV = Aabb<S>;
   TriangleMesh<S> mesh;
   try {
     if (a.mesh.empty()) {
@@ -233,12 +211,12 @@ int main(int argc, char** argv) {
 
   std::printf("impact-particles-bench: %s, %d triangles, %d particles x %d steps, dt %g, speed %.3g (%.2f%% of the diagonal per step)\n",
               mesh_name.c_str(), mesh.num_triangles(), a.particles, a.steps, a.dt, speed, 100 * speed * a.dt / diag);
-  const RunResult ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true, a.sort_every);
-  const RunResult bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
-  const RunResult pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
-  const RunResult nv = run(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
+  const RunResult<S> ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true, a.sort_every);
+  const RunResult<S> bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
+  const RunResult<S> pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
+  const RunResult<S> nv = run(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
 
-  auto row = [&](const char* method, const RunResult& r, int n, int substeps) {
+  auto row = [&](const char* method, const RunResult<S>& r, int n, int substeps) {
     Row w;
     w.method = method;
     w.particles = n;
@@ -282,4 +260,35 @@ int main(int argc, char** argv) {
     }
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  Args a;
+  auto usage = [] {
+    std::fprintf(stderr,
+                 "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
+                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--seed X] [--json FILE]\n");
+    return 2;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (s == "--particles" && (v = next())) a.particles = std::max(1, std::atoi(v));
+    else if (s == "--steps" && (v = next())) a.steps = std::max(1, std::atoi(v));
+    else if (s == "--dt" && (v = next())) a.dt = std::atof(v);
+    else if (s == "--naive-particles" && (v = next())) a.naive_particles = std::max(0, std::atoi(v));
+    else if (s == "--ref-particles" && (v = next())) a.ref_particles = std::max(0, std::atoi(v));
+    else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
+    else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
+    else if (s == "--float") a.use_float = true;
+    else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
+    else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
+    else if (s == "--json" && (v = next())) a.json = v;
+    else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
+    else return usage();
+  }
+  if (!(a.dt > 0)) return usage();
+
+  return a.use_float ? run_all<float>(a) : run_all<double>(a);
 }
