@@ -2,7 +2,7 @@
 // impact-particles-bench: particles against a triangle mesh, run time against error.
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
-//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--seed X] [--json FILE]
+//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -17,7 +17,8 @@
 //                accuracy reference of the position errors.
 // --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache); --sort-every N
 // reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never);
-// --float runs everything in single precision (double by default).
+// --float runs everything in single precision (double by default); --leaf L sets the tree's
+// maximum leaf size (BuildConfig::leaf_size, 1 by default).
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
 // escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
 // particle changed sides, or a particle outside the container), the mean and max distance to the
@@ -46,6 +47,7 @@ struct Args {
   double dt = 1e-2, free_ball = 8;
   int sort_every = 10;
   bool use_float = false;
+  int leaf = 1;
   std::uint64_t seed = 1;
 };
 
@@ -167,7 +169,9 @@ template <class S> int run_all(const Args& a) {
   }
   const std::string mesh_name = a.mesh.empty() ? "generated:torus" : a.mesh;
 
-  const MeshBvh<BV> bvh(mesh);
+  MeshBvhConfig cfg;
+  cfg.build.leaf_size = a.leaf;
+  const MeshBvh<BV> bvh(mesh, cfg);
   MeshBvhConfig one_leaf;
   one_leaf.build.leaf_size = mesh.num_triangles();
   const MeshBvh<BV> flat(mesh, one_leaf);
@@ -267,7 +271,7 @@ int main(int argc, char** argv) {
   auto usage = [] {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
-                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--seed X] [--json FILE]\n");
+                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -282,6 +286,7 @@ int main(int argc, char** argv) {
     else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
     else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
     else if (s == "--float") a.use_float = true;
+    else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
     else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
     else if (s == "--json" && (v = next())) a.json = v;
