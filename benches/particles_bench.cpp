@@ -63,13 +63,13 @@ template <class S> int crossings(const MeshBvh<Aabb<S>>& m, const Vec3<S>& a, co
   using BV = Aabb<S>;
   const Vec3<S> d = b - a;
   if (d.squaredNorm() == 0) return 0;
-  const detail::WatertightRay<S> wr(a, d);
+  const PreparedRay<S> pr(Ray<S>(a, d, S(1)));
   const Vec3<S> inv = detail::safe_inverse(d);
   int n = 0;
   traverse(
       m.tree(), [&](const BV& bv) { return detail::ray_box_entry(a, inv, bv, S(1)).has_value(); },
       [&](std::int32_t k) {
-        n += detail::watertight_hit(wr, m.triangle(k), S(1)).has_value() ? 1 : 0;
+        n += intersect_ray_triangle(pr, m.triangle(k)).has_value() ? 1 : 0;
         return true;
       });
   return n;

@@ -37,11 +37,12 @@ template <class S> TriangleMesh<S> transformed(const TriangleMesh<S>& m, const R
 
 // Brute force: the same watertight test on every triangle of the mesh given in world coordinates.
 template <class S> std::optional<std::pair<S, int>> brute_first_hit(const TriangleMesh<S>& w, const Ray<S>& ray) {
-  const detail::WatertightRay<S> wr(ray.origin, ray.direction);
+  PreparedRay<S> pr(ray);
   std::optional<std::pair<S, int>> best;
   for (int t = 0; t < w.num_triangles(); ++t) {
-    const auto h = detail::watertight_hit(wr, w.triangle(t), best ? best->first : ray.t_max);
-    if (h && (!best || h->first < best->first)) best = std::make_pair(h->first, t);
+    pr.ray.t_max = best ? best->first : ray.t_max;
+    const auto h = detail::ray_mesh_triangle_hit(pr, w.triangle(t));
+    if (h && (!best || h->t < best->first)) best = std::make_pair(h->t, t);
   }
   return best;
 }

@@ -89,13 +89,13 @@ TYPED_TEST(Particles, AnalyticBounceHeights) {
 /// Counts crossings of the ray from x along a fixed direction (odd: inside a closed mesh).
 template <class S> int crossings(const MeshBvh<Aabb<S>>& m, const Vec3<S>& x) {
   const Vec3<S> d = Vec3<S>(S(0.5773), S(0.6133), S(0.5392)) * S(100);
-  const detail::WatertightRay<S> wr(x, d);
+  const PreparedRay<S> pr(Ray<S>(x, d, S(1)));
   const Vec3<S> inv = detail::safe_inverse(d);
   int n = 0;
   traverse(
       m.tree(), [&](const Aabb<S>& b) { return detail::ray_box_entry(x, inv, b, S(1)).has_value(); },
       [&](std::int32_t k) {
-        n += detail::watertight_hit(wr, m.triangle(k), S(1)).has_value() ? 1 : 0;
+        n += intersect_ray_triangle(pr, m.triangle(k)).has_value() ? 1 : 0;
         return true;
       });
   return n;

@@ -4,12 +4,11 @@
 /// transform: first hit (nearest-first traversal, the entry parameter of the ray into each node's
 /// BV as the key) and any hit (depth-first, stops at the first triangle hit).
 ///
-/// Numerical contract. Triangles are tested with a watertight ray-triangle test (Woop, Benthin and
-/// Wald, "Watertight Ray/Triangle Intersection", JCGT 2013): the ray is sheared into its own frame
-/// once, and each edge function depends only on the edge's two vertices, so a ray through a shared
-/// edge or vertex of a closed mesh hits at least one of the triangles around it (never none). Edge
-/// functions that come out exactly zero in float are recomputed in double. A hit on the boundary
-/// of a triangle counts (closed triangles). Rays parallel to a triangle's plane miss it. The node
+/// Numerical contract. Triangles are tested with the narrow phase's watertight ray-triangle test
+/// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013): the ray is prepared once, and a
+/// ray through a shared edge or vertex of a closed mesh hits at least one of the triangles around
+/// it (never none). A hit on the boundary of a triangle counts (closed triangles). Rays parallel
+/// to a triangle's plane miss it. The node
 /// tests are conservative (their exit parameter is padded, PBRT's robust slab test), so no hit is
 /// lost to rounding in the traversal. One tie rule keeps particles out of surfaces: a hit at
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
@@ -21,6 +20,7 @@
 #include "impact/bvh/traverse.hpp"
 #include "impact/geometry/ray.hpp"
 #include "impact/geometry/transform.hpp"
+#include "impact/narrow/ray_triangle.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -47,51 +47,13 @@ struct RayMeshStats {
 
 namespace detail {
 
-/// A ray prepared for the watertight test: shear constants and the permutation of axes that
-/// makes the dominant direction component the z axis.
-template <class S> struct WatertightRay {
-  Vec3<S> o, d;
-  int kx = 0, ky = 1, kz = 2;
-  S sx = 0, sy = 0, sz = 1;
-  explicit WatertightRay(const Vec3<S>& origin, const Vec3<S>& dir) : o(origin), d(dir) {
-    const Vec3<S> a = dir.cwiseAbs();
-    kz = a[0] >= a[1] ? (a[0] >= a[2] ? 0 : 2) : (a[1] >= a[2] ? 1 : 2);
-    kx = (kz + 1) % 3;
-    ky = (kx + 1) % 3;
-    if (dir[kz] < S(0)) std::swap(kx, ky);  // keep the winding
-    sx = dir[kx] / dir[kz];
-    sy = dir[ky] / dir[kz];
-    sz = S(1) / dir[kz];
-  }
-};
-
-/// Watertight ray-triangle test. Returns the (t, barycentric) of a hit with t in [0, t_max] (t = 0
-/// only when entering the front), or nothing. The direction must be nonzero.
-template <class S>
-inline std::optional<std::pair<S, Vec3<S>>> watertight_hit(const WatertightRay<S>& r, const Triangle<S>& tri, S t_max) {
-  const Vec3<S> A = tri.a - r.o, B = tri.b - r.o, C = tri.c - r.o;
-  const S ax = A[r.kx] - r.sx * A[r.kz], ay = A[r.ky] - r.sy * A[r.kz];
-  const S bx = B[r.kx] - r.sx * B[r.kz], by = B[r.ky] - r.sy * B[r.kz];
-  const S cx = C[r.kx] - r.sx * C[r.kz], cy = C[r.ky] - r.sy * C[r.kz];
-  S u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
-  if constexpr (std::is_same_v<S, float>) {
-    if (u == S(0) || v == S(0) || w == S(0)) {
-      u = static_cast<S>(double(cx) * double(by) - double(cy) * double(bx));
-      v = static_cast<S>(double(ax) * double(cy) - double(ay) * double(cx));
-      w = static_cast<S>(double(bx) * double(ay) - double(by) * double(ax));
-    }
-  }
-  if ((u < S(0) || v < S(0) || w < S(0)) && (u > S(0) || v > S(0) || w > S(0))) return std::nullopt;
-  const S det = u + v + w;
-  if (det == S(0)) return std::nullopt;  // parallel to the plane, or degenerate triangle
-  const S az = r.sz * A[r.kz], bz = r.sz * B[r.kz], cz = r.sz * C[r.kz];
-  const S T = u * az + v * bz + w * cz;
-  // t = T / det must lie in [0, t_max]; compare without dividing, sign-aware.
-  if (det > S(0) ? (T < S(0) || T > t_max * det) : (T > S(0) || T < t_max * det)) return std::nullopt;
-  const S inv = S(1) / det;
-  const S t = T * inv;
-  if (T == S(0) && r.d.dot(tri.scaled_normal()) >= S(0)) return std::nullopt;  // on the surface, leaving or parallel
-  return std::make_pair(t, Vec3<S>(u * inv, v * inv, w * inv));
+/// The narrow-phase watertight test with the library's tie rule at t = 0: a hit exactly at the
+/// ray's origin counts only when the ray enters the triangle's front (see the file comment).
+/// `pr.ray.t_max` is the current bound.
+template <class S> inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Triangle<S>& tri) {
+  auto h = intersect_ray_triangle(pr, tri);
+  if (h && h->t == S(0) && !h->front) return std::nullopt;
+  return h;
 }
 
 /// Entry parameter of the ray into a box, padded so that rounding never loses a hit; nullopt when
@@ -106,7 +68,7 @@ inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, co
       continue;
     }
     if (n > f) std::swap(n, f);
-    f *= S(1) + S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
+    f += std::abs(f) * S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
     t0 = n > t0 ? n : t0;
     t1 = f < t1 ? f : t1;
     if (t0 > t1) return std::nullopt;
@@ -172,7 +134,7 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  const detail::WatertightRay<S> wr(o, d);
+  PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
   const Vec3<S> inv = detail::safe_inverse(d);
   S best = ray.t_max;
   std::int32_t best_leaf = -1;
@@ -195,11 +157,12 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
       [&]() { return best; },
       [&](std::int32_t k) {
         if (stats) ++stats->triangle_tests;
-        const auto h = detail::watertight_hit(wr, mesh.triangle(k), best);
-        if (h && (best_leaf < 0 || h->first < best)) {
-          best = h->first;
+        pr.ray.t_max = best;
+        const auto h = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k));
+        if (h && (best_leaf < 0 || h->t < best)) {
+          best = h->t;
           best_leaf = k;
-          best_bary = h->second;
+          best_bary = Vec3<S>(h->u, h->v, h->w);
         }
         return true;
       });
@@ -226,13 +189,13 @@ bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return false;
-  const detail::WatertightRay<S> wr(o, d);
+  const PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
   const Vec3<S> inv = detail::safe_inverse(d);
   bool found = false;
   traverse(
       mesh.tree(), [&](const BV& bv) { return detail::ray_bv_entry(o, d, inv, bv, ray.t_max).has_value(); },
       [&](std::int32_t k) {
-        found = detail::watertight_hit(wr, mesh.triangle(k), ray.t_max).has_value();
+        found = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k)).has_value();
         return !found;
       });
   return found;
