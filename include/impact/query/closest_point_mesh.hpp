@@ -5,9 +5,9 @@
 /// Returns the point, the triangle (row of F), the feature of that triangle the point lies on
 /// (face interior, one of its edges or one of its vertices), the distance and a normal.
 ///
-/// Numerical contract: approximate to rounding. The closest point on each triangle follows the
-/// Voronoi-region method (Ericson, Real-Time Collision Detection, 5.1.5); the feature reported is
-/// the region the query fell in. Node keys are exact lower bounds up to rounding, so the result
+/// Numerical contract: approximate to rounding. The closest point on each triangle is the narrow
+/// phase's (narrow/closest_point.hpp: Voronoi regions after Ericson, Real-Time Collision
+/// Detection, 5.1.5, robust on slivers); the feature reported is the region the query fell in. Node keys are exact lower bounds up to rounding, so the result
 /// is the nearest triangle up to ties (equal distances at shared edges and vertices return one of
 /// the triangles that share them).
 #pragma once
@@ -15,6 +15,7 @@
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
 #include "impact/geometry/transform.hpp"
+#include "impact/narrow/closest_point.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -23,9 +24,10 @@
 
 namespace impact {
 
-/// The feature of a triangle (a, b, c) a closest point lies on. Edge k joins vertex k and vertex
-/// (k + 1) % 3 (EdgeAB, EdgeBC, EdgeCA).
-enum class TriangleFeature : std::uint8_t { Face, VertexA, VertexB, VertexC, EdgeAB, EdgeBC, EdgeCA };
+/// The feature of a triangle (a, b, c) a closest point lies on: the narrow phase's
+/// TriangleFeatureId (Face, VertexA..C, EdgeAB, EdgeBC, EdgeCA; edge k joins vertex k and
+/// vertex (k + 1) % 3).
+using TriangleFeature = TriangleFeatureId;
 
 /// True for the three vertex features.
 inline bool is_vertex(TriangleFeature f) { return f == TriangleFeature::VertexA || f == TriangleFeature::VertexB || f == TriangleFeature::VertexC; }
@@ -50,41 +52,11 @@ template <class S> struct TrianglePoint {
 
 namespace detail {
 
-/// Closest point on triangle t to p by Voronoi regions (Ericson 5.1.5). Degenerate triangles end
-/// in an edge or vertex region.
+/// Closest point on triangle t to p (the narrow phase's closest_point_on_triangle: Voronoi
+/// regions, explicit branches for slivers and degenerate triangles).
 template <class S> inline TrianglePoint<S> closest_on_triangle(const Vec3<S>& p, const Triangle<S>& t) {
-  TrianglePoint<S> r;
-  const Vec3<S> ab = t.b - t.a, ac = t.c - t.a, ap = p - t.a;
-  const S d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= S(0) && d2 <= S(0)) return {t.a, {S(1), S(0), S(0)}, TriangleFeature::VertexA};
-  const Vec3<S> bp = p - t.b;
-  const S d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= S(0) && d4 <= d3) return {t.b, {S(0), S(1), S(0)}, TriangleFeature::VertexB};
-  const S vc = d1 * d4 - d3 * d2;
-  if (vc <= S(0) && d1 >= S(0) && d3 <= S(0)) {
-    const S v = d1 / (d1 - d3);
-    return {t.a + v * ab, {S(1) - v, v, S(0)}, TriangleFeature::EdgeAB};
-  }
-  const Vec3<S> cp = p - t.c;
-  const S d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= S(0) && d5 <= d6) return {t.c, {S(0), S(0), S(1)}, TriangleFeature::VertexC};
-  const S vb = d5 * d2 - d1 * d6;
-  if (vb <= S(0) && d2 >= S(0) && d6 <= S(0)) {
-    const S w = d2 / (d2 - d6);
-    return {t.a + w * ac, {S(1) - w, S(0), w}, TriangleFeature::EdgeCA};
-  }
-  const S va = d3 * d6 - d5 * d4;
-  if (va <= S(0) && (d4 - d3) >= S(0) && (d5 - d6) >= S(0)) {
-    const S w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {t.b + w * (t.c - t.b), {S(0), S(1) - w, w}, TriangleFeature::EdgeBC};
-  }
-  const S denom = va + vb + vc;
-  if (!(denom > S(0)) && !(denom < S(0))) return {t.a, {S(1), S(0), S(0)}, TriangleFeature::VertexA};
-  const S v = vb / denom, w = vc / denom;
-  r.point = t.a + ab * v + ac * w;
-  r.barycentric = {S(1) - v - w, v, w};
-  r.feature = TriangleFeature::Face;
-  return r;
+  const TriangleClosestPoint<S> c = closest_point_on_triangle(p, t);
+  return {c.point, c.barycentric, c.feature};
 }
 
 /// Squared distance from p to a BV (0 inside); a lower bound of the distance to what it holds.
