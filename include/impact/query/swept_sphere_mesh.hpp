@@ -5,8 +5,9 @@
 /// vertex. Equivalently a ray against the mesh grown by r (each triangle becomes a slab capped by
 /// cylinders and spheres), traversed nearest first with every BV inflated by r.
 ///
-/// Contract. Exact up to rounding for faces (offset plane), edges (ray-cylinder) and vertices
-/// (ray-sphere); the capsule around a shared edge belongs to both triangles, so seams are closed.
+/// Contract. The leaf test is the narrow phase's sweep_sphere_triangle (narrow/sphere_triangle.hpp:
+/// faces by the offset plane, edges by ray-cylinder, vertices by ray-sphere, approximate to
+/// rounding); the capsule around a shared edge belongs to both triangles, so seams are closed.
 /// A sphere that already touches or overlaps a triangle at t = 0 hits it at t = 0 when it moves
 /// towards the triangle (velocity . normal < 0, normal from the triangle to the centre), and does
 /// not hit it when it moves away: starting in contact neither sticks nor tunnels.
@@ -14,6 +15,7 @@
 
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
+#include "impact/narrow/sphere_triangle.hpp"
 
 namespace impact {
 
@@ -29,107 +31,29 @@ template <class S> struct SweptSphereHit {
 
 namespace detail {
 
-/// Smallest root in [0, t_max] of a t^2 + 2 b t + c = 0 entering the region c(t) <= 0, for a > 0.
-/// Tangential grazing (a double root, up to rounding) is not a hit: the motion does not approach.
-template <class S> inline std::optional<S> entering_root(S a, S b, S c, S t_max) {
-  if (!(a > S(0))) return std::nullopt;
-  const S disc = b * b - a * c;
-  if (!(disc > S(64) * std::numeric_limits<S>::epsilon() * (b * b + std::abs(a * c)))) return std::nullopt;
-  const S t = (-b - std::sqrt(disc)) / a;
-  if (t < S(0) || t > t_max) return std::nullopt;
-  return t;
-}
-
-/// Swept sphere (centre o + t d, radius r > 0) against one triangle. See the file comment.
+/// Swept sphere (centre o + t d, t in [0, t_max], radius r > 0) against one triangle: the narrow
+/// phase's sweep_sphere_triangle with the library's contact rule on top. A sphere already
+/// touching the triangle at t = 0 hits only when it moves towards it (d . n < 0 beyond the
+/// rounding of the normal); touching and sliding along or moving away is no hit.
 template <class S>
 inline std::optional<SweptSphereHit<S>> swept_sphere_triangle(const Vec3<S>& o, const Vec3<S>& d, S r, const Triangle<S>& tri,
                                                               S t_max) {
-  SweptSphereHit<S> h;
-  const TrianglePoint<S> cp = closest_on_triangle(o, tri);
-  const Vec3<S> diff = o - cp.point;
-  const S dist2 = diff.squaredNorm();
-  if (dist2 <= r * r) {
-    Vec3<S> n;
-    S slack = S(0);  // rounding of the closest point tilts n; sliding along the surface is no hit
-    if (dist2 > S(0)) {
-      const S dist = std::sqrt(dist2);
-      n = diff / dist;
-      slack = S(64) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + cp.point.cwiseAbs().maxCoeff()) / dist;
-    } else {
-      n = tri.normal();
-      if (n.dot(d) > S(0)) n = -n;
-    }
-    if (!(d.dot(n) < -slack * d.norm())) return std::nullopt;
-    h.t = S(0);
-    h.point = cp.point;
-    h.normal = n;
-    h.feature = cp.feature;
-    return h;
+  const auto h = sweep_sphere_triangle(o, Vec3<S>(o + t_max * d), r, tri);
+  if (!h) return std::nullopt;
+  if (h->time == S(0)) {
+    const S dist = (o - h->point).norm();
+    const S slack = dist > S(0) ? S(64) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + h->point.cwiseAbs().maxCoeff()) / dist
+                                : S(0);
+    if (!(d.dot(h->normal) < -slack * d.norm())) return std::nullopt;
+  } else if (!(d.dot(h->normal) < S(0))) {
+    return std::nullopt;  // tangential grazing: the motion does not approach
   }
-  S best = t_max;
-  bool found = false;
-  // Face: the plane moved by r towards the origin's side.
-  const Vec3<S> n = tri.normal();
-  if (n.squaredNorm() > S(0)) {
-    const S sd = (o - tri.a).dot(n);
-    const Vec3<S> ns = sd >= S(0) ? n : Vec3<S>(-n);
-    const S dn = d.dot(ns);
-    if (dn < S(0)) {
-      const S t = (std::abs(sd) - r) / (-dn);
-      if (t >= S(0) && t <= best) {
-        const Vec3<S> p = o + t * d - r * ns;
-        // inside the triangle: same-sign edge tests against the wound normal
-        const bool in = n.dot((tri.b - tri.a).cross(p - tri.a)) >= S(0) && n.dot((tri.c - tri.b).cross(p - tri.b)) >= S(0) &&
-                        n.dot((tri.a - tri.c).cross(p - tri.c)) >= S(0);
-        if (in) {
-          h.t = t;
-          h.point = p;
-          h.normal = ns;
-          h.feature = TriangleFeature::Face;
-          return h;  // the face is the outermost part of the grown triangle: nothing is hit before it
-        }
-      }
-    }
-  }
-  const S dd = d.squaredNorm();
-  // Edges: cylinders of radius r around each edge, within the edge's length.
-  for (int k = 0; k < 3; ++k) {
-    const Vec3<S>& p = tri[k];
-    const Vec3<S> e = tri[(k + 1) % 3] - p;
-    const S ee = e.squaredNorm();
-    if (!(ee > S(0))) continue;
-    const Vec3<S> m = o - p;
-    const S md = m.dot(d), me = m.dot(e), de = d.dot(e);
-    // |(m + t d) x e|^2 / ee = r^2  ->  quadratic in t
-    const S a = dd * ee - de * de;
-    const S b = md * ee - me * de;
-    const S c = m.squaredNorm() * ee - me * me - r * r * ee;
-    const auto t = entering_root(a, b, c, best);
-    if (!t) continue;
-    const S s = (me + *t * de) / ee;
-    if (s < S(0) || s > S(1)) continue;
-    best = *t;
-    found = true;
-    h.t = *t;
-    h.point = p + s * e;
-    h.feature = static_cast<TriangleFeature>(static_cast<int>(TriangleFeature::EdgeAB) + k);
-  }
-  // Vertices: spheres of radius r.
-  for (int k = 0; k < 3; ++k) {
-    const Vec3<S> m = o - tri[k];
-    const auto t = entering_root(dd, m.dot(d), m.squaredNorm() - r * r, best);
-    if (!t) continue;
-    best = *t;
-    found = true;
-    h.t = *t;
-    h.point = tri[k];
-    h.feature = static_cast<TriangleFeature>(static_cast<int>(TriangleFeature::VertexA) + k);
-  }
-  if (!found) return std::nullopt;
-  const Vec3<S> c = o + h.t * d - h.point;
-  const S cn = c.norm();
-  h.normal = cn > S(0) ? Vec3<S>(c / cn) : Vec3<S>(-d.normalized());
-  return h;
+  SweptSphereHit<S> out;
+  out.t = h->time * t_max;
+  out.point = h->point;
+  out.normal = h->normal;
+  out.feature = h->feature;
+  return out;
 }
 
 }  // namespace detail
