@@ -44,12 +44,10 @@ void traverse_nearest(const Bvh<BV>& tree, Key&& key, Bound&& bound, Visit&& vis
   if (tree.empty()) return;
   const std::optional<S> k0 = key(tree.root().bv);
   if (!k0) return;
-  std::vector<std::pair<S, std::int32_t>> stack;
-  stack.reserve(64);
-  stack.push_back({*k0, 0});
+  detail::TraversalStack<std::pair<S, std::int32_t>, 128> stack;  // no allocation per query
+  stack.push({*k0, 0});
   while (!stack.empty()) {
-    const auto [d, i] = stack.back();
-    stack.pop_back();
+    const auto [d, i] = stack.pop();
     if (!(d <= bound())) continue;
     const auto& node = tree.nodes[static_cast<std::size_t>(i)];
     if (node.is_leaf()) {
@@ -61,16 +59,16 @@ void traverse_nearest(const Bvh<BV>& tree, Key&& key, Bound&& bound, Visit&& vis
     const auto kr = key(tree.nodes[node.right()].bv);
     if (kl && kr) {
       if (*kl <= *kr) {
-        stack.push_back({*kr, node.right()});
-        stack.push_back({*kl, node.left()});
+        stack.push({*kr, node.right()});
+        stack.push({*kl, node.left()});
       } else {
-        stack.push_back({*kl, node.left()});
-        stack.push_back({*kr, node.right()});
+        stack.push({*kl, node.left()});
+        stack.push({*kr, node.right()});
       }
     } else if (kl) {
-      stack.push_back({*kl, node.left()});
+      stack.push({*kl, node.left()});
     } else if (kr) {
-      stack.push_back({*kr, node.right()});
+      stack.push({*kr, node.right()});
     }
   }
 }
