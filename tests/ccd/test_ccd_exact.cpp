@@ -19,20 +19,12 @@
 #include <cstdio>
 #include <random>
 
+#include "support/sanitizer.hpp"
+
 namespace {
 
 // Sanitizer builds (CI runs ASan + UBSan) are about 10x slower: run a quarter of the queries.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_UNDEFINED__)
-constexpr int kCountDivisor = 4;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(undefined_behavior_sanitizer)
-constexpr int kCountDivisor = 4;
-#else
-constexpr int kCountDivisor = 1;
-#endif
-#else
-constexpr int kCountDivisor = 1;
-#endif
+constexpr int kCountDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 using impact::test::ExactAnswer;
 using impact::test::IntCcdQuery;

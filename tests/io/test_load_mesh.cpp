@@ -30,14 +30,8 @@
 using namespace impact;
 namespace fs = std::filesystem;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define IMPACT_TEST_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define IMPACT_TEST_ASAN 1
-#endif
-#endif
-#ifdef IMPACT_TEST_ASAN
+#include "support/sanitizer.hpp"
+#if IMPACT_TEST_SANITIZED
 // assimp 5.2 leaks memory on some of its own error paths (the mutated files below reach them).
 // The leaks are inside libassimp, not in impact: LeakSanitizer is told to ignore that module.
 extern "C" __attribute__((used)) const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }

@@ -11,6 +11,7 @@
 #include "support/data.hpp"
 #include "support/fcl_oracle.hpp"
 #include "support/poses.hpp"
+#include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,11 +22,7 @@ using namespace impact::test;
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr int kPoses = 1000;  // instrumented builds: fewer poses, same code paths
-#else
-constexpr int kPoses = 10000;
-#endif
+constexpr int kPoses = IMPACT_TEST_SANITIZED ? 1000 : 10000;  // instrumented builds: fewer poses, same code paths
 
 struct Counts {
   int colliding = 0, mismatches = 0;

@@ -12,16 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define IMPACT_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define IMPACT_TEST_SANITIZED 1
-#endif
-#endif
-#ifndef IMPACT_TEST_SANITIZED
-#define IMPACT_TEST_SANITIZED 0
-#endif
+#include "support/sanitizer.hpp"
 
 // Fewer samples under the sanitizers (CI), the full count in Release.
 constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;

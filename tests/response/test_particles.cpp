@@ -18,16 +18,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define IMPACT_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define IMPACT_TEST_SANITIZED 1
-#endif
-#endif
-#ifndef IMPACT_TEST_SANITIZED
-#define IMPACT_TEST_SANITIZED 0
-#endif
+#include "support/sanitizer.hpp"
 
 namespace impact {
 namespace {
