@@ -39,6 +39,22 @@ extern "C" __attribute__((used)) const char* __lsan_default_suppressions() { ret
 
 namespace {
 
+/// Loads `path`: either a valid mesh (counted in loaded) or InvalidInput whose message names the
+/// path (counted in rejected); any other outcome fails the test.
+template <class S> void load_or_reject(const std::string& path, int& loaded, int& rejected) {
+  try {
+    const auto m = load_mesh<S>(path);
+    EXPECT_NO_THROW(validate_mesh(m)) << path;
+    ++loaded;
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    ++rejected;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << path << ": unexpected exception type: " << e.what();
+  }
+}
+
+
 // ---------------------------------------------------------------------------------------------
 // helpers
 
@@ -599,16 +615,7 @@ TEST(LoadMeshErrors, MutatedFilesLoadOrThrowInvalidInput) {
       }
       if (below(4) == 0) bytes.resize(below(bytes.size()));
       const std::string path = tmp.write("mutant" + std::to_string(file++) + "." + ext, bytes);
-      try {
-        const auto m = load_mesh<double>(path);
-        EXPECT_NO_THROW(validate_mesh(m)) << path;
-        ++loaded;
-      } catch (const InvalidInput& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-        ++rejected;
-      } catch (const std::exception& e) {
-        ADD_FAILURE() << path << ": unexpected exception type: " << e.what();
-      }
+      load_or_reject<double>(path, loaded, rejected);
     }
   }
   EXPECT_GT(rejected, 0);
@@ -630,16 +637,7 @@ TEST(LoadMesh, AssimpTestModelsLoadOrThrowInvalidInput) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (!exts.count(ext)) continue;
     const std::string path = entry.path().string();
-    try {
-      const auto m = load_mesh<float>(path);
-      EXPECT_NO_THROW(validate_mesh(m)) << path;
-      ++loaded;
-    } catch (const InvalidInput& e) {
-      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-      ++rejected;
-    } catch (const std::exception& e) {
-      ADD_FAILURE() << path << ": unexpected exception type: " << e.what();
-    }
+    load_or_reject<float>(path, loaded, rejected);
   }
   EXPECT_GT(loaded, 50) << rejected << " rejected";
 }

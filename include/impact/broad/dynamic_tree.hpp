@@ -200,7 +200,7 @@ class DynamicTree {
       if (!(ni.active | nj.active)) continue;
       ++st.bv_tests;
       if (!overlap(ni.box, nj.box)) continue;
-      if (!descend(i, j, stack))
+      if (!descend(*this, *this, i, j, stack))
         if (!visit(ni.object(), nj.object())) return false;
     }
     return true;
@@ -220,16 +220,8 @@ class DynamicTree {
       if (!(ni.active | nj.active)) continue;
       ++st.bv_tests;
       if (!overlap(ni.box, nj.box)) continue;
-      const bool li = ni.is_leaf(), lj = nj.is_leaf();
-      if (li && lj) {
+      if (!descend(*this, other, i, j, stack))
         if (!visit(ni.object(), nj.object())) return false;
-      } else if (lj || (!li && size(ni.box) >= size(nj.box))) {
-        stack.push({ni.child[1], j});
-        stack.push({ni.child[0], j});
-      } else {
-        stack.push({i, nj.child[1]});
-        stack.push({i, nj.child[0]});
-      }
     }
     return true;
   }
@@ -297,9 +289,11 @@ class DynamicTree {
 
   /// Pushes the children pairs of (i, j) when one of them is inner; returns false for two leaves.
   template <class Stack>
-  bool descend(std::int32_t i, std::int32_t j, Stack& stack) const {
-    const Node& ni = node(i);
-    const Node& nj = node(j);
+  /// Pushes the children of the larger of node i (of tree a) and node j (of tree b), or of the
+  /// inner one when the other is a leaf; false when both are leaves.
+  static bool descend(const DynamicTree& a, const DynamicTree& b, std::int32_t i, std::int32_t j, Stack& stack) {
+    const Node& ni = a.node(i);
+    const Node& nj = b.node(j);
     const bool li = ni.is_leaf(), lj = nj.is_leaf();
     if (li && lj) return false;
     if (lj || (!li && size(ni.box) >= size(nj.box))) {

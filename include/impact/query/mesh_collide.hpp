@@ -133,14 +133,9 @@ CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const
     const Triangle<S> tb_a(b_to_a.apply(tb.a), b_to_a.apply(tb.b), b_to_a.apply(tb.c));
     if (!triangles_intersect(ta, tb_a)) return true;
     result.colliding = true;
-    if (!options.all_pairs) {
-      result.pairs.emplace_back(a.triangle_id(p), b.triangle_id(q));
-      if (options.contacts) result.contacts.push_back(detail::make_contact(ta, tb_a, pose_a, a.triangle_id(p), b.triangle_id(q)));
-      return false;
-    }
     result.pairs.emplace_back(a.triangle_id(p), b.triangle_id(q));
     if (options.contacts) result.contacts.push_back(detail::make_contact(ta, tb_a, pose_a, a.triangle_id(p), b.triangle_id(q)));
-    return result.pairs.size() < options.max_pairs;
+    return options.all_pairs && result.pairs.size() < options.max_pairs;  // boolean mode stops here
   };
   traverse_pair_nodes(a.tree(), b.tree(), overlap, visit);
   return result;
