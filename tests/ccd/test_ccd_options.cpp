@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace {
@@ -92,6 +94,7 @@ TYPED_TEST(CcdOptionsTest, BudgetGivesConservativeHit) {
   using S = TypeParam;
   impact::CcdOptions o;
   o.max_iterations = 1;
+  o.recheck_iterations = 0;
   // A clear miss that needs a few boxes to exclude: reported as a hit at the earliest time not
   // excluded, flagged.
   auto r = falling_point<S>(S(0.6), S(0.6), S(1), S(-1), o);
@@ -99,6 +102,17 @@ TYPED_TEST(CcdOptionsTest, BudgetGivesConservativeHit) {
   EXPECT_TRUE(r.budget_exhausted);
   EXPECT_EQ(r.toi, S(0));
   EXPECT_EQ(r.iterations, 1);
+  // The re-check of that hit, with its own budget, proves the miss; with too small a budget
+  // of its own the conservative hit stands.
+  o.recheck_iterations = 1;
+  r = falling_point<S>(S(0.6), S(0.6), S(1), S(-1), o);
+  EXPECT_TRUE(r.hit);
+  EXPECT_TRUE(r.budget_exhausted);
+  o.recheck_iterations = 1000;
+  r = falling_point<S>(S(0.6), S(0.6), S(1), S(-1), o);
+  EXPECT_FALSE(r.hit);
+  EXPECT_FALSE(r.budget_exhausted);
+  EXPECT_GT(r.recheck_iterations, 1);
   // With enough budget the same query is a miss.
   o.max_iterations = 100000;
   r = falling_point<S>(S(0.6), S(0.6), S(1), S(-1), o);
@@ -109,6 +123,32 @@ TYPED_TEST(CcdOptionsTest, BudgetGivesConservativeHit) {
     o.max_iterations = budget;
     r = falling_point<S>(S(0.25), S(0.25), S(1), S(-1), o);
     EXPECT_TRUE(r.hit);
+    EXPECT_LE(r.toi, S(0.5));
+  }
+}
+
+TYPED_TEST(CcdOptionsTest, RecheckSeparatesNearMisses) {
+  using S = TypeParam;
+  impact::CcdOptions plain, checked;
+  plain.recheck_iterations = 0;
+  // Near misses, each closer than the tolerance: through the plane 2^-60 outside the edge x = 0
+  // (far below double rounding of the search), and 2^-23 and one ulp outside the hypotenuse
+  // x + y = 1. The search alone reports hits; the re-check proves the misses.
+  const S ulp_half = std::numeric_limits<S>::epsilon() / 2;  // ulp(0.5)
+  const S cases[3][2] = {{-std::ldexp(S(1), -60), S(0.25)}, {S(0.5) + std::ldexp(S(1), -23), S(0.5)}, {S(0.5) + ulp_half, S(0.5)}};
+  for (const auto& c : cases) {
+    auto r = falling_point<S>(c[0], c[1], S(1), S(-1), plain);
+    EXPECT_TRUE(r.hit) << c[0] << " " << c[1];
+    r = falling_point<S>(c[0], c[1], S(1), S(-1), checked);
+    EXPECT_FALSE(r.hit) << c[0] << " " << c[1];
+    EXPECT_FALSE(r.budget_exhausted);
+    EXPECT_EQ(r.toi, S(1));
+  }
+  // Exact contacts stay hits: through the edge x = 0, the hypotenuse, and a vertex.
+  const S contacts[3][2] = {{S(0), S(0.25)}, {S(0.5), S(0.5)}, {S(1), S(0)}};
+  for (const auto& c : contacts) {
+    const auto r = falling_point<S>(c[0], c[1], S(1), S(-1), checked);
+    EXPECT_TRUE(r.hit) << c[0] << " " << c[1];
     EXPECT_LE(r.toi, S(0.5));
   }
 }

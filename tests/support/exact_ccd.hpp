@@ -10,7 +10,8 @@
 // there is no contact for t in [0, 1]) or gives up (Unknown) after a budget or at depth 60 per
 // variable. Besides the given directions, each box also tries integer approximations of the
 // plane normal and of a separating direction at the box's start time (any integer n is valid). Bounds:
-// |coordinate| < 2^53 and |n_i| < 2^41 keep every value below 2^300 (the integers have 320 bits).
+// |coordinate| < 2^53, depth <= 60 and |n_i| <= 2^61 keep every value below 2^301 (the integers have
+// 320 bits): corner values of F stay below 2^237, each product with n_i below 2^298.
 #pragma once
 
 #include <algorithm>
@@ -138,7 +139,7 @@ inline std::array<BigInt, 3> corner(const IntCcdQuery& q, std::int64_t T, int A,
 }  // namespace detail_exact
 
 /// Tries to prove that the closed primitives never touch for t in [0, 1] (distance 0; no minimum
-/// separation). `directions`: optional integer directions n (each |n_i| < 2^41) whose n . F is
+/// separation). `directions`: optional integer directions n (each |n_i| <= 2^61) whose n . F is
 /// also used to exclude boxes, e.g. the normal of a plane of coplanar motion. NoContact is a
 /// proof; Unknown means the budget (boxes) or the depth limit ran out.
 inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<std::array<std::int64_t, 3>>& directions = {},
@@ -197,7 +198,7 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
       auto to_int = [](const long double* v, std::array<std::int64_t, 3>& out) {
         const long double m = std::max({std::fabs(v[0]), std::fabs(v[1]), std::fabs(v[2])});
         if (m > 0)
-          for (int i = 0; i < 3; ++i) out[std::size_t(i)] = (std::int64_t)std::llround(v[i] / m * 1099511627776.0L);  // 2^40
+          for (int i = 0; i < 3; ++i) out[std::size_t(i)] = (std::int64_t)std::llround(v[i] / m * 2305843009213693952.0L);  // 2^61
       };
       to_int(nn, nb);
       to_int(mm, mb);

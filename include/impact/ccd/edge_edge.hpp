@@ -31,7 +31,7 @@ CcdResult<S> edge_edge_ccd(const Vec3<S>& a0_t0, const Vec3<S>& a1_t0, const Vec
   detail::ccd_load(a0_t0, a1_t0, b0_t0, b1_t0, a);
   detail::ccd_load(a0_t1, a1_t1, b0_t1, b1_t1, b);
   detail::ccd_check(a, b, opt);
-  return detail::ccd_result_cast<S>(detail::inclusion_ccd<false>(a, b, opt));
+  return detail::ccd_result_cast<S>(detail::ccd_query<false>(a, b, opt));
 }
 
 }  // namespace impact

@@ -30,7 +30,7 @@ CcdResult<S> vertex_face_ccd(const Vec3<S>& p0, const Vec3<S>& f00, const Vec3<S
   detail::ccd_load(p0, f00, f10, f20, a);
   detail::ccd_load(p1, f01, f11, f21, b);
   detail::ccd_check(a, b, opt);
-  return detail::ccd_result_cast<S>(detail::inclusion_ccd<true>(a, b, opt));
+  return detail::ccd_result_cast<S>(detail::ccd_query<true>(a, b, opt));
 }
 
 }  // namespace impact

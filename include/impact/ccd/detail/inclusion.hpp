@@ -27,6 +27,7 @@
 /// (reassociation) void the guarantee.
 #pragma once
 
+#include "impact/ccd/detail/double_double.hpp"
 #include "impact/ccd/options.hpp"
 #include "impact/core/config.hpp"
 
@@ -49,36 +50,64 @@ struct CcdBoxLater {
   bool operator()(const CcdBox& a, const CcdBox& b) const { return a.t0 > b.t0 || (a.t0 == b.t0 && a.depth < b.depth); }
 };
 
-/// The four moving points of a query in double: x0 at t = 0 and dx = x1 - x0 (rounded),
-/// with the per-axis magnitude bound and error bound.
-struct CcdQuery {
-  double x0[4][3];
-  double dx[4][3];
+/// Absolute floor of the error bounds, covering underflow of products (far below any real input).
+inline constexpr double kCcdTinyError = 1e-290;
+
+/// The arithmetic the search runs in: double for the search itself, DoubleDouble for the re-check
+/// of hits. `value_exponent`: the corner values of F are within 2^value_exponent m of exact (m the
+/// magnitude bound); `direction_exponent`: the same for n . F, relative to sum |n_i| m_i.
+/// With u the unit roundoff of one operation (2^-53 for double, 2^-103 for DoubleDouble, see
+/// double_double.hpp), the moving point x0 + t (x1 - x0) is within 5 u m of exact, the differences
+/// and products of either formulation add at most 45 u m more (all intermediates stay below 6 m),
+/// and a dot product with n adds 3 u sum |n_i| m_i. The bounds used, 512 u m and 1024 u sum |n_i|
+/// m_i, leave a margin of 10x, which also covers the rounding of lo - err and of |n_i| to double.
+template <class T> struct CcdArith;
+template <> struct CcdArith<double> {
+  static constexpr int value_exponent = -44;      // 512 * 2^-53
+  static constexpr int direction_exponent = -43;  // 1024 * 2^-53
+  static double difference(double a, double b) { return a - b; }
+  static double approx(double x) { return x; }
+  static double abs(double x) { return std::abs(x); }
+};
+template <> struct CcdArith<DoubleDouble> {
+  static constexpr int value_exponent = -94;      // 512 * 2^-103
+  static constexpr int direction_exponent = -93;  // 1024 * 2^-103
+  static DoubleDouble difference(double a, double b) { return DoubleDouble::difference(a, b); }  // exact
+  static double approx(const DoubleDouble& x) { return x.approx(); }
+  static DoubleDouble abs(const DoubleDouble& x) { return detail::abs(x); }
+};
+
+/// The four moving points of a query: x0 at t = 0 and dx = x1 - x0 (rounded in double, exact in
+/// DoubleDouble), with the per-axis magnitude bound and error bound.
+template <class T> struct CcdQuery {
+  T x0[4][3];
+  T dx[4][3];
   double mag[3];  ///< max |coordinate| over the 8 input points, per axis
   double err[3];  ///< bound on |computed - exact| of any corner value of F, per axis
 };
 
-/// Absolute floor of the error bounds, covering underflow of products (far below any real input).
-inline constexpr double kCcdTinyError = 1e-290;
-
 /// Forward error bound of one component of F at any (t, u, v) in [0,1]^3 computed as in
-/// ccd_eval_box from coordinates bounded by m in magnitude. With u = 2^-53 the unit roundoff,
-/// the moving point x0 + t fl(x1 - x0) is within 5 u m of exact, the differences and products of
-/// either formulation add at most 45 u m more (all intermediates stay below 6 m). The bound used
-/// here, 2^-44 m = 512 u m, leaves a margin of 10x, which also covers the rounding of lo - err.
-inline double error_bound(double m) { return std::ldexp(m, -44) + kCcdTinyError; }
+/// ccd_corners from coordinates bounded by m in magnitude (see CcdArith).
+template <class T> inline double error_bound(double m) { return std::ldexp(m, CcdArith<T>::value_exponent) + kCcdTinyError; }
 
-inline CcdQuery make_ccd_query(const double (&p0)[4][3], const double (&p1)[4][3]) {
-  CcdQuery q{};
+template <class T> inline CcdQuery<T> make_ccd_query(const double (&p0)[4][3], const double (&p1)[4][3]) {
+  CcdQuery<T> q{};
   for (int i = 0; i < 3; ++i) q.mag[i] = 0.0;
   for (int k = 0; k < 4; ++k)
     for (int i = 0; i < 3; ++i) {
       q.x0[k][i] = p0[k][i];
-      q.dx[k][i] = p1[k][i] - p0[k][i];
+      q.dx[k][i] = CcdArith<T>::difference(p1[k][i], p0[k][i]);
       q.mag[i] = std::max(q.mag[i], std::max(std::abs(p0[k][i]), std::abs(p1[k][i])));
     }
-  for (int i = 0; i < 3; ++i) q.err[i] = error_bound(q.mag[i]);
+  for (int i = 0; i < 3; ++i) q.err[i] = error_bound<T>(q.mag[i]);
   return q;
+}
+
+/// Whether the parameters u, v >= 0 of a box corner satisfy u + v <= 1 exactly.
+inline bool in_triangle(double u, double v) {
+  double s, e;
+  two_sum(u, v, s, e);
+  return s < 1.0 || (s == 1.0 && e <= 0.0);
 }
 
 /// Number of extra exclusion directions per box (besides the three axes).
@@ -93,17 +122,19 @@ inline constexpr int kCcdDirections = 3;
 ///  - F at that centre itself: near the closest approach it is the direction of the separation, so
 ///    n . F > d |n| is a tight test against a minimum separation d > 0.
 /// Any direction gives a valid exclusion; these are chosen to make it effective.
-template <bool VertexFace>
-inline void ccd_corners(const CcdQuery& q, const CcdBox& b, double (&f)[8][3], double (&dir)[kCcdDirections][3]) {
+template <bool VertexFace, class T>
+inline void ccd_corners(const CcdQuery<T>& q, const CcdBox& b, T (&f)[8][3], T (&dir)[kCcdDirections][3]) {
+  using A = CcdArith<T>;
   const double ts[2] = {b.t0, b.t1};
   const double us[2] = {b.u0, b.u1};
   const double vs[2] = {b.v0, b.v1};
-  double edge[3] = {0.0, 0.0, 0.0};
+  T edge[3];
+  double best = 0.0;
   for (int it = 0; it < 2; ++it) {
-    double x[4][3];
+    T x[4][3];
     for (int k = 0; k < 4; ++k)
       for (int i = 0; i < 3; ++i) x[k][i] = q.x0[k][i] + ts[it] * q.dx[k][i];
-    double e0[3], e1[3], e2[3];
+    T e0[3], e1[3], e2[3];
     if constexpr (VertexFace) {
       for (int i = 0; i < 3; ++i) {
         e0[i] = x[0][i] - x[1][i];
@@ -126,39 +157,52 @@ inline void ccd_corners(const CcdQuery& q, const CcdBox& b, double (&f)[8][3], d
       dir[0][0] = e1[1] * e2[2] - e1[2] * e2[1];
       dir[0][1] = e1[2] * e2[0] - e1[0] * e2[2];
       dir[0][2] = e1[0] * e2[1] - e1[1] * e2[0];
-      const double l1 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-      const double l2 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
-      double best = l1;
+      // the longest edge, chosen in double (any choice is valid)
+      auto len2 = [](const T (&e)[3]) {
+        double l = 0.0;
+        for (int i = 0; i < 3; ++i) l += A::approx(e[i]) * A::approx(e[i]);
+        return l;
+      };
+      best = len2(e1);
       for (int i = 0; i < 3; ++i) edge[i] = e1[i];
-      if (l2 > best) {
-        best = l2;
+      if (len2(e2) > best) {
+        best = len2(e2);
         for (int i = 0; i < 3; ++i) edge[i] = e2[i];
       }
       if constexpr (VertexFace) {
-        const double e3[3] = {e2[0] - e1[0], e2[1] - e1[1], e2[2] - e1[2]};
-        if (e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2] > best)
+        T e3[3];
+        for (int i = 0; i < 3; ++i) e3[i] = e2[i] - e1[i];
+        if (len2(e3) > best) {
+          best = len2(e3);
           for (int i = 0; i < 3; ++i) edge[i] = e3[i];
+        }
       }
     }
   }
   // F at the centre of the start face is the mean of its 4 corners (multilinearity).
-  double fc[3];
+  T fc[3];
   for (int i = 0; i < 3; ++i) fc[i] = 0.25 * ((f[0][i] + f[1][i]) + (f[2][i] + f[3][i]));
-  const double ee = edge[0] * edge[0] + edge[1] * edge[1] + edge[2] * edge[2];
-  const double s = ee > 0.0 ? (fc[0] * edge[0] + fc[1] * edge[1] + fc[2] * edge[2]) / ee : 0.0;
+  double s = 0.0;
+  if (best > 0.0) {
+    for (int i = 0; i < 3; ++i) s += A::approx(fc[i]) * A::approx(edge[i]);
+    s /= best;
+  }
   for (int i = 0; i < 3; ++i) {
     dir[1][i] = fc[i] - s * edge[i];
     dir[2][i] = fc[i];
   }
 }
 
-/// The search. p0/p1: the 4 points at t = 0 and t = 1 (vertex-face: p, f0, f1, f2; edge-edge:
-/// a0, a1, b0, b1). Preconditions: finite coordinates below 1e100 in magnitude, d >= 0,
-/// 0 < t_max <= 1.
-template <bool VertexFace>
+/// The search in arithmetic T (double, or DoubleDouble for the re-check). p0/p1: the 4 points at
+/// t = 0 and t = 1 (vertex-face: p, f0, f1, f2; edge-edge: a0, a1, b0, b1). Preconditions: finite
+/// coordinates below 1e100 in magnitude, d >= 0, 0 < t_max <= 1. Besides the tolerance, a corner
+/// is accepted when rounding alone keeps it from being proved farther than d away (a single point
+/// cannot be split further), which is what ends the re-check on real contacts.
+template <bool VertexFace, class T = double>
 inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
+  using A = CcdArith<T>;
   constexpr int kFunctions = 3 + kCcdDirections;
-  const CcdQuery q = make_ccd_query(p0, p1);
+  const CcdQuery<T> q = make_ccd_query<T>(p0, p1);
   const double d = opt.min_separation;
   const double eps = std::numeric_limits<double>::epsilon();
   const double d2 = d * d * (1.0 + 32.0 * eps);
@@ -179,9 +223,10 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
     ++it;
 
     // hv[c][j]: corner c of exclusion function j (F_x, F_y, F_z, then dir_k . F).
-    double f[8][3], dir[kCcdDirections][3], hv[8][kFunctions];
+    T f[8][3], dir[kCcdDirections][3], hv[8][kFunctions];
     ccd_corners<VertexFace>(q, b, f, dir);
-    double lo[kFunctions], hi[kFunctions], err[kFunctions], thr[kFunctions];
+    T lo[kFunctions], hi[kFunctions];
+    double err[kFunctions], thr[kFunctions];
     for (int c = 0; c < 8; ++c) {
       for (int i = 0; i < 3; ++i) hv[c][i] = f[c][i];
       for (int k = 0; k < kCcdDirections; ++k) hv[c][3 + k] = dir[k][0] * f[c][0] + dir[k][1] * f[c][1] + dir[k][2] * f[c][2];
@@ -198,11 +243,12 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
       thr[i] = d;
     }
     for (int k = 0; k < kCcdDirections; ++k) {
-      const double* n = dir[k];
+      const double n[3] = {A::approx(dir[k][0]), A::approx(dir[k][1]), A::approx(dir[k][2])};
       // n . F is multilinear too (n is fixed on the box); error: |n|_1-weighted F error plus the
-      // rounding of the dot product, below 2^-43 sum |n_i| mag_i (see error_bound).
-      err[3 + k] =
-          std::ldexp(std::abs(n[0]) * q.mag[0] + std::abs(n[1]) * q.mag[1] + std::abs(n[2]) * q.mag[2], -43) + kCcdTinyError;
+      // rounding of the dot product (see CcdArith).
+      err[3 + k] = std::ldexp(std::abs(n[0]) * q.mag[0] + std::abs(n[1]) * q.mag[1] + std::abs(n[2]) * q.mag[2],
+                              A::direction_exponent) +
+                   kCcdTinyError;
       // |F| <= d implies |n . F| <= d |n|.
       thr[3 + k] = d > 0.0 ? d * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * (1.0 + 16.0 * eps) : 0.0;
     }
@@ -211,26 +257,36 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
     bool excluded = false;
     double gap[3];
     for (int j = 0; j < kFunctions; ++j) {
-      const double l = lo[j] - err[j], h = hi[j] + err[j];
-      const double g = l > 0.0 ? l : (h < 0.0 ? -h : 0.0);
-      if (j < 3) gap[j] = g;
-      excluded = excluded || g > thr[j];
+      const T l = lo[j] - err[j], h = hi[j] + err[j];
+      const T g = l > T(0.0) ? l : (h < T(0.0) ? -h : T(0.0));
+      if (j < 3) gap[j] = A::approx(g);
+      excluded = excluded || g > T(thr[j]);
     }
     if (!excluded && d > 0.0) excluded = gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2] > d2;
     if (excluded) continue;
 
     // Acceptance: a corner of the start face, inside the domain, where the primitives are within
-    // d + tolerance. Every earlier time is excluded, so toi = t0 is conservative.
+    // d + tolerance (or not provably farther than d: see above). Every earlier time is excluded,
+    // so toi = t0 is conservative.
     const double tm = 0.5 * (b.t0 + b.t1), um = 0.5 * (b.u0 + b.u1), vm = 0.5 * (b.v0 + b.v1);
     // Or the whole box is within the tolerance in every component: since it is not excluded,
     // every point of it is then within d + sqrt(3) tolerance (this is what ends the search when
     // d > 0, where the distance only grazes d at the first contact).
     int accept = -1;
-    if (hi[0] - lo[0] <= opt.tolerance && hi[1] - lo[1] <= opt.tolerance && hi[2] - lo[2] <= opt.tolerance) accept = 0;
+    if (A::approx(hi[0] - lo[0]) <= opt.tolerance && A::approx(hi[1] - lo[1]) <= opt.tolerance &&
+        A::approx(hi[2] - lo[2]) <= opt.tolerance)
+      accept = 0;
     for (int c = 0; c < 4 && accept < 0; ++c) {
       const double cu = (c >> 1) ? b.u1 : b.u0, cv = (c & 1) ? b.v1 : b.v0;
-      if (VertexFace && cu + cv > 1.0) continue;
-      if (f[c][0] * f[c][0] + f[c][1] * f[c][1] + f[c][2] * f[c][2] <= acc) accept = c;
+      if (VertexFace && !in_triangle(cu, cv)) continue;
+      double n2 = 0.0, m2 = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        const double x = A::approx(f[c][i]);
+        const double m = std::max(std::abs(x) - err[i], 0.0);
+        n2 += x * x;
+        m2 += m * m;
+      }
+      if (n2 <= acc || m2 <= d2) accept = c;
     }
     const bool can_t = tm > b.t0 && tm<b.t1, can_u = um> b.u0 && um<b.u1, can_v = vm> b.v0 && vm < b.v1;
     const bool budget = it >= opt.max_iterations;
@@ -240,18 +296,21 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
       r.u = accept >= 0 ? ((accept >> 1) ? b.u1 : b.u0) : um;
       r.v = accept >= 0 ? ((accept & 1) ? b.v1 : b.v0) : vm;
       if (VertexFace && r.u + r.v > 1.0) {
-        const double s = r.u + r.v;
-        r.u /= s;
-        r.v /= s;
+        const double sum = r.u + r.v;
+        r.u /= sum;
+        r.v /= sum;
       }
       r.budget_exhausted = budget && accept < 0;
       r.iterations = it;
       return r;
     }
-    // Split choice. F is multilinear, so the corner values of both halves of a split are the
-    // parent's corners and the midpoints of its edges (averages). Prefer the variable whose split
-    // lets a half be excluded right away (this is what makes sliding and collinear contacts
-    // cheap); otherwise halve the variable along which F varies most.
+    // Split choice (heuristic, in double). F is multilinear, so the corner values of both halves
+    // of a split are the parent's corners and the midpoints of its edges (averages). Prefer the
+    // variable whose split lets a half be excluded right away (this is what makes sliding and
+    // collinear contacts cheap); otherwise halve the variable along which F varies most.
+    double hd[8][kFunctions];
+    for (int c = 0; c < 8; ++c)
+      for (int j = 0; j < kFunctions; ++j) hd[c][j] = A::approx(hv[c][j]);
     double wdim[3] = {0.0, 0.0, 0.0};
     int excl[3] = {0, 0, 0};
     for (int k = 0; k < 3; ++k) {
@@ -261,7 +320,7 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
         double l0 = std::numeric_limits<double>::infinity(), h0 = -l0, l1 = l0, h1 = -l0, lm = l0, hm = -l0;
         for (int c = 0; c < 8; ++c) {
           if (c & bit) continue;
-          const double x0 = hv[c][j], x1 = hv[c | bit][j], xm = 0.5 * (x0 + x1);
+          const double x0 = hd[c][j], x1 = hd[c | bit][j], xm = 0.5 * (x0 + x1);
           l0 = std::min(l0, x0), h0 = std::max(h0, x0);
           l1 = std::min(l1, x1), h1 = std::max(h1, x1);
           lm = std::min(lm, xm), hm = std::max(hm, xm);
@@ -299,6 +358,46 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
   return r;
 }
 
+/// The test: the search in double, then, for a hit, the re-check in DoubleDouble without the
+/// tolerance (CcdOptions::recheck_iterations), which turns the hit into a miss when it proves that
+/// no contact happens; otherwise the double search's answer stands.
+template <bool VertexFace>
+inline CcdResult<double> ccd_query(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
+  CcdResult<double> r = inclusion_ccd<VertexFace>(p0, p1, opt);
+  if (!r.hit || opt.recheck_iterations <= 0) return r;
+  CcdOptions fine = opt;
+  fine.tolerance = 0.0;
+  fine.max_iterations = opt.recheck_iterations;
+  CcdResult<double> c;
+  if constexpr (VertexFace) {
+    // The boxes cover u + v <= 1 only up to the hypotenuse, which boxes cannot resolve near a
+    // near miss just outside it. Put the triangle vertex nearest to the hit at f0, so that the
+    // edges next to the hit are the axes u = 0 and v = 0, which boxes resolve exactly.
+    const double w[3] = {1.0 - r.u - r.v, r.u, r.v};
+    const int k = w[1] > w[0] && w[1] >= w[2] ? 1 : (w[2] > w[0] && w[2] > w[1] ? 2 : 0);
+    double q0[4][3], q1[4][3];
+    for (int i = 0; i < 3; ++i) {
+      q0[0][i] = p0[0][i];
+      q1[0][i] = p1[0][i];
+      for (int j = 0; j < 3; ++j) {
+        q0[1 + j][i] = p0[1 + (k + j) % 3][i];
+        q1[1 + j][i] = p1[1 + (k + j) % 3][i];
+      }
+    }
+    c = inclusion_ccd<VertexFace, DoubleDouble>(q0, q1, fine);
+  } else {
+    c = inclusion_ccd<VertexFace, DoubleDouble>(p0, p1, fine);
+  }
+  r.recheck_iterations = c.iterations;
+  if (!c.hit) {
+    r.hit = false;
+    r.toi = opt.t_max;
+    r.u = r.v = 0.0;
+    r.budget_exhausted = false;
+  }
+  return r;
+}
+
 /// Copies four Vec3-like points into a plain array of doubles.
 template <class P>
 inline void ccd_load(const P& a, const P& b, const P& c, const P& e, double (&out)[4][3]) {
@@ -322,6 +421,7 @@ inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
   o.v = static_cast<S>(r.v);
   o.budget_exhausted = r.budget_exhausted;
   o.iterations = r.iterations;
+  o.recheck_iterations = r.recheck_iterations;
   return o;
 }
 
