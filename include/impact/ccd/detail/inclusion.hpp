@@ -27,6 +27,7 @@
 /// (reassociation) void the guarantee.
 #pragma once
 
+#include "impact/ccd/detail/contact_proof.hpp"
 #include "impact/ccd/detail/double_double.hpp"
 #include "impact/ccd/options.hpp"
 #include "impact/core/config.hpp"
@@ -358,13 +359,15 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
   return r;
 }
 
-/// The test: the search in double, then, for a hit, the re-check in DoubleDouble without the
-/// tolerance (CcdOptions::recheck_iterations), which turns the hit into a miss when it proves that
-/// no contact happens; otherwise the double search's answer stands.
+/// The test: the search in double, then, for a hit that is not proved real (contact_proof.hpp),
+/// the re-check in DoubleDouble without the tolerance (CcdOptions::recheck_iterations), which
+/// turns the hit into a miss when it proves that no contact happens; otherwise the double
+/// search's answer stands.
 template <bool VertexFace>
 inline CcdResult<double> ccd_query(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
   CcdResult<double> r = inclusion_ccd<VertexFace>(p0, p1, opt);
   if (!r.hit || opt.recheck_iterations <= 0) return r;
+  if (!r.budget_exhausted && ccd_prove_contact<VertexFace>(p0, p1, opt, r.toi, r.u, r.v)) return r;  // a real contact
   CcdOptions fine = opt;
   fine.tolerance = 0.0;
   fine.max_iterations = opt.recheck_iterations;
