@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 // impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T]
-//                  [--max-iterations N] [--repeat R] [--generated N] [--no-sweep]
+//                  [--max-iterations N] [--recheck N] [--repeat R] [--generated N] [--no-sweep]
 // Runs vertex_face_ccd and edge_edge_ccd over CCD query files with exact ground truth and reports,
 // per file and in total, for each kind: queries, positives, false positives, false negatives and
-// the mean, p99 and max time per query in microseconds; then a sweep of tolerance and minimum
-// separation against time and false positives. Each DIR is searched recursively for
+// the mean, p99 and max time per query in microseconds; then a sweep of tolerance, minimum
+// separation and re-check budget (--recheck N sets CcdOptions::recheck_iterations; 0 is the
+// double-precision search alone) against time and false positives. Each DIR is searched recursively for
 // .../vertex-face/*.csv and .../edge-edge/*.csv; without DIR it reads $IMPACT_DATA_DIR/ccd-queries,
 // and without that it generates queries (constructed contacts with known truth, and random ones
 // whose truth is unknown and not counted in FP/FN). The time of a query is the minimum over R
@@ -14,6 +15,7 @@
 #include "impact/ccd/vertex_face.hpp"
 #include "support/ccd_queries.hpp"
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -192,6 +194,8 @@ int main(int argc, char** argv) {
       opt.tolerance = std::stod(next());
     else if (a == "--max-iterations")
       opt.max_iterations = std::stoll(next());
+    else if (a == "--recheck")
+      opt.recheck_iterations = std::stoll(next());
     else if (a == "--repeat")
       g_repeat = std::max(1, std::stoi(next()));
     else if (a == "--generated")
@@ -200,8 +204,8 @@ int main(int argc, char** argv) {
       sweep = false;
     else if (a == "--help" || a == "-h") {
       std::printf(
-          "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--repeat R] "
-          "[--generated N] [--no-sweep]\n");
+          "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--recheck N] "
+          "[--repeat R] [--generated N] [--no-sweep]\n");
       return 0;
     } else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
@@ -231,8 +235,9 @@ int main(int argc, char** argv) {
     generate(generated ? generated : 2000, sets);
   }
 
-  std::printf("tolerance %g, min_separation %g, max_iterations %lld, time = min of %d runs per query\n", opt.tolerance,
-              opt.min_separation, static_cast<long long>(opt.max_iterations), g_repeat);
+  std::printf("tolerance %g, min_separation %g, max_iterations %lld, recheck_iterations %lld, time = min of %d runs per query\n",
+              opt.tolerance, opt.min_separation, static_cast<long long>(opt.max_iterations),
+              static_cast<long long>(opt.recheck_iterations), g_repeat);
   std::printf("%-52s %-12s %8s %9s %6s %6s %10s %10s %10s\n", "file", "kind", "queries", "positives", "FP", "FN", "mean_us",
               "p99_us", "max_us");
   std::vector<std::string> results, totals, sweeps;
@@ -251,25 +256,34 @@ int main(int argc, char** argv) {
   }
 
   if (sweep) {
-    std::printf("\nsweep: time and false positives against tolerance and min separation (FN = misses of d = 0 contacts)\n");
-    std::printf("%10s %14s %-12s %8s %6s %6s %10s %10s %10s\n", "tolerance", "min_sep", "kind", "queries", "FP", "FN", "mean_us",
-                "p99_us", "max_us");
+    std::printf(
+        "\nsweep: time and false positives against tolerance, min separation and re-check budget (FN = misses of d = 0 "
+        "contacts)\n");
+    std::printf("%10s %14s %8s %-12s %8s %6s %6s %10s %10s %10s\n", "tolerance", "min_sep", "recheck", "kind", "queries", "FP", "FN",
+                "mean_us", "p99_us", "max_us");
     struct P {
       double tol, d;
+      std::int64_t recheck;
     };
-    const P grid[] = {{1e-3, 0}, {1e-4, 0},    {1e-5, 0},    {1e-6, 0},    {1e-7, 0},
-                      {1e-8, 0}, {1e-6, 1e-8}, {1e-6, 1e-6}, {1e-6, 1e-4}, {1e-6, 1e-3}};
+    const std::int64_t rc = opt.recheck_iterations;
+    const P grid[] = {{1e-3, 0, rc},    {1e-4, 0, rc},    {1e-5, 0, rc},    {1e-6, 0, rc},    {1e-7, 0, rc},
+                      {1e-8, 0, rc},    {1e-6, 0, 0},     {1e-8, 0, 0},     {1e-6, 0, 100},   {1e-6, 0, 1600},
+                      {1e-6, 1e-8, rc}, {1e-6, 1e-6, rc}, {1e-6, 1e-4, rc}, {1e-6, 1e-3, rc}};
     for (const P& g : grid)
       for (const std::string kind : {"vertex-face", "edge-edge"}) {
         impact::CcdOptions o = opt;
         o.tolerance = g.tol;
         o.min_separation = g.d;
+        o.recheck_iterations = g.recheck;
         const Row r = total(sets, kind, o);
         if (r.queries == 0) continue;
-        std::printf("%10.0e %14.0e %-12s %8zu %6zu %6zu %10.3f %10.3f %10.3f\n", g.tol, g.d, kind.c_str(), r.queries, r.fp, r.fn,
-                    r.mean, r.p99, r.max);
+        std::printf("%10.0e %14.0e %8lld %-12s %8zu %6zu %6zu %10.3f %10.3f %10.3f\n", g.tol, g.d, static_cast<long long>(g.recheck),
+                    kind.c_str(), r.queries, r.fp, r.fn, r.mean, r.p99, r.max);
         impact::bench::JsonObject j;
-        j.add("tolerance", g.tol).add("min_separation", g.d).raw("row", json_row(r, false));
+        j.add("tolerance", g.tol)
+            .add("min_separation", g.d)
+            .add("recheck_iterations", static_cast<long long>(g.recheck))
+            .raw("row", json_row(r, false));
         sweeps.push_back(j.str());
       }
   }
@@ -279,6 +293,7 @@ int main(int argc, char** argv) {
     o.add("tolerance", opt.tolerance)
         .add("min_separation", opt.min_separation)
         .add("max_iterations", static_cast<long long>(opt.max_iterations))
+        .add("recheck_iterations", static_cast<long long>(opt.recheck_iterations))
         .raw("results", impact::bench::JsonObject::array(results))
         .raw("totals", impact::bench::JsonObject::array(totals))
         .raw("sweep", impact::bench::JsonObject::array(sweeps));

@@ -228,9 +228,13 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
     ccd_corners<VertexFace>(q, b, f, dir);
     T lo[kFunctions], hi[kFunctions];
     double err[kFunctions], thr[kFunctions];
+    // The directions, rounded to double (any direction is valid; this one is used exactly).
+    double nd[kCcdDirections][3];
+    for (int k = 0; k < kCcdDirections; ++k)
+      for (int i = 0; i < 3; ++i) nd[k][i] = A::approx(dir[k][i]);
     for (int c = 0; c < 8; ++c) {
       for (int i = 0; i < 3; ++i) hv[c][i] = f[c][i];
-      for (int k = 0; k < kCcdDirections; ++k) hv[c][3 + k] = dir[k][0] * f[c][0] + dir[k][1] * f[c][1] + dir[k][2] * f[c][2];
+      for (int k = 0; k < kCcdDirections; ++k) hv[c][3 + k] = f[c][0] * nd[k][0] + f[c][1] * nd[k][1] + f[c][2] * nd[k][2];
     }
     for (int j = 0; j < kFunctions; ++j) {
       lo[j] = hi[j] = hv[0][j];
@@ -244,7 +248,7 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
       thr[i] = d;
     }
     for (int k = 0; k < kCcdDirections; ++k) {
-      const double n[3] = {A::approx(dir[k][0]), A::approx(dir[k][1]), A::approx(dir[k][2])};
+      const double* n = nd[k];
       // n . F is multilinear too (n is fixed on the box); error: |n|_1-weighted F error plus the
       // rounding of the dot product (see CcdArith).
       err[3 + k] = std::ldexp(std::abs(n[0]) * q.mag[0] + std::abs(n[1]) * q.mag[1] + std::abs(n[2]) * q.mag[2],
