@@ -20,8 +20,11 @@ namespace impact {
 /// than the first contact, and (u, v) with the contact points a0 + u (a1 - a0), b0 + v (b1 - b0).
 /// Method: best-first subdivision of (t, u, v) with an exact-range inclusion of the trilinear
 /// F(t, u, v) = a0 + u (a1 - a0) - b0 - v (b1 - b0) and rigorous floating-point error bounds
-/// (detail/inclusion.hpp). float inputs are computed in double. Cost: at most opt.max_iterations
-/// boxes (about 0.1 us each); on exhaustion a conservative hit is reported.
+/// (detail/inclusion.hpp); a hit is then either proved real (detail/contact_proof.hpp) or
+/// re-checked in double-double arithmetic, which turns near misses into misses
+/// (CcdOptions::recheck_iterations). float inputs are computed in double. Cost: at most
+/// opt.max_iterations boxes (about 0.1 us each; on exhaustion a conservative hit is reported),
+/// plus at most opt.recheck_iterations double-double boxes (about 1 us each) for a hit.
 template <class S>
 CcdResult<S> edge_edge_ccd(const Vec3<S>& a0_t0, const Vec3<S>& a1_t0, const Vec3<S>& b0_t0, const Vec3<S>& b1_t0,
                            const Vec3<S>& a0_t1, const Vec3<S>& a1_t1, const Vec3<S>& b0_t1, const Vec3<S>& b1_t1,

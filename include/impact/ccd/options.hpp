@@ -15,22 +15,27 @@ struct CcdOptions {
   double min_separation = 0.0;
   /// The tests look at t in [0, t_max], 0 < t_max <= 1 (t = 1 is the end of the step).
   double t_max = 1.0;
-  /// Bounds the false positives: a hit is only reported once the search has found a time toi,
+  /// Bounds the false positives of the search: it reports a hit once it has found a time toi,
   /// with every earlier time excluded, at which the primitives are within
   /// min_separation + 2 tolerance (up to rounding, about 1e-15 times the coordinate magnitude).
-  /// Smaller is tighter and slower. Never affects the no-false-negative guarantee.
+  /// Smaller gives a later (tighter) toi and is slower; the re-check below then decides whether
+  /// such a hit is a real contact. Never affects the no-false-negative guarantee.
   double tolerance = 1e-6;
   /// Work budget: the number of (t, u, v) boxes the search may examine. When it runs out the test
   /// reports a hit at the earliest time not yet excluded, with CcdResult::budget_exhausted set.
   /// A box costs about 0.1-0.5 us, so the default bounds a query to well under a millisecond; the
   /// query files of the benchmark need at most about 600 boxes at the default tolerance.
   std::int64_t max_iterations = 2000;
-  /// Re-check of hits: a hit found by the search above is searched again in double-double
-  /// arithmetic (about 106 bits) without the tolerance, for at most this many boxes; when that
-  /// search excludes every time, the answer becomes a miss. This removes the false positives of
-  /// near misses closer than the tolerance, including those closer than double rounding can
-  /// separate (about 1e-15 times the coordinates). A box costs about 1 us here, so a hit costs up
-  /// to about this many microseconds more; misses cost nothing more. 0 disables the re-check.
+  /// Re-check of hits. A hit of the search is first tested for a proof of a real contact (a
+  /// simple root of the contact equations inside the domain, proved in interval arithmetic: the
+  /// usual transversal contact, a few microseconds). Otherwise it is searched again in
+  /// double-double arithmetic (about 106 bits) without the tolerance, for at most this many
+  /// boxes; when that search excludes every time, the answer becomes a miss. This removes the
+  /// false positives of near misses closer than the tolerance, including those closer than
+  /// double rounding can separate (about 1e-15 times the coordinates). A box costs about 1 us,
+  /// so an unproved hit (a contact exactly on an edge or vertex, tangential or coplanar, or a
+  /// near miss) costs up to about 0.5 ms more by default; misses cost nothing more. 0 disables
+  /// the re-check (the double search alone).
   std::int64_t recheck_iterations = 400;
 };
 
@@ -40,7 +45,9 @@ struct CcdOptions {
 /// - hit == true: toi is never later than the first time at which the primitives come within
 ///   min_separation (if they do at all), and at time toi the primitives are within
 ///   min_separation + 2 tolerance of each other (except when budget_exhausted, which only
-///   promises that no contact happens before toi). Near misses closer than that are hits.
+///   promises that no contact happens before toi). Near misses closer than that are hits only
+///   when the re-check (CcdOptions::recheck_iterations) can neither prove the contact nor
+///   exclude it within its budget.
 template <class S>
 struct CcdResult {
   bool hit = false;
@@ -51,9 +58,11 @@ struct CcdResult {
   /// Unless budget_exhausted, the primitives' points at (toi, u, v) are within
   /// min_separation + 2 tolerance of each other.
   S u = S(0), v = S(0);
-  /// The budget ran out: toi is the earliest time not yet excluded, the hit may be false.
+  /// The search's budget ran out (and the re-check did not settle the query): toi is the earliest
+  /// time not yet excluded, the hit may be false.
   bool budget_exhausted = false;
-  /// Number of (t, u, v) boxes examined by the search, and by the re-check of a hit.
+  /// Number of (t, u, v) boxes examined by the search, and by the re-check of a hit (0 when the
+  /// hit was proved real or there was no hit).
   std::int64_t iterations = 0;
   std::int64_t recheck_iterations = 0;
 };

@@ -20,8 +20,11 @@ namespace impact {
 /// no later than the first contact, and (u, v) with the contact point (1-u-v) f0 + u f1 + v f2.
 /// Method: best-first subdivision of (t, u, v) with an exact-range inclusion of the trilinear
 /// F(t, u, v) = p - f0 - u (f1 - f0) - v (f2 - f0) and rigorous floating-point error bounds
-/// (detail/inclusion.hpp). float inputs are computed in double. Cost: at most opt.max_iterations
-/// boxes (about 0.1 us each); on exhaustion a conservative hit is reported.
+/// (detail/inclusion.hpp); a hit is then either proved real (detail/contact_proof.hpp) or
+/// re-checked in double-double arithmetic, which turns near misses into misses
+/// (CcdOptions::recheck_iterations). float inputs are computed in double. Cost: at most
+/// opt.max_iterations boxes (about 0.1 us each; on exhaustion a conservative hit is reported),
+/// plus at most opt.recheck_iterations double-double boxes (about 1 us each) for a hit.
 template <class S>
 CcdResult<S> vertex_face_ccd(const Vec3<S>& p0, const Vec3<S>& f00, const Vec3<S>& f10, const Vec3<S>& f20, const Vec3<S>& p1,
                              const Vec3<S>& f01, const Vec3<S>& f11, const Vec3<S>& f21, const CcdOptions& opt = {}) {
