@@ -37,15 +37,17 @@ template <class BV, class Enter, class Visit> bool traverse(const Bvh<BV>& tree,
 /// std::optional<S>` gives a lower bound of what can be found inside a node (entry distance of a
 /// ray, distance to a point), or nullopt to skip it; nodes whose key is not below the current
 /// `bound()` are skipped. `visit(primitive_id)` tests a primitive and may lower the bound it shares
-/// with `bound`; it returns false to stop. Children are entered nearer first.
+/// with `bound`; it returns false to stop. Children are entered nearer first. `start` (the root by
+/// default) restricts the walk to that node's subtree: the caller guarantees nothing outside it
+/// can be found.
 template <class BV, class Key, class Bound, class Visit>
-void traverse_nearest(const Bvh<BV>& tree, Key&& key, Bound&& bound, Visit&& visit) {
+void traverse_nearest(const Bvh<BV>& tree, Key&& key, Bound&& bound, Visit&& visit, std::int32_t start = 0) {
   using S = typename BvTraits<BV>::Scalar;
   if (tree.empty()) return;
-  const std::optional<S> k0 = key(tree.root().bv);
+  const std::optional<S> k0 = key(tree.nodes[static_cast<std::size_t>(start)].bv);
   if (!k0) return;
   detail::TraversalStack<std::pair<S, std::int32_t>, 128> stack;  // no allocation per query
-  stack.push({*k0, 0});
+  stack.push({*k0, start});
   while (!stack.empty()) {
     const auto [d, i] = stack.pop();
     if (!(d <= bound())) continue;

@@ -125,11 +125,14 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
 /// the world by `pose`. A segment p -> q is the ray (p, q - p, 1). Returns nothing when the ray
 /// misses or the direction is zero. Ties between triangles at the same t (a shared edge) return
 /// one of them. Cost O(log n) for rays that pass near few triangles.
+///
+/// `start_node` (the root by default) restricts the search to one subtree of mesh.tree(): the
+/// caller guarantees that every triangle the ray can hit lies in it (e.g. DistanceGrid::start_node).
 template <class BV>
 std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh,
                                                                             const Ray<typename BvTraits<BV>::Scalar>& ray,
                                                                             const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
-                                                                            RayMeshStats* stats = nullptr) {
+                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
   using S = typename BvTraits<BV>::Scalar;
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
@@ -165,7 +168,8 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
           best_bary = Vec3<S>(h->u, h->v, h->w);
         }
         return true;
-      });
+      },
+      start_node);
   if (best_leaf < 0) return std::nullopt;
   RayMeshHit<S> hit;
   hit.t = best;
