@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// DistanceGrid: conservative lower bounds of the (unsigned) distance from any point to a triangle
+/// mesh, from a regular grid of samples taken once. Each cell stores a lower bound of the distance
+/// from its centre c to the mesh; since the distance is 1-Lipschitz, dist(p) >= value(c) - |p - c|
+/// for every point p and every cell, so one array read answers "how far is the surface at least"
+/// in O(1), where a tree query costs O(log n) cache misses. Made for clearance tests such as the
+/// particle free ball (response/particle_step.hpp), which skip exact queries for anything that
+/// provably stays away from the surface.
+///
+/// Numerical contract: conservative. The samples are closest_point_on_mesh distances, shrunk by
+/// 64 ulps relative plus 64 ulps of the scene's size (more than the query's rounding) and rounded
+/// down to float for storage; lower_bound() shrinks its own rounding the same way. The bound is
+/// never above the true distance; it is below it by at most about the cell's half diagonal plus
+/// the margins for points inside the grid, and is 0 (useless, still valid) where the mesh passes.
+/// The mesh must not move or deform relative to the frame the grid was built in (rebuild it).
+///
+/// Start nodes (optional, DistanceGridConfig::start_node_reach > 0): each cell also keeps the
+/// deepest node of the mesh's tree whose subtree holds every triangle whose bounding box meets the
+/// cell grown by the reach (or a mark that there is none). start_node(o, e) returns it for a
+/// segment whose (padded) box lies in that grown cell, so a short ray cast can skip the top of the
+/// tree, or the whole mesh; exact: the skipped triangles cannot meet the segment's box.
+#pragma once
+
+#include "impact/bvh/mesh_bvh.hpp"
+#include "impact/query/closest_point_mesh.hpp"
+#include "impact/query/ray_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace impact {
+
+/// Options of a DistanceGrid.
+template <class S>
+struct DistanceGridConfig {
+  /// Cells along the longest side of the mesh's bounding box (>= 1); memory is about
+  /// 4 * resolution^3 * (the box's volume / the longest side's cube) bytes.
+  int resolution = 64;
+  /// Cells added around the mesh's bounding box on every side (>= 0): tighter bounds just outside.
+  int padding = 2;
+  /// Samples farther than this from the mesh store this value (a valid lower bound); bounding the
+  /// build's closest-point queries makes it faster. Infinity: exact samples everywhere.
+  S max_distance = std::numeric_limits<S>::infinity();
+  /// Start nodes for segments of up to this many cells around their start cell; 0: none.
+  S start_node_reach = S(1);
+};
+
+/// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
+/// Build cost: one bounded closest-point query and one box query per cell; memory 8 bytes per cell.
+template <class S>
+class DistanceGrid {
+ public:
+  DistanceGrid() = default;
+
+  /// Samples the distance to `mesh` (its local frame) on a grid over its bounding box.
+  template <class BV>
+  explicit DistanceGrid(const MeshBvh<BV>& mesh, const DistanceGridConfig<S>& cfg = {}) {
+    static_assert(std::is_same_v<typename BvTraits<BV>::Scalar, S>, "DistanceGrid: scalar of the mesh");
+    Aabb<S> box;
+    const auto& V = mesh.mesh().V;
+    for (Eigen::Index i = 0; i < V.rows(); ++i) box.extend(Vec3<S>(V.row(i).transpose()));
+    const int res = std::max(cfg.resolution, 1), pad = std::max(cfg.padding, 0);
+    const Vec3<S> ext = box.extent();
+    h_ = std::max(ext.maxCoeff() / S(res), std::numeric_limits<S>::min() * S(1e6));
+    inv_h_ = S(1) / h_;
+    for (int k = 0; k < 3; ++k) {
+      n_[k] = std::max(1, static_cast<int>(std::ceil(ext[k] / h_))) + 2 * pad;
+      origin_[k] = box.center()[k] - S(0.5) * h_ * S(n_[k]);
+    }
+    const S eps = std::numeric_limits<S>::epsilon();
+    const S scale = box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).maxCoeff() + S(2 * pad) * h_;
+    cells_.resize(static_cast<std::size_t>(n_[0]) * static_cast<std::size_t>(n_[1]) * static_cast<std::size_t>(n_[2]));
+    reach_ = cfg.start_node_reach > S(0) ? cfg.start_node_reach * h_ : S(0);
+    const auto& tree = mesh.tree();
+    std::vector<std::pair<std::int32_t, std::int32_t>> range;  // primitive range of each subtree
+    if (reach_ > S(0)) range = subtree_ranges(tree);
+    ClosestPointOptions<S> opt;
+    opt.max_distance = cfg.max_distance;
+    std::size_t idx = 0;
+    for (int z = 0; z < n_[2]; ++z)
+      for (int y = 0; y < n_[1]; ++y)
+        for (int x = 0; x < n_[0]; ++x, ++idx) {
+          const Vec3<S> c = center(x, y, z);
+          const auto r = closest_point_on_mesh(mesh, c, RigidTransform<S>(), opt);
+          S d = r ? r->distance : cfg.max_distance;
+          d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
+          cells_[idx].bound = round_down(d);
+          cells_[idx].node = reach_ > S(0) ? deepest_node(tree, range, grown_cell(c, S(4) * eps * scale)) : 0;
+        }
+  }
+
+  /// A lower bound (>= 0) of the distance from p (mesh frame) to the mesh. O(1): one read.
+  S lower_bound(const Vec3<S>& p) const {
+    if (cells_.empty()) return S(0);
+    int i[3];
+    cell_of(p, i);  // any cell gives a valid bound
+    const S v = S(cells_[index(i[0], i[1], i[2])].bound);
+    const Vec3<S> c = center(i[0], i[1], i[2]);
+    const S eps = std::numeric_limits<S>::epsilon();
+    const S b = (v - (p - c).norm()) * (S(1) - S(64) * eps) - S(64) * eps * (p.cwiseAbs().maxCoeff() + c.cwiseAbs().maxCoeff());
+    return b > S(0) ? b : S(0);
+  }
+
+  /// The node of the mesh's tree to start a ray cast along the segment o -> e from (mesh frame):
+  /// every triangle whose box meets the segment's box (padded as ray_mesh_first_hit pads it) is
+  /// in its subtree. 0 (the root) when the segment leaves its start cell's reach or start nodes
+  /// are off; kNoTriangle when no triangle can meet the segment. O(1).
+  std::int32_t start_node(const Vec3<S>& o, const Vec3<S>& e) const {
+    if (cells_.empty() || !(reach_ > S(0))) return 0;
+    int i[3];
+    cell_of(o, i);
+    const Aabb<S> q = grown_cell(center(i[0], i[1], i[2]), S(0));
+    const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+    const Vec3<S> lo = o.cwiseMin(e).array() - pad, hi = o.cwiseMax(e).array() + pad;
+    if (!((lo.array() >= q.min.array()).all() && (hi.array() <= q.max.array()).all())) return 0;
+    return cells_[index(i[0], i[1], i[2])].node;
+  }
+  /// start_node() when no triangle can be met.
+  static constexpr std::int32_t kNoTriangle = -1;
+
+  bool empty() const { return cells_.empty(); }
+  /// Edge length of the (cubic) cells.
+  S cell_size() const { return h_; }
+  /// Cells along x, y, z.
+  Eigen::Vector3i dims() const { return {n_[0], n_[1], n_[2]}; }
+  /// Centre of cell (x, y, z), computed the same way by the build and by lower_bound().
+  Vec3<S> center(int x, int y, int z) const {
+    return {origin_[0] + (S(x) + S(0.5)) * h_, origin_[1] + (S(y) + S(0.5)) * h_, origin_[2] + (S(z) + S(0.5)) * h_};
+  }
+  /// The stored bound at the centre of cell (x, y, z).
+  S value(int x, int y, int z) const { return S(cells_[index(x, y, z)].bound); }
+  std::size_t memory_bytes() const { return cells_.size() * sizeof(Cell); }
+
+ private:
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * static_cast<std::size_t>(n_[1]) + static_cast<std::size_t>(y)) *
+               static_cast<std::size_t>(n_[0]) +
+           static_cast<std::size_t>(x);
+  }
+  void cell_of(const Vec3<S>& p, int* i) const {
+    for (int k = 0; k < 3; ++k) {
+      const S u = (p[k] - origin_[k]) * inv_h_;  // clamped into the grid
+      i[k] = u >= S(n_[k] - 1) ? n_[k] - 1 : (u >= S(1) ? static_cast<int>(u) : 0);
+    }
+  }
+  /// The cell around centre c grown by the reach, and by `extra` more (the build's safety margin).
+  Aabb<S> grown_cell(const Vec3<S>& c, S extra) const {
+    const S g = S(0.5) * h_ + reach_ + extra;
+    return {c.array() - g, c.array() + g};
+  }
+  template <class BV>
+  static std::vector<std::pair<std::int32_t, std::int32_t>> subtree_ranges(const Bvh<BV>& tree) {
+    std::vector<std::pair<std::int32_t, std::int32_t>> r(tree.nodes.size());
+    for (std::size_t j = tree.nodes.size(); j-- > 0;) {  // children come after their parent
+      const auto& n = tree.nodes[j];
+      if (n.is_leaf())
+        r[j] = {n.first, n.first + n.count - 1};
+      else
+        r[j] = {r[static_cast<std::size_t>(n.left())].first, r[static_cast<std::size_t>(n.right())].second};
+    }
+    return r;
+  }
+  /// Deepest node whose subtree holds every primitive whose box meets q (leaf positions are
+  /// primitive ids in a MeshBvh), or kNoTriangle.
+  template <class BV>
+  static std::int32_t deepest_node(const Bvh<BV>& tree, const std::vector<std::pair<std::int32_t, std::int32_t>>& range,
+                                   const Aabb<S>& q) {
+    std::int32_t lo = std::numeric_limits<std::int32_t>::max(), hi = -1;
+    traverse(
+        tree, [&](const BV& bv) { return detail::may_overlap(q, bv); },
+        [&](std::int32_t k) {
+          lo = std::min(lo, k);
+          hi = std::max(hi, k);
+          return true;
+        });
+    if (hi < 0) return kNoTriangle;
+    std::int32_t n = 0;
+    for (;;) {
+      const auto& node = tree.nodes[static_cast<std::size_t>(n)];
+      if (node.is_leaf()) return n;
+      const auto& l = range[static_cast<std::size_t>(node.left())];
+      const auto& r = range[static_cast<std::size_t>(node.right())];
+      if (l.first <= lo && hi <= l.second)
+        n = node.left();
+      else if (r.first <= lo && hi <= r.second)
+        n = node.right();
+      else
+        return n;
+    }
+  }
+  static float round_down(S d) {
+    if (!(d > S(0))) return 0.0f;
+    float f = static_cast<float>(d);
+    if (S(f) > d) f = std::nextafter(f, 0.0f);
+    return f;
+  }
+
+  Vec3<S> origin_ = Vec3<S>::Zero();
+  S h_ = S(1), inv_h_ = S(1);
+  S reach_ = S(0);
+  int n_[3] = {0, 0, 0};
+  struct Cell {
+    float bound;        // lower bound of the distance at the centre
+    std::int32_t node;  // start node, or kNoTriangle
+  };
+  std::vector<Cell> cells_;
+};
+
+}  // namespace impact
