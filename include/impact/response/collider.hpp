@@ -36,6 +36,7 @@
 #include "impact/geometry/sphere.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/query/closest_point_mesh.hpp"
+#include "impact/query/distance_grid.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/swept_sphere_mesh.hpp"
 #include "impact/response/contact.hpp"
@@ -370,6 +371,11 @@ template <class BV> struct MeshCollider {
   ColliderMotion<S> motion;
   Material<S> material;
   Strategy strategy = Strategy::Inherit;
+  /// Optional distance bounds to this mesh in its local frame (not owned; must outlive the
+  /// collider and match the mesh): backtracking then refreshes free balls in O(1) from it
+  /// instead of walking the tree (StepOptions::free_ball_factor), and point particles' ray casts
+  /// start from its start nodes (same hits, shorter walks).
+  const DistanceGrid<S>* distance_grid = nullptr;
 
   MeshCollider() = default;
   explicit MeshCollider(const MeshBvh<BV>& m, ColliderSide sd = ColliderSide::TwoSided, const Material<S>& mat = {})
@@ -385,7 +391,12 @@ template <class BV> struct MeshCollider {
       if (!h) return std::nullopt;
       return LocalHit<S>{h->t, h->point, h->normal};
     }
-    const auto h = ray_mesh_first_hit(*mesh, Ray<S>(o, d, t_max));
+    std::int32_t start = 0;
+    if (distance_grid) {
+      start = distance_grid->start_node(o, Vec3<S>(o + t_max * d));
+      if (start == DistanceGrid<S>::kNoTriangle) return std::nullopt;
+    }
+    const auto h = ray_mesh_first_hit(*mesh, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start);
     if (!h) return std::nullopt;
     return LocalHit<S>{h->t, h->point, h->front_face ? h->normal : Vec3<S>(-h->normal)};
   }

@@ -32,8 +32,10 @@
 /// Projection cannot see thin geometry crossed within one step: that is what backtracking is for.
 ///
 /// Speed: legs that stay inside a particle's free ball (Particle::free_radius, a conservative
-/// clearance from the static meshes) skip the mesh ray casts (StepOptions::free_ball_factor), and
-/// spatial_order() gives a cache-friendly order for large particle sets.
+/// clearance from the static meshes) skip the mesh ray casts (StepOptions::free_ball_factor); a
+/// DistanceGrid on a mesh collider (query/distance_grid.hpp) makes the clearance O(1) and starts
+/// the remaining ray casts deep in the tree; spatial_order() gives a cache-friendly order for
+/// large particle sets.
 ///
 /// The offset is scale-aware: offset_ulps * epsilon(S) * (|x|_inf + collider scale + |chord|_inf)
 /// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
@@ -71,10 +73,12 @@ template <class S> struct StepOptions {
   /// Absolute surface offset; used instead of offset_ulps when > 0.
   S surface_offset = S(0);
   /// Free-ball cache (Particle::free_radius) for static meshes under backtracking: when a leg
-  /// leaves the particle's free ball, a new ball, at most free_ball_factor times the leg's length,
-  /// is found from a lower bound of the distance to the meshes (refresh_free_ball); legs inside
-  /// the ball skip the mesh ray casts. Conservative (a leg is skipped only when no mesh surface
-  /// is within its reach); 0 disables it.
+  /// leaves the particle's free ball, a new ball around the leg's start is found from a lower
+  /// bound of the distance to the meshes (refresh_free_ball): in O(1) from a mesh's distance
+  /// grid when it has one (MeshCollider::distance_grid; then the leg is also clear when the
+  /// grid's balls around both of its ends cover it), else from the tree, at most
+  /// free_ball_factor times the leg's length. Legs inside the ball skip the mesh ray casts.
+  /// Conservative (a leg is skipped only when no mesh surface is within its reach); 0 disables it.
   S free_ball_factor = S(8);
 };
 
@@ -150,17 +154,26 @@ template <class C> struct IsMeshCollider : std::false_type {};
 template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 
 /// Refreshes the particle's free ball at its current centre x for a leg of length len: a ball
-/// around x, up to factor * len, clear of every static backtracking mesh. The radius is a cheap
-/// lower bound of the distance to each mesh: the walk descends only into nodes whose box
-/// contains x; any other node bounds its triangles by its box's distance, and the leaves that
-/// contain x give exact triangle distances. Conservative, O(depth) per mesh.
+/// around x clear of every static backtracking mesh. A mesh with a distance grid
+/// (MeshCollider::distance_grid) bounds it in O(1) from the grid, with no cap. Otherwise the
+/// radius is capped at factor * len and is a cheap lower bound of the distance: the walk descends
+/// only into nodes whose box contains x; any other node bounds its triangles by its box's
+/// distance, and the leaves that contain x give exact triangle distances. Conservative, O(depth)
+/// per mesh. Returns true when every mesh had a grid (the refresh was O(1)).
 template <class S, class BV>
-inline void refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
-  S R = opt.free_ball_factor * len + p.radius;  // bound on the distance of the centre to any surface
+inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
+  S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any surface
+  bool all_grids = true;
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     const RigidTransform<S>& P = c.motion.pose;
     const Vec3<S> q = P.R.transpose() * (x - P.t);
+    if (c.distance_grid) {
+      R = std::min(R, c.distance_grid->lower_bound(q));
+      continue;
+    }
+    all_grids = false;
+    R = std::min(R, opt.free_ball_factor * len + p.radius);
     traverse(
         c.mesh->tree(),
         [&](const BV& bv) {
@@ -182,6 +195,27 @@ inline void refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const Col
   R = R * (S(1) - S(64) * std::numeric_limits<S>::epsilon()) - S(64) * std::numeric_limits<S>::epsilon() * x.cwiseAbs().maxCoeff();
   p.free_center = x;
   p.free_radius = R > S(0) ? R : S(0);
+  return all_grids;
+}
+
+/// True when every static backtracking mesh (each with a distance grid) provably keeps the
+/// particle's segment x -> e clear: the balls around both ends whose radii are the grid's distance
+/// bounds minus the particle's radius cover the segment (their radii add up to its length).
+template <class S, class BV>
+inline bool grids_clear_segment(const Vec3<S>& x, const Vec3<S>& e, S len, S radius, const ColliderSet<S, BV>& colliders,
+                                const StepOptions<S>& opt) {
+  const S eps = std::numeric_limits<S>::epsilon();
+  for (const auto& c : colliders.meshes) {
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
+    if (!c.distance_grid) return false;
+    const RigidTransform<S>& P = c.motion.pose;
+    const S rx = c.distance_grid->lower_bound(P.R.transpose() * (x - P.t)) - radius;
+    const S re = c.distance_grid->lower_bound(P.R.transpose() * (e - P.t)) - radius;
+    if (!(rx > S(0) && re > S(0))) return false;
+    const S margin = S(64) * eps * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+    if (!(rx + re >= len + margin)) return false;
+  }
+  return true;
 }
 
 /// Time of impact within a leg of length `left` starting at x with velocity v and acceleration
@@ -262,15 +296,18 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
       const Vec3<S> e = x + d;
       const S R2 = p.free_radius * p.free_radius;
       auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
-      if (p.free_radius > S(0)) {
-        meshes_clear = in_ball(x) && in_ball(e);
+      if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
+        meshes_clear = true;
       } else if (p.free_radius < S(0) && in_ball(x)) {
-        // cooling down: the last refresh here found a surface too near to help, do not retry yet
+        // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
       } else {
         const S len = d.norm();
-        detail::refresh_free_ball(p, x, len, colliders, opt);
+        const bool cheap = detail::refresh_free_ball(p, x, len, colliders, opt);
         meshes_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
-        if (!meshes_clear) p.free_radius = -S(2) * len;  // a surface is near: retry two legs away
+        // grids: the balls at both ends may still cover the leg; trees: a surface is near, retry
+        // two legs away
+        if (!meshes_clear && cheap) meshes_clear = detail::grids_clear_segment(x, e, len, p.radius, colliders, opt);
+        if (!meshes_clear && !cheap) p.free_radius = -S(2) * len;
       }
     }
     std::optional<Contact<S>> hit;
