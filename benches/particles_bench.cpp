@@ -2,7 +2,8 @@
 // impact-particles-bench: particles against a triangle mesh, run time against error.
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
-//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--seed X] [--json FILE]
+//                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--grid G]
+//                          [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -18,7 +19,9 @@
 // --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache); --sort-every N
 // reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never);
 // --float runs everything in single precision (double by default); --leaf L sets the tree's
-// maximum leaf size (BuildConfig::leaf_size, 1 by default).
+// maximum leaf size (BuildConfig::leaf_size, 1 by default); --grid G gives the backtracking (and
+// reference) mesh collider a DistanceGrid of G cells along the box's longest side (64 by
+// default; 0: none), built once before the runs and not timed (its build time is printed).
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
 // escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
 // particle changed sides, or a particle outside the container), the mean and max distance to the
@@ -48,6 +51,7 @@ struct Args {
   int sort_every = 10;
   bool use_float = false;
   int leaf = 1;
+  int grid = 64;
   std::uint64_t seed = 1;
 };
 
@@ -207,7 +211,15 @@ template <class S> int run_all(const Args& a) {
     cs.boxes[0].strategy = Strategy::Backtrack;
     return cs;
   };
-  const auto cs_bt = scene(bvh, Strategy::Backtrack), cs_pr = scene(bvh, Strategy::Project), cs_naive = scene(flat, Strategy::Backtrack);
+  const double tg0 = thread_seconds();  // the grid's build: once per mesh, like the tree's
+  DistanceGridConfig<S> gcfg;
+  gcfg.resolution = a.grid;
+  const DistanceGrid<S> grid = a.grid > 0 ? DistanceGrid<S>(bvh, gcfg) : DistanceGrid<S>();
+  const double grid_seconds = thread_seconds() - tg0;
+  auto cs_bt = scene(bvh, Strategy::Backtrack);
+  if (a.grid > 0) cs_bt.meshes[0].distance_grid = &grid;
+
+  const auto cs_pr = scene(bvh, Strategy::Project), cs_naive = scene(flat, Strategy::Backtrack);
 
   const int n_ref = std::min(a.ref_particles, a.particles);
   const int n_naive = std::min(a.naive_particles, a.particles);
@@ -215,6 +227,9 @@ template <class S> int run_all(const Args& a) {
 
   std::printf("impact-particles-bench: %s, %d triangles, %d particles x %d steps, dt %g, speed %.3g (%.2f%% of the diagonal per step)\n",
               mesh_name.c_str(), mesh.num_triangles(), a.particles, a.steps, a.dt, speed, 100 * speed * a.dt / diag);
+  if (a.grid > 0)
+    std::printf("distance grid: %d cells along the longest side, %.1f MB, built in %.2f s (not timed)\n", a.grid, double(grid.memory_bytes()) / 1e6,
+                grid_seconds);
   const RunResult<S> ref = run(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, true, a.sort_every);
   const RunResult<S> bt = run(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
   const RunResult<S> pr = run(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, true, a.sort_every);
@@ -256,7 +271,7 @@ template <class S> int run_all(const Args& a) {
   if (!a.json.empty()) {
     bench::JsonObject top;
     top.add("bench", "impact-particles-bench").add("mesh", mesh_name).add("triangles", mesh.num_triangles()).add("dt", a.dt);
-    top.add("substeps", a.substeps).add("diagonal", diag);
+    top.add("substeps", a.substeps).add("diagonal", diag).add("grid", a.grid).add("grid_build_s", grid_seconds);
     top.raw("rows", bench::JsonObject::array(items));
     if (!bench::write_file(a.json, top.str())) {
       std::fprintf(stderr, "impact-particles-bench: cannot write %s\n", a.json.c_str());
@@ -271,7 +286,8 @@ int main(int argc, char** argv) {
   auto usage = [] {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
-                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--seed X] [--json FILE]\n");
+                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
+                 "                              [--grid G] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -287,6 +303,7 @@ int main(int argc, char** argv) {
     else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
     else if (s == "--float") a.use_float = true;
     else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
+    else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
     else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
     else if (s == "--json" && (v = next())) a.json = v;
