@@ -468,12 +468,14 @@ template <class BV> struct MeshCollider {
           const S cosang = std::max(S(-1), std::min(S(1), e1.dot(e2) / (l1 * l2)));
           vertex_normals_[static_cast<std::size_t>(F(static_cast<Eigen::Index>(t), k))] += std::acos(cosang) * n;
         }
-        edges[key(F(static_cast<Eigen::Index>(t), k), F(static_cast<Eigen::Index>(t), (k + 1) % 3))] += n;
+        // try_emplace with an explicit zero: operator[] would leave a fresh Eigen vector uninitialised
+        edges.try_emplace(key(F(static_cast<Eigen::Index>(t), k), F(static_cast<Eigen::Index>(t), (k + 1) % 3)), Vec3<S>::Zero())
+            .first->second += n;
       }
     }
     for (std::size_t t = 0; t < m; ++t)
       for (int k = 0; k < 3; ++k) {
-        const Vec3<S> e = edges[key(F(static_cast<Eigen::Index>(t), k), F(static_cast<Eigen::Index>(t), (k + 1) % 3))];
+        const Vec3<S> e = edges.at(key(F(static_cast<Eigen::Index>(t), k), F(static_cast<Eigen::Index>(t), (k + 1) % 3)));
         const S len = e.norm();
         edge_normals_[3 * t + static_cast<std::size_t>(k)] = len > S(0) ? Vec3<S>(e / len) : face_normals_[t];
       }
