@@ -10,7 +10,8 @@
 ///
 /// Numerical contract: conservative. The samples are closest_point_on_mesh distances, shrunk by
 /// 64 ulps relative plus 64 ulps of the scene's size (more than the query's rounding) and rounded
-/// down to float for storage; lower_bound() shrinks its own rounding the same way. The bound is
+/// down to 16-bit multiples of (largest sample / 65535) for storage (2 bytes a cell, so the
+/// bounds stay in cache); lower_bound() shrinks its own rounding the same way. The bound is
 /// never above the true distance; it is below it by at most about the cell's half diagonal plus
 /// the margins for points inside the grid, and is 0 (useless, still valid) where the mesh passes.
 /// The mesh must not move or deform relative to the frame the grid was built in (rebuild it).
@@ -38,7 +39,7 @@ namespace impact {
 template <class S>
 struct DistanceGridConfig {
   /// Cells along the longest side of the mesh's bounding box (>= 1); memory is about
-  /// 4 * resolution^3 * (the box's volume / the longest side's cube) bytes.
+  /// 6 * resolution^3 * (the box's volume / the longest side's cube) bytes.
   int resolution = 64;
   /// Cells added around the mesh's bounding box on every side (>= 0): tighter bounds just outside.
   int padding = 2;
@@ -50,7 +51,7 @@ struct DistanceGridConfig {
 };
 
 /// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
-/// Build cost: one bounded closest-point query and one box query per cell; memory 8 bytes per cell.
+/// Build cost: one bounded closest-point query and one box query per cell; memory 6 bytes per cell.
 template <class S>
 class DistanceGrid {
  public:
@@ -73,7 +74,9 @@ class DistanceGrid {
     }
     const S eps = std::numeric_limits<S>::epsilon();
     const S scale = box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).maxCoeff() + S(2 * pad) * h_;
-    cells_.resize(static_cast<std::size_t>(n_[0]) * static_cast<std::size_t>(n_[1]) * static_cast<std::size_t>(n_[2]));
+    const std::size_t cells = static_cast<std::size_t>(n_[0]) * static_cast<std::size_t>(n_[1]) * static_cast<std::size_t>(n_[2]);
+    std::vector<S> dist(cells);
+    nodes_.resize(cells);
     reach_ = cfg.start_node_reach > S(0) ? cfg.start_node_reach * h_ : S(0);
     const auto& tree = mesh.tree();
     std::vector<std::pair<std::int32_t, std::int32_t>> range;  // primitive range of each subtree
@@ -88,17 +91,30 @@ class DistanceGrid {
           const auto r = closest_point_on_mesh(mesh, c, RigidTransform<S>(), opt);
           S d = r ? r->distance : cfg.max_distance;
           d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
-          cells_[idx].bound = round_down(d);
-          cells_[idx].node = reach_ > S(0) ? deepest_node(tree, range, grown_cell(c, S(4) * eps * scale)) : 0;
+          dist[idx] = d > S(0) ? d : S(0);
+          nodes_[idx] = reach_ > S(0) ? deepest_node(tree, range, grown_cell(c, S(4) * eps * scale)) : 0;
         }
+    // 16-bit storage, rounded down: k * quantum <= the sample (checked with the very expression
+    // lower_bound() evaluates)
+    S top = S(0);
+    for (const S d : dist)
+      if (d < std::numeric_limits<S>::infinity()) top = std::max(top, d);
+    quantum_ = top > S(0) ? top / S(65535) : S(1);
+    bounds_.resize(cells);
+    for (std::size_t k = 0; k < cells; ++k) {
+      const S q = std::floor(std::min(dist[k] / quantum_, S(65535)));
+      auto v = static_cast<std::uint16_t>(q > S(0) ? q : S(0));
+      while (v > 0 && S(v) * quantum_ > dist[k]) --v;
+      bounds_[k] = v;
+    }
   }
 
   /// A lower bound (>= 0) of the distance from p (mesh frame) to the mesh. O(1): one read.
   S lower_bound(const Vec3<S>& p) const {
-    if (cells_.empty()) return S(0);
+    if (bounds_.empty()) return S(0);
     int i[3];
     cell_of(p, i);  // any cell gives a valid bound
-    const S v = S(cells_[index(i[0], i[1], i[2])].bound);
+    const S v = S(bounds_[index(i[0], i[1], i[2])]) * quantum_;
     const Vec3<S> c = center(i[0], i[1], i[2]);
     const S eps = std::numeric_limits<S>::epsilon();
     const S b = (v - (p - c).norm()) * (S(1) - S(64) * eps) - S(64) * eps * (p.cwiseAbs().maxCoeff() + c.cwiseAbs().maxCoeff());
@@ -110,19 +126,19 @@ class DistanceGrid {
   /// in its subtree. 0 (the root) when the segment leaves its start cell's reach or start nodes
   /// are off; kNoTriangle when no triangle can meet the segment. O(1).
   std::int32_t start_node(const Vec3<S>& o, const Vec3<S>& e) const {
-    if (cells_.empty() || !(reach_ > S(0))) return 0;
+    if (nodes_.empty() || !(reach_ > S(0))) return 0;
     int i[3];
     cell_of(o, i);
     const Aabb<S> q = grown_cell(center(i[0], i[1], i[2]), S(0));
     const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
     const Vec3<S> lo = o.cwiseMin(e).array() - pad, hi = o.cwiseMax(e).array() + pad;
     if (!((lo.array() >= q.min.array()).all() && (hi.array() <= q.max.array()).all())) return 0;
-    return cells_[index(i[0], i[1], i[2])].node;
+    return nodes_[index(i[0], i[1], i[2])];
   }
   /// start_node() when no triangle can be met.
   static constexpr std::int32_t kNoTriangle = -1;
 
-  bool empty() const { return cells_.empty(); }
+  bool empty() const { return bounds_.empty(); }
   /// Edge length of the (cubic) cells.
   S cell_size() const { return h_; }
   /// Cells along x, y, z.
@@ -132,8 +148,8 @@ class DistanceGrid {
     return {origin_[0] + (S(x) + S(0.5)) * h_, origin_[1] + (S(y) + S(0.5)) * h_, origin_[2] + (S(z) + S(0.5)) * h_};
   }
   /// The stored bound at the centre of cell (x, y, z).
-  S value(int x, int y, int z) const { return S(cells_[index(x, y, z)].bound); }
-  std::size_t memory_bytes() const { return cells_.size() * sizeof(Cell); }
+  S value(int x, int y, int z) const { return S(bounds_[index(x, y, z)]) * quantum_; }
+  std::size_t memory_bytes() const { return bounds_.size() * sizeof(std::uint16_t) + nodes_.size() * sizeof(std::int32_t); }
 
  private:
   std::size_t index(int x, int y, int z) const {
@@ -192,22 +208,14 @@ class DistanceGrid {
         return n;
     }
   }
-  static float round_down(S d) {
-    if (!(d > S(0))) return 0.0f;
-    float f = static_cast<float>(d);
-    if (S(f) > d) f = std::nextafter(f, 0.0f);
-    return f;
-  }
 
   Vec3<S> origin_ = Vec3<S>::Zero();
   S h_ = S(1), inv_h_ = S(1);
   S reach_ = S(0);
   int n_[3] = {0, 0, 0};
-  struct Cell {
-    float bound;        // lower bound of the distance at the centre
-    std::int32_t node;  // start node, or kNoTriangle
-  };
-  std::vector<Cell> cells_;
+  S quantum_ = S(1);                       // bounds_ unit
+  std::vector<std::uint16_t> bounds_;       // lower bounds of the distance at the cell centres
+  std::vector<std::int32_t> nodes_;         // start nodes, or kNoTriangle
 };
 
 }  // namespace impact
