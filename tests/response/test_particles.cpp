@@ -453,6 +453,9 @@ TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
   plain.meshes[0].motion.pose.R = Eigen::AngleAxis<S>(S(0.3), Vec3<S>(1, 2, 3).normalized()).toRotationMatrix();
   plain.meshes[0].motion.pose.t = Vec3<S>(S(0.1), S(-0.05), S(0.02));
   plain.boxes.emplace_back(Aabb<S>(Vec3<S>(-2, -2, -1), Vec3<S>(2, 2, 1)), ColliderSide::Inside, Material<S>::elastic());
+  plain.planes.emplace_back(Plane<S>(Vec3<S>(0, 0, 1), S(-0.8)), Material<S>::elastic());
+  plain.spheres.emplace_back(Sphere<S>(Vec3<S>(S(1.6), 0, 0), S(0.25)), ColliderSide::Outside, Material<S>::elastic());
+  plain.spheres.emplace_back(Sphere<S>(Vec3<S>(0, 0, 0), S(2.5)), ColliderSide::Inside, Material<S>::elastic());
   fast = plain;
   fast.meshes[0].distance_grid = &grid;
   test::Rng rng(62);
@@ -476,6 +479,39 @@ TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
     EXPECT_EQ(a[i].position, b[i].position) << i;
     EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
   }
+}
+
+// The clearance of planes, spheres and boxes (the free ball's bound for them): a particle that
+// moves less than it from the allowed side never hits, and it is 0 on the wrong side.
+TYPED_TEST(Particles, ClearanceIsConservative) {
+  using S = TypeParam;
+  const PlaneCollider<S> plane(Plane<S>(Vec3<S>(1, 2, 2).normalized(), S(0.3)));
+  const SphereCollider<S> ball(Sphere<S>(Vec3<S>(S(0.2), 0, S(-0.1)), S(0.7)), ColliderSide::Outside);
+  const SphereCollider<S> shell(Sphere<S>(Vec3<S>(S(0.2), 0, S(-0.1)), S(1.2)), ColliderSide::Inside);
+  const Obb<S> obb{Vec3<S>(S(0.1), S(-0.2), 0), Eigen::AngleAxis<S>(S(0.5), Vec3<S>(1, 1, 0).normalized()).toRotationMatrix(),
+                   Vec3<S>(S(0.6), S(0.4), S(0.8))};
+  const BoxCollider<S> solid(obb, ColliderSide::Outside), hollow(obb, ColliderSide::Inside);
+  test::Rng rng(63);
+  int tested = 0;
+  auto check = [&](const auto& c) {
+    for (int i = 0; i < 2000 / kSampleDivisor; ++i) {
+      const Vec3<S> q = rng.vec(-1.5, 1.5).template cast<S>();
+      const S cl = c.clearance(q);
+      ASSERT_GE(cl, S(0));
+      if (!(cl > S(0))) continue;
+      const Vec3<S> d = (rng.vec(-1, 1).normalized() * 0.999 * double(cl)).template cast<S>();
+      EXPECT_FALSE(c.local_first_hit(q, d, S(0), S(1)).has_value()) << q.transpose() << " " << cl;
+      ++tested;
+    }
+  };
+  check(plane);
+  check(ball);
+  check(shell);
+  check(solid);
+  check(hollow);
+  EXPECT_GT(tested, 2000 / kSampleDivisor);
+  EXPECT_EQ(solid.clearance(obb.center), S(0));  // inside a solid box
+  EXPECT_EQ(hollow.clearance(Vec3<S>(5, 5, 5)), S(0));  // outside a container
 }
 
 }  // namespace

@@ -108,6 +108,9 @@ template <class S> struct PlaneCollider {
   explicit PlaneCollider(const Plane<S>& p, const Material<S>& m = {}) : plane(p), material(m) {}
 
   S scale() const { return std::abs(plane.offset); }
+  /// Distance from the local point q to the surface when q is strictly on the allowed side, else
+  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  S clearance(const Vec3<S>& q) const { return std::max(plane.signed_distance(q), S(0)); }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     const S s0 = plane.signed_distance(o) - r;
@@ -140,6 +143,12 @@ template <class S> struct SphereCollider {
   SphereCollider(const Sphere<S>& s, ColliderSide sd = ColliderSide::Outside, const Material<S>& m = {}) : sphere(s), side(sd), material(m) {}
 
   S scale() const { return sphere.center.cwiseAbs().maxCoeff() + sphere.radius; }
+  /// Distance from the local point q to the surface when q is strictly on the allowed side, else
+  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  S clearance(const Vec3<S>& q) const {
+    const S c = (q - sphere.center).norm() - sphere.radius;
+    return std::max(side == ColliderSide::Inside ? -c : c, S(0));
+  }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     const Vec3<S> m = o - sphere.center;
@@ -209,6 +218,13 @@ template <class S> struct BoxCollider {
   }
 
   S scale() const { return box.center.cwiseAbs().maxCoeff() + box.half.maxCoeff(); }
+  /// Distance from the local point q to the surface when q is strictly on the allowed side, else
+  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  S clearance(const Vec3<S>& qw) const {
+    const Vec3<S> q = box.axes.transpose() * (qw - box.center);
+    if (side == ColliderSide::Inside) return std::max((box.half - q.cwiseAbs()).minCoeff(), S(0));
+    return (q - q.cwiseMax(-box.half).cwiseMin(box.half)).norm();
+  }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& ow, const Vec3<S>& dw, S r, S t_max) const {
     const Vec3<S> o = box.axes.transpose() * (ow - box.center), d = box.axes.transpose() * dw;

@@ -14,10 +14,10 @@ template <class S> struct Particle {
   Vec3<S> velocity = Vec3<S>::Zero();
   S radius = S(0);  ///< >= 0
   /// Cache kept by the backtracking step: a ball of centres (free_center, free_radius) known to
-  /// keep this particle clear of every static mesh collider, so that legs inside it skip the
-  /// mesh ray casts. Moving the particle anywhere is safe (a leg outside the ball is cast as
-  /// usual); set free_radius = 0 when static meshes are added, moved or deformed. A negative
-  /// value is a cool-down radius: no new ball is searched for within it.
+  /// keep this particle clear of every static backtracking collider, so that legs inside it skip
+  /// the collision tests. Moving the particle anywhere is safe (a leg outside the ball is cast as
+  /// usual); set free_radius = 0 when colliders are added, moved or deformed. A negative value is
+  /// a cool-down radius: no new ball is searched for within it.
   Vec3<S> free_center = Vec3<S>::Zero();
   S free_radius = S(0);
 };

@@ -32,7 +32,7 @@
 /// Projection cannot see thin geometry crossed within one step: that is what backtracking is for.
 ///
 /// Speed: legs that stay inside a particle's free ball (Particle::free_radius, a conservative
-/// clearance from the static meshes) skip the mesh ray casts (StepOptions::free_ball_factor); a
+/// clearance from the colliders) skip the collision tests (StepOptions::free_ball_factor); a
 /// DistanceGrid on a mesh collider (query/distance_grid.hpp) makes the clearance O(1) and starts
 /// the remaining ray casts deep in the tree; spatial_order() gives a cache-friendly order for
 /// large particle sets.
@@ -72,13 +72,14 @@ template <class S> struct StepOptions {
   S offset_ulps = S(256);
   /// Absolute surface offset; used instead of offset_ulps when > 0.
   S surface_offset = S(0);
-  /// Free-ball cache (Particle::free_radius) for static meshes under backtracking: when a leg
-  /// leaves the particle's free ball, a new ball around the leg's start is found from a lower
-  /// bound of the distance to the meshes (refresh_free_ball): in O(1) from a mesh's distance
-  /// grid when it has one (MeshCollider::distance_grid; then the leg is also clear when the
-  /// grid's balls around both of its ends cover it), else from the tree, at most
-  /// free_ball_factor times the leg's length. Legs inside the ball skip the mesh ray casts.
-  /// Conservative (a leg is skipped only when no mesh surface is within its reach); 0 disables it.
+  /// Free-ball cache (Particle::free_radius) under backtracking, used when no collider moves and
+  /// there is a mesh: when a leg leaves the particle's free ball, a new ball around the leg's
+  /// start is found from lower bounds of the distance to every collider (refresh_free_ball):
+  /// exact for planes, spheres and boxes, in O(1) from a mesh's distance grid when it has one
+  /// (MeshCollider::distance_grid; then a leg is also clear of the meshes when the grid's balls
+  /// around both of its ends cover it), else from the mesh's tree, at most free_ball_factor times
+  /// the leg's length. Legs inside the ball skip every collision test. Conservative (a test is
+  /// skipped only when no surface is within the leg's reach); 0 disables it.
   S free_ball_factor = S(8);
 };
 
@@ -154,7 +155,8 @@ template <class C> struct IsMeshCollider : std::false_type {};
 template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 
 /// Refreshes the particle's free ball at its current centre x for a leg of length len: a ball
-/// around x clear of every static backtracking mesh. A mesh with a distance grid
+/// around x clear of every backtracking collider (all static here). Planes, spheres and boxes
+/// give their exact clearance (shrunk for rounding). A mesh with a distance grid
 /// (MeshCollider::distance_grid) bounds it in O(1) from the grid, with no cap. Otherwise the
 /// radius is capped at factor * len and is a cheap lower bound of the distance: the walk descends
 /// only into nodes whose box contains x; any other node bounds its triangles by its box's
@@ -164,6 +166,16 @@ template <class S, class BV>
 inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
   S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any surface
   bool all_grids = true;
+  const S eps = std::numeric_limits<S>::epsilon();
+  auto simple = [&](const auto& c) {
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) return;
+    const RigidTransform<S>& P = c.motion.pose;
+    const Vec3<S> q = P.R.transpose() * (x - P.t);
+    R = std::min(R, c.clearance(q) * (S(1) - S(64) * eps) - S(64) * eps * (q.cwiseAbs().maxCoeff() + c.scale()));
+  };
+  for (const auto& c : colliders.planes) simple(c);
+  for (const auto& c : colliders.spheres) simple(c);
+  for (const auto& c : colliders.boxes) simple(c);
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     const RigidTransform<S>& P = c.motion.pose;
@@ -199,21 +211,19 @@ inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const Col
 }
 
 /// True when every static backtracking mesh (each with a distance grid) provably keeps the
-/// particle's segment x -> e clear: the balls around both ends whose radii are the grid's distance
-/// bounds minus the particle's radius cover the segment (their radii add up to its length).
+/// particle's segment x -> e clear: the free ball just refreshed at x (radius rx, already clear of
+/// every mesh for the particle's radius) and the ball around e whose radius is the grid's distance
+/// bound minus the particle's radius cover the segment (their radii add up to its length).
 template <class S, class BV>
-inline bool grids_clear_segment(const Vec3<S>& x, const Vec3<S>& e, S len, S radius, const ColliderSet<S, BV>& colliders,
+inline bool grids_clear_segment(S rx, const Vec3<S>& x, const Vec3<S>& e, S len, S radius, const ColliderSet<S, BV>& colliders,
                                 const StepOptions<S>& opt) {
-  const S eps = std::numeric_limits<S>::epsilon();
+  const S margin = S(64) * std::numeric_limits<S>::epsilon() * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     if (!c.distance_grid) return false;
     const RigidTransform<S>& P = c.motion.pose;
-    const S rx = c.distance_grid->lower_bound(P.R.transpose() * (x - P.t)) - radius;
     const S re = c.distance_grid->lower_bound(P.R.transpose() * (e - P.t)) - radius;
-    if (!(rx > S(0) && re > S(0))) return false;
-    const S margin = S(64) * eps * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
-    if (!(rx + re >= len + margin)) return false;
+    if (!(re > S(0) && rx + re >= len + margin)) return false;
   }
   return true;
 }
@@ -291,28 +301,29 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
       ++st.budget_exhausted;  // policy: stay at the last safe point, drop the rest of the step
       break;
     }
-    bool meshes_clear = false;
+    bool all_clear = false, meshes_clear = false;  // skip every collider / the meshes
     if (use_free_ball) {
       const Vec3<S> e = x + d;
       const S R2 = p.free_radius * p.free_radius;
       auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
       if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
-        meshes_clear = true;
+        all_clear = true;
       } else if (p.free_radius < S(0) && in_ball(x)) {
         // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
       } else {
         const S len = d.norm();
         const bool cheap = detail::refresh_free_ball(p, x, len, colliders, opt);
-        meshes_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
-        // grids: the balls at both ends may still cover the leg; trees: a surface is near, retry
-        // two legs away
-        if (!meshes_clear && cheap) meshes_clear = detail::grids_clear_segment(x, e, len, p.radius, colliders, opt);
-        if (!meshes_clear && !cheap) p.free_radius = -S(2) * len;
+        all_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
+        // grids: the balls at both ends may still cover the leg for the meshes; trees: a surface
+        // is near, retry two legs away
+        if (!all_clear && cheap) meshes_clear = detail::grids_clear_segment(p.free_radius, x, e, len, p.radius, colliders, opt);
+        if (!all_clear && !cheap) p.free_radius = -S(2) * len;
       }
     }
     std::optional<Contact<S>> hit;
     S best_t = S(1), scale = S(0);
     colliders.for_each([&](const auto& c, int index) {
+      if (all_clear) return;  // every collider is static when the free ball is in use
       if constexpr (detail::IsMeshCollider<std::decay_t<decltype(c)>>::value) {
         if (meshes_clear) return;
       }
