@@ -16,15 +16,18 @@
 /// hits, moving away it does not.
 #pragma once
 
+#include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
 #include "impact/geometry/ray.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/ray_triangle.hpp"
 
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <type_traits>
 #include <utility>
 
 namespace impact {
@@ -121,18 +124,15 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
 
 }  // namespace detail
 
-/// First hit of the ray origin + t * direction, t in [0, ray.t_max], against the mesh placed in
-/// the world by `pose`. A segment p -> q is the ray (p, q - p, 1). Returns nothing when the ray
-/// misses or the direction is zero. Ties between triangles at the same t (a shared edge) return
-/// one of them. Cost O(log n) for rays that pass near few triangles.
-///
-/// `start_node` (the root by default) restricts the search to one subtree of mesh.tree(): the
-/// caller guarantees that every triangle the ray can hit lies in it (e.g. DistanceGrid::start_node).
-template <class BV>
-std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh,
-                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
-                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
-                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+namespace detail {
+
+/// The first-hit cast shared by both tree layouts: `walk(key, bound, visit)` runs a nearest-first
+/// traversal whose key receives a node's BV (the mesh's own, or a CompactBvh's float box).
+template <class BV, class Walk>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_with(const MeshBvh<BV>& mesh, Walk&& walk,
+                                                                                 const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                                 const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
+                                                                                 RayMeshStats* stats) {
   using S = typename BvTraits<BV>::Scalar;
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
@@ -150,12 +150,17 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
     const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
     seg = Aabb<S>(o.cwiseMin(e).array() - pad, o.cwiseMax(e).array() + pad);
   }
-  traverse_nearest(
-      mesh.tree(),
-      [&](const BV& bv) -> std::optional<S> {
+  walk(
+      [&](const auto& bv) -> std::optional<S> {
         if (stats) ++stats->node_tests;
-        if (finite && !detail::may_overlap(seg, bv)) return std::nullopt;
-        return detail::ray_bv_entry(o, d, inv, bv, best);
+        if constexpr (std::is_same_v<std::decay_t<decltype(bv)>, Aabb<float>> && !std::is_same_v<S, float>) {
+          const Aabb<S> box = bv.template cast<S>();  // exact: every float is a double
+          if (finite && !detail::may_overlap(seg, box)) return std::nullopt;
+          return detail::ray_box_entry(o, inv, box, best);
+        } else {
+          if (finite && !detail::may_overlap(seg, bv)) return std::nullopt;
+          return detail::ray_bv_entry(o, d, inv, bv, best);
+        }
       },
       [&]() { return best; },
       [&](std::int32_t k) {
@@ -168,8 +173,7 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
           best_bary = Vec3<S>(h->u, h->v, h->w);
         }
         return true;
-      },
-      start_node);
+      });
   if (best_leaf < 0) return std::nullopt;
   RayMeshHit<S> hit;
   hit.t = best;
@@ -181,6 +185,46 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   hit.normal = pose.R * n;
   hit.front_face = d.dot(n) < S(0);
   return hit;
+}
+
+}  // namespace detail
+
+/// First hit of the ray origin + t * direction, t in [0, ray.t_max], against the mesh placed in
+/// the world by `pose`. A segment p -> q is the ray (p, q - p, 1). Returns nothing when the ray
+/// misses or the direction is zero. Ties between triangles at the same t (a shared edge) return
+/// one of them. Cost O(log n) for rays that pass near few triangles.
+///
+/// `start_node` (the root by default) restricts the search to one subtree of mesh.tree(): the
+/// caller guarantees that every triangle the ray can hit lies in it (e.g. DistanceGrid::start_node).
+template <class BV>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh,
+                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
+                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+  return detail::ray_mesh_first_hit_with(
+      mesh,
+      [&](auto&& key, auto&& bound, auto&& visit) {
+        traverse_nearest(mesh.tree(), [&](const BV& bv) { return key(bv); }, bound, visit, start_node);
+      },
+      ray, pose, stats);
+}
+
+/// The same first hit, walking `fast`, a CompactBvh of mesh.tree() (bvh/compact_bvh.hpp), from
+/// the node standing for `start_node` (a node of mesh.tree(), with the same guarantee): the same
+/// t (the triangle may differ only among triangles hit at exactly the same t), faster when the
+/// mesh's tree does not fit in cache. `fast` must be built from mesh.tree() after its last change.
+template <class BV>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh, const CompactBvh& fast,
+                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
+                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+  assert(fast.num_primitives() == static_cast<std::size_t>(mesh.num_triangles()));
+  return detail::ray_mesh_first_hit_with(
+      mesh,
+      [&](auto&& key, auto&& bound, auto&& visit) {
+        traverse_nearest(fast, [&](const CompactBvhNode& n) { return key(n.box()); }, bound, visit, fast.from_source(start_node));
+      },
+      ray, pose, stats);
 }
 
 /// True when the ray hits any triangle for t in [0, ray.t_max] (same rules as the first hit).
