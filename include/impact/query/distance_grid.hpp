@@ -121,6 +121,19 @@ class DistanceGrid {
     return b > S(0) ? b : S(0);
   }
 
+  /// Hints the cache to load the bound lower_bound(p) will read (for loops over many points:
+  /// call it a few points ahead). No effect on results.
+  void prefetch(const Vec3<S>& p) const {
+#if defined(__GNUC__) || defined(__clang__)
+    if (bounds_.empty()) return;
+    int i[3];
+    cell_of(p, i);
+    __builtin_prefetch(&bounds_[index(i[0], i[1], i[2])]);
+#else
+    (void)p;
+#endif
+  }
+
   /// The node of the mesh's tree to start a ray cast along the segment o -> e from (mesh frame):
   /// every triangle whose box meets the segment's box (padded as ray_mesh_first_hit pads it) is
   /// in its subtree. 0 (the root) when the segment leaves its start cell's reach or start nodes
@@ -213,9 +226,9 @@ class DistanceGrid {
   S h_ = S(1), inv_h_ = S(1);
   S reach_ = S(0);
   int n_[3] = {0, 0, 0};
-  S quantum_ = S(1);                       // bounds_ unit
-  std::vector<std::uint16_t> bounds_;       // lower bounds of the distance at the cell centres
-  std::vector<std::int32_t> nodes_;         // start nodes, or kNoTriangle
+  S quantum_ = S(1);                   // bounds_ unit
+  std::vector<std::uint16_t> bounds_;  // lower bounds of the distance at the cell centres
+  std::vector<std::int32_t> nodes_;    // start nodes, or kNoTriangle
 };
 
 }  // namespace impact
