@@ -439,9 +439,10 @@ TYPED_TEST(Particles, FreeBallCacheIsExactAndSpatialOrderIsAPermutation) {
   EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
 }
 
-// With a distance grid on the mesh collider (O(1) free balls, covering balls at both ends of a
-// leg, ray casts from the grid's start nodes) trajectories are identical to those without the
-// free-ball cache at all, for point particles and balls, on a mesh moved by a rigid pose.
+// With a distance grid and a compact tree on the mesh collider (O(1) free balls, covering balls
+// along a leg, ray casts through the compact tree from the grid's start nodes) trajectories are
+// identical to those without any of them, for point particles and balls, on a mesh moved by a
+// rigid pose, among planes, spheres and a box.
 TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
   using S = TypeParam;
   const MeshBvh<Aabb<S>> bvh(make_torus<S>(S(1), S(0.4), 32, 16));
@@ -458,6 +459,8 @@ TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
   plain.spheres.emplace_back(Sphere<S>(Vec3<S>(0, 0, 0), S(2.5)), ColliderSide::Inside, Material<S>::elastic());
   fast = plain;
   fast.meshes[0].distance_grid = &grid;
+  const CompactBvh compact(bvh.tree(), 4);
+  fast.meshes[0].compact_tree = &compact;
   test::Rng rng(62);
   std::vector<Particle<S>> a(300 / kSampleDivisor);
   for (auto& p : a) {

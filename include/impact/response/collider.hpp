@@ -392,6 +392,10 @@ template <class BV> struct MeshCollider {
   /// instead of walking the tree (StepOptions::free_ball_factor), and point particles' ray casts
   /// start from its start nodes (same hits, shorter walks).
   const DistanceGrid<S>* distance_grid = nullptr;
+  /// Optional cache-sized copy of the mesh's tree (not owned; must outlive the collider and be
+  /// built from mesh->tree()): point particles' ray casts walk it instead (the same hits; see
+  /// bvh/compact_bvh.hpp).
+  const CompactBvh* compact_tree = nullptr;
 
   MeshCollider() = default;
   explicit MeshCollider(const MeshBvh<BV>& m, ColliderSide sd = ColliderSide::TwoSided, const Material<S>& mat = {})
@@ -412,7 +416,8 @@ template <class BV> struct MeshCollider {
       start = distance_grid->start_node(o, Vec3<S>(o + t_max * d));
       if (start == DistanceGrid<S>::kNoTriangle) return std::nullopt;
     }
-    const auto h = ray_mesh_first_hit(*mesh, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start);
+    const auto h = compact_tree ? ray_mesh_first_hit(*mesh, *compact_tree, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start)
+                                : ray_mesh_first_hit(*mesh, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start);
     if (!h) return std::nullopt;
     return LocalHit<S>{h->t, h->point, h->front_face ? h->normal : Vec3<S>(-h->normal)};
   }

@@ -161,21 +161,18 @@ template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 /// radius is capped at factor * len and is a cheap lower bound of the distance: the walk descends
 /// only into nodes whose box contains x; any other node bounds its triangles by its box's
 /// distance, and the leaves that contain x give exact triangle distances. Conservative, O(depth)
-/// per mesh. Returns true when every mesh had a grid (the refresh was O(1)).
+/// per mesh. Also returns the radius for the meshes alone, and whether every mesh had a grid.
+template <class S> struct FreeBallRefresh {
+  bool cheap = true;        ///< every mesh had a grid (the refresh was O(1))
+  S mesh_radius = S(0);     ///< the ball's radius for the meshes alone (>= free_radius)
+};
+
 template <class S, class BV>
-inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
-  S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any surface
-  bool all_grids = true;
+inline FreeBallRefresh<S> refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders,
+                                            const StepOptions<S>& opt) {
+  FreeBallRefresh<S> out;
   const S eps = std::numeric_limits<S>::epsilon();
-  auto simple = [&](const auto& c) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) return;
-    const RigidTransform<S>& P = c.motion.pose;
-    const Vec3<S> q = P.R.transpose() * (x - P.t);
-    R = std::min(R, c.clearance(q) * (S(1) - S(64) * eps) - S(64) * eps * (q.cwiseAbs().maxCoeff() + c.scale()));
-  };
-  for (const auto& c : colliders.planes) simple(c);
-  for (const auto& c : colliders.spheres) simple(c);
-  for (const auto& c : colliders.boxes) simple(c);
+  S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any mesh
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     const RigidTransform<S>& P = c.motion.pose;
@@ -184,7 +181,7 @@ inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const Col
       R = std::min(R, c.distance_grid->lower_bound(q));
       continue;
     }
-    all_grids = false;
+    out.cheap = false;
     R = std::min(R, opt.free_ball_factor * len + p.radius);
     traverse(
         c.mesh->tree(),
@@ -202,18 +199,32 @@ inline bool refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const Col
           return true;
         });
   }
-  R -= p.radius;
   // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
-  R = R * (S(1) - S(64) * std::numeric_limits<S>::epsilon()) - S(64) * std::numeric_limits<S>::epsilon() * x.cwiseAbs().maxCoeff();
+  auto shrink = [&](S r) {
+    r = (r - p.radius) * (S(1) - S(64) * eps) - S(64) * eps * x.cwiseAbs().maxCoeff();
+    return r > S(0) ? r : S(0);
+  };
+  out.mesh_radius = shrink(R);
+  S Ro = std::numeric_limits<S>::infinity();  // the same for planes, spheres and boxes
+  auto simple = [&](const auto& c) {
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) return;
+    const RigidTransform<S>& P = c.motion.pose;
+    const Vec3<S> q = P.R.transpose() * (x - P.t);
+    Ro = std::min(Ro, c.clearance(q) * (S(1) - S(64) * eps) - S(64) * eps * (q.cwiseAbs().maxCoeff() + c.scale()));
+  };
+  for (const auto& c : colliders.planes) simple(c);
+  for (const auto& c : colliders.spheres) simple(c);
+  for (const auto& c : colliders.boxes) simple(c);
   p.free_center = x;
-  p.free_radius = R > S(0) ? R : S(0);
-  return all_grids;
+  p.free_radius = std::min(out.mesh_radius, shrink(Ro));
+  return out;
 }
 
 /// True when every static backtracking mesh (each with a distance grid) provably keeps the
-/// particle's segment x -> e clear: the free ball just refreshed at x (radius rx, already clear of
-/// every mesh for the particle's radius) and the ball around e whose radius is the grid's distance
-/// bound minus the particle's radius cover the segment (their radii add up to its length).
+/// particle's segment x -> e clear: the meshes' ball just refreshed at x (radius rx, already clear
+/// of every mesh for the particle's radius) and the balls around e (and if needed the midpoint)
+/// whose radii are the grid's distance bounds minus the particle's radius cover the segment
+/// (the radii of consecutive balls add up to the distance between their centres).
 template <class S, class BV>
 inline bool grids_clear_segment(S rx, const Vec3<S>& x, const Vec3<S>& e, S len, S radius, const ColliderSet<S, BV>& colliders,
                                 const StepOptions<S>& opt) {
@@ -223,7 +234,12 @@ inline bool grids_clear_segment(S rx, const Vec3<S>& x, const Vec3<S>& e, S len,
     if (!c.distance_grid) return false;
     const RigidTransform<S>& P = c.motion.pose;
     const S re = c.distance_grid->lower_bound(P.R.transpose() * (e - P.t)) - radius;
-    if (!(re > S(0) && rx + re >= len + margin)) return false;
+    if (!(re > S(0))) return false;
+    if (rx + re >= len + margin) continue;
+    // the ball around the midpoint may bridge the gap
+    const Vec3<S> m = (x + e) / S(2);
+    const S rm = c.distance_grid->lower_bound(P.R.transpose() * (m - P.t)) - radius;
+    if (!(rx + rm >= len / S(2) + margin && rm + re >= len / S(2) + margin)) return false;
   }
   return true;
 }
@@ -253,24 +269,36 @@ template <class S> inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, cons
 
 }  // namespace detail
 
-/// Advances one particle by dt against the colliders (see the file comment). `on_leg(from, to)`
-/// is called for every straight piece of path the particle actually travels during
-/// backtracking, for audits and visualisation. Returns this particle-step's counters.
-template <class S, class BV, class LegObserver = detail::NoLegObserver>
-StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt,
-                        LegObserver&& on_leg = {}) {
+namespace detail {
+
+/// What a step computes once for every particle.
+template <class S> struct StepContext {
+  S rest = S(0);               ///< resting threshold
+  bool moving = false;         ///< some collider moves (a particle at rest can still be hit)
+  bool use_free_ball = false;  ///< the free-ball cache is in use
+  template <class BV> StepContext(const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
+    rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
+    moving = colliders.any_moving();
+    use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
+  }
+};
+
+/// step_particle with the per-step context computed by the caller.
+template <class S, class BV, class LegObserver>
+StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx,
+                           LegObserver& on_leg) {
   StepStats st;
-  const S rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
   ResponseOptions<S> ropt;
-  ropt.rest_speed = rest;
+  ropt.rest_speed = ctx.rest;
   const Vec3<S> x_start = p.position;
   Vec3<S> x = p.position, v = p.velocity;
   S tau_now = S(0), left = dt;
   Vec3<S> active[3];
   int n_active = 0;
   S mu_rest = S(0);
-  const bool moving = colliders.any_moving();  // a particle at rest can still be hit
-  const bool use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
+  const bool moving = ctx.moving;
+  const bool use_free_ball = ctx.use_free_ball;
+
   for (int it = 0;; ++it) {
     // acceleration and velocity constrained by the resting contacts of this step
     Vec3<S> a = opt.gravity;
@@ -312,18 +340,26 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
         // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
       } else {
         const S len = d.norm();
-        const bool cheap = detail::refresh_free_ball(p, x, len, colliders, opt);
-        all_clear = (e - p.free_center).squaredNorm() <= p.free_radius * p.free_radius;
-        // grids: the balls at both ends may still cover the leg for the meshes; trees: a surface
-        // is near, retry two legs away
-        if (!all_clear && cheap) meshes_clear = detail::grids_clear_segment(p.free_radius, x, e, len, p.radius, colliders, opt);
-        if (!all_clear && !cheap) p.free_radius = -S(2) * len;
+        const auto fb = detail::refresh_free_ball(p, x, len, colliders, opt);
+        const S e2 = (e - x).squaredNorm();
+        all_clear = e2 <= p.free_radius * p.free_radius;
+        // the meshes alone may still be clear: their own ball, then (grids) the balls at the
+        // leg's end and midpoint; trees: a surface is near, retry two legs away
+        if (!all_clear) meshes_clear = e2 <= fb.mesh_radius * fb.mesh_radius;
+        if (!all_clear && !meshes_clear && fb.cheap)
+          meshes_clear = detail::grids_clear_segment(fb.mesh_radius, x, e, len, p.radius, colliders, opt);
+        if (!all_clear && !fb.cheap) p.free_radius = -S(2) * len;
       }
+    }
+    if (all_clear) {  // every collider is static when the free ball is in use
+      on_leg(x, Vec3<S>(x + d));
+      x += d;
+      v += a * left;
+      break;
     }
     std::optional<Contact<S>> hit;
     S best_t = S(1), scale = S(0);
     colliders.for_each([&](const auto& c, int index) {
-      if (all_clear) return;  // every collider is static when the free ball is in use
       if constexpr (detail::IsMeshCollider<std::decay_t<decltype(c)>>::value) {
         if (meshes_clear) return;
       }
@@ -384,6 +420,17 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
   return st;
 }
 
+}  // namespace detail
+
+/// Advances one particle by dt against the colliders (see the file comment). `on_leg(from, to)`
+/// is called for every straight piece of path the particle actually travels during
+/// backtracking, for audits and visualisation. Returns this particle-step's counters.
+template <class S, class BV, class LegObserver = detail::NoLegObserver>
+StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt,
+                        LegObserver&& on_leg = {}) {
+  return detail::step_particle_in(p, colliders, dt, opt, detail::StepContext<S>(colliders, dt, opt), on_leg);
+}
+
 /// A permutation of the particles along a Morton (Z-order) curve over their bounding box, 21 bits
 /// per axis. Stepping particles in this order makes consecutive queries touch the same tree nodes
 /// (better cache use on large meshes); reorder every few steps, since particles drift apart.
@@ -421,7 +468,15 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
 template <class S, class BV>
 StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
   StepStats st;
-  for (auto& p : particles) st += step_particle(p, colliders, dt, opt);
+  const detail::StepContext<S> ctx(colliders, dt, opt);
+  detail::NoLegObserver none;
+  constexpr std::size_t ahead = 4;  // prefetch the distance bounds of the particle this far ahead
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (ctx.use_free_ball && i + ahead < particles.size())
+      for (const auto& c : colliders.meshes)
+        if (c.distance_grid) c.distance_grid->prefetch(c.motion.pose.R.transpose() * (particles[i + ahead].position - c.motion.pose.t));
+    st += detail::step_particle_in(particles[i], colliders, dt, opt, ctx, none);
+  }
   return st;
 }
 
