@@ -3,7 +3,7 @@
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
 //                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--grid G]
-//                          [--seed X] [--json FILE]
+//                          [--compact C] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -21,7 +21,9 @@
 // --float runs everything in single precision (double by default); --leaf L sets the tree's
 // maximum leaf size (BuildConfig::leaf_size, 1 by default); --grid G gives the backtracking (and
 // reference) mesh collider a DistanceGrid of G cells along the box's longest side (64 by
-// default; 0: none), built once before the runs and not timed (its build time is printed).
+// default; 0: none), built once before the runs and not timed (its build time is printed);
+// --compact C gives it a CompactBvh copy of the tree with leaves of up to C triangles for its ray
+// casts (4 by default; 0: none).
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
 // escaped (a step whose start-to-end segment crosses the mesh an odd number of times, i.e. the
 // particle changed sides, or a particle outside the container), the mean and max distance to the
@@ -52,6 +54,7 @@ struct Args {
   bool use_float = false;
   int leaf = 1;
   int grid = 64;
+  int compact = 4;
   std::uint64_t seed = 1;
 };
 
@@ -218,6 +221,8 @@ template <class S> int run_all(const Args& a) {
   const double grid_seconds = thread_seconds() - tg0;
   auto cs_bt = scene(bvh, Strategy::Backtrack);
   if (a.grid > 0) cs_bt.meshes[0].distance_grid = &grid;
+  const CompactBvh compact = a.compact > 0 ? CompactBvh(bvh.tree(), a.compact) : CompactBvh();
+  if (a.compact > 0) cs_bt.meshes[0].compact_tree = &compact;
 
   const auto cs_pr = scene(bvh, Strategy::Project), cs_naive = scene(flat, Strategy::Backtrack);
 
@@ -271,7 +276,7 @@ template <class S> int run_all(const Args& a) {
   if (!a.json.empty()) {
     bench::JsonObject top;
     top.add("bench", "impact-particles-bench").add("mesh", mesh_name).add("triangles", mesh.num_triangles()).add("dt", a.dt);
-    top.add("substeps", a.substeps).add("diagonal", diag).add("grid", a.grid).add("grid_build_s", grid_seconds);
+    top.add("substeps", a.substeps).add("diagonal", diag).add("grid", a.grid).add("grid_build_s", grid_seconds).add("compact", a.compact);
     top.raw("rows", bench::JsonObject::array(items));
     if (!bench::write_file(a.json, top.str())) {
       std::fprintf(stderr, "impact-particles-bench: cannot write %s\n", a.json.c_str());
@@ -287,7 +292,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
                  "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
-                 "                              [--grid G] [--seed X] [--json FILE]\n");
+                 "                              [--grid G] [--compact C] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -304,6 +309,7 @@ int main(int argc, char** argv) {
     else if (s == "--float") a.use_float = true;
     else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
     else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
+    else if (s == "--compact" && (v = next())) a.compact = std::max(0, std::atoi(v));
     else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
     else if (s == "--json" && (v = next())) a.json = v;
