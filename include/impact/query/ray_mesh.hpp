@@ -79,6 +79,24 @@ inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, co
   return t0;
 }
 
+/// ray_box_entry for a CompactBvh node's float box, for a direction whose inverse `inv` is finite
+/// on every axis, with the axes' signs (`neg`: inv < 0) precomputed: the near and far planes are
+/// picked by sign instead of swapped, which gives exactly ray_box_entry's values.
+template <class S>
+inline std::optional<S> ray_node_entry(const Vec3<S>& o, const Vec3<S>& inv, const bool (&neg)[3], const CompactBvhNode& n, S t_max) {
+  S t0 = S(0), t1 = t_max;
+  for (int i = 0; i < 3; ++i) {
+    const S lo = S(n.lo[i]), hi = S(n.hi[i]);
+    const S a = ((neg[i] ? hi : lo) - o[i]) * inv[i];
+    S b = ((neg[i] ? lo : hi) - o[i]) * inv[i];
+    b += std::abs(b) * S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
+    t0 = a > t0 ? a : t0;
+    t1 = b < t1 ? b : t1;
+    if (t0 > t1) return std::nullopt;
+  }
+  return t0;
+}
+
 /// Entry parameter of the ray into a sphere (padded), nullopt on a miss or entry after t_max.
 template <class S> inline std::optional<S> ray_sphere_entry(const Vec3<S>& o, const Vec3<S>& d, const Sphere<S>& s, S t_max) {
   const Vec3<S> m = o - s.center;
@@ -150,13 +168,19 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_with
     const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
     seg = Aabb<S>(o.cwiseMin(e).array() - pad, o.cwiseMax(e).array() + pad);
   }
+  // the compact walk's slab test picks each axis' near plane by the direction's sign, which gives
+  // ray_box_entry's values whenever 1 / d is finite on every axis
+  const bool slab_ok = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
+  const bool neg[3] = {inv[0] < S(0), inv[1] < S(0), inv[2] < S(0)};
   walk(
       [&](const auto& bv) -> std::optional<S> {
         if (stats) ++stats->node_tests;
-        if constexpr (std::is_same_v<std::decay_t<decltype(bv)>, Aabb<float>> && !std::is_same_v<S, float>) {
-          const Aabb<S> box = bv.template cast<S>();  // exact: every float is a double
-          if (finite && !detail::may_overlap(seg, box)) return std::nullopt;
-          return detail::ray_box_entry(o, inv, box, best);
+        if constexpr (std::is_same_v<std::decay_t<decltype(bv)>, CompactBvhNode>) {
+          if (finite)
+            for (int i = 0; i < 3; ++i)
+              if (seg.max[i] < S(bv.lo[i]) || S(bv.hi[i]) < seg.min[i]) return std::nullopt;
+          if (slab_ok) return detail::ray_node_entry(o, inv, neg, bv, best);
+          return detail::ray_box_entry(o, inv, Aabb<S>(bv.box().template cast<S>()), best);  // exact: float -> S
         } else {
           if (finite && !detail::may_overlap(seg, bv)) return std::nullopt;
           return detail::ray_bv_entry(o, d, inv, bv, best);
@@ -222,7 +246,7 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   return detail::ray_mesh_first_hit_with(
       mesh,
       [&](auto&& key, auto&& bound, auto&& visit) {
-        traverse_nearest(fast, [&](const CompactBvhNode& n) { return key(n.box()); }, bound, visit, fast.from_source(start_node));
+        traverse_nearest(fast, [&](const CompactBvhNode& n) { return key(n); }, bound, visit, fast.from_source(start_node));
       },
       ray, pose, stats);
 }
