@@ -434,7 +434,7 @@ StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S d
 /// A permutation of the particles along a Morton (Z-order) curve over their bounding box, 21 bits
 /// per axis. Stepping particles in this order makes consecutive queries touch the same tree nodes
 /// (better cache use on large meshes); reorder every few steps, since particles drift apart.
-/// O(n log n).
+/// O(n) (a radix sort of the codes).
 template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Particle<S>>& particles) {
   Aabb<S> box;
   for (const auto& p : particles) box.extend(p.position);
@@ -458,7 +458,17 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
     }
     keys[i] = {code, static_cast<std::uint32_t>(i)};
   }
-  std::sort(keys.begin(), keys.end());
+  // LSD radix sort, 8 bits a pass (stable, so equal codes keep their index order, as a sort of
+  // the (code, index) pairs would); passes where every key has the same digit are skipped
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> tmp(keys.size());
+  for (int shift = 0; shift < 64; shift += 8) {
+    std::size_t count[257] = {0};
+    for (const auto& k : keys) ++count[((k.first >> shift) & 0xff) + 1];
+    if (std::any_of(count + 1, count + 257, [&](std::size_t c) { return c == keys.size(); })) continue;
+    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
+    for (const auto& k : keys) tmp[count[(k.first >> shift) & 0xff]++] = k;
+    keys.swap(tmp);
+  }
   std::vector<std::uint32_t> order(particles.size());
   for (std::size_t i = 0; i < keys.size(); ++i) order[i] = keys[i].second;
   return order;
