@@ -3,8 +3,9 @@
 // leaf sizes, each node's BV holds all its triangles' vertices), termination on degenerate input,
 // refit after deformation, and the traversals against brute force: pair traversal under random
 // rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere and AABB,
-// float and double, both split rules.
+// float and double, both split rules. The traversal stack keeps its order past its fixed slots.
 #include "impact/bvh/mesh_bvh.hpp"
+#include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/traverse.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "support/brute_force.hpp"
@@ -232,4 +233,22 @@ TEST(BvhSingleTree, TraverseVisitsExactlyTheOverlappingPrimitives) {
     if ((mesh.triangle(t).centroid() - probe.center).norm() <= probe.radius) expected.push_back(t);
   EXPECT_EQ(sorted(got), expected);
   EXPECT_FALSE(expected.empty());
+}
+
+// The traversal stack is LIFO across its fixed slots and its heap overflow, for plain and pair
+// entries, through repeated fill and drain.
+TEST(TraversalStack, LifoAcrossTheOverflow) {
+  detail::TraversalStack<std::pair<double, std::int32_t>, 4> stack;
+  for (int round = 0; round < 3; ++round) {
+    EXPECT_TRUE(stack.empty());
+    const int n = 3 + 5 * round;  // below, then well beyond the 4 fixed slots
+    for (int i = 0; i < n; ++i) stack.push({0.5 * i, i});
+    for (int i = n - 1; i >= 0; --i) {
+      ASSERT_FALSE(stack.empty());
+      const auto [key, node] = stack.pop();
+      EXPECT_EQ(node, i);
+      EXPECT_EQ(key, 0.5 * i);
+    }
+    EXPECT_TRUE(stack.empty());
+  }
 }
