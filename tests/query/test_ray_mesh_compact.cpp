@@ -3,7 +3,8 @@
 // subtrees' primitives; ray casts through it (from the root, or from a DistanceGrid's start nodes)
 // give the first hits of ray casts through the plain tree: the same t, and the same triangle
 // except between triangles hit at exactly that t. Torus in float and double with source leaves of
-// 1 and 3, collapsed leaves of 1, 4 and 16; the Stanford bunny.
+// 1 and 3, collapsed leaves of 1, 4 and 16; the Stanford bunny. The two-sibling slab test gives
+// exactly the one-box slab test's entry parameters.
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/distance_grid.hpp"
@@ -47,7 +48,9 @@ void check_hits(const MeshBvh<Aabb<S>>& bvh, const CompactBvh& c, const Distance
   for (int i = 0; i < n; ++i) {
     const Triangle<S>& t = bvh.triangle(static_cast<std::int32_t>(rng.index(static_cast<std::uint64_t>(bvh.num_triangles()))));
     const Vec3<S> o = t.centroid() + (rng.vec(-1, 1) * scale).template cast<S>();
-    const Vec3<S> d = (rng.vec(-1, 1) * (i % 7 == 0 ? 20 * scale : scale)).template cast<S>();
+    Vec3<S> d = (rng.vec(-1, 1) * (i % 7 == 0 ? 20 * scale : scale)).template cast<S>();
+    if (i % 13 == 0) d[i % 3] = S(0);        // rays in a coordinate plane (1 / d infinite on an axis)
+    if (i % 17 == 0) d[(i + 1) % 3] = S(0);  // and along a coordinate axis, with the case above
     const Ray<S> ray(o, d, i % 11 == 0 ? std::numeric_limits<S>::infinity() : S(1));
     std::int32_t start = 0;
     if (grid && i % 11 != 0) {
@@ -86,6 +89,42 @@ TYPED_TEST(CompactBvhTest, TorusSameFirstHits) {
       check_hits(bvh, c, &grid, 3000 / kSampleDivisor, 0.05, 21 + std::uint64_t(leaf));
     }
   }
+}
+
+// Both siblings' entry parameters at once (SSE2 for double) are exactly ray_box_entry's on each
+// float box, for rays from every octant, boxes in front of, around and behind the origin, and
+// bounds that cut the ray short.
+TYPED_TEST(CompactBvhTest, PairSlabIsTheSlabTest) {
+  using S = TypeParam;
+  test::Rng rng(41);
+  int hits = 0, misses = 0;
+  for (int i = 0; i < 20000 / kSampleDivisor; ++i) {
+    const Vec3<S> o = rng.vec(-1, 1).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    CompactBvhPair p;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d c = rng.vec(-1.5, 1.5), h = rng.vec(0.1, 0.8);
+      CompactBvhNode n;
+      for (int k = 0; k < 3; ++k) n.lo[k] = float(c[k] - h[k]), n.hi[k] = float(c[k] + h[k]);
+      p.set(side, n);
+    }
+    const S t_max = i % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 2);
+    S keys[2];
+    detail::PairSlab<S>(o, inv).keys(p, t_max, keys);
+    for (int side = 0; side < 2; ++side) {
+      const auto t = detail::ray_box_entry(o, inv, Aabb<S>(p.child(side).box().template cast<S>()), t_max);
+      if (t) {
+        ++hits;
+        EXPECT_EQ(keys[side], *t) << i << " " << side;
+      } else {
+        ++misses;
+        EXPECT_TRUE(std::isnan(keys[side])) << i << " " << side;
+      }
+    }
+  }
+  EXPECT_GT(hits, 1000 / kSampleDivisor);
+  EXPECT_GT(misses, 1000 / kSampleDivisor);
 }
 
 TEST(CompactBvh, BunnySameFirstHits) {

@@ -25,10 +25,16 @@
 
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <type_traits>
 #include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace impact {
 
@@ -79,23 +85,80 @@ inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, co
   return t0;
 }
 
-/// ray_box_entry for a CompactBvh node's float box, for a direction whose inverse `inv` is finite
-/// on every axis, with the axes' signs (`neg`: inv < 0) precomputed: the near and far planes are
-/// picked by sign instead of swapped, which gives exactly ray_box_entry's values.
+/// ray_box_entry for both boxes of a CompactBvh pair at once, for a ray whose inverse direction
+/// `inv` is finite on every axis: the near and far planes are picked by the axes' signs instead of
+/// swapped, which gives exactly ray_box_entry's values (with SSE2, two siblings per instruction:
+/// maxpd and minpd pick a > b ? a : b as the scalar code does). Set up once per ray.
 template <class S>
-inline std::optional<S> ray_node_entry(const Vec3<S>& o, const Vec3<S>& inv, const bool (&neg)[3], const CompactBvhNode& n, S t_max) {
-  S t0 = S(0), t1 = t_max;
-  for (int i = 0; i < 3; ++i) {
-    const S lo = S(n.lo[i]), hi = S(n.hi[i]);
-    const S a = ((neg[i] ? hi : lo) - o[i]) * inv[i];
-    S b = ((neg[i] ? lo : hi) - o[i]) * inv[i];
-    b += std::abs(b) * S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
-    t0 = a > t0 ? a : t0;
-    t1 = b < t1 ? b : t1;
-    if (t0 > t1) return std::nullopt;
+class PairSlab {
+ public:
+  PairSlab(const Vec3<S>& o, const Vec3<S>& inv) {
+    for (int i = 0; i < 3; ++i) {
+      // byte offsets of this axis' near and far planes (both siblings) in a CompactBvhPair
+      const bool neg = inv[i] < S(0);
+      const std::size_t lo = offsetof(CompactBvhPair, lo) + sizeof(float[2]) * std::size_t(i);
+      const std::size_t hi = offsetof(CompactBvhPair, hi) + sizeof(float[2]) * std::size_t(i);
+      near_[i] = neg ? hi : lo;
+      far_[i] = neg ? lo : hi;
+#if defined(__SSE2__)
+      if constexpr (std::is_same_v<S, double>) {
+        o2_[i] = _mm_set1_pd(o[i]);
+        inv2_[i] = _mm_set1_pd(inv[i]);
+      }
+#endif
+      o_[i] = o[i];
+      inv_[i] = inv[i];
+    }
   }
-  return t0;
-}
+  /// keys[side]: the entry parameter into that sibling's box, or NaN when the ray misses it or
+  /// enters it after t_max.
+  void keys(const CompactBvhPair& p, S t_max, S (&keys)[2]) const {
+    const char* base = reinterpret_cast<const char*>(&p);
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<S, double>) {
+      const __m128d pad = _mm_set1_pd(4 * std::numeric_limits<double>::epsilon());
+      const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+      __m128d t0 = _mm_setzero_pd(), t1 = _mm_set1_pd(t_max);
+      for (int i = 0; i < 3; ++i) {
+        const __m128d a = _mm_mul_pd(_mm_sub_pd(load2(base + near_[i]), o2_[i]), inv2_[i]);
+        __m128d b = _mm_mul_pd(_mm_sub_pd(load2(base + far_[i]), o2_[i]), inv2_[i]);
+        b = _mm_add_pd(b, _mm_mul_pd(_mm_and_pd(b, abs_mask), pad));  // robust slab test (PBRT 3.9.2)
+        t0 = _mm_max_pd(a, t0);
+        t1 = _mm_min_pd(b, t1);
+      }
+      const __m128d hit = _mm_cmple_pd(t0, t1);
+      _mm_storeu_pd(keys,
+                    _mm_or_pd(_mm_and_pd(hit, t0), _mm_andnot_pd(hit, _mm_set1_pd(std::numeric_limits<double>::quiet_NaN()))));
+      return;
+    }
+#endif
+    S t0[2] = {S(0), S(0)}, t1[2] = {t_max, t_max};
+    for (int i = 0; i < 3; ++i) {
+      float near_plane[2], far_plane[2];
+      std::memcpy(near_plane, base + near_[i], sizeof near_plane);
+      std::memcpy(far_plane, base + far_[i], sizeof far_plane);
+      for (int c = 0; c < 2; ++c) {
+        const S a = (S(near_plane[c]) - o_[i]) * inv_[i];
+        S b = (S(far_plane[c]) - o_[i]) * inv_[i];
+        b += std::abs(b) * S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
+        t0[c] = a > t0[c] ? a : t0[c];
+        t1[c] = b < t1[c] ? b : t1[c];
+      }
+    }
+    for (int c = 0; c < 2; ++c) keys[c] = t0[c] <= t1[c] ? t0[c] : std::numeric_limits<S>::quiet_NaN();
+  }
+
+ private:
+#if defined(__SSE2__)
+  // two floats, widened to two doubles
+  static __m128d load2(const char* f) {
+    return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f))));
+  }
+  __m128d o2_[3], inv2_[3];
+#endif
+  S o_[3], inv_[3];
+  std::size_t near_[3], far_[3];
+};
 
 /// Entry parameter of the ray into a sphere (padded), nullopt on a miss or entry after t_max.
 template <class S> inline std::optional<S> ray_sphere_entry(const Vec3<S>& o, const Vec3<S>& d, const Sphere<S>& s, S t_max) {
@@ -144,72 +207,64 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
 
 namespace detail {
 
-/// The first-hit cast shared by both tree layouts: `walk(key, bound, visit)` runs a nearest-first
-/// traversal whose key receives a node's BV (the mesh's own, or a CompactBvh's float box).
-template <class BV, class Walk>
-std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_with(const MeshBvh<BV>& mesh, Walk&& walk,
-                                                                                 const Ray<typename BvTraits<BV>::Scalar>& ray,
-                                                                                 const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
-                                                                                 RayMeshStats* stats) {
+/// The first-hit cast shared by both tree layouts: the ray in the mesh's frame, the best hit so
+/// far, and the triangle visitor; the walks (the mesh's own tree, or a CompactBvh) add the node
+/// tests.
+template <class BV>
+struct FirstHitCast {
   using S = typename BvTraits<BV>::Scalar;
-  const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
-  const Vec3<S> d = pose.R.transpose() * ray.direction;
-  if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
-  const Vec3<S> inv = detail::safe_inverse(d);
-  S best = ray.t_max;
+  const MeshBvh<BV>& mesh;
+  RayMeshStats* stats;
+  Vec3<S> o, d, inv;
+  PreparedRay<S> pr;
+  S best;
   std::int32_t best_leaf = -1;
-  Vec3<S> best_bary;
-  // a finite ray's own box rejects most nodes before the slab test
-  const bool finite = ray.t_max < std::numeric_limits<S>::infinity();
+  Vec3<S> best_bary = Vec3<S>::Zero();
+  bool finite = false;  ///< a finite ray whose own box `seg` was asked for (it rejects most nodes before the slab test)
   Aabb<S> seg;
-  if (finite) {
-    const Vec3<S> e = o + ray.t_max * d;
-    const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
-    seg = Aabb<S>(o.cwiseMin(e).array() - pad, o.cwiseMax(e).array() + pad);
+
+  FirstHitCast(const MeshBvh<BV>& m, const Ray<S>& ray, const RigidTransform<S>& pose, RayMeshStats* st, bool segment_box)
+      : mesh(m),
+        stats(st),
+        o(pose.R.transpose() * (ray.origin - pose.t)),
+        d(pose.R.transpose() * ray.direction),
+        best(ray.t_max) {
+    inv = detail::safe_inverse(d);
+    pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
+    finite = segment_box && ray.t_max < std::numeric_limits<S>::infinity();
+    if (finite) {
+      const Vec3<S> e = o + ray.t_max * d;
+      const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+      seg = Aabb<S>(o.cwiseMin(e).array() - pad, o.cwiseMax(e).array() + pad);
+    }
   }
-  // the compact walk's slab test picks each axis' near plane by the direction's sign, which gives
-  // ray_box_entry's values whenever 1 / d is finite on every axis
-  const bool slab_ok = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
-  const bool neg[3] = {inv[0] < S(0), inv[1] < S(0), inv[2] < S(0)};
-  walk(
-      [&](const auto& bv) -> std::optional<S> {
-        if (stats) ++stats->node_tests;
-        if constexpr (std::is_same_v<std::decay_t<decltype(bv)>, CompactBvhNode>) {
-          if (finite)
-            for (int i = 0; i < 3; ++i)
-              if (seg.max[i] < S(bv.lo[i]) || S(bv.hi[i]) < seg.min[i]) return std::nullopt;
-          if (slab_ok) return detail::ray_node_entry(o, inv, neg, bv, best);
-          return detail::ray_box_entry(o, inv, Aabb<S>(bv.box().template cast<S>()), best);  // exact: float -> S
-        } else {
-          if (finite && !detail::may_overlap(seg, bv)) return std::nullopt;
-          return detail::ray_bv_entry(o, d, inv, bv, best);
-        }
-      },
-      [&]() { return best; },
-      [&](std::int32_t k) {
-        if (stats) ++stats->triangle_tests;
-        pr.ray.t_max = best;
-        const auto h = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k));
-        if (h && (best_leaf < 0 || h->t < best)) {
-          best = h->t;
-          best_leaf = k;
-          best_bary = Vec3<S>(h->u, h->v, h->w);
-        }
-        return true;
-      });
-  if (best_leaf < 0) return std::nullopt;
-  RayMeshHit<S> hit;
-  hit.t = best;
-  hit.leaf_index = best_leaf;
-  hit.triangle = mesh.triangle_id(best_leaf);
-  hit.barycentric = best_bary;
-  hit.point = ray.origin + best * ray.direction;
-  const Vec3<S> n = mesh.triangle(best_leaf).normal();
-  hit.normal = pose.R * n;
-  hit.front_face = d.dot(n) < S(0);
-  return hit;
-}
+  /// False when nothing can be hit (zero direction, negative t_max).
+  bool valid() const { return d.squaredNorm() != S(0) && best >= S(0); }
+  bool visit(std::int32_t k) {
+    if (stats) ++stats->triangle_tests;
+    pr.ray.t_max = best;
+    const auto h = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k));
+    if (h && (best_leaf < 0 || h->t < best)) {
+      best = h->t;
+      best_leaf = k;
+      best_bary = Vec3<S>(h->u, h->v, h->w);
+    }
+    return true;
+  }
+  std::optional<RayMeshHit<S>> result(const Ray<S>& ray, const RigidTransform<S>& pose) const {
+    if (best_leaf < 0) return std::nullopt;
+    RayMeshHit<S> hit;
+    hit.t = best;
+    hit.leaf_index = best_leaf;
+    hit.triangle = mesh.triangle_id(best_leaf);
+    hit.barycentric = best_bary;
+    hit.point = ray.origin + best * ray.direction;
+    const Vec3<S> n = mesh.triangle(best_leaf).normal();
+    hit.normal = pose.R * n;
+    hit.front_face = d.dot(n) < S(0);
+    return hit;
+  }
+};
 
 }  // namespace detail
 
@@ -225,12 +280,18 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
                                                                             const Ray<typename BvTraits<BV>::Scalar>& ray,
                                                                             const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
                                                                             RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
-  return detail::ray_mesh_first_hit_with(
-      mesh,
-      [&](auto&& key, auto&& bound, auto&& visit) {
-        traverse_nearest(mesh.tree(), [&](const BV& bv) { return key(bv); }, bound, visit, start_node);
+  detail::FirstHitCast<BV> c(mesh, ray, pose, stats, true);
+  if (!c.valid()) return std::nullopt;
+  traverse_nearest(
+      mesh.tree(),
+      [&](const BV& bv) {
+        if (stats) ++stats->node_tests;
+        using R = std::optional<typename BvTraits<BV>::Scalar>;
+        if (c.finite && !detail::may_overlap(c.seg, bv)) return R();
+        return detail::ray_bv_entry(c.o, c.d, c.inv, bv, c.best);
       },
-      ray, pose, stats);
+      [&]() { return c.best; }, [&](std::int32_t k) { return c.visit(k); }, start_node);
+  return c.result(ray, pose);
 }
 
 /// The same first hit, walking `fast`, a CompactBvh of mesh.tree() (bvh/compact_bvh.hpp), from
@@ -242,13 +303,28 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
                                                                             const Ray<typename BvTraits<BV>::Scalar>& ray,
                                                                             const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
                                                                             RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+  using S = typename BvTraits<BV>::Scalar;
   assert(fast.num_primitives() == static_cast<std::size_t>(mesh.num_triangles()));
-  return detail::ray_mesh_first_hit_with(
-      mesh,
-      [&](auto&& key, auto&& bound, auto&& visit) {
-        traverse_nearest(fast, [&](const CompactBvhNode& n) { return key(n); }, bound, visit, fast.from_source(start_node));
-      },
-      ray, pose, stats);
+  detail::FirstHitCast<BV> c(mesh, ray, pose, stats, false);
+  if (!c.valid()) return std::nullopt;
+  // both siblings at once: by the axes' signs when 1 / d is finite on every axis, which gives
+  // ray_box_entry's values; else one by one, on the exact float boxes (float -> S is exact)
+  const detail::PairSlab<S> slab(c.o, c.inv);
+  auto by_sign = [&](const CompactBvhPair& p, S(&keys)[2]) { slab.keys(p, c.best, keys); };
+  auto one_by_one = [&](const CompactBvhPair& p, S(&keys)[2]) {
+    for (int side = 0; side < 2; ++side) {
+      const auto t = detail::ray_box_entry(c.o, c.inv, Aabb<S>(p.child(side).box().template cast<S>()), c.best);
+      keys[side] = t ? *t : std::numeric_limits<S>::quiet_NaN();
+    }
+  };
+  auto bound = [&]() { return c.best; };
+  auto visit = [&](std::int32_t k) { return c.visit(k); };
+  const std::int32_t start = fast.from_source(start_node);
+  const std::size_t pairs = std::isfinite(c.inv[0]) && std::isfinite(c.inv[1]) && std::isfinite(c.inv[2])
+                                ? traverse_nearest_pairs<S>(fast, by_sign, bound, visit, start)
+                                : traverse_nearest_pairs<S>(fast, one_by_one, bound, visit, start);
+  if (stats) stats->node_tests += 2 * pairs;
+  return c.result(ray, pose);
 }
 
 /// True when the ray hits any triangle for t in [0, ray.t_max] (same rules as the first hit).
