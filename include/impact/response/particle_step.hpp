@@ -32,10 +32,10 @@
 /// Projection cannot see thin geometry crossed within one step: that is what backtracking is for.
 ///
 /// Speed: legs that stay inside a particle's free ball (Particle::free_radius, a conservative
-/// clearance from the colliders) skip the collision tests (StepOptions::free_ball_factor); a
-/// DistanceGrid on a mesh collider (query/distance_grid.hpp) makes the clearance O(1) and starts
-/// the remaining ray casts deep in the tree; spatial_order() gives a cache-friendly order for
-/// large particle sets.
+/// clearance from the colliders) skip the collision tests (StepOptions::free_ball_factor), and
+/// step_particles() moves such a particle without setting up the full step; a DistanceGrid on a
+/// mesh collider (query/distance_grid.hpp) makes the clearance O(1) and starts the remaining ray
+/// casts deep in the tree; spatial_order() gives a cache-friendly order for large particle sets.
 ///
 /// The offset is scale-aware: offset_ulps * epsilon(S) * (|x|_inf + collider scale + |chord|_inf)
 /// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
@@ -73,13 +73,15 @@ template <class S> struct StepOptions {
   /// Absolute surface offset; used instead of offset_ulps when > 0.
   S surface_offset = S(0);
   /// Free-ball cache (Particle::free_radius) under backtracking, used when no collider moves and
-  /// there is a mesh: when a leg leaves the particle's free ball, a new ball around the leg's
-  /// start is found from lower bounds of the distance to every collider (refresh_free_ball):
-  /// exact for planes, spheres and boxes, in O(1) from a mesh's distance grid when it has one
-  /// (MeshCollider::distance_grid; then a leg is also clear of the meshes when the grid's balls
-  /// around both of its ends cover it), else from the mesh's tree, at most free_ball_factor times
-  /// the leg's length. Legs inside the ball skip every collision test. Conservative (a test is
-  /// skipped only when no surface is within the leg's reach); 0 disables it.
+  /// there is a mesh: when a leg leaves the particle's free ball, a new ball is found from lower
+  /// bounds of the distance to every collider (free_ball_at): exact for planes, spheres and boxes,
+  /// in O(1) from a mesh's distance grid when it has one (MeshCollider::distance_grid), else from
+  /// the mesh's tree, at most free_ball_factor times the leg's length. With grids on every mesh the
+  /// ball is first sought around the leg's end (it then also holds the legs that follow), else
+  /// around its start; a leg is also clear of the meshes, or of the other colliders, when their
+  /// balls around both of its ends (and, for grids, its midpoint) cover it. Legs inside the ball
+  /// skip every collision test. Conservative (a test is skipped only when no surface is within
+  /// the leg's reach); 0 disables it.
   S free_ball_factor = S(8);
 };
 
@@ -154,22 +156,25 @@ inline void first_hit_one(const C& c, int index, const Vec3<S>& x, const Vec3<S>
 template <class C> struct IsMeshCollider : std::false_type {};
 template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 
-/// Refreshes the particle's free ball at its current centre x for a leg of length len: a ball
-/// around x clear of every backtracking collider (all static here). Planes, spheres and boxes
-/// give their exact clearance (shrunk for rounding). A mesh with a distance grid
-/// (MeshCollider::distance_grid) bounds it in O(1) from the grid, with no cap. Otherwise the
-/// radius is capped at factor * len and is a cheap lower bound of the distance: the walk descends
-/// only into nodes whose box contains x; any other node bounds its triangles by its box's
-/// distance, and the leaves that contain x give exact triangle distances. Conservative, O(depth)
-/// per mesh. Also returns the radius for the meshes alone, and whether every mesh had a grid.
+/// A free ball around a centre: the radii within which the centre of a particle of the given
+/// radius stays clear of the meshes and of the other backtracking colliders.
 template <class S> struct FreeBallRefresh {
-  bool cheap = true;        ///< every mesh had a grid (the refresh was O(1))
-  S mesh_radius = S(0);     ///< the ball's radius for the meshes alone (>= free_radius)
+  bool cheap = true;      ///< every mesh had a grid (the radii came in O(1))
+  S mesh_radius = S(0);   ///< clear of every backtracking mesh
+  S other_radius = S(0);  ///< clear of every backtracking plane, sphere and box
 };
 
+/// The free ball around x, for a leg of length len of a particle of the given radius, clear of
+/// every backtracking collider (all static here). Planes, spheres and boxes give their exact
+/// clearance (shrunk for rounding). A mesh with a distance grid (MeshCollider::distance_grid)
+/// bounds it in O(1) from the grid, with no cap. Otherwise the radius is capped at
+/// free_ball_factor * len and is a cheap lower bound of the distance: the walk descends only
+/// into nodes whose box contains x; any other node bounds its triangles by its box's distance,
+/// and the leaves that contain x give exact triangle distances. Conservative, O(depth) per mesh.
+
 template <class S, class BV>
-inline FreeBallRefresh<S> refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S len, const ColliderSet<S, BV>& colliders,
-                                            const StepOptions<S>& opt) {
+inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV>& colliders,
+                                       const StepOptions<S>& opt) {
   FreeBallRefresh<S> out;
   const S eps = std::numeric_limits<S>::epsilon();
   S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any mesh
@@ -182,7 +187,7 @@ inline FreeBallRefresh<S> refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S 
       continue;
     }
     out.cheap = false;
-    R = std::min(R, opt.free_ball_factor * len + p.radius);
+    R = std::min(R, opt.free_ball_factor * len + radius);
     traverse(
         c.mesh->tree(),
         [&](const BV& bv) {
@@ -200,8 +205,9 @@ inline FreeBallRefresh<S> refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S 
         });
   }
   // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
+  const S x_margin = S(64) * eps * x.cwiseAbs().maxCoeff();
   auto shrink = [&](S r) {
-    r = (r - p.radius) * (S(1) - S(64) * eps) - S(64) * eps * x.cwiseAbs().maxCoeff();
+    r = (r - radius) * (S(1) - S(64) * eps) - x_margin;
     return r > S(0) ? r : S(0);
   };
   out.mesh_radius = shrink(R);
@@ -215,29 +221,31 @@ inline FreeBallRefresh<S> refresh_free_ball(Particle<S>& p, const Vec3<S>& x, S 
   for (const auto& c : colliders.planes) simple(c);
   for (const auto& c : colliders.spheres) simple(c);
   for (const auto& c : colliders.boxes) simple(c);
-  p.free_center = x;
-  p.free_radius = std::min(out.mesh_radius, shrink(Ro));
+  out.other_radius = shrink(Ro);
   return out;
 }
 
+/// The clear radius of a refresh: the smaller of the meshes' and the other colliders'.
+template <class S>
+inline S clear_radius(const FreeBallRefresh<S>& f) {
+  return std::min(f.mesh_radius, f.other_radius);
+}
+
 /// True when every static backtracking mesh (each with a distance grid) provably keeps the
-/// particle's segment x -> e clear: the meshes' ball just refreshed at x (radius rx, already clear
-/// of every mesh for the particle's radius) and the balls around e (and if needed the midpoint)
-/// whose radii are the grid's distance bounds minus the particle's radius cover the segment
-/// (the radii of consecutive balls add up to the distance between their centres).
+/// segment x -> e clear, given clear radii rx and re for the meshes at both ends (balls of
+/// centres clear of every mesh): the two balls cover the segment (their radii add up to its
+/// length), or the ball around the midpoint bridges the gap between them.
 template <class S, class BV>
-inline bool grids_clear_segment(S rx, const Vec3<S>& x, const Vec3<S>& e, S len, S radius, const ColliderSet<S, BV>& colliders,
-                                const StepOptions<S>& opt) {
+inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, S len, S radius,
+                                const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
   const S margin = S(64) * std::numeric_limits<S>::epsilon() * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+  if (rx + re >= len + margin) return true;
+  if (!(rx > S(0) && re > S(0))) return false;
+  const Vec3<S> m = (x + e) / S(2);
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     if (!c.distance_grid) return false;
     const RigidTransform<S>& P = c.motion.pose;
-    const S re = c.distance_grid->lower_bound(P.R.transpose() * (e - P.t)) - radius;
-    if (!(re > S(0))) return false;
-    if (rx + re >= len + margin) continue;
-    // the ball around the midpoint may bridge the gap
-    const Vec3<S> m = (x + e) / S(2);
     const S rm = c.distance_grid->lower_bound(P.R.transpose() * (m - P.t)) - radius;
     if (!(rx + rm >= len / S(2) + margin && rm + re >= len / S(2) + margin)) return false;
   }
@@ -276,12 +284,149 @@ template <class S> struct StepContext {
   S rest = S(0);               ///< resting threshold
   bool moving = false;         ///< some collider moves (a particle at rest can still be hit)
   bool use_free_ball = false;  ///< the free-ball cache is in use
+  bool any_projection = false;  ///< some collider uses projection
+  bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
   template <class BV> StepContext(const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
     rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
     moving = colliders.any_moving();
     use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
+    colliders.for_each(
+        [&](const auto& c, int) { any_projection = any_projection || effective(c.strategy, opt.strategy) == Strategy::Project; });
+    all_grids = true;
+    for (const auto& c : colliders.meshes)
+      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !c.distance_grid) all_grids = false;
   }
 };
+
+/// The step of a particle whose whole flight stays inside its free ball: exactly what
+/// step_particle_in does on that path (one all-clear leg), without its set-up. Returns false, with
+/// the particle untouched, when the full step is needed.
+template <class S>
+inline bool free_flight(Particle<S>& p, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx) {
+  if (!ctx.use_free_ball || ctx.any_projection || !(p.free_radius > S(0)) || opt.max_iterations <= 0 || !(dt > S(0)))
+    return false;
+  const Vec3<S> d = p.velocity * dt + (dt * dt / S(2)) * opt.gravity;
+  if (d.squaredNorm() == S(0)) return false;
+  const S R2 = p.free_radius * p.free_radius;
+  const Vec3<S> e = p.position + d;
+  if (!((p.position - p.free_center).squaredNorm() <= R2 && (e - p.free_center).squaredNorm() <= R2)) return false;
+  p.position = e;
+  p.velocity += opt.gravity * dt;
+  return true;
+}
+
+/// Which colliders a leg provably stays clear of (their tests are skipped).
+struct LegClearance {
+  bool all = false;     ///< every collider
+  bool meshes = false;  ///< every mesh
+  bool others = false;  ///< every plane, sphere and box
+};
+
+/// The free-ball test of the leg x -> x + d of particle p (the free-ball cache is in use: every
+/// collider is static): inside the particle's ball, every collider is clear; else the ball is
+/// refreshed (StepOptions::free_ball_factor) and the meshes, or the rest, may still be clear.
+template <class S, class BV>
+LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, const ColliderSet<S, BV>& colliders,
+                           const StepOptions<S>& opt, const StepContext<S>& ctx) {
+  LegClearance c;
+  const Vec3<S> e = x + d;
+  const S R2 = p.free_radius * p.free_radius;
+  auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
+  if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
+    c.all = true;
+  } else if (p.free_radius < S(0) && in_ball(x)) {
+    // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
+  } else {
+    const S len = d.norm();
+    const S e2 = (e - x).squaredNorm();
+    // The ball around x is the particle's own when it is centred there (the last leg ended at
+    // its end ball); both of its radii are then at least free_radius.
+    const bool own_at_x = p.free_radius >= S(0) && p.free_center == x;
+    S rx_mesh = own_at_x ? p.free_radius : S(0), rx_other = rx_mesh;
+    // First a ball around the leg's end (it holds the next legs too) when the grids make it
+    // O(1); else, or when it does not reach back to x, a ball around x.
+    FreeBallRefresh<S> fe;
+    fe.cheap = false;
+    if (ctx.all_grids) {
+      fe = detail::free_ball_at(e, len, p.radius, colliders, opt);
+      p.free_center = e;  // where the next leg starts, unless this one is hit
+      p.free_radius = detail::clear_radius(fe);
+      c.all = e2 <= p.free_radius * p.free_radius;
+    }
+    if (!c.all && !own_at_x) {
+      const auto fx = detail::free_ball_at(x, len, p.radius, colliders, opt);
+      rx_mesh = fx.mesh_radius;
+      rx_other = fx.other_radius;
+      if (!fe.cheap) {
+        p.free_center = x;
+        p.free_radius = detail::clear_radius(fx);
+        // trees: a surface is near, retry two legs away
+        if (!fx.cheap && !(e2 <= p.free_radius * p.free_radius)) p.free_radius = -S(2) * len;
+      }
+      c.all = e2 <= detail::clear_radius(fx) * detail::clear_radius(fx);
+    }
+    if (!c.all) {
+      // the meshes, or the rest, alone may still be clear: the ball at x, or (grids) the balls
+      // at both ends and the midpoint
+      c.meshes = e2 <= rx_mesh * rx_mesh ||
+                 (fe.cheap && detail::grids_clear_segment(rx_mesh, fe.mesh_radius, x, e, len, p.radius, colliders, opt));
+      c.others = e2 <= rx_other * rx_other || (fe.cheap && rx_other + fe.other_radius >= len);
+    }
+  }
+  return c;
+}
+
+/// The first hit of the chord x -> x + d (travelled during [tau0, tau0 + len] of the step) of a
+/// particle of the given radius against every backtracking collider not known to be clear, as a
+/// contact whose time is the chord fraction; `scale` gets the hit collider's scale.
+template <class S, class BV>
+std::optional<Contact<S>> first_hit(const ColliderSet<S, BV>& colliders, const Vec3<S>& x, const Vec3<S>& d, S radius, S tau0,
+                                    S len, const LegClearance& clear, const StepOptions<S>& opt, S& scale) {
+  std::optional<Contact<S>> hit;
+  S best_t = S(1);
+  colliders.for_each([&](const auto& c, int index) {
+    if constexpr (IsMeshCollider<std::decay_t<decltype(c)>>::value) {
+      if (clear.meshes) return;
+    } else {
+      if (clear.others) return;
+    }
+    if (effective(c.strategy, opt.strategy) == Strategy::Backtrack)
+      first_hit_one(c, index, x, d, radius, tau0, len, best_t, hit, scale);
+  });
+  return hit;
+}
+
+/// Projection at the end of a step (Strategy::Project colliders): a particle of the given radius
+/// that moved from x_start to x and ended inside a collider, or within its radius, goes to the
+/// closest surface point plus (radius + offset) along the normal, with the response on v; up to
+/// max_iterations passes over the colliders. Returns whether it was moved.
+template <class S, class BV>
+bool project(S radius, const Vec3<S>& x_start, Vec3<S>& x, Vec3<S>& v, const ColliderSet<S, BV>& colliders, S dt,
+             const StepOptions<S>& opt, const ResponseOptions<S>& ropt, StepStats& st) {
+  bool projected = false;
+  for (int pass = 0; pass < opt.max_iterations; ++pass) {
+    bool moved = false;
+    colliders.for_each([&](const auto& c, int) {
+      if (effective(c.strategy, opt.strategy) != Strategy::Project) return;
+      const RigidTransform<S> P1 = c.motion.moving() ? c.motion.at(dt) : c.motion.pose;
+      const RigidTransform<S>& P0 = c.motion.pose;
+      const Vec3<S> q = P1.R.transpose() * (x - P1.t);
+      const Vec3<S> q0 = P0.R.transpose() * (x_start - P0.t);
+      const S delta = surface_offset(opt, x, c.scale(), Vec3<S>(x - x_start));
+      const auto pen = c.local_penetration(q, q0, radius, delta);
+      if (!pen) return;
+      x = P1.apply(pen->target);
+      const Vec3<S> n = P1.R * pen->normal;
+      const Vec3<S> vc = c.motion.moving() ? c.motion.velocity_at(P1.apply(pen->point), dt) : Vec3<S>::Zero();
+      v = respond(v, n, vc, c.material, ropt).velocity;
+      ++st.projections;
+      moved = true;
+    });
+    if (!moved) break;
+    projected = true;
+  }
+  return projected;
+}
 
 /// step_particle with the per-step context computed by the caller.
 template <class S, class BV, class LegObserver>
@@ -329,43 +474,16 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV>& colliders, 
       ++st.budget_exhausted;  // policy: stay at the last safe point, drop the rest of the step
       break;
     }
-    bool all_clear = false, meshes_clear = false;  // skip every collider / the meshes
-    if (use_free_ball) {
-      const Vec3<S> e = x + d;
-      const S R2 = p.free_radius * p.free_radius;
-      auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
-      if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
-        all_clear = true;
-      } else if (p.free_radius < S(0) && in_ball(x)) {
-        // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
-      } else {
-        const S len = d.norm();
-        const auto fb = detail::refresh_free_ball(p, x, len, colliders, opt);
-        const S e2 = (e - x).squaredNorm();
-        all_clear = e2 <= p.free_radius * p.free_radius;
-        // the meshes alone may still be clear: their own ball, then (grids) the balls at the
-        // leg's end and midpoint; trees: a surface is near, retry two legs away
-        if (!all_clear) meshes_clear = e2 <= fb.mesh_radius * fb.mesh_radius;
-        if (!all_clear && !meshes_clear && fb.cheap)
-          meshes_clear = detail::grids_clear_segment(fb.mesh_radius, x, e, len, p.radius, colliders, opt);
-        if (!all_clear && !fb.cheap) p.free_radius = -S(2) * len;
-      }
-    }
-    if (all_clear) {  // every collider is static when the free ball is in use
+    // which colliders the leg provably stays clear of
+    const LegClearance clear = use_free_ball ? leg_clearance(p, x, d, colliders, opt, ctx) : LegClearance{};
+    if (clear.all) {  // every collider is static when the free ball is in use
       on_leg(x, Vec3<S>(x + d));
       x += d;
       v += a * left;
       break;
     }
-    std::optional<Contact<S>> hit;
-    S best_t = S(1), scale = S(0);
-    colliders.for_each([&](const auto& c, int index) {
-      if constexpr (detail::IsMeshCollider<std::decay_t<decltype(c)>>::value) {
-        if (meshes_clear) return;
-      }
-      if (detail::effective(c.strategy, opt.strategy) == Strategy::Backtrack)
-        detail::first_hit_one(c, index, x, d, p.radius, tau_now, left, best_t, hit, scale);
-    });
+    S scale = S(0);
+    const std::optional<Contact<S>> hit = first_hit(colliders, x, d, p.radius, tau_now, left, clear, opt, scale);
     if (!hit) {
       on_leg(x, Vec3<S>(x + d));
       x += d;
@@ -391,30 +509,8 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV>& colliders, 
     tau_now += tau;
     left -= tau;
   }
-  // projection colliders
-  bool any_projection = false;
-  for (int pass = 0; pass < opt.max_iterations; ++pass) {
-    bool moved = false;
-    colliders.for_each([&](const auto& c, int) {
-      if (detail::effective(c.strategy, opt.strategy) != Strategy::Project) return;
-      const RigidTransform<S> P1 = c.motion.moving() ? c.motion.at(dt) : c.motion.pose;
-      const RigidTransform<S>& P0 = c.motion.pose;
-      const Vec3<S> q = P1.R.transpose() * (x - P1.t);
-      const Vec3<S> q0 = P0.R.transpose() * (x_start - P0.t);
-      const S delta = detail::surface_offset(opt, x, c.scale(), Vec3<S>(x - x_start));
-      const auto pen = c.local_penetration(q, q0, p.radius, delta);
-      if (!pen) return;
-      x = P1.apply(pen->target);
-      const Vec3<S> n = P1.R * pen->normal;
-      const Vec3<S> vc = c.motion.moving() ? c.motion.velocity_at(P1.apply(pen->point), dt) : Vec3<S>::Zero();
-      v = respond(v, n, vc, c.material, ropt).velocity;
-      ++st.projections;
-      moved = true;
-    });
-    if (!moved) break;
-    any_projection = true;
-  }
-  if (st.impacts > 0 || any_projection) st.particles_hit = 1;
+  const bool projected = ctx.any_projection && project(p.radius, x_start, x, v, colliders, dt, opt, ropt, st);
+  if (st.impacts > 0 || projected) st.particles_hit = 1;
   p.position = x;
   p.velocity = v;
   return st;
@@ -480,11 +576,8 @@ StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<
   StepStats st;
   const detail::StepContext<S> ctx(colliders, dt, opt);
   detail::NoLegObserver none;
-  constexpr std::size_t ahead = 4;  // prefetch the distance bounds of the particle this far ahead
   for (std::size_t i = 0; i < particles.size(); ++i) {
-    if (ctx.use_free_ball && i + ahead < particles.size())
-      for (const auto& c : colliders.meshes)
-        if (c.distance_grid) c.distance_grid->prefetch(c.motion.pose.R.transpose() * (particles[i + ahead].position - c.motion.pose.t));
+    if (detail::free_flight(particles[i], dt, opt, ctx)) continue;
     st += detail::step_particle_in(particles[i], colliders, dt, opt, ctx, none);
   }
   return st;
