@@ -18,9 +18,11 @@
 ///
 /// Start nodes (optional, DistanceGridConfig::start_node_reach > 0): each cell also keeps the
 /// deepest node of the mesh's tree whose subtree holds every triangle whose bounding box meets the
-/// cell grown by the reach (or a mark that there is none). start_node(o, e) returns it for a
-/// segment whose (padded) box lies in that grown cell, so a short ray cast can skip the top of the
-/// tree, or the whole mesh; exact: the skipped triangles cannot meet the segment's box.
+/// cell grown by the reach (or a mark that there is none). start_node(o, e) returns the node of
+/// the segment's midpoint cell when the segment's (padded) box lies in that grown cell (always
+/// when the segment spans at most twice the reach along each axis), so a short ray cast can skip
+/// the top of the tree, or the whole mesh; exact: the skipped triangles cannot meet the segment's
+/// box.
 #pragma once
 
 #include "impact/bvh/mesh_bvh.hpp"
@@ -100,6 +102,10 @@ class DistanceGrid {
     for (const S d : dist)
       if (d < std::numeric_limits<S>::infinity()) top = std::max(top, d);
     quantum_ = top > S(0) ? top / S(65535) : S(1);
+    S centre_scale = S(0);  // the largest |coordinate| of a cell centre
+    for (int k = 0; k < 3; ++k)
+      centre_scale = std::max({centre_scale, std::abs(center(0, 0, 0)[k]), std::abs(center(n_[0] - 1, n_[1] - 1, n_[2] - 1)[k])});
+    margin_ = S(64) * eps * (S(2) * centre_scale + S(65535) * quantum_);
     bounds_.resize(cells);
     for (std::size_t k = 0; k < cells; ++k) {
       const S q = std::floor(std::min(dist[k] / quantum_, S(65535)));
@@ -116,32 +122,20 @@ class DistanceGrid {
     cell_of(p, i);  // any cell gives a valid bound
     const S v = S(bounds_[index(i[0], i[1], i[2])]) * quantum_;
     const Vec3<S> c = center(i[0], i[1], i[2]);
-    const S eps = std::numeric_limits<S>::epsilon();
-    const S b = (v - (p - c).norm()) * (S(1) - S(64) * eps) - S(64) * eps * (p.cwiseAbs().maxCoeff() + c.cwiseAbs().maxCoeff());
+    // rounding: 64 ulps of |p|_inf + |c|_inf, bounded once for all points that get a positive
+    // bound (then |p - c| < v, so |p|_inf + |c|_inf <= 2 max|c|_inf + max v: margin_)
+    const S b = (v - (p - c).norm()) * (S(1) - S(64) * std::numeric_limits<S>::epsilon()) - margin_;
     return b > S(0) ? b : S(0);
-  }
-
-  /// Hints the cache to load the bound lower_bound(p) will read (for loops over many points:
-  /// call it a few points ahead). No effect on results.
-  void prefetch(const Vec3<S>& p) const {
-#if defined(__GNUC__) || defined(__clang__)
-    if (bounds_.empty()) return;
-    int i[3];
-    cell_of(p, i);
-    __builtin_prefetch(&bounds_[index(i[0], i[1], i[2])]);
-#else
-    (void)p;
-#endif
   }
 
   /// The node of the mesh's tree to start a ray cast along the segment o -> e from (mesh frame):
   /// every triangle whose box meets the segment's box (padded as ray_mesh_first_hit pads it) is
-  /// in its subtree. 0 (the root) when the segment leaves its start cell's reach or start nodes
-  /// are off; kNoTriangle when no triangle can meet the segment. O(1).
+  /// in its subtree. 0 (the root) when the segment leaves the reach of its midpoint's cell or
+  /// start nodes are off; kNoTriangle when no triangle can meet the segment. O(1).
   std::int32_t start_node(const Vec3<S>& o, const Vec3<S>& e) const {
     if (nodes_.empty() || !(reach_ > S(0))) return 0;
     int i[3];
-    cell_of(o, i);
+    cell_of(Vec3<S>((o + e) / S(2)), i);
     const Aabb<S> q = grown_cell(center(i[0], i[1], i[2]), S(0));
     const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
     const Vec3<S> lo = o.cwiseMin(e).array() - pad, hi = o.cwiseMax(e).array() + pad;
@@ -227,6 +221,7 @@ class DistanceGrid {
   S reach_ = S(0);
   int n_[3] = {0, 0, 0};
   S quantum_ = S(1);                   // bounds_ unit
+  S margin_ = S(0);                    // lower_bound()'s rounding margin
   std::vector<std::uint16_t> bounds_;  // lower bounds of the distance at the cell centres
   std::vector<std::int32_t> nodes_;    // start nodes, or kNoTriangle
 };
