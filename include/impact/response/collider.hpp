@@ -390,7 +390,8 @@ template <class BV> struct MeshCollider {
   /// Optional distance bounds to this mesh in its local frame (not owned; must outlive the
   /// collider and match the mesh): backtracking then refreshes free balls in O(1) from it
   /// instead of walking the tree (StepOptions::free_ball_factor), and point particles' ray casts
-  /// start from its start nodes (same hits, shorter walks).
+  /// start from its start nodes (same hits, shorter walks); projection skips the closest-point
+  /// query of a particle the grid proves out of its reach (the same answer).
   const DistanceGrid<S>* distance_grid = nullptr;
   /// Optional cache-sized copy of the mesh's tree (not owned; must outlive the collider and be
   /// built from mesh->tree()): point particles' ray casts walk it instead (the same hits; see
@@ -440,6 +441,10 @@ template <class BV> struct MeshCollider {
     const S travel = (q - q0).norm();
     ClosestPointOptions<S> opt;
     opt.max_distance = travel + r + offset;
+    // the grid proves most particles farther than that from the surface (the query would find
+    // nothing; the factor keeps well clear of its rounding)
+    if (distance_grid && !(distance_grid->lower_bound(q) <= opt.max_distance * (S(1) + S(64) * std::numeric_limits<S>::epsilon())))
+      return std::nullopt;
     const auto c = closest_point_on_mesh(*mesh, q, RigidTransform<S>(), opt);
     if (!c) return std::nullopt;
     int want = side == ColliderSide::Inside ? -1 : 1;
