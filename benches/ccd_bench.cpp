@@ -266,9 +266,9 @@ int main(int argc, char** argv) {
       std::int64_t recheck;
     };
     const std::int64_t rc = opt.recheck_iterations;
-    const P grid[] = {{1e-3, 0, rc},    {1e-4, 0, rc},    {1e-5, 0, rc},    {1e-6, 0, rc},    {1e-7, 0, rc},
-                      {1e-8, 0, rc},    {1e-6, 0, 0},     {1e-8, 0, 0},     {1e-6, 0, 100},   {1e-6, 0, 1600},
-                      {1e-6, 1e-8, rc}, {1e-6, 1e-6, rc}, {1e-6, 1e-4, rc}, {1e-6, 1e-3, rc}};
+    const P grid[] = {{1e-3, 0, rc},   {1e-4, 0, rc},    {1e-5, 0, rc},    {1e-6, 0, rc},    {1e-7, 0, rc},
+                      {1e-8, 0, rc},   {1e-6, 0, 0},     {1e-8, 0, 0},     {1e-6, 0, 100},   {1e-6, 0, 200},
+                      {1e-6, 0, 1600}, {1e-6, 1e-8, rc}, {1e-6, 1e-6, rc}, {1e-6, 1e-4, rc}, {1e-6, 1e-3, rc}};
     for (const P& g : grid)
       for (const std::string kind : {"vertex-face", "edge-edge"}) {
         impact::CcdOptions o = opt;
