@@ -34,6 +34,42 @@ TYPED_TEST_SUITE(Particles, Scalars);
 
 template <class S> bool is_double() { return std::is_same_v<S, double>; }
 
+/// Random particles in [-1.5, 1.5]^2 x [-0.5, 0.5] (around the unit torus) with velocities of up to
+/// 2 per axis; a share `balls` of them are balls of radius 0.02, the others points.
+template <class S>
+std::vector<Particle<S>> particles_around_torus(std::uint64_t seed, std::size_t n, double balls) {
+  test::Rng rng(seed);
+  std::vector<Particle<S>> ps(n);
+  for (auto& p : ps) {
+    p.position = rng.in_box(Eigen::Vector3d(-1.5, -1.5, -0.5), Eigen::Vector3d(1.5, 1.5, 0.5)).template cast<S>();
+    p.velocity = (rng.vec(-1, 1) * 2.0).template cast<S>();
+    p.radius = rng.uniform() < balls ? S(0.02) : S(0);
+  }
+  return ps;
+}
+
+/// Steps particles a (colliders ca, options oa) and b (cb, ob) side by side; returns a's counters.
+template <class S>
+StepStats step_side_by_side(std::vector<Particle<S>>& a, const ColliderSet<S>& ca, const StepOptions<S>& oa,
+                            std::vector<Particle<S>>& b, const ColliderSet<S>& cb, const StepOptions<S>& ob, int steps, S dt) {
+  StepStats st;
+  for (int s = 0; s < steps; ++s) {
+    st += step_particles(a, ca, dt, oa);
+    step_particles(b, cb, dt, ob);
+  }
+  return st;
+}
+
+/// Every particle of a in exactly (bit for bit) the state of the same particle of b.
+template <class S>
+void expect_same_states(const std::vector<Particle<S>>& a, const std::vector<Particle<S>>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].position, b[i].position) << i;
+    EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
+  }
+}
+
 /// Apex heights of the bounces of a ball dropped from h0 on the plane z = 0, from the exact
 /// free-flight apex z + vz^2 / (2 g) after each impact.
 template <class S> std::vector<double> bounce_apexes(Strategy strategy, S eps, S h0, S dt, int n_bounces) {
@@ -414,27 +450,13 @@ TYPED_TEST(Particles, FreeBallCacheIsExactAndSpatialOrderIsAPermutation) {
   ColliderSet<S> cs;
   cs.meshes.emplace_back(bvh, ColliderSide::TwoSided, Material<S>{S(0.9), S(0.1)});
   cs.boxes.emplace_back(Aabb<S>(Vec3<S>(-2, -2, -1), Vec3<S>(2, 2, 1)), ColliderSide::Inside, Material<S>::elastic());
-  test::Rng rng(61);
-  std::vector<Particle<S>> a(200 / kSampleDivisor);
-  for (auto& p : a) {
-    p.position = rng.in_box(Eigen::Vector3d(-1.5, -1.5, -0.5), Eigen::Vector3d(1.5, 1.5, 0.5)).template cast<S>();
-    p.velocity = (rng.vec(-1, 1) * 2.0).template cast<S>();
-    p.radius = rng.uniform() < 0.5 ? S(0) : S(0.02);
-  }
+  std::vector<Particle<S>> a = particles_around_torus<S>(61, 200 / kSampleDivisor, 0.5);
   std::vector<Particle<S>> b = a;
   StepOptions<S> with, without;
   with.gravity = without.gravity = Vec3<S>(0, 0, S(-3));
   without.free_ball_factor = S(0);
-  std::size_t hits = 0;
-  for (int s = 0; s < 200; ++s) {
-    hits += step_particles(a, cs, S(0.01), with).impacts;
-    step_particles(b, cs, S(0.01), without);
-  }
-  EXPECT_GT(hits, 50u / kSampleDivisor);
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(a[i].position, b[i].position) << i;
-    EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
-  }
+  EXPECT_GT(step_side_by_side(a, cs, with, b, cs, without, 200, S(0.01)).impacts, 50u / kSampleDivisor);
+  expect_same_states(a, b);
   const auto order = spatial_order(a);
   std::vector<int> seen(a.size(), 0);
   for (auto i : order) ++seen[i];
@@ -463,27 +485,13 @@ TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
   fast.meshes[0].distance_grid = &grid;
   const CompactBvh compact(bvh.tree(), 4);
   fast.meshes[0].compact_tree = &compact;
-  test::Rng rng(62);
-  std::vector<Particle<S>> a(300 / kSampleDivisor);
-  for (auto& p : a) {
-    p.position = rng.in_box(Eigen::Vector3d(-1.5, -1.5, -0.5), Eigen::Vector3d(1.5, 1.5, 0.5)).template cast<S>();
-    p.velocity = (rng.vec(-1, 1) * 2.0).template cast<S>();
-    p.radius = rng.uniform() < 0.7 ? S(0) : S(0.02);
-  }
+  std::vector<Particle<S>> a = particles_around_torus<S>(62, 300 / kSampleDivisor, 0.3);
   std::vector<Particle<S>> b = a;
   StepOptions<S> with, without;
   with.gravity = without.gravity = Vec3<S>(0, 0, S(-3));
   without.free_ball_factor = S(0);
-  std::size_t hits = 0;
-  for (int s = 0; s < 200; ++s) {
-    hits += step_particles(a, fast, S(0.01), with).impacts;
-    step_particles(b, plain, S(0.01), without);
-  }
-  EXPECT_GT(hits, 50u / kSampleDivisor);
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(a[i].position, b[i].position) << i;
-    EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
-  }
+  EXPECT_GT(step_side_by_side(a, fast, with, b, plain, without, 200, S(0.01)).impacts, 50u / kSampleDivisor);
+  expect_same_states(a, b);
 }
 
 // Projection with a distance grid on the mesh (the grid skips the closest-point queries of
@@ -504,26 +512,12 @@ TYPED_TEST(Particles, DistanceGridProjectionIsExact) {
     plain.boxes.emplace_back(Aabb<S>(Vec3<S>(-2, -2, -1), Vec3<S>(2, 2, 1)), ColliderSide::Inside, Material<S>::elastic());
     ColliderSet<S> fast = plain;
     fast.meshes[0].distance_grid = &grid;
-    test::Rng rng(64);
-    std::vector<Particle<S>> a(300 / kSampleDivisor);
-    for (auto& p : a) {
-      p.position = rng.in_box(Eigen::Vector3d(-1.5, -1.5, -0.5), Eigen::Vector3d(1.5, 1.5, 0.5)).template cast<S>();
-      p.velocity = (rng.vec(-1, 1) * 2.0).template cast<S>();
-      p.radius = rng.uniform() < 0.7 ? S(0) : S(0.02);
-    }
+    std::vector<Particle<S>> a = particles_around_torus<S>(64, 300 / kSampleDivisor, 0.3);
     std::vector<Particle<S>> b = a;
     StepOptions<S> opt;
     opt.gravity = Vec3<S>(0, 0, S(-3));
-    std::size_t projections = 0;
-    for (int s = 0; s < 200; ++s) {
-      projections += step_particles(a, fast, S(0.01), opt).projections;
-      step_particles(b, plain, S(0.01), opt);
-    }
-    EXPECT_GT(projections, 50u / kSampleDivisor);
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(a[i].position, b[i].position) << i;
-      EXPECT_EQ(a[i].velocity, b[i].velocity) << i;
-    }
+    EXPECT_GT(step_side_by_side(a, fast, opt, b, plain, opt, 200, S(0.01)).projections, 50u / kSampleDivisor);
+    expect_same_states(a, b);
   }
 }
 
