@@ -29,6 +29,17 @@
 
 namespace impact {
 
+namespace detail {
+/// v rounded to float downwards (dir < 0) or upwards (dir > 0).
+template <class S>
+inline float round_to_float(S v, int dir) {
+  float f = static_cast<float>(v);
+  if (dir < 0 ? S(f) > v : S(f) < v)
+    f = std::nextafter(f, dir < 0 ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity());
+  return f;
+}
+}  // namespace detail
+
 /// A node of a CompactBvh, as a value: its float box, and either its children's pair (inner
 /// node, count 0) or a range of the primitive permutation (leaf, count > 0).
 struct CompactBvhNode {
@@ -148,17 +159,10 @@ class CompactBvh {
   static CompactBvhNode convert(const Aabb<S>& b) {
     CompactBvhNode c;
     for (int k = 0; k < 3; ++k) {
-      c.lo[k] = round(b.min[k], -std::numeric_limits<float>::infinity());
-      c.hi[k] = round(b.max[k], std::numeric_limits<float>::infinity());
+      c.lo[k] = detail::round_to_float(b.min[k], -1);
+      c.hi[k] = detail::round_to_float(b.max[k], 1);
     }
     return c;
-  }
-  /// v rounded to float towards `dir` (-inf: down, +inf: up).
-  template <class S>
-  static float round(S v, float dir) {
-    float f = static_cast<float>(v);
-    if (dir < 0 ? S(f) > v : S(f) < v) f = std::nextafter(f, dir);
-    return f;
   }
 
   CompactBvhNode root_;

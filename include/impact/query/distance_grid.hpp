@@ -10,21 +10,31 @@
 ///
 /// Numerical contract: conservative. The samples are closest_point_on_mesh distances, shrunk by
 /// 64 ulps relative plus 64 ulps of the scene's size (more than the query's rounding) and rounded
-/// down to 16-bit multiples of (largest sample / 65535) for storage (2 bytes a cell, so the
-/// bounds stay in cache); lower_bound() shrinks its own rounding the same way. The bound is
-/// never above the true distance; it is below it by at most about the cell's half diagonal plus
-/// the margins for points inside the grid, and is 0 (useless, still valid) where the mesh passes.
-/// The mesh must not move or deform relative to the frame the grid was built in (rebuild it).
+/// down to 8-bit multiples of a quantum, the smaller of (largest sample / 255) and
+/// (cell size / 16), so a cell's bound takes one byte and the bounds stay in cache; samples beyond
+/// 255 quanta (16 cells) store 255 quanta, still a valid bound. lower_bound() shrinks its own
+/// rounding the same way. Outside the mesh's bounding box the distance to that box is a bound
+/// too, and lower_bound() takes the larger of the two. The bound is never above the true
+/// distance; it is below it by at most about the cell's half diagonal plus a quantum and the
+/// margins for points inside the grid (and nearer than 16 cells), and is 0 (useless, still
+/// valid) where the mesh passes. The mesh must not move or deform relative to the frame the grid
+/// was built in (rebuild it).
 ///
-/// Start nodes (optional, DistanceGridConfig::start_node_reach > 0): each cell also keeps the
-/// deepest node of the mesh's tree whose subtree holds every triangle whose bounding box meets the
-/// cell grown by the reach (or a mark that there is none). start_node(o, e) returns the node of
-/// the segment's midpoint cell when the segment's (padded) box lies in that grown cell (always
-/// when the segment spans at most twice the reach along each axis), so a short ray cast can skip
-/// the top of the tree, or the whole mesh; exact: the skipped triangles cannot meet the segment's
-/// box.
+/// Start nodes (optional, DistanceGridConfig::start_node_reach > 0): each cell also keeps, for the
+/// triangles whose bounding boxes meet the cell grown by the reach (its patch), the deepest node
+/// of the mesh's tree whose subtree holds them all (or a mark that there is none) and a slab
+/// lo <= n . x <= hi that holds them (n their area-weighted mean normal). start_node(o, e) looks
+/// at the segment's midpoint cell when the segment's (padded) box lies in that grown cell (always
+/// when the segment spans at most twice the reach along each axis): when both ends are beyond the
+/// same side of the slab (by more than the casts' rounding) the segment can meet no triangle;
+/// else a ray cast can start at the node and skip the top of the tree. This rules out most of the
+/// short segments that pass near a smooth surface without crossing it, which the distance bounds
+/// (no tighter than a cell) cannot clear. Exact: the skipped triangles cannot meet the segment's
+/// box, and the patch's triangles lie in the slab, which the segment (convex) does not meet.
+/// Segments whose box misses the mesh's box meet nothing either.
 #pragma once
 
+#include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
@@ -41,19 +51,22 @@ namespace impact {
 template <class S>
 struct DistanceGridConfig {
   /// Cells along the longest side of the mesh's bounding box (>= 1); memory is about
-  /// 6 * resolution^3 * (the box's volume / the longest side's cube) bytes.
+  /// 25 * resolution^3 * (the box's volume / the longest side's cube) bytes (1 without start
+  /// nodes).
   int resolution = 64;
   /// Cells added around the mesh's bounding box on every side (>= 0): tighter bounds just outside.
   int padding = 2;
   /// Samples farther than this from the mesh store this value (a valid lower bound); bounding the
   /// build's closest-point queries makes it faster. Infinity: exact samples everywhere.
   S max_distance = std::numeric_limits<S>::infinity();
-  /// Start nodes for segments of up to this many cells around their start cell; 0: none.
+  /// Start nodes and slabs for segments of up to this many cells around their midpoint's cell;
+  /// 0: none.
   S start_node_reach = S(1);
 };
 
 /// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
-/// Build cost: one bounded closest-point query and one box query per cell; memory 6 bytes per cell.
+/// Build cost: one bounded closest-point query and one box query per cell; memory 25 bytes per
+/// cell (1 for the bound, 24 for the start node and the slab).
 template <class S>
 class DistanceGrid {
  public:
@@ -67,6 +80,8 @@ class DistanceGrid {
     const auto& V = mesh.mesh().V;
     for (Eigen::Index i = 0; i < V.rows(); ++i) box.extend(Vec3<S>(V.row(i).transpose()));
     const int res = std::max(cfg.resolution, 1), pad = std::max(cfg.padding, 0);
+    box_ = box;
+    size_ = box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).sum();
     const Vec3<S> ext = box.extent();
     h_ = std::max(ext.maxCoeff() / S(res), std::numeric_limits<S>::min() * S(1e6));
     inv_h_ = S(1) / h_;
@@ -78,11 +93,11 @@ class DistanceGrid {
     const S scale = box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).maxCoeff() + S(2 * pad) * h_;
     const std::size_t cells = static_cast<std::size_t>(n_[0]) * static_cast<std::size_t>(n_[1]) * static_cast<std::size_t>(n_[2]);
     std::vector<S> dist(cells);
-    nodes_.resize(cells);
     reach_ = cfg.start_node_reach > S(0) ? cfg.start_node_reach * h_ : S(0);
     const auto& tree = mesh.tree();
     std::vector<std::pair<std::int32_t, std::int32_t>> range;  // primitive range of each subtree
-    if (reach_ > S(0)) range = subtree_ranges(tree);
+    if (reach_ > S(0)) range = subtree_ranges(tree), patches_.resize(cells);
+    std::vector<std::int32_t> ids;  // scratch: the triangles near a cell
     ClosestPointOptions<S> opt;
     opt.max_distance = cfg.max_distance;
     std::size_t idx = 0;
@@ -94,22 +109,22 @@ class DistanceGrid {
           S d = r ? r->distance : cfg.max_distance;
           d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
           dist[idx] = d > S(0) ? d : S(0);
-          nodes_[idx] = reach_ > S(0) ? deepest_node(tree, range, grown_cell(c, S(4) * eps * scale)) : 0;
+          if (reach_ > S(0)) patches_[idx] = patch(mesh, range, grown_cell(c, S(4) * eps * scale), ids);
         }
-    // 16-bit storage, rounded down: k * quantum <= the sample (checked with the very expression
+    // 8-bit storage, rounded down: k * quantum <= the sample (checked with the very expression
     // lower_bound() evaluates)
     S top = S(0);
     for (const S d : dist)
       if (d < std::numeric_limits<S>::infinity()) top = std::max(top, d);
-    quantum_ = top > S(0) ? top / S(65535) : S(1);
+    quantum_ = top > S(0) ? std::min(top / S(kLevels), h_ / S(16)) : S(1);
     S centre_scale = S(0);  // the largest |coordinate| of a cell centre
     for (int k = 0; k < 3; ++k)
       centre_scale = std::max({centre_scale, std::abs(center(0, 0, 0)[k]), std::abs(center(n_[0] - 1, n_[1] - 1, n_[2] - 1)[k])});
-    margin_ = S(64) * eps * (S(2) * centre_scale + S(65535) * quantum_);
+    margin_ = S(64) * eps * (S(2) * centre_scale + S(kLevels) * quantum_);
     bounds_.resize(cells);
     for (std::size_t k = 0; k < cells; ++k) {
-      const S q = std::floor(std::min(dist[k] / quantum_, S(65535)));
-      auto v = static_cast<std::uint16_t>(q > S(0) ? q : S(0));
+      const S q = std::floor(std::min(dist[k] / quantum_, S(kLevels)));
+      auto v = static_cast<std::uint8_t>(q > S(0) ? q : S(0));
       while (v > 0 && S(v) * quantum_ > dist[k]) --v;
       bounds_[k] = v;
     }
@@ -124,23 +139,41 @@ class DistanceGrid {
     const Vec3<S> c = center(i[0], i[1], i[2]);
     // rounding: 64 ulps of |p|_inf + |c|_inf, bounded once for all points that get a positive
     // bound (then |p - c| < v, so |p|_inf + |c|_inf <= 2 max|c|_inf + max v: margin_)
-    const S b = (v - (p - c).norm()) * (S(1) - S(64) * std::numeric_limits<S>::epsilon()) - margin_;
+    const S shrink = S(1) - S(64) * std::numeric_limits<S>::epsilon();
+    S b = (v - (p - c).norm()) * shrink - margin_;
+    if (!box_.contains(p)) {
+      // the distance to the mesh's box: each difference is rounded once, the norm within a few
+      // ulps relative
+      const Vec3<S> q = p.cwiseMax(box_.min).cwiseMin(box_.max);
+      b = std::max(b, (p - q).norm() * shrink);
+    }
     return b > S(0) ? b : S(0);
   }
 
   /// The node of the mesh's tree to start a ray cast along the segment o -> e from (mesh frame):
   /// every triangle whose box meets the segment's box (padded as ray_mesh_first_hit pads it) is
-  /// in its subtree. 0 (the root) when the segment leaves the reach of its midpoint's cell or
-  /// start nodes are off; kNoTriangle when no triangle can meet the segment. O(1).
+  /// in its subtree. kNoTriangle when no triangle can meet the segment (its box misses the
+  /// mesh's box, no triangle's box meets the grown cell, or the segment passes beside the cell's
+  /// slab); else 0 (the root) when the segment leaves the reach of its midpoint's cell or start
+  /// nodes are off. O(1).
   std::int32_t start_node(const Vec3<S>& o, const Vec3<S>& e) const {
-    if (nodes_.empty() || !(reach_ > S(0))) return 0;
+    if (bounds_.empty()) return 0;
+    const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
+    const Vec3<S> lo = o.cwiseMin(e).array() - pad, hi = o.cwiseMax(e).array() + pad;
+    if ((lo.array() > box_.max.array()).any() || (hi.array() < box_.min.array()).any()) return kNoTriangle;
+    if (patches_.empty()) return 0;
     int i[3];
     cell_of(Vec3<S>((o + e) / S(2)), i);
     const Aabb<S> q = grown_cell(center(i[0], i[1], i[2]), S(0));
-    const S pad = S(4) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
-    const Vec3<S> lo = o.cwiseMin(e).array() - pad, hi = o.cwiseMax(e).array() + pad;
     if (!((lo.array() >= q.min.array()).all() && (hi.array() <= q.max.array()).all())) return 0;
-    return nodes_[index(i[0], i[1], i[2])];
+    const Patch& c = patches_[index(i[0], i[1], i[2])];
+    // both ends beyond the same side of the slab (by more than the casts' rounding): the segment
+    // is, and it cannot meet the triangles of the grown cell, which are in the slab
+    const Vec3<S> n(S(c.n[0]), S(c.n[1]), S(c.n[2]));
+    const S so = n.dot(o), se = n.dot(e);
+    const S m = S(256) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().sum() + e.cwiseAbs().sum() + size_);
+    if (std::min(so, se) > S(c.hi) + m || std::max(so, se) < S(c.lo) - m) return kNoTriangle;
+    return c.node;
   }
   /// start_node() when no triangle can be met.
   static constexpr std::int32_t kNoTriangle = -1;
@@ -156,9 +189,19 @@ class DistanceGrid {
   }
   /// The stored bound at the centre of cell (x, y, z).
   S value(int x, int y, int z) const { return S(bounds_[index(x, y, z)]) * quantum_; }
-  std::size_t memory_bytes() const { return bounds_.size() * sizeof(std::uint16_t) + nodes_.size() * sizeof(std::int32_t); }
+  std::size_t memory_bytes() const { return bounds_.size() * sizeof(bounds_[0]) + patches_.size() * sizeof(Patch); }
 
  private:
+  static constexpr int kLevels = 255;  // the largest stored bound, in quanta
+  /// What a cell knows of the triangles whose boxes meet it grown by the reach: the deepest node
+  /// holding them all (or kNoTriangle), and a slab lo <= n . x <= hi holding them (lo = -inf,
+  /// hi = inf when there is none).
+  struct Patch {
+    std::int32_t node = 0;
+    float n[3] = {0, 0, 0};
+    float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
+  };
+
   std::size_t index(int x, int y, int z) const {
     return (static_cast<std::size_t>(z) * static_cast<std::size_t>(n_[1]) + static_cast<std::size_t>(y)) *
                static_cast<std::size_t>(n_[0]) +
@@ -187,20 +230,51 @@ class DistanceGrid {
     }
     return r;
   }
-  /// Deepest node whose subtree holds every primitive whose box meets q (leaf positions are
-  /// primitive ids in a MeshBvh), or kNoTriangle.
+  /// The patch of the grown cell q (leaf positions are primitive ids in a MeshBvh). The slab's
+  /// normal is the area-weighted mean normal of the triangles; its bounds are the extreme
+  /// n . vertex, widened by their rounding and rounded outward to float. `ids` is scratch.
   template <class BV>
-  static std::int32_t deepest_node(const Bvh<BV>& tree, const std::vector<std::pair<std::int32_t, std::int32_t>>& range,
-                                   const Aabb<S>& q) {
-    std::int32_t lo = std::numeric_limits<std::int32_t>::max(), hi = -1;
+  static Patch patch(const MeshBvh<BV>& mesh, const std::vector<std::pair<std::int32_t, std::int32_t>>& range, const Aabb<S>& q,
+                     std::vector<std::int32_t>& ids) {
+    const Bvh<BV>& tree = mesh.tree();
+    Patch out;
+    ids.clear();
     traverse(
         tree, [&](const BV& bv) { return detail::may_overlap(q, bv); },
         [&](std::int32_t k) {
-          lo = std::min(lo, k);
-          hi = std::max(hi, k);
+          ids.push_back(k);
           return true;
         });
-    if (hi < 0) return kNoTriangle;
+    if (ids.empty()) {
+      out.node = kNoTriangle;
+      return out;
+    }
+    const auto [lo_id, hi_id] = std::minmax_element(ids.begin(), ids.end());
+    out.node = deepest_node(tree, range, *lo_id, *hi_id);
+    Vec3<S> sum = Vec3<S>::Zero();
+    for (const std::int32_t k : ids) sum += mesh.triangle(k).scaled_normal();
+    if (!(sum.norm() > S(0))) return out;
+    const Vec3<float> nf = (sum / sum.norm()).template cast<float>();
+    const Vec3<S> n = nf.template cast<S>();
+    S lo = std::numeric_limits<S>::infinity(), hi = -lo, size = S(0);
+    for (const std::int32_t k : ids)
+      for (int j = 0; j < 3; ++j) {
+        const Vec3<S>& v = mesh.triangle(k)[j];
+        const S t = n.dot(v);
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+        size = std::max(size, v.cwiseAbs().sum());
+      }
+    const S m = S(8) * std::numeric_limits<S>::epsilon() * size;  // the dot products' rounding
+    out.lo = detail::round_to_float(lo - m, -1);
+    out.hi = detail::round_to_float(hi + m, 1);
+    for (int k = 0; k < 3; ++k) out.n[k] = nf[k];
+    return out;
+  }
+  /// Deepest node whose subtree holds the primitives lo..hi (its range contains both).
+  template <class BV>
+  static std::int32_t deepest_node(const Bvh<BV>& tree, const std::vector<std::pair<std::int32_t, std::int32_t>>& range,
+                                   std::int32_t lo, std::int32_t hi) {
     std::int32_t n = 0;
     for (;;) {
       const auto& node = tree.nodes[static_cast<std::size_t>(n)];
@@ -222,8 +296,10 @@ class DistanceGrid {
   int n_[3] = {0, 0, 0};
   S quantum_ = S(1);                   // bounds_ unit
   S margin_ = S(0);                    // lower_bound()'s rounding margin
-  std::vector<std::uint16_t> bounds_;  // lower bounds of the distance at the cell centres
-  std::vector<std::int32_t> nodes_;    // start nodes, or kNoTriangle
+  Aabb<S> box_;                        // the mesh's bounding box
+  S size_ = S(0);                      // the largest |x|_1 of the box
+  std::vector<std::uint8_t> bounds_;   // lower bounds of the distance at the cell centres
+  std::vector<Patch> patches_;         // start node and slab of each cell
 };
 
 }  // namespace impact
