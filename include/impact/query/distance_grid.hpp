@@ -51,7 +51,7 @@ namespace impact {
 template <class S>
 struct DistanceGridConfig {
   /// Cells along the longest side of the mesh's bounding box (>= 1); memory is about
-  /// 25 * resolution^3 * (the box's volume / the longest side's cube) bytes (1 without start
+  /// 17 * resolution^3 * (the box's volume / the longest side's cube) bytes (1 without start
   /// nodes).
   int resolution = 64;
   /// Cells added around the mesh's bounding box on every side (>= 0): tighter bounds just outside.
@@ -65,8 +65,8 @@ struct DistanceGridConfig {
 };
 
 /// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
-/// Build cost: one bounded closest-point query and one box query per cell; memory 25 bytes per
-/// cell (1 for the bound, 24 for the start node and the slab).
+/// Build cost: one bounded closest-point query and one box query per cell; memory 17 bytes per
+/// cell (1 for the bound, 16 for the start node and the slab).
 template <class S>
 class DistanceGrid {
  public:
@@ -169,7 +169,7 @@ class DistanceGrid {
     const Patch& c = patches_[index(i[0], i[1], i[2])];
     // both ends beyond the same side of the slab (by more than the casts' rounding): the segment
     // is, and it cannot meet the triangles of the grown cell, which are in the slab
-    const Vec3<S> n(S(c.n[0]), S(c.n[1]), S(c.n[2]));
+    const Vec3<S> n = c.normal();
     const S so = n.dot(o), se = n.dot(e);
     const S m = S(256) * std::numeric_limits<S>::epsilon() * (o.cwiseAbs().sum() + e.cwiseAbs().sum() + size_);
     if (std::min(so, se) > S(c.hi) + m || std::max(so, se) < S(c.lo) - m) return kNoTriangle;
@@ -198,9 +198,28 @@ class DistanceGrid {
   /// hi = inf when there is none).
   struct Patch {
     std::int32_t node = 0;
-    float n[3] = {0, 0, 0};
+    std::int16_t n[2] = {0, 0};  // the slab's normal, octahedral (normal())
     float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
+
+    /// The slab's normal (not unit: the build computes lo and hi with this very vector).
+    Vec3<S> normal() const {
+      const S u = S(n[0]) / S(32767), v = S(n[1]) / S(32767), w = S(1) - std::abs(u) - std::abs(v);
+      if (w >= S(0)) return {u, v, w};
+      return {std::copysign(S(1) - std::abs(v), u), std::copysign(S(1) - std::abs(u), v), w};
+    }
+    /// Stores the octahedral code of the unit vector m.
+    void set_normal(const Vec3<S>& m) {
+      const S l1 = std::abs(m[0]) + std::abs(m[1]) + std::abs(m[2]);
+      S u = m[0] / l1, v = m[1] / l1;
+      if (m[2] < S(0)) {
+        const S fu = std::copysign(S(1) - std::abs(v), u), fv = std::copysign(S(1) - std::abs(u), v);
+        u = fu, v = fv;
+      }
+      n[0] = static_cast<std::int16_t>(std::lround(std::clamp(u, S(-1), S(1)) * S(32767)));
+      n[1] = static_cast<std::int16_t>(std::lround(std::clamp(v, S(-1), S(1)) * S(32767)));
+    }
   };
+  static_assert(sizeof(Patch) == 16, "DistanceGrid: a patch is 16 bytes");
 
   std::size_t index(int x, int y, int z) const {
     return (static_cast<std::size_t>(z) * static_cast<std::size_t>(n_[1]) + static_cast<std::size_t>(y)) *
@@ -254,8 +273,8 @@ class DistanceGrid {
     Vec3<S> sum = Vec3<S>::Zero();
     for (const std::int32_t k : ids) sum += mesh.triangle(k).scaled_normal();
     if (!(sum.norm() > S(0))) return out;
-    const Vec3<float> nf = (sum / sum.norm()).template cast<float>();
-    const Vec3<S> n = nf.template cast<S>();
+    out.set_normal(sum / sum.norm());
+    const Vec3<S> n = out.normal();
     S lo = std::numeric_limits<S>::infinity(), hi = -lo, size = S(0);
     for (const std::int32_t k : ids)
       for (int j = 0; j < 3; ++j) {
@@ -268,7 +287,6 @@ class DistanceGrid {
     const S m = S(8) * std::numeric_limits<S>::epsilon() * size;  // the dot products' rounding
     out.lo = detail::round_to_float(lo - m, -1);
     out.hi = detail::round_to_float(hi + m, 1);
-    for (int k = 0; k < 3; ++k) out.n[k] = nf[k];
     return out;
   }
   /// Deepest node whose subtree holds the primitives lo..hi (its range contains both).
