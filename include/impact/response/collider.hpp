@@ -390,8 +390,9 @@ template <class BV> struct MeshCollider {
   /// Optional distance bounds to this mesh in its local frame (not owned; must outlive the
   /// collider and match the mesh): backtracking then refreshes free balls in O(1) from it
   /// instead of walking the tree (StepOptions::free_ball_factor), and point particles' ray casts
-  /// start from its start nodes (same hits, shorter walks); projection skips the closest-point
-  /// query of a particle the grid proves out of its reach (the same answer).
+  /// start from its start nodes, or are skipped when its slabs rule the leg out (same hits,
+  /// shorter walks); projection skips the closest-point query of a particle the grid proves out
+  /// of its reach (the same answer).
   const DistanceGrid<S>* distance_grid = nullptr;
   /// Optional cache-sized copy of the mesh's tree (not owned; must outlive the collider and be
   /// built from mesh->tree()): point particles' ray casts walk it instead (the same hits; see
