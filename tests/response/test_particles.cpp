@@ -48,6 +48,14 @@ std::vector<Particle<S>> particles_around_torus(std::uint64_t seed, std::size_t 
   return ps;
 }
 
+/// A 24-cell distance grid of a small test mesh (its build stays quick under the sanitizers).
+template <class S>
+DistanceGrid<S> coarse_grid(const MeshBvh<Aabb<S>>& mesh) {
+  DistanceGridConfig<S> cfg;
+  cfg.resolution = 24;
+  return DistanceGrid<S>(mesh, cfg);
+}
+
 /// Steps particles a (colliders ca, options oa) and b (cb, ob) side by side; returns a's counters.
 template <class S>
 StepStats step_side_by_side(std::vector<Particle<S>>& a, const ColliderSet<S>& ca, const StepOptions<S>& oa,
@@ -470,9 +478,7 @@ TYPED_TEST(Particles, FreeBallCacheIsExactAndSpatialOrderIsAPermutation) {
 TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
   using S = TypeParam;
   const MeshBvh<Aabb<S>> bvh(make_torus<S>(S(1), S(0.4), 32, 16));
-  DistanceGridConfig<S> gcfg;
-  gcfg.resolution = 24;
-  const DistanceGrid<S> grid(bvh, gcfg);
+  const DistanceGrid<S> grid = coarse_grid(bvh);
   ColliderSet<S> plain, fast;
   plain.meshes.emplace_back(bvh, ColliderSide::TwoSided, Material<S>{S(0.9), S(0.1)});
   plain.meshes[0].motion.pose.R = Eigen::AngleAxis<S>(S(0.3), Vec3<S>(1, 2, 3).normalized()).toRotationMatrix();
@@ -500,9 +506,7 @@ TYPED_TEST(Particles, DistanceGridFreeBallIsExact) {
 TYPED_TEST(Particles, DistanceGridProjectionIsExact) {
   using S = TypeParam;
   const MeshBvh<Aabb<S>> torus(make_torus<S>(S(1), S(0.4), 32, 16));
-  DistanceGridConfig<S> gcfg;
-  gcfg.resolution = 24;
-  const DistanceGrid<S> grid(torus, gcfg);
+  const DistanceGrid<S> grid = coarse_grid(torus);
   for (ColliderSide side : {ColliderSide::Outside, ColliderSide::TwoSided}) {
     ColliderSet<S> plain;
     plain.meshes.emplace_back(torus, side, Material<S>{S(0.8), S(0.2)});

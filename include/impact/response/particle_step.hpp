@@ -34,8 +34,9 @@
 /// Speed: legs that stay inside a particle's free ball (Particle::free_radius, a conservative
 /// clearance from the colliders) skip the collision tests (StepOptions::free_ball_factor), and
 /// step_particles() moves such a particle without setting up the full step; a DistanceGrid on a
-/// mesh collider (query/distance_grid.hpp) makes the clearance O(1) and starts the remaining ray
-/// casts deep in the tree; spatial_order() gives a cache-friendly order for large particle sets.
+/// mesh collider (query/distance_grid.hpp) makes the clearance O(1), rules out the legs that pass
+/// beside the surface and starts the remaining ray casts deep in the tree; spatial_order() gives
+/// a cache-friendly order for large particle sets.
 ///
 /// The offset is scale-aware: offset_ulps * epsilon(S) * (|x|_inf + collider scale + |chord|_inf)
 /// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
@@ -171,7 +172,6 @@ template <class S> struct FreeBallRefresh {
 /// free_ball_factor * len and is a cheap lower bound of the distance: the walk descends only
 /// into nodes whose box contains x; any other node bounds its triangles by its box's distance,
 /// and the leaves that contain x give exact triangle distances. Conservative, O(depth) per mesh.
-
 template <class S, class BV>
 inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV>& colliders,
                                        const StepOptions<S>& opt) {
@@ -357,13 +357,14 @@ LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, c
       const auto fx = detail::free_ball_at(x, len, p.radius, colliders, opt);
       rx_mesh = fx.mesh_radius;
       rx_other = fx.other_radius;
+      const S rx = detail::clear_radius(fx);
+      c.all = e2 <= rx * rx;
       if (!fe.cheap) {
         p.free_center = x;
-        p.free_radius = detail::clear_radius(fx);
+        p.free_radius = rx;
         // trees: a surface is near, retry two legs away
-        if (!fx.cheap && !(e2 <= p.free_radius * p.free_radius)) p.free_radius = -S(2) * len;
+        if (!fx.cheap && !c.all) p.free_radius = -S(2) * len;
       }
-      c.all = e2 <= detail::clear_radius(fx) * detail::clear_radius(fx);
     }
     if (!c.all) {
       // the meshes, or the rest, alone may still be clear: the ball at x, or (grids) the balls
