@@ -45,7 +45,11 @@ struct ClothObstacles {
 /// How the impact zones are resolved (stage 3).
 enum class ZoneMethod {
   Harmon,  ///< inelastic projection (Harmon et al. 2008): momentum kept, sliding survives
-  Rigid,   ///< rigid impact zones (Provot 1997; Bridson 2002 section 7.4)
+  /// Rigid impact zones (Provot 1997; Bridson 2002 section 7.4): the zone moves rigidly with
+  /// its momentum and angular momentum. A zone held by infinite-mass vertices that do not move
+  /// (a static obstacle, pinned vertices) rests with them (x1' = x0); one held by moving
+  /// infinite-mass vertices cannot follow them rigidly and is projected like Harmon's.
+  Rigid,
 };
 
 /// What to do when x0 itself has pairs closer than the thickness.
@@ -85,8 +89,8 @@ struct ClothCollisionOptions {
   CcdOptions ccd{};
   /// x0 closer than h somewhere: throw (default) or report and proceed.
   StartViolation on_start_violation = StartViolation::Throw;
-  /// Threads for the batch parts (CCD over the candidates); 1 is the serial path. The result does
-  /// not depend on it.
+  /// Threads for the batch parts (CCD over the candidates; core/parallel.hpp): 1 is the serial
+  /// path, <= 0 the hardware concurrency. The result does not depend on it, bit for bit.
   int threads = 1;
 };
 

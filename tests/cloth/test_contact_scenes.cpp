@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: MIT
+// The collision step on scenes with many simultaneous contacts, each stage alone and together,
+// against the oracles of cloth_oracles.hpp (all pairs sampled by closest points, all pairs through
+// the primitive CCD) and the exact verify_cloth_state: two cloth layers pressed between two
+// approaching planes (hundreds of contacts), pinned vertices, sliding that survives Harmon's zones
+// and not rigid ones (coplanar and parallel edges), float and double.
+#include "cloth_oracles.hpp"
+#include "impact/cloth/verify_state.hpp"
+#include "scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <random>
+
+namespace {
+
+using namespace impact;
+using cloth_test::combine;
+
+template <class S>
+class ClothScenes : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(ClothScenes, Scalars);
+
+enum class Stages { FailsafeOnly, ImpulsesOnly, HarmonOnly, RigidOnly, All };
+
+template <class S>
+struct Pressed {
+  TriangleMesh<S> cloth;
+  Vertices<S> x1;
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w;
+  Vertices<S> lo0, lo1, hi0, hi1;
+  Faces qf = cloth_test::quad_faces();
+  ClothObstacles<S> obs;
+  double h = 0.01;
+
+  explicit Pressed(unsigned seed) {
+    cloth = cloth_test::layers<S>(8, {-h, h});
+    lo0 = cloth_test::quad<S>(2, -4 * h), lo1 = cloth_test::quad<S>(2, -2.4 * h);
+    hi0 = cloth_test::quad<S>(2, 4 * h), hi1 = cloth_test::quad<S>(2, 2.4 * h);
+    obs.kinematic.push_back({&lo0, &lo1, &qf});
+    obs.kinematic.push_back({&hi0, &hi1, &qf});
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    x1 = cloth.V;
+    w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(cloth.V.rows());
+    for (Eigen::Index i = 0; i < x1.rows(); ++i) {
+      x1(i, 0) += S(h * U(rng)), x1(i, 1) += S(h * U(rng)), x1(i, 2) += S(3 * h * U(rng));
+      w[i] = S(1 / (1 + 0.5 * (U(rng) + 1)));
+    }
+    // Pin the corners of the lower layer (scripted: they move as given) and make vertex 40 heavy-pinned still.
+    for (int c : {0, 8, 72, 80}) w[c] = S(0), x1.row(c) = cloth.V.row(c);
+    w[40] = S(0), x1.row(40) = cloth.V.row(40);
+  }
+};
+
+template <class S>
+ClothCollisionOptions<S> options_for(Stages s, double h) {
+  ClothCollisionOptions<S> o;
+  o.thickness = S(h);
+  o.proximity = s == Stages::All;
+  o.impulses = s == Stages::ImpulsesOnly || s == Stages::All;
+  o.zones = s == Stages::HarmonOnly || s == Stages::RigidOnly || s == Stages::All;
+  o.zone_method = s == Stages::RigidOnly ? ZoneMethod::Rigid : ZoneMethod::Harmon;
+  return o;
+}
+
+template <class S>
+void run_pressed(Stages s, unsigned seed) {
+  Pressed<S> p(seed);
+  Vertices<S> x1 = p.x1;
+  const auto opt = options_for<S>(s, p.h);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto st = cloth_collision_step(p.cloth.F, p.w, p.cloth.V, x1, p.obs, opt);
+  ::testing::Test::RecordProperty("step_ms", std::to_string(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()));
+  SCOPED_TRACE(testing::Message() << "stages " << int(s) << " seed " << seed);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_TRUE(st.unresolved.empty());
+  // Hundreds of simultaneous contacts.
+  const std::size_t handled = st.proximity.collisions + st.impulses.collisions + st.zones.collisions + st.failsafe.collisions;
+  EXPECT_GT(handled, 100u);
+  if (s == Stages::FailsafeOnly) {
+    EXPECT_TRUE(st.failsafe_used);
+  }
+  if (s == Stages::HarmonOnly || s == Stages::All) {
+    EXPECT_FALSE(st.failsafe_used);
+    EXPECT_GT(st.zone_count, 0u);
+  }
+  // Pinned and infinite-mass vertices never move away from their scripted end.
+  for (Eigen::Index i = 0; i < x1.rows(); ++i)
+    if (p.w[i] == S(0)) {
+      EXPECT_TRUE(x1.row(i) == p.x1.row(i)) << i;
+    }
+  // Oracles independent of the step's tree and stages.
+  const auto c = combine(p.cloth.F, p.cloth.V, x1, p.obs);
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, p.h), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c, 8), p.h);
+  const auto rep = verify_cloth_state(p.cloth.F, x1, p.obs, ObstacleTime::End, ClothVerifyOptions{2 * p.h, 16});
+  EXPECT_EQ(rep.intersections, 0u);
+  EXPECT_GE(rep.min_distance, p.h);
+}
+
+TYPED_TEST(ClothScenes, PressedBetweenPlanesFailsafeOnly) { run_pressed<TypeParam>(Stages::FailsafeOnly, 1); }
+TYPED_TEST(ClothScenes, PressedBetweenPlanesImpulsesOnly) { run_pressed<TypeParam>(Stages::ImpulsesOnly, 2); }
+TYPED_TEST(ClothScenes, PressedBetweenPlanesHarmonZones) { run_pressed<TypeParam>(Stages::HarmonOnly, 3); }
+TYPED_TEST(ClothScenes, PressedBetweenPlanesRigidZones) { run_pressed<TypeParam>(Stages::RigidOnly, 4); }
+TYPED_TEST(ClothScenes, PressedBetweenPlanesAllStages) { run_pressed<TypeParam>(Stages::All, 5); }
+
+// Two triangles; B slides along A's edge while closing in on it. Returns the sliding that
+// survived: the relative displacement along the edges of their midpoints.
+template <class S>
+double sliding_after(bool coplanar, ZoneMethod m, bool* collision_free) {
+  const double h = 0.01;
+  Vertices<S> x0(6, 3);
+  if (coplanar)  // both in z = 0, facing edges along x at y = 0 and y = 3h
+    x0 << 0, 0, 0, 1, 0, 0, 0.5, -1, 0, 0, 3 * h, 0, 1, 3 * h, 0, 0.5, 1, 0;
+  else  // A vertical with its top edge along x at z = 0; B above, its bottom edge parallel at z = 3h
+    x0 << 0, 0, 0, 1, 0, 0, 0.5, 0, -1, 0, 0, 3 * h, 1, 0, 3 * h, 0.5, 1, 1;
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  Vertices<S> x1 = x0;
+  for (int i = 3; i < 6; ++i) {
+    x1(i, 0) += S(0.5);
+    x1(i, coplanar ? 1 : 2) -= S(5 * h);
+  }
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionOptions<S> o;
+  o.thickness = S(h);
+  o.proximity = false;
+  o.impulses = false;
+  o.friction = S(0);
+  o.zone_method = m;
+  const auto st = cloth_collision_step(F, w, x0, x1, ClothObstacles<S>{}, o);
+  *collision_free = st.collision_free && !st.failsafe_used;
+  const auto c = combine(F, x0, x1, ClothObstacles<S>{});
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, h), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c, 64), h);
+  // Relative displacement along x of the facing edges' midpoints (the contact).
+  auto mid = [&](const Vertices<S>& X, int a, int b) { return 0.5 * double(X(a, 0) + X(b, 0)); };
+  return (mid(x1, 3, 4) - mid(x0, 3, 4)) - (mid(x1, 0, 1) - mid(x0, 0, 1));
+}
+
+TYPED_TEST(ClothScenes, SlidingSurvivesHarmonNotRigid) {
+  using S = TypeParam;
+  for (bool coplanar : {true, false}) {
+    bool ok = false;
+    const double harmon = sliding_after<S>(coplanar, ZoneMethod::Harmon, &ok);
+    EXPECT_TRUE(ok);
+    EXPECT_NEAR(harmon, 0.5, 0.01) << "coplanar " << coplanar;
+    const double rigid = sliding_after<S>(coplanar, ZoneMethod::Rigid, &ok);
+    EXPECT_TRUE(ok);
+    EXPECT_LT(std::abs(rigid), 0.05) << "coplanar " << coplanar;
+  }
+}
+
+}  // namespace

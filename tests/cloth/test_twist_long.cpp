@@ -1,0 +1,22 @@
+// SPDX-License-Identifier: MIT
+// The longer twisting runs (label "long": skipped by the sanitizer pass): a full turn with dense
+// self-contact, both zone methods, float and double, zero intersections at every verified state.
+#include "twist_run.hpp"
+
+namespace {
+
+TEST(ClothTwistLong, FullTurnHarmonDouble) {
+  const auto r = cloth_test::twist_run<double>(8, 120, 1.0, impact::ZoneMethod::Harmon, 10);
+  EXPECT_EQ(r.steps_run, 120);
+  EXPECT_EQ(r.not_collision_free, 0);
+  EXPECT_EQ(r.intersections_seen, 0u);
+  EXPECT_GT(r.zones, 0u);  // the run reaches self-contact that needs zones
+}
+
+TEST(ClothTwistLong, FullTurnRigidFloat) {
+  const auto r = cloth_test::twist_run<float>(8, 120, 1.0, impact::ZoneMethod::Rigid, 10);
+  EXPECT_EQ(r.not_collision_free, 0);
+  EXPECT_EQ(r.intersections_seen, 0u);
+}
+
+}  // namespace
