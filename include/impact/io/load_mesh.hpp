@@ -103,11 +103,16 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
 /// The result passes validate_mesh. Throws InvalidInput, with the path and the reason in the
 /// message, when the file does not exist, is not a regular file, cannot be read, is empty, cannot
 /// be parsed (assimp's error text is included), contains no triangles, has a NaN or infinite
-/// coordinate (or one that overflows S), has a face index out of range, is a PLY, OFF or ASCII
-/// STL file cut short of what its header or syntax declares, or holds more than INT_MAX vertices
-/// or triangles. A text file cut at a line boundary that is still a valid file (OBJ declares no
-/// counts) cannot be told from a complete one. Never prints. Cost: one pass of assimp plus
-/// O(triangles) expected time for welding; about 0.1 s for 270k triangles.
+/// coordinate (or one that overflows S), has a face index out of range, or holds more than INT_MAX
+/// vertices or triangles. PLY, OFF and STL files (recognised by their bytes as well as their name,
+/// since assimp reads .txt, .dat or unnamed files by content) are checked before assimp sees them
+/// (io/file_checks.hpp): they are rejected when cut short of what their header or syntax declares,
+/// when a declared count exceeds what the file's size can hold, when their header is malformed or
+/// holds stray control bytes, when a face has an empty index list (or, in OFF, more than 9
+/// corners), and when a non-numeric token stands where a number is due. A text file cut at a line
+/// boundary that is still a valid file (OBJ declares no counts) cannot be told from a complete
+/// one. Never prints. Cost: one pass of the checks and of assimp plus O(triangles) expected time
+/// for welding; about 0.1 s for 270k triangles.
 template <class S> TriangleMesh<S> load_mesh(const std::string& path, const LoadOptions& options = {}) {
   static_assert(is_supported_scalar_v<S>, "load_mesh: S must be float or double");
   namespace fs = std::filesystem;
@@ -118,7 +123,7 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
   if (fs::is_directory(st)) detail::loader::fail(path, "is a directory, not a mesh file");
   if (!std::ifstream(path, std::ios::binary).good()) detail::loader::fail(path, "file cannot be opened for reading");
   if (fs::is_regular_file(st) && fs::file_size(path, ec) == 0 && !ec) detail::loader::fail(path, "file is empty");
-  detail::mesh_file::check(path);  // PLY, OFF and STL defects assimp would hang on or hide
+  detail::mesh_file::check(path);  // PLY, OFF and STL defects assimp would hang, abort or allocate on, or hide
 
   // No JoinIdenticalVertices when welding by position ourselves: it would only cost time.
   unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
