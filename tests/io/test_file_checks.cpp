@@ -206,4 +206,25 @@ TEST(FileChecks, D6NonNumericTokens) {
   expect_rejected(f.write("two_vertices.stl", std::string(stl).erase(stl.find("vertex 0 1 0"), 13)), "where 'vertex' is due");
 }
 
+// Formats: assimp hands a file to another reader by its content when the extension's readers
+// decline it (glTF and GLB have two readers each) or when assimp does not claim the extension
+// (.txt, .dat, none). An ASCII-export file under .gltf, .glb or .txt crashed assimp's ASE reader
+// (found by tests/fuzz/fuzz_load_mesh.cpp). load_mesh reads by default only OBJ, PLY, OFF and STL,
+// and only through the readers of the file's format.
+TEST(FileChecks, FormatsOutsideTheDefaultsAreRefused) {
+  Files f;
+  const std::string ase =
+      "*3DSMAX_ASCIIEXPORT 200\n*GEOMOBJECT {\n*NODE_NAME \"t\"\n*MESH {\n*MESH_NUMVERTEX 3\n*MESH_NUMFACES 1\n"
+      "*MESH_TVEERX_LIST {\n*MESH_VERTEX 0 0 0 0\n*MESH_VERTEX 1 1 0 0\n*MESH_VERTEX 2 0 1 0\n}\n*MESH_FACE_LIST {\n"
+      "*MESH_FACE 0: A: 0 B: 1 C: 2\n}\n}\n}\n";
+  for (const char* name : {"crash.ase", "crash.gltf", "crash.glb"}) expect_rejected(f.write(name, ase), "not read by default");
+  for (const char* name : {"crash.txt", "crash.dat", "crash"}) expect_rejected(f.write(name, ase), "unknown format");
+  // a file is read only by the readers of its own format, never diverted by its content
+  expect_rejected(f.write("off_content.stl", kOff), "cannot be parsed");
+  expect_rejected(f.write("stl_content.ply", kStl), "cannot be parsed");
+  // PLY, OFF and STL content under a name assimp does not claim is checked and read as such
+  expect_rejected(f.write("cut_ply.dat", "ply\n" + kPlyAsciiHeader + "0 0 0\n"), "truncated");
+  expect_loaded(f.write("stl_no_extension", kStl), 1);
+}
+
 }  // namespace

@@ -7,12 +7,10 @@
 /// declared (assimp pads them with made-up items or keeps the part before a cut), out-of-range
 /// indices (assimp clamps them) and non-numeric tokens where numbers are due (assimp leaks).
 ///
-/// Which check applies is decided from the bytes as well as the name, because assimp reads files
-/// by content when their extension is not one of its own (.txt, .dat, none): bytes starting with
-/// "ply" get the PLY check, bytes starting with "off" or a name *.off the OFF check, bytes starting
-/// with "solid" or a name *.stl the STL check. Each check is in io/detail/<format>_check.hpp,
-/// walks the file without building anything (time and memory linear in its size) and throws
-/// InvalidInput with the reason; other formats pass through untouched.
+/// load_mesh decides the format (by the extension, or by the first bytes when assimp does not
+/// claim the extension: .txt, .dat, none) and hands assimp the very bytes checked here. Each check
+/// is in io/detail/<format>_check.hpp, walks the file without building anything (time and memory
+/// linear in its size) and throws InvalidInput with the reason.
 #pragma once
 
 #include "impact/io/detail/off_check.hpp"
@@ -40,26 +38,26 @@ inline std::string extension_of(const std::string& path) {
   return lower_ascii(std::string_view(path).substr(dot + 1));
 }
 
-/// Runs the check that fits the file (see the file comment): by its extension when it is one of
-/// ply, off, stl (assimp then reads it with that reader), else by its first bytes.
-inline void check_bytes(const std::string& path, const std::string& data) {
-  const std::string ext = extension_of(path);
-  if (ext == "ply") {
+/// The format of a file named with an extension assimp does not claim (.txt, .dat, none), from
+/// its first bytes: "ply", "off" or "stl" (ASCII, starting with "solid"), else "" (unknown).
+inline std::string sniff_format(const std::string& data) {
+  if (looks_like_ply(data)) return "ply";
+  if (starts_with_ci(data, "off")) return "off";
+  if (looks_like_ascii_stl(data)) return "stl";
+  return {};
+}
+
+/// Runs the check of `format` ("ply", "off" or "stl"; other formats are not checked) on the file's
+/// bytes. by_extension: the file is named with that extension (a headerless OFF file is then
+/// allowed, as assimp reads one only by name).
+inline void check_format(const std::string& path, const std::string& data, const std::string& format, bool by_extension) {
+  if (format == "ply") {
     if (looks_like_ply(data)) check_ply(path, data);  // else assimp rejects the magic number
-  } else if (ext == "off") {
-    check_off(path, data, true);
-  } else if (ext == "stl") {
-    check_stl(path, data);
-  } else if (looks_like_ply(data)) {
-    check_ply(path, data);
-  } else if (starts_with_ci(data, "off")) {
-    check_off(path, data, false);
-  } else if (looks_like_ascii_stl(data)) {
+  } else if (format == "off") {
+    check_off(path, data, by_extension);
+  } else if (format == "stl") {
     check_stl(path, data);
   }
 }
-
-/// check_bytes on the file's contents.
-inline void check(const std::string& path) { check_bytes(path, read_all_bytes(path)); }
 
 }  // namespace impact::detail::mesh_file
