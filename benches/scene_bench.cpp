@@ -4,7 +4,7 @@
 //
 //   impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]
 //                      [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]
-//                      [--bullet-deferred 0|1] [--json FILE]
+//                      [--bullet-deferred 0|1] [--only NAME] [--json FILE]
 //
 // A scene of N objects (70% spheres of radius 0.2..0.8, 30% small meshes: an 80-triangle icosphere
 // and a 144-triangle torus) uniform in a cube sized for 0.1 objects per unit volume; a fraction F is
@@ -21,6 +21,7 @@
 // same set. Mismatches: pairs in the symmetric difference with the reference (all-pairs when it
 // runs; otherwise static/dynamic, itself checked against the first peer), summed over every step
 // (warm-up steps included); the exit status is 3 when there is any.
+// --only NAME keeps the methods whose name contains NAME (for profiling one of them).
 // Then the same for an all-static scene (F = 0), and a scaling table for N = 10^2 .. --scaling-max.
 // Times are CPU time of the bench thread (setup excluded from ms/step, --warmup untimed steps
 // first), so that a loaded machine does not distort the comparison.
@@ -76,13 +77,15 @@ struct Args {
   long scaling_max = 100000;
   double bullet_prediction = 2.0;
   bool bullet_deferred = false;
+  std::string only;
   std::string json;
 };
 
 [[noreturn]] void usage(const char* msg) {
   std::fprintf(stderr,
                "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]\n"
-               "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P] [--json FILE]\n",
+               "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]\n"
+               "                          [--bullet-deferred 0|1] [--only NAME] [--json FILE]\n",
                msg);
   std::exit(2);
 }
@@ -113,6 +116,8 @@ Args parse(int argc, char** argv) {
       a.bullet_prediction = std::atof(next().c_str());
     else if (s == "--bullet-deferred")
       a.bullet_deferred = std::atoi(next().c_str()) != 0;
+    else if (s == "--only")
+      a.only = next();
     else if (s == "--json")
       a.json = next();
     else if (s == "-h" || s == "--help")
@@ -384,6 +389,10 @@ class BulletMethod {
     bp_.setVelocityPrediction(btScalar(prediction));
   }
   ~BulletMethod() {
+    // Pairs first (one hash removal each): destroyProxy scans the whole pair cache for its pairs.
+    btOverlappingPairCache* cache = bp_.getOverlappingPairCache();
+    btBroadphasePairArray& arr = cache->getOverlappingPairArray();
+    while (arr.size() > 0) cache->removeOverlappingPair(arr[arr.size() - 1].m_pProxy0, arr[arr.size() - 1].m_pProxy1, nullptr);
     for (btBroadphaseProxy* p : proxy_) bp_.destroyProxy(p, nullptr);
   }
   BulletMethod(const BulletMethod&) = delete;
@@ -463,8 +472,19 @@ std::vector<Row> run(long n, double frac, int steps, const Args& args, const Mes
 #endif
   // The reference: all-pairs when it runs, else static/dynamic, itself checked against the first
   // peer (FCL, else Bullet, else the hierarchical method).
+  if (!args.only.empty()) {
+    std::vector<Method> kept;
+    for (auto& m : methods)
+      if (m.name.find(args.only) != std::string::npos) kept.push_back(std::move(m));
+    methods = std::move(kept);
+    if (methods.empty()) usage(("--only " + args.only + " names no method").c_str());
+  }
   const std::size_t ref = 0;
-  const std::size_t check = with_all ? ref : (methods.size() > 2 ? 2 : 1);
+  std::size_t check = ref;
+  if (methods[0].name != "impact-all-pairs") {
+    for (std::size_t m = methods.size(); m-- > 1;)
+      if (methods[m].name.rfind("impact", 0) != 0 || check == ref) check = m;
+  }
   std::vector<Row> rows(methods.size());
   std::vector<double> total(methods.size(), 0.0);
   std::vector<PairKeys> k(methods.size());
