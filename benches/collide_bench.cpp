@@ -2,7 +2,7 @@
 // impact-collide-bench: mesh–mesh collision of impact's sphere and AABB trees against FCL's
 // OBBRSS and OBB trees, in one run, on the same meshes and the same random poses.
 //
-//   impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|all]
+//   impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]
 //                        [--split middle|median] [--leaf N] [--json FILE]
 //
 // Mesh B defaults to mesh A; without meshes a built-in generated scene is used (a torus against an
@@ -36,7 +36,7 @@ struct Args {
 
 [[noreturn]] void usage(const char* msg) {
   std::fprintf(stderr,
-               "%s\nusage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|all]\n"
+               "%s\nusage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
                "                            [--split middle|median] [--leaf N] [--json FILE]\n",
                msg);
   std::exit(2);
@@ -64,7 +64,7 @@ Args parse(int argc, char** argv) {
   if (pos.size() > 2) usage("at most two meshes");
   if (a.poses < 1) usage("--poses must be >= 1");
   if (a.leaf < 1) usage("--leaf must be >= 1");
-  if (a.bv != "sphere" && a.bv != "aabb" && a.bv != "all") usage("--bv must be sphere, aabb or all");
+  if (a.bv != "sphere" && a.bv != "aabb" && a.bv != "obb" && a.bv != "all") usage("--bv must be sphere, aabb, obb or all");
   if (a.split != "middle" && a.split != "median") usage("--split must be middle or median");
   if (!pos.empty()) a.mesh_a = pos[0];
   a.mesh_b = pos.size() > 1 ? pos[1] : a.mesh_a;
@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
   };
   if (args.bv == "sphere" || args.bv == "all") run_impact(Sphere<double>{}, "sphere");
   if (args.bv == "aabb" || args.bv == "all") run_impact(Aabb<double>{}, "aabb");
+  if (args.bv == "obb" || args.bv == "all") run_impact(Obb<double>{}, "obb");
 
   for (Row& r : rows) r.ratio = (r.query == "boolean" ? ref_bool_median : ref_all_median) / std::max(r.us.median, 1e-9);
 
