@@ -13,7 +13,7 @@ mode="${1:-test}"
 [ $# -gt 0 ] && shift
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libgtest-dev libbenchmark-dev)
+packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev)
 # the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
 [ "$mode" = test ] && packages+=(assimp-testmodels)
 missing=()
