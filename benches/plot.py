@@ -12,7 +12,7 @@ ranges the README quotes). Charts written, when the JSON holds the data:
                          <stem>-scene-methods.png   ms per step per method (main scene)
                          <stem>-scene-threads.png   ms per step against threads (rows with "threads")
   impact-collide-bench   <stem>-collide.png         median µs per method, boolean and all-pairs
-  impact-ccd-bench       <stem>-ccd-sweep.png       mean µs against false positives over the sweep
+  impact-ccd-bench       <stem>-ccd-sweep.png       mean µs and false positives against tolerance
   impact-fit-bench       <stem>-fit.png             time against radius excess per fitting method
   impact-particles-bench <stem>-particles.png       particle-steps/s against position error
   a ray bench            <stem>-rays.png            rays per second per set and library
@@ -96,7 +96,7 @@ def plot_scene(docs, out, stem):
     series = defaultdict(lambda: defaultdict(list))
     for d in docs:
         for r in d.get("scaling", []):
-            if r.get("ms_per_step", 0) > 0:
+            if r.get("ms_per_step", 0) > 0 and r.get("threads", 1) == 1:
                 series[r["method"]][r["objects"]].append(r["ms_per_step"])
     if series:
         fig, ax = plt.subplots(figsize=FIGSIZE)
@@ -119,7 +119,7 @@ def plot_scene(docs, out, stem):
     for d in docs:
         frac = d.get("dynamic_fraction")
         for r in d.get("rows", []):
-            if r.get("dynamic_fraction") == frac and "threads" not in r:
+            if r.get("dynamic_fraction") == frac and r.get("threads", 1) == 1:
                 per[r["method"]].append(r["ms_per_step"])
     if per:
         fig, ax = plt.subplots(figsize=FIGSIZE)
@@ -148,8 +148,11 @@ def plot_threads(docs, out, stem, key=None, label=None):
     """Any rows carrying "threads": time or rate against the thread count, per method."""
     series = defaultdict(lambda: defaultdict(list))
     for d in docs:
-        for r in rows_of(d) + d.get("scaling", []):
+        for r in rows_of(d):
             if "threads" not in r:
+                continue
+            # the scene bench's main scene only (not its all-static rows)
+            if "dynamic_fraction" in r and "dynamic_fraction" in d and r["dynamic_fraction"] != d["dynamic_fraction"]:
                 continue
             k = key if key and key in r else next((c for c in ("ms_per_step", "rays_per_s", "particle_steps_per_s",
                                                                "mean_us", "median_us") if c in r), None)
@@ -209,7 +212,9 @@ def plot_collide(docs, out, stem):
 
 # --- time against error --------------------------------------------------------------------------
 def plot_ccd(docs, out, stem):
-    pts = defaultdict(list)  # (kind, tol, d, recheck) -> [(fp, us)]
+    """Time and false positives against the tolerance (the sweep points at the default separation
+    and re-check budget), vertex-face and edge-edge."""
+    pts = defaultdict(list)  # (kind, tol, d, recheck) -> [(fp rate, mean us)]
     for d in docs:
         for s in d.get("sweep", []):
             r = s.get("row", s)
@@ -217,23 +222,26 @@ def plot_ccd(docs, out, stem):
                 (r.get("false_positives", 0) / max(r.get("queries", 1), 1), r.get("mean_us", 0)))
     if not pts:
         return []
-    fig, ax = plt.subplots(figsize=FIGSIZE)
+    default_recheck = docs[0].get("recheck_iterations")
+    fig, (ax_t, ax_e) = plt.subplots(1, 2, figsize=(FIGSIZE[0] * 1.3, FIGSIZE[1]))
     for kind, marker in (("vertex-face", "o"), ("edge-edge", "s")):
-        sel = [(k, v) for k, v in pts.items() if k[0] == kind]
+        sel = sorted((k[1], v) for k, v in pts.items() if k[0] == kind and k[2] == 0 and k[3] == default_recheck)
         if not sel:
             continue
-        xs = [statistics.median(p[0] for p in v) for _, v in sel]
-        ys = [statistics.median(p[1] for p in v) for _, v in sel]
-        ax.scatter(xs, ys, marker=marker, s=18, label=kind)
-        for (k, _), x, y in zip(sel, xs, ys):
-            if k[2] == 0 and k[3] == sel[0][0][3]:
-                ax.annotate(f"tol {k[1]:.0e}", (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
-    ax.set_xscale("symlog", linthresh=1e-4)
-    ax.set_xlabel("false-positive rate")
-    ax.set_ylabel("mean µs per query")
-    ax.set_title("CCD: time against false positives (tolerance, separation, re-check sweep)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+        tols = [t for t, _ in sel]
+        ax_t.plot(tols, [statistics.median(p[1] for p in v) for _, v in sel], marker=marker, ms=4, label=kind)
+        ax_e.plot(tols, [statistics.median(p[0] for p in v) for _, v in sel], marker=marker, ms=4, label=kind)
+    for ax in (ax_t, ax_e):
+        ax.set_xscale("log")
+        ax.set_xlabel("tolerance")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    ax_t.set_ylabel("mean µs per query")
+    ax_e.set_ylabel("false-positive rate")
+    ax_e.set_yscale("symlog", linthresh=1e-4)
+    ax_e.set_ylim(bottom=0)
+    ax_t.set_title("CCD: time against tolerance", fontsize=10)
+    ax_e.set_title("CCD: false positives against tolerance", fontsize=10)
     path = os.path.join(out, f"{stem}-ccd-sweep.png")
     save(fig, path)
     return [path]
