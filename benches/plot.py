@@ -96,7 +96,7 @@ def plot_scene(docs, out, stem):
     series = defaultdict(lambda: defaultdict(list))
     for d in docs:
         for r in d.get("scaling", []):
-            if r.get("ms_per_step", 0) > 0:
+            if r.get("ms_per_step", 0) > 0 and r.get("threads", 1) == 1:
                 series[r["method"]][r["objects"]].append(r["ms_per_step"])
     if series:
         fig, ax = plt.subplots(figsize=FIGSIZE)
@@ -119,7 +119,7 @@ def plot_scene(docs, out, stem):
     for d in docs:
         frac = d.get("dynamic_fraction")
         for r in d.get("rows", []):
-            if r.get("dynamic_fraction") == frac and "threads" not in r:
+            if r.get("dynamic_fraction") == frac and r.get("threads", 1) == 1:
                 per[r["method"]].append(r["ms_per_step"])
     if per:
         fig, ax = plt.subplots(figsize=FIGSIZE)
@@ -148,8 +148,11 @@ def plot_threads(docs, out, stem, key=None, label=None):
     """Any rows carrying "threads": time or rate against the thread count, per method."""
     series = defaultdict(lambda: defaultdict(list))
     for d in docs:
-        for r in rows_of(d) + d.get("scaling", []):
+        for r in rows_of(d):
             if "threads" not in r:
+                continue
+            # the scene bench's main scene only (not its all-static rows)
+            if "dynamic_fraction" in r and "dynamic_fraction" in d and r["dynamic_fraction"] != d["dynamic_fraction"]:
                 continue
             k = key if key and key in r else next((c for c in ("ms_per_step", "rays_per_s", "particle_steps_per_s",
                                                                "mean_us", "median_us") if c in r), None)
