@@ -187,8 +187,8 @@ template <class S> struct PosePad {
   }
 };
 
-/// Node test of the mesh queries: the BVs must overlap (padded by PosePad for the rounding of the
-/// relative transform) and, for sphere trees when exactly one node is a leaf, the other node's
+/// Node test of the mesh queries: the BVs must overlap (spheres and AABBs padded by PosePad for the
+/// rounding of the relative transform; other BVs by their traits) and, for sphere trees when exactly one node is a leaf, the other node's
 /// sphere must touch one of the leaf's triangles. Conservative: never false for a node pair under
 /// which the narrow phase would find a pair (see PosePad and sphere_may_touch_triangle).
 template <class BV> struct MeshNodeOverlap {
@@ -223,13 +223,15 @@ template <class BV> struct MeshNodeOverlap {
         return leaf_touches(b, nb, a_to_b.apply(na.bv.center), (na.bv.radius + pad.a_abs) * pad.a_scale);
       }
       return true;
-    } else {
+    } else if constexpr (std::is_same_v<BV, Aabb<S>>) {
       if (pad.identity) return BvTraits<BV>::overlap(na.bv, nb.bv);
       const Vec3<S> ea = (na.bv.max - na.bv.min) / S(2) + Vec3<S>::Constant(pad.box_a);
       const Vec3<S> eb0 = (nb.bv.max - nb.bv.min) / S(2);
       const Vec3<S> eb = eb0 + Vec3<S>::Constant(pad.box_b + pad.box_g * eb0.sum());
       const Vec3<S> tb = b_to_a.apply(nb.bv.center()) - na.bv.center();
       return obb_overlap<S>(ea, b_to_a.R, tb, eb);
+    } else {
+      return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }
   }
 };
