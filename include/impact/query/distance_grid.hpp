@@ -32,6 +32,10 @@
 /// (no tighter than a cell) cannot clear. Exact: the skipped triangles cannot meet the segment's
 /// box, and the patch's triangles lie in the slab, which the segment (convex) does not meet.
 /// Segments whose box misses the mesh's box meet nothing either.
+///
+/// Thread safety: immutable after construction; every query is const and may run from any number
+/// of threads at once (the particles' parallel step does). The mesh tree it was built from must
+/// not be edited (set_vertices) while the grid is in use; rebuild the grid after such an edit.
 #pragma once
 
 #include "impact/bvh/compact_bvh.hpp"
