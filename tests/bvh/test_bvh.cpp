@@ -80,19 +80,23 @@ TYPED_TEST(BvhTest, BuildInvariants) {
   const auto mesh = random_soup<S>(500, 1);
   for (SplitRule rule : {SplitRule::SpatialMiddle, SplitRule::CentroidMedian, SplitRule::Sah}) {
     for (int leaf : {1, 2, 4, 8}) {
-      MeshBvhConfig cfg;
-      cfg.build.split = rule;
-      cfg.build.leaf_size = leaf;
-      MeshBvh<BV> m(mesh, cfg);
-      std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
-      int leaves = 0;
-      EXPECT_EQ(check_node(m, 0, seen, leaf, leaves), 500);
-      for (int s : seen) ASSERT_EQ(s, 1);
-      EXPECT_EQ(static_cast<std::size_t>(2 * leaves - 1), m.tree().nodes.size());
-      // leaf positions map back to distinct rows of F
-      std::vector<int> rows(500, 0);
-      for (std::int32_t k = 0; k < 500; ++k) ++rows[static_cast<std::size_t>(m.triangle_id(k))];
-      for (int r : rows) ASSERT_EQ(r, 1);
+      for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp}) {
+        if (method == BuildMethod::BottomUp && rule != SplitRule::SpatialMiddle) continue;  // the split rule is top-down's
+        MeshBvhConfig cfg;
+        cfg.build.split = rule;
+        cfg.build.method = method;
+        cfg.build.leaf_size = leaf;
+        MeshBvh<BV> m(mesh, cfg);
+        std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
+        int leaves = 0;
+        EXPECT_EQ(check_node(m, 0, seen, leaf, leaves), 500);
+        for (int s : seen) ASSERT_EQ(s, 1);
+        EXPECT_EQ(static_cast<std::size_t>(2 * leaves - 1), m.tree().nodes.size());
+        // leaf positions map back to distinct rows of F
+        std::vector<int> rows(500, 0);
+        for (std::int32_t k = 0; k < 500; ++k) ++rows[static_cast<std::size_t>(m.triangle_id(k))];
+        for (int r : rows) ASSERT_EQ(r, 1);
+      }
     }
   }
 }
@@ -108,6 +112,12 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   for (int t = 0; t < 64; ++t) m.F.row(t) << 0, 1, 2;
   MeshBvh<BV> tree(m);
   EXPECT_EQ(bvh_stats(tree.tree()).leaves, 64u);
+  // bottom-up: equal primitives pair up, so the tree is balanced (depth log2 64)
+  MeshBvhConfig bottom_up;
+  bottom_up.build.method = BuildMethod::BottomUp;
+  const MeshBvh<BV> bu(m, bottom_up);
+  EXPECT_EQ(bvh_stats(bu.tree()).leaves, 64u);
+  EXPECT_EQ(bvh_stats(bu.tree()).max_depth, 6u);
   // zero-area triangles (all three vertices equal) are allowed
   TriangleMesh<S> z;
   z.V = Vertices<S>::Zero(1, 3);
@@ -126,6 +136,9 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
   MeshBvhConfig sah;
   sah.build.split = SplitRule::Sah;
   MeshBvh<BV> a_sah(ma, sah), b_sah(mb, sah);
+  MeshBvhConfig bottom_up;
+  bottom_up.build.method = BuildMethod::BottomUp;
+  MeshBvh<BV> a_bu(ma, bottom_up), b_bu(mb, bottom_up);
   Rng rng(99);
   int colliding = 0;
   for (int pose = 0; pose < 30; ++pose) {
@@ -137,6 +150,7 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
     const auto got = collide(a, pa, b, pb, opt);
     ASSERT_EQ(sorted(got.pairs), expected) << "pose " << pose;
     ASSERT_EQ(sorted(collide(a_sah, pa, b_sah, pb, opt).pairs), expected) << "pose " << pose << " (SAH)";
+    ASSERT_EQ(sorted(collide(a_bu, pa, b_bu, pb, opt).pairs), expected) << "pose " << pose << " (bottom-up)";
     EXPECT_EQ(got.colliding, !expected.empty());
     EXPECT_EQ(collides(a, pa, b, pb), !expected.empty());
     colliding += !expected.empty();

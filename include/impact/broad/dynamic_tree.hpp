@@ -8,7 +8,8 @@
 /// little stays inside its leaf box and costs nothing in the tree. An object that leaves its fat box
 /// is removed and inserted again: the new sibling is chosen by the surface-area cost of the
 /// enlargement (greedy descent, as in the incremental trees of Goldsmith & Salmon 1987 and of Box2D),
-/// and the path to the root is improved by surface-area tree rotations (Kopta et al. 2012). The
+/// and its ancestors are refitted and improved by surface-area tree rotations (Kopta et al. 2012) up to the
+/// first one the edit leaves unchanged. The
 /// surface-area cost of the whole tree is watched; when it degrades past a ratio of its value after the last
 /// rebuild, the tree is rebuilt top-down (median split on the longest axis of the leaf centres).
 /// Leaf node ids are stable across rotations and rebuilds, so callers keep them as handles.
@@ -487,11 +488,20 @@ class DynamicTree {
     node(leaf).parent = null;
   }
 
+  /// Rotates and refits the ancestors of an edit, from node i up. Stops at the first node that
+  /// neither rotated nor changed its box, height or activity: every node above it is then
+  /// unchanged too (a reinsertion deep in a large tree usually stops a few levels up instead of
+  /// walking and rotating to the root).
   void fix_upwards(std::int32_t i) {
     while (i != null) {
-      rotate(i);
+      const Node before = node(i);
+      const bool rotated = rotate(i);
       recompute(i);
-      i = node(i).parent;
+      const Node& n = node(i);
+      if (!rotated && n.height == before.height && n.active == before.active && n.box.min == before.box.min &&
+          n.box.max == before.box.max)
+        break;
+      i = n.parent;
     }
   }
 
@@ -499,8 +509,9 @@ class DynamicTree {
   /// animated scenes", I3D 2012): swap one child of a with a grandchild under the other child
   /// when that shrinks the other child's surface area, most shrinking swap first. Unlike
   /// height-balancing (AVL) rotations this never groups distant nodes; a rebuild bounds the depth.
-  void rotate(std::int32_t a) {
-    if (node(a).is_leaf()) return;
+  /// Returns whether it swapped.
+  bool rotate(std::int32_t a) {
+    if (node(a).is_leaf()) return false;
     const std::int32_t b = node(a).child[0], c = node(a).child[1];
     double best = 0;
     int kind = -1;  // 0/1: b <-> c.child[k]; 2/3: c <-> b.child[k - 2]
@@ -518,7 +529,7 @@ class DynamicTree {
         }
       }
     }
-    if (kind < 0) return;
+    if (kind < 0) return false;
     const int k = kind & 1;
     const std::int32_t keep = kind < 2 ? b : c, under = kind < 2 ? c : b;
     const std::int32_t g = node(under).child[k];
@@ -527,6 +538,7 @@ class DynamicTree {
     node(a).child[kind < 2 ? 0 : 1] = g;
     node(g).parent = a;
     recompute(under);
+    return true;
   }
 
   /// Builds inner nodes over the leaves in [first, last) by median split; returns the subtree root.

@@ -13,6 +13,7 @@
 /// must not overlap any other call on the same tree.
 #pragma once
 
+#include "impact/bvh/build_bottom_up.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/refit.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
@@ -92,12 +93,13 @@ template <class BV> class MeshBvh {
       centroids[t] = tris_[t].centroid();
     }
     // Build over mesh order, then renumber primitives to leaf positions.
-    std::vector<Aabb<S>> boxes;  // the surface-area heuristic weighs the triangles' boxes
-    if (cfg_.build.split == SplitRule::Sah) {
+    std::vector<Aabb<S>> boxes;  // the surface-area heuristic and the clustering weigh the triangles' boxes
+    if (cfg_.build.split == SplitRule::Sah || cfg_.build.method == BuildMethod::BottomUp) {
       boxes.resize(m);
       for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris_[t].a.cwiseMin(tris_[t].b).cwiseMin(tris_[t].c), tris_[t].a.cwiseMax(tris_[t].b).cwiseMax(tris_[t].c));
     }
-    tree_ = build_top_down<BV>(centroids, fitter(), cfg_.build, boxes);
+    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(), cfg_.build)
+                                                        : build_top_down<BV>(centroids, fitter(), cfg_.build, boxes);
     ids_ = tree_.primitives;
     std::vector<Triangle<S>> ordered(m);
     for (std::size_t k = 0; k < m; ++k) ordered[k] = tris_[static_cast<std::size_t>(ids_[k])];
