@@ -193,7 +193,8 @@ class Stepper {
     stats_.candidates_vf = 0;
     for (const auto& p : cand_) (p.ee ? stats_.candidates_ee : stats_.candidates_vf)++;
     // Distances at x0 (double); the pairs near h get the exact-enough static CCD.
-    const double margin = 2 * ccd_.tolerance + 1e-4 * h_ + 64 * std::numeric_limits<double>::epsilon() * scale_;
+    // (the CCD tolerance is relative to a query's extent, at most twice the coordinate scale)
+    const double margin = 4 * ccd_.tolerance * scale_ + 1e-4 * h_ + 64 * std::numeric_limits<double>::epsilon() * scale_;
     std::vector<Prim> bad;
     for (const auto& p : cand_) {
       Contact c = closest(p, /*start=*/true);
