@@ -1,13 +1,25 @@
 # SPDX-License-Identifier: MIT
 # impact-scene-bench: broad phases on big scenes (all pairs, static/dynamic split, hierarchical)
-# against FCL's DynamicAABBTreeCollisionManager; without FCL it runs without the FCL column.
+# against FCL's DynamicAABBTreeCollisionManager and Bullet 3's btDbvtBroadphase (double-precision
+# build, Debian libbullet-dev, found through pkg-config); without a peer it runs without its rows.
 if(TARGET fcl)
   set(scene_fcl_lib fcl)
 else()
   set(scene_fcl_lib "")
-  message(STATUS "impact: FCL not found, impact-scene-bench runs without the FCL column")
+  message(STATUS "impact: FCL not found, impact-scene-bench runs without the FCL rows")
 endif()
-impact_add_bench(impact-scene-bench scene_bench.cpp LIBS ${scene_fcl_lib} SMOKE_ARGS --objects 200 --steps 2)
+find_package(PkgConfig QUIET)
+if(PkgConfig_FOUND)
+  pkg_check_modules(IMPACT_BULLET QUIET IMPORTED_TARGET bullet-float64)
+endif()
+if(NOT IMPACT_BULLET_FOUND)
+  message(STATUS "impact: Bullet (pkg-config bullet-float64) not found, impact-scene-bench runs without the Bullet rows")
+endif()
+impact_add_bench(impact-scene-bench scene_bench.cpp LIBS ${scene_fcl_lib} SMOKE_ARGS --objects 200 --steps 2 --warmup 2 --scaling-max 1000)
 if(TARGET fcl)
   target_compile_definitions(impact-scene-bench PRIVATE IMPACT_HAVE_FCL=1)
+endif()
+if(IMPACT_BULLET_FOUND)
+  target_link_libraries(impact-scene-bench PRIVATE PkgConfig::IMPACT_BULLET)
+  target_compile_definitions(impact-scene-bench PRIVATE IMPACT_HAVE_BULLET=1)
 endif()

@@ -1,24 +1,30 @@
 // SPDX-License-Identifier: MIT
-// impact-scene-bench: broad phases on big scenes, against FCL's DynamicAABBTreeCollisionManager,
-// on the same objects in one run.
+// impact-scene-bench: broad phases on big scenes, against FCL's DynamicAABBTreeCollisionManager
+// and Bullet's btDbvtBroadphase, on the same objects in one run.
 //
-//   impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--seed K] [--allpairs-max M]
-//                      [--scaling-max N] [--json FILE]
+//   impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]
+//                      [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]
+//                      [--bullet-deferred 0|1] [--only NAME] [--json FILE]
 //
 // A scene of N objects (70% spheres of radius 0.2..0.8, 30% small meshes: an 80-triangle icosphere
 // and a 144-triangle torus) uniform in a cube sized for 0.1 objects per unit volume; a fraction F is
 // dynamic and moves every step (random velocity up to 0.1 per axis, meshes also rotate). Per step
 // each method gets the new poses of the moved objects and returns the broad-phase pairs: objects
 // whose tight world AABBs overlap, static–static pairs excluded. Methods: impact all-pairs (N <=
-// --allpairs-max), impact static/dynamic split, impact hierarchical (incremental AABB tree), and
-// FCL's dynamic AABB tree manager with fcl::Sphere and fcl::BVHModel<OBBRSS> objects, update() of the
-// moved objects and collide(callback); the callback keeps a pair when it is not static–static and
-// the tight AABBs overlap (FCL bounds rotated meshes by a looser box), so every method must return
-// the same set. Mismatches: pairs in the symmetric difference with the reference (all-pairs when it
-// runs; otherwise static/dynamic, itself checked against FCL), summed over the steps.
+// --allpairs-max), impact static/dynamic split, impact hierarchical (incremental AABB trees);
+// FCL's dynamic AABB tree manager as its users split a world (a static manager set up once, a
+// dynamic manager updated with the moved objects; dynamic against itself and against static), with
+// fcl::Sphere and fcl::BVHModel<OBBRSS> objects; Bullet's btDbvtBroadphase as btCollisionWorld
+// drives it (static proxies in the static filter group), with its defaults and with the tuned
+// knobs (--bullet-prediction, --bullet-deferred). The peers bound objects by their own (looser or
+// enlarged) boxes, so they keep the pairs whose tight AABBs overlap: every method must return the
+// same set. Mismatches: pairs in the symmetric difference with the reference (all-pairs when it
+// runs; otherwise static/dynamic, itself checked against the first peer), summed over every step
+// (warm-up steps included); the exit status is 3 when there is any.
+// --only NAME keeps the methods whose name contains NAME (for profiling one of them).
 // Then the same for an all-static scene (F = 0), and a scaling table for N = 10^2 .. --scaling-max.
-// Times are CPU time of the bench thread (setup excluded from ms/step), so that a loaded machine
-// does not distort the comparison.
+// Times are CPU time of the bench thread (setup excluded from ms/step, --warmup untimed steps
+// first), so that a loaded machine does not distort the comparison.
 #include "bench_util.hpp"
 #include "impact/broad/scene.hpp"
 #include "impact/geometry/mesh_generators.hpp"
@@ -31,11 +37,17 @@
 #include <fcl/math/bv/OBBRSS.h>
 #endif
 
+#ifdef IMPACT_HAVE_BULLET
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
+#include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
+#endif
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -59,16 +71,21 @@ struct Args {
   long objects = 100000;
   double dynamic = 0.1;
   int steps = 10;
+  int warmup = 50;
   std::uint64_t seed = 1;
   long allpairs_max = 5000;
   long scaling_max = 100000;
+  double bullet_prediction = 2.0;
+  bool bullet_deferred = false;
+  std::string only;
   std::string json;
 };
 
 [[noreturn]] void usage(const char* msg) {
   std::fprintf(stderr,
-               "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--seed K] [--allpairs-max M]\n"
-               "                          [--scaling-max N] [--json FILE]\n",
+               "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]\n"
+               "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]\n"
+               "                          [--bullet-deferred 0|1] [--only NAME] [--json FILE]\n",
                msg);
   std::exit(2);
 }
@@ -87,12 +104,20 @@ Args parse(int argc, char** argv) {
       a.dynamic = std::atof(next().c_str());
     else if (s == "--steps")
       a.steps = std::atoi(next().c_str());
+    else if (s == "--warmup")
+      a.warmup = std::atoi(next().c_str());
     else if (s == "--seed")
       a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--allpairs-max")
       a.allpairs_max = std::atol(next().c_str());
     else if (s == "--scaling-max")
       a.scaling_max = std::atol(next().c_str());
+    else if (s == "--bullet-prediction")
+      a.bullet_prediction = std::atof(next().c_str());
+    else if (s == "--bullet-deferred")
+      a.bullet_deferred = std::atoi(next().c_str()) != 0;
+    else if (s == "--only")
+      a.only = next();
     else if (s == "--json")
       a.json = next();
     else if (s == "-h" || s == "--help")
@@ -103,6 +128,7 @@ Args parse(int argc, char** argv) {
   if (a.objects < 2) usage("--objects must be >= 2");
   if (!(a.dynamic >= 0 && a.dynamic <= 1)) usage("--dynamic must be in [0, 1]");
   if (a.steps < 1) usage("--steps must be >= 1");
+  if (a.warmup < 0) usage("--warmup must be >= 0");
   return a;
 }
 
@@ -113,6 +139,18 @@ struct Meshes {
   TriangleMesh<double> torus = make_torus<double>(0.45, 0.15, 12, 6);
   Mesh ico_bvh{ico};
   Mesh torus_bvh{torus};
+  /// Per mesh kind (1 icosphere, 2 torus): local vertex box and largest distance of a vertex from
+  /// its centre, for the peers' tight world boxes.
+  Aabb<double> local[3];
+  double reach[3] = {0, 0, 0};
+  Meshes() {
+    for (int k = 1; k <= 2; ++k) {
+      const TriangleMesh<double>& m = k == 1 ? ico : torus;
+      for (Eigen::Index i = 0; i < m.V.rows(); ++i) local[k].extend(m.V.row(i).transpose());
+      for (Eigen::Index i = 0; i < m.V.rows(); ++i)
+        reach[k] = std::max(reach[k], (m.V.row(i).transpose() - local[k].center()).norm());
+    }
+  }
 };
 
 /// The scene description shared by every method, and its motion.
@@ -165,6 +203,16 @@ struct World {
 };
 
 using PairKeys = std::vector<std::uint64_t>;
+
+/// The tight world box the scene computes (sphere: centre +- r; mesh: its vertex box rotated,
+/// capped by the ball around its centre), which the peers use to keep the same pairs.
+Aabb<double> tight_box(const World::Obj& o, const Meshes& m) {
+  if (o.kind == 0) return {o.pose.t.array() - o.radius, o.pose.t.array() + o.radius};
+  const Aabb<double>& local = m.local[o.kind];
+  const Eigen::Vector3d c = o.pose.apply(local.center());
+  const Eigen::Vector3d e = (o.pose.R.cwiseAbs() * ((local.max - local.min) / 2.0)).cwiseMin(Eigen::Vector3d::Constant(m.reach[o.kind]));
+  return {c - e, c + e};
+}
 
 std::size_t mismatches(PairKeys a, PairKeys b) {
   std::sort(a.begin(), a.end());
@@ -234,7 +282,7 @@ class ImpactMethod {
 #ifdef IMPACT_HAVE_FCL
 class FclMethod {
  public:
-  FclMethod(const World& w, const Meshes& m) : w_(w) {
+  FclMethod(const World& w, const Meshes& m) : w_(w), m_(m) {
     ico_ = make_model(m.ico);
     torus_ = make_model(m.torus);
   }
@@ -251,14 +299,17 @@ class FclMethod {
       auto obj = std::make_unique<fcl::CollisionObjectd>(g, to_fcl(o.pose));
       obj->setUserData(reinterpret_cast<void*>(i));
       objs_.push_back(std::move(obj));
-      tight_box(i);
+      boxes_[i] = tight_box(o, m_);
     }
-    std::vector<fcl::CollisionObjectd*> ptrs;
-    for (auto& o : objs_) ptrs.push_back(o.get());
-    manager_.registerObjects(ptrs);
-    manager_.setup();
-    moved_.clear();
-    for (const std::int32_t i : w_.dynamic_ids) moved_.push_back(objs_[std::size_t(i)].get());
+    // As FCL's users split a world: static objects in one manager, set up once and never
+    // updated; dynamic objects in another, updated with the moved objects every step.
+    std::vector<fcl::CollisionObjectd*> statics, dynamics;
+    for (std::size_t i = 0; i < objs_.size(); ++i) (w_.obj[i].dynamic ? dynamics : statics).push_back(objs_[i].get());
+    static_.registerObjects(statics);
+    static_.setup();
+    dynamic_.registerObjects(dynamics);
+    dynamic_.setup();
+    moved_ = dynamics;
     PairKeys k;
     collide(k);
   }
@@ -267,9 +318,9 @@ class FclMethod {
       fcl::CollisionObjectd* o = objs_[std::size_t(i)].get();
       o->setTransform(to_fcl(w_.obj[std::size_t(i)].pose));
       o->computeAABB();
-      tight_box(std::size_t(i));
+      boxes_[std::size_t(i)] = tight_box(w_.obj[std::size_t(i)], m_);
     }
-    manager_.update(moved_);
+    dynamic_.update(moved_);
     collide(out);
   }
 
@@ -282,8 +333,6 @@ class FclMethod {
     auto* d = static_cast<Data*>(data);
     const auto i = reinterpret_cast<std::size_t>(a->getUserData());
     const auto j = reinterpret_cast<std::size_t>(b->getUserData());
-    const auto& w = d->self->w_;
-    if (!w.obj[i].dynamic && !w.obj[j].dynamic) return false;
     if (!overlap(d->self->boxes_[i], d->self->boxes_[j])) return false;
     d->out->push_back(key(i, j));
     return false;
@@ -291,40 +340,20 @@ class FclMethod {
   void collide(PairKeys& out) {
     out.clear();
     Data d{this, &out};
-    manager_.collide(&d, &FclMethod::callback);
-  }
-  /// The same tight world box the scene computes (sphere: centre +- r; mesh: vertex box rotated).
-  void tight_box(std::size_t i) {
-    const auto& o = w_.obj[i];
-    if (o.kind == 0) {
-      boxes_[i] = {o.pose.t.array() - o.radius, o.pose.t.array() + o.radius};
-      return;
-    }
-    const auto& local = o.kind == 1 ? ico_box_ : torus_box_;
-    const Eigen::Vector3d c = o.pose.apply(local.center());
-    const double reach = o.kind == 1 ? ico_reach_ : torus_reach_;
-    const Eigen::Vector3d e = (o.pose.R.cwiseAbs() * ((local.max - local.min) / 2.0)).cwiseMin(Eigen::Vector3d::Constant(reach));
-    boxes_[i] = {c - e, c + e};
+    dynamic_.collide(&d, &FclMethod::callback);            // dynamic against dynamic
+    dynamic_.collide(&static_, &d, &FclMethod::callback);  // dynamic against static
   }
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> make_model(const TriangleMesh<double>& m) {
     auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
     std::vector<fcl::Vector3d> pts;
     std::vector<fcl::Triangle> tris;
-    Aabb<double> box;
-    for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
-      pts.push_back(m.V.row(i).transpose());
-      box.extend(m.V.row(i).transpose());
-    }
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) pts.push_back(m.V.row(i).transpose());
     for (Eigen::Index t = 0; t < m.F.rows(); ++t)
       tris.emplace_back(std::size_t(m.F(t, 0)), std::size_t(m.F(t, 1)), std::size_t(m.F(t, 2)));
     model->beginModel();
     model->addSubModel(pts, tris);
     model->endModel();
     model->computeLocalAABB();
-    double reach = 0;
-    for (Eigen::Index i = 0; i < m.V.rows(); ++i) reach = std::max(reach, (m.V.row(i).transpose() - box.center()).norm());
-    (ico_box_.empty() ? ico_reach_ : torus_reach_) = reach;
-    (ico_box_.empty() ? ico_box_ : torus_box_) = box;
     return model;
   }
   static fcl::Transform3d to_fcl(const RigidTransform<double>& x) {
@@ -335,102 +364,181 @@ class FclMethod {
   }
 
   const World& w_;
+  const Meshes& m_;
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> ico_, torus_;
-  Aabb<double> ico_box_, torus_box_;
-  double ico_reach_ = 0, torus_reach_ = 0;
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objs_;
   std::vector<fcl::CollisionObjectd*> moved_;
   std::vector<Aabb<double>> boxes_;
-  fcl::DynamicAABBTreeCollisionManagerd manager_;
+  fcl::DynamicAABBTreeCollisionManagerd static_, dynamic_;
 };
 #endif
 
-/// Runs every method on one scene for `steps` steps; returns rows (all-pairs first when it ran).
-std::vector<Row> run(long n, double frac, int steps, const Args& args, const Meshes& meshes) {
-  World world(n, frac, args.seed);
-  const bool with_all = n <= args.allpairs_max;
-  ImpactMethod all(BroadPhaseKind::AllPairs, world, meshes), sd(BroadPhaseKind::StaticDynamic, world, meshes),
-      hi(BroadPhaseKind::Hierarchical, world, meshes);
-  std::vector<Row> rows(4);
-  rows[0].method = "impact-all-pairs";
-  rows[1].method = "impact-static-dynamic";
-  rows[2].method = "impact-hierarchical";
-  rows[3].method = "fcl-dynamic-aabb-tree";
-  for (auto& r : rows) {
-    r.objects = n;
-    r.fraction = frac;
+#ifdef IMPACT_HAVE_BULLET
+/// Bullet 3's btDbvtBroadphase used as btCollisionWorld uses it: a proxy per object with its tight
+/// world box, static objects in the StaticFilter group with mask AllFilter ^ StaticFilter (so
+/// static–static pairs are filtered out), dynamic ones in DefaultFilter with mask AllFilter; per
+/// step setAabb of the moved objects, calculateOverlappingPairs, then a walk over the overlapping
+/// pair cache (what btCollisionWorld's dispatcher does) that keeps the pairs whose tight boxes
+/// overlap (the cache holds pairs of Bullet's enlarged leaf boxes, and stale ones until its
+/// incremental clean-up removes them). `deferred` and `prediction` are the two knobs Bullet's
+/// users tune (btDbvtBroadphase::m_deferedcollide, m_prediction; defaults false and 0).
+class BulletMethod {
+ public:
+  BulletMethod(const World& w, const Meshes& m, bool deferred, double prediction) : w_(w), m_(m) {
+    bp_.m_deferedcollide = deferred;
+    bp_.setVelocityPrediction(btScalar(prediction));
   }
-#ifdef IMPACT_HAVE_FCL
-  FclMethod fcl_m(world, meshes);
-#endif
-  auto time_setup = [](Row& r, auto&& f) {
-    const double t0 = cpu_seconds();
-    f();
-    r.build_ms = 1e3 * (cpu_seconds() - t0);
-    r.ran = true;
-  };
-  if (with_all) time_setup(rows[0], [&] { all.setup(); });
-  time_setup(rows[1], [&] { sd.setup(); });
-  time_setup(rows[2], [&] { hi.setup(); });
-  all.total = sd.total = hi.total = {};
-#ifdef IMPACT_HAVE_FCL
-  time_setup(rows[3], [&] { fcl_m.setup(); });
-#endif
-  std::vector<double> total(4, 0.0);
-  PairKeys k[4];
-  for (int s = 0; s < steps; ++s) {
-    world.advance();
-    auto timed = [&](int m, auto&& f) {
-      const double t0 = cpu_seconds();
-      f(k[m]);
-      total[std::size_t(m)] += cpu_seconds() - t0;
-      rows[std::size_t(m)].pairs += double(k[m].size());
-    };
-    if (with_all) timed(0, [&](PairKeys& o) { all.step(o); });
-    timed(1, [&](PairKeys& o) { sd.step(o); });
-    timed(2, [&](PairKeys& o) { hi.step(o); });
-#ifdef IMPACT_HAVE_FCL
-    timed(3, [&](PairKeys& o) { fcl_m.step(o); });
-#endif
-    const int ref = with_all ? 0 : 1;
-    for (int m = 0; m < 4; ++m) {
-      if (!rows[std::size_t(m)].ran) continue;
-      if (m == ref) {  // the reference is checked against an independent method
-        const int other = with_all ? -1 : (rows[3].ran ? 3 : 2);
-        if (other >= 0) rows[std::size_t(m)].mismatches += mismatches(k[m], k[other]);
-      } else {
-        rows[std::size_t(m)].mismatches += mismatches(k[m], k[ref]);
-      }
+  ~BulletMethod() {
+    // Pairs first (one hash removal each): destroyProxy scans the whole pair cache for its pairs.
+    btOverlappingPairCache* cache = bp_.getOverlappingPairCache();
+    btBroadphasePairArray& arr = cache->getOverlappingPairArray();
+    while (arr.size() > 0) cache->removeOverlappingPair(arr[arr.size() - 1].m_pProxy0, arr[arr.size() - 1].m_pProxy1, nullptr);
+    for (btBroadphaseProxy* p : proxy_) bp_.destroyProxy(p, nullptr);
+  }
+  BulletMethod(const BulletMethod&) = delete;
+  BulletMethod& operator=(const BulletMethod&) = delete;
+  void setup() {
+    boxes_.resize(w_.obj.size());
+    proxy_.resize(w_.obj.size());
+    for (std::size_t i = 0; i < w_.obj.size(); ++i) {
+      const auto& o = w_.obj[i];
+      boxes_[i] = tight_box(o, m_);
+      const int group = o.dynamic ? int(btBroadphaseProxy::DefaultFilter) : int(btBroadphaseProxy::StaticFilter);
+      const int mask = o.dynamic ? int(btBroadphaseProxy::AllFilter)
+                                 : int(btBroadphaseProxy::AllFilter) ^ int(btBroadphaseProxy::StaticFilter);
+      proxy_[i] = bp_.createProxy(bt(boxes_[i].min), bt(boxes_[i].max), o.kind == 0 ? SPHERE_SHAPE_PROXYTYPE : TRIANGLE_MESH_SHAPE_PROXYTYPE,
+                                  reinterpret_cast<void*>(i), group, mask, nullptr);
+    }
+    PairKeys k;
+    pairs(k);
+  }
+  void step(PairKeys& out) {
+    for (const std::int32_t i : w_.dynamic_ids) {
+      const auto s = std::size_t(i);
+      boxes_[s] = tight_box(w_.obj[s], m_);
+      bp_.setAabb(proxy_[s], bt(boxes_[s].min), bt(boxes_[s].max), nullptr);
+    }
+    pairs(out);
+  }
+
+ private:
+  static btVector3 bt(const Eigen::Vector3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+  void pairs(PairKeys& out) {
+    out.clear();
+    bp_.calculateOverlappingPairs(nullptr);
+    btBroadphasePairArray& arr = bp_.getOverlappingPairCache()->getOverlappingPairArray();
+    for (int p = 0; p < arr.size(); ++p) {
+      const auto i = reinterpret_cast<std::size_t>(arr[p].m_pProxy0->m_clientObject);
+      const auto j = reinterpret_cast<std::size_t>(arr[p].m_pProxy1->m_clientObject);
+      if (overlap(boxes_[i], boxes_[j])) out.push_back(key(i, j));
     }
   }
-  rows[0].stats = all.total;
-  rows[1].stats = sd.total;
-  rows[2].stats = hi.total;
-  for (int m = 0; m < 4; ++m) {
-    rows[std::size_t(m)].ms_per_step = 1e3 * total[std::size_t(m)] / steps;
-    rows[std::size_t(m)].pairs /= steps;
+  const World& w_;
+  const Meshes& m_;
+  btDbvtBroadphase bp_;
+  std::vector<btBroadphaseProxy*> proxy_;
+  std::vector<Aabb<double>> boxes_;
+};
+#endif
+
+/// Runs every method on one scene for `steps` steps; returns the rows of the methods that ran, in
+/// the order all-pairs, static/dynamic, hierarchical, FCL, Bullet defaults, Bullet tuned.
+std::vector<Row> run(long n, double frac, int steps, const Args& args, const Meshes& meshes) {
+  World world(n, frac, args.seed);
+  struct Method {
+    std::string name;
+    std::function<void()> setup;
+    std::function<void(PairKeys&)> step;
+    const BroadPhaseStats* stats = nullptr;
+  };
+  std::vector<Method> methods;
+  ImpactMethod all(BroadPhaseKind::AllPairs, world, meshes), sd(BroadPhaseKind::StaticDynamic, world, meshes),
+      hi(BroadPhaseKind::Hierarchical, world, meshes);
+  const bool with_all = n <= args.allpairs_max;
+  auto impact_method = [&](const char* name, ImpactMethod& m) {
+    methods.push_back({name, [&m] { m.setup(); }, [&m](PairKeys& o) { m.step(o); }, &m.total});
+  };
+  if (with_all) impact_method("impact-all-pairs", all);
+  impact_method("impact-static-dynamic", sd);
+  impact_method("impact-hierarchical", hi);
+#ifdef IMPACT_HAVE_FCL
+  FclMethod fcl_m(world, meshes);
+  methods.push_back({"fcl-dynamic-aabb-tree", [&] { fcl_m.setup(); }, [&](PairKeys& o) { fcl_m.step(o); }});
+#endif
+#ifdef IMPACT_HAVE_BULLET
+  BulletMethod bt_default(world, meshes, false, 0.0), bt_tuned(world, meshes, args.bullet_deferred, args.bullet_prediction);
+  methods.push_back({"bullet-dbvt-defaults", [&] { bt_default.setup(); }, [&](PairKeys& o) { bt_default.step(o); }});
+  methods.push_back({"bullet-dbvt-tuned", [&] { bt_tuned.setup(); }, [&](PairKeys& o) { bt_tuned.step(o); }});
+#endif
+  // The reference: all-pairs when it runs, else static/dynamic, itself checked against the first
+  // peer (FCL, else Bullet, else the hierarchical method).
+  if (!args.only.empty()) {
+    std::vector<Method> kept;
+    for (auto& m : methods)
+      if (m.name.find(args.only) != std::string::npos) kept.push_back(std::move(m));
+    methods = std::move(kept);
+    if (methods.empty()) usage(("--only " + args.only + " names no method").c_str());
   }
-  std::vector<Row> out;
-  for (auto& r : rows)
-    if (r.ran) out.push_back(r);
-  return out;
+  const std::size_t ref = 0;
+  std::size_t check = ref;
+  if (methods[0].name != "impact-all-pairs") {
+    for (std::size_t m = methods.size(); m-- > 1;)
+      if (methods[m].name.rfind("impact", 0) != 0 || check == ref) check = m;
+  }
+  std::vector<Row> rows(methods.size());
+  std::vector<double> total(methods.size(), 0.0);
+  std::vector<PairKeys> k(methods.size());
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    rows[m].method = methods[m].name;
+    rows[m].objects = n;
+    rows[m].fraction = frac;
+    const double t0 = cpu_seconds();
+    methods[m].setup();
+    rows[m].build_ms = 1e3 * (cpu_seconds() - t0);
+  }
+  // The first --warmup steps are not timed (each method reaches its steady state); every step is
+  // checked.
+  for (int s = 0; s < args.warmup + steps; ++s) {
+    world.advance();
+    const bool timed = s >= args.warmup;
+    if (s == args.warmup) all.total = sd.total = hi.total = {};
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+      const double t0 = cpu_seconds();
+      methods[m].step(k[m]);
+      if (!timed) continue;
+      total[m] += cpu_seconds() - t0;
+      rows[m].pairs += double(k[m].size());
+    }
+    for (std::size_t m = 0; m < methods.size(); ++m)
+      if (m != ref)
+        rows[m].mismatches += mismatches(k[m], k[ref]);
+      else if (check != ref)
+        rows[m].mismatches += mismatches(k[m], k[check]);
+  }
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    if (methods[m].stats) rows[m].stats = *methods[m].stats;
+    rows[m].ms_per_step = 1e3 * total[m] / steps;
+    rows[m].pairs /= steps;
+  }
+  return rows;
 }
 
-double fcl_ms(const std::vector<Row>& rows) {
+double ms_of(const std::vector<Row>& rows, const std::string& method) {
   for (const auto& r : rows)
-    if (r.method.rfind("fcl", 0) == 0) return r.ms_per_step;
+    if (r.method == method) return r.ms_per_step;
   return 0;
 }
 
 void print_table(const std::vector<Row>& rows, int steps) {
-  const double f = fcl_ms(rows);
-  std::printf("  %-24s %10s %12s %12s %11s %12s | per step: %10s %10s %10s %10s\n", "method", "build ms", "ms/step", "pairs/step",
-              "mismatches", "FCL/method", "bv tests", "aabb tests", "reinserts", "st.queries");
+  const double f = ms_of(rows, "fcl-dynamic-aabb-tree"), b = ms_of(rows, "bullet-dbvt-tuned");
+  std::printf("  %-24s %10s %12s %12s %11s %11s %11s | per step: %10s %10s %10s %10s\n", "method", "build ms", "ms/step",
+              "pairs/step", "mismatches", "FCL/method", "Btun/method", "bv tests", "aabb tests", "reinserts", "st.queries");
   for (const auto& r : rows) {
-    char ratio[32] = "-";
-    if (f > 0 && r.ms_per_step > 0) std::snprintf(ratio, sizeof ratio, "%.2fx", f / r.ms_per_step);
-    std::printf("  %-24s %10.2f %12.4f %12.1f %11zu %12s |           %10.0f %10.0f %10.0f %10.0f\n", r.method.c_str(), r.build_ms,
-                r.ms_per_step, r.pairs, r.mismatches, ratio, double(r.stats.bv_tests) / steps,
+    char rf[32] = "-", rb[32] = "-";
+    if (f > 0 && r.ms_per_step > 0) std::snprintf(rf, sizeof rf, "%.2fx", f / r.ms_per_step);
+    if (b > 0 && r.ms_per_step > 0) std::snprintf(rb, sizeof rb, "%.2fx", b / r.ms_per_step);
+    std::printf("  %-24s %10.2f %12.4f %12.1f %11zu %11s %11s |           %10.0f %10.0f %10.0f %10.0f\n", r.method.c_str(),
+                r.build_ms, r.ms_per_step, r.pairs, r.mismatches, rf, rb, double(r.stats.bv_tests) / steps,
                 double(r.stats.pairs_tested) / steps, double(r.stats.reinserts) / steps, double(r.stats.static_queries) / steps);
   }
 }
@@ -438,7 +546,7 @@ void print_table(const std::vector<Row>& rows, int steps) {
 std::string json_row(const Row& r) {
   bench::JsonObject o;
   o.add("method", r.method).add("objects", static_cast<long long>(r.objects)).add("dynamic_fraction", r.fraction);
-  o.add("ms_per_step", r.ms_per_step).add("pairs", r.pairs).add("mismatches", r.mismatches);
+  o.add("build_ms", r.build_ms).add("ms_per_step", r.ms_per_step).add("pairs", r.pairs).add("mismatches", r.mismatches);
   return o.str();
 }
 
@@ -448,7 +556,10 @@ int main(int argc, char** argv) {
   const Args args = parse(argc, argv);
   const Meshes meshes;
 #ifndef IMPACT_HAVE_FCL
-  std::printf("note: built without FCL; the FCL column is missing\n");
+  std::printf("note: built without FCL; the FCL rows are missing\n");
+#endif
+#ifndef IMPACT_HAVE_BULLET
+  std::printf("note: built without Bullet; the Bullet rows are missing\n");
 #endif
   std::vector<std::string> json_rows, json_scaling;
   std::size_t total_mismatches = 0;
@@ -456,8 +567,9 @@ int main(int argc, char** argv) {
   std::printf(
       "impact-scene-bench: %ld objects (70%% spheres, 30%% meshes of 80/144 triangles), %.0f%% dynamic, %d steps, seed %llu\n",
       args.objects, 100 * args.dynamic, args.steps, static_cast<unsigned long long>(args.seed));
-  std::printf("reference for mismatches: %s\n",
-              args.objects <= args.allpairs_max ? "impact-all-pairs" : "impact-static-dynamic (checked against FCL)");
+  std::printf("reference for mismatches: %s\n", args.objects <= args.allpairs_max
+                                                    ? "impact-all-pairs"
+                                                    : "impact-static-dynamic (itself checked against the first peer)");
   const auto main_rows = run(args.objects, args.dynamic, args.steps, args, meshes);
   print_table(main_rows, args.steps);
   for (const auto& r : main_rows) {
@@ -474,32 +586,33 @@ int main(int argc, char** argv) {
   }
 
   std::printf("\nscaling, %.0f%% dynamic: ms/step\n", 100 * args.dynamic);
-  std::printf("  %8s %14s %16s %14s %14s %12s\n", "N", "all-pairs", "static-dynamic", "hierarchical", "fcl", "FCL/s-d");
+  const char* names[] = {"impact-all-pairs",      "impact-static-dynamic", "impact-hierarchical",
+                         "fcl-dynamic-aabb-tree", "bullet-dbvt-defaults",  "bullet-dbvt-tuned"};
+  std::printf("  %8s %12s %12s %12s %12s %12s %12s %9s %9s\n", "N", "all-pairs", "static-dyn", "hierarch.", "fcl", "bullet-def",
+              "bullet-tun", "FCL/s-d", "Btun/s-d");
   for (long n = 100; n <= args.scaling_max; n *= 10) {
     const auto rows = run(n, args.dynamic, args.steps, args, meshes);
-    double v[4] = {-1, -1, -1, -1};
     for (const auto& r : rows) {
       json_scaling.push_back(json_row(r));
       total_mismatches += r.mismatches;
-      const int m = r.method == "impact-all-pairs"        ? 0
-                    : r.method == "impact-static-dynamic" ? 1
-                    : r.method == "impact-hierarchical"   ? 2
-                                                          : 3;
-      v[m] = r.ms_per_step;
     }
-    auto cell = [](double x) {
-      static char buf[4][32];
-      static int k = 0;
-      k = (k + 1) % 4;
-      if (x < 0)
-        std::snprintf(buf[k], 32, "-");
+    std::printf("  %8ld", n);
+    for (const char* name : names) {
+      const double v = ms_of(rows, name);
+      if (v > 0)
+        std::printf(" %12.4f", v);
       else
-        std::snprintf(buf[k], 32, "%.4f", x);
-      return buf[k];
-    };
-    char ratio[32] = "-";
-    if (v[3] > 0 && v[1] > 0) std::snprintf(ratio, sizeof ratio, "%.2fx", v[3] / v[1]);
-    std::printf("  %8ld %14s %16s %14s %14s %12s\n", n, cell(v[0]), cell(v[1]), cell(v[2]), cell(v[3]), ratio);
+        std::printf(" %12s", "-");
+    }
+    const double sdv = ms_of(rows, names[1]);
+    for (const int peer : {3, 5}) {
+      const double v = ms_of(rows, names[peer]);
+      if (v > 0 && sdv > 0)
+        std::printf(" %8.2fx", v / sdv);
+      else
+        std::printf(" %9s", "-");
+    }
+    std::printf("\n");
   }
   std::printf("\ntotal mismatches: %zu\n", total_mismatches);
 
@@ -508,7 +621,8 @@ int main(int argc, char** argv) {
     o.add("bench", "impact-scene-bench")
         .add("objects", static_cast<long long>(args.objects))
         .add("dynamic_fraction", args.dynamic);
-    o.add("steps", args.steps).add("seed", static_cast<long long>(args.seed));
+    o.add("steps", args.steps).add("warmup", args.warmup).add("seed", static_cast<long long>(args.seed));
+    o.add("bullet_prediction", args.bullet_prediction).add("bullet_deferred", args.bullet_deferred);
     o.raw("rows", bench::JsonObject::array(json_rows));
     o.raw("scaling", bench::JsonObject::array(json_scaling));
     if (!bench::write_file(args.json, o.str())) {

@@ -13,9 +13,11 @@ mode="${1:-test}"
 [ $# -gt 0 ] && shift
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libgtest-dev libbenchmark-dev)
+packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev)
 # the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
 [ "$mode" = test ] && packages+=(assimp-testmodels)
+# the bench mode also installs matplotlib for benches/plot.py (charts from the benches' --json)
+[ "$mode" = bench ] && packages+=(python3-matplotlib)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

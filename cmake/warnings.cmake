@@ -16,4 +16,10 @@ if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
       -fno-sanitize-recover=all)
     target_link_options(impact_warnings INTERFACE -fsanitize=address,undefined)
   endif()
+  if(IMPACT_TSAN)
+    # ThreadSanitizer: not combinable with ASan; the build holds the concurrency tests only
+    # (tests/CMakeLists.txt), which run the parallel paths and concurrent queries.
+    target_compile_options(impact_warnings INTERFACE -fsanitize=thread -fno-omit-frame-pointer)
+    target_link_options(impact_warnings INTERFACE -fsanitize=thread)
+  endif()
 endif()

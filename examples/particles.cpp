@@ -6,8 +6,9 @@
 //
 //   example-particles [OUT_DIR] [--mesh FILE] [--steps S] [--every K] [--ply]
 //
-// OUT_DIR defaults to the current directory; the default run (600 steps) takes well under a
-// second and writes 10 files particles_0000.csv ... particles_0009.csv.
+// OUT_DIR defaults to the current directory and is created (with its parents) when it does not
+// exist; the default run (600 steps) takes well under a second and writes 10 files
+// particles_0000.csv ... particles_0009.csv.
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/response/particle_step.hpp"
 #ifdef IMPACT_HAVE_IO
@@ -16,6 +17,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -62,9 +64,18 @@ int main(int argc, char** argv) {
     else if (s == "--ply") ply = true;
     else if (!s.empty() && s[0] != '-') out = s;
     else {
-      std::fprintf(stderr, "usage: example-particles [OUT_DIR] [--mesh FILE] [--steps S] [--every K] [--ply]\n");
+      std::fprintf(stderr,
+                   "usage: example-particles [OUT_DIR] [--mesh FILE] [--steps S] [--every K] [--ply]\n"
+                   "  OUT_DIR  folder for the frames (default: the current one; created if missing)\n");
       return 2;
     }
+  }
+
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);  // no-op when it exists
+  if (ec) {
+    std::fprintf(stderr, "cannot create the output folder %s: %s\n", out.c_str(), ec.message().c_str());
+    return 1;
   }
 
   TriangleMesh<double> mesh;

@@ -7,6 +7,7 @@
 
 #include "impact/core/config.hpp"
 #include "impact/core/error.hpp"
+#include "impact/core/parallel.hpp"
 #include "impact/core/types.hpp"
 
 #include "impact/geometry/aabb.hpp"

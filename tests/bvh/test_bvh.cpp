@@ -2,8 +2,8 @@
 // The hierarchy: structural invariants of the top-down build (every triangle in exactly one leaf,
 // leaf sizes, each node's BV holds all its triangles' vertices), termination on degenerate input,
 // refit after deformation, and the traversals against brute force: pair traversal under random
-// rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere and AABB,
-// float and double, both split rules. The traversal stack keeps its order past its fixed slots.
+// rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere, AABB and
+// oriented box, float and double, every split rule (middle, median, SAH). The traversal stack keeps its order past its fixed slots.
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/traverse.hpp"
@@ -48,6 +48,9 @@ template <class BV> std::int32_t check_node(const MeshBvh<BV>& m, std::int32_t i
       const Vec3<S> x = t[v];
       if constexpr (std::is_same_v<BV, Sphere<S>>) {
         EXPECT_LE((x - node.bv.center).norm(), node.bv.radius + slack);
+      } else if constexpr (std::is_same_v<BV, Obb<S>>) {
+        const Eigen::Vector3d h = node.bv.axes.template cast<double>().fullPivLu().solve((x - node.bv.center).template cast<double>());
+        EXPECT_TRUE((h.cwiseAbs().array() <= node.bv.half.template cast<double>().array()).all());
       } else {
         EXPECT_TRUE(node.bv.contains(x));
       }
@@ -68,28 +71,32 @@ template <class BV> std::int32_t check_node(const MeshBvh<BV>& m, std::int32_t i
 }  // namespace
 
 template <class BV> class BvhTest : public ::testing::Test {};
-using BvTypes = ::testing::Types<Sphere<float>, Sphere<double>, Aabb<float>, Aabb<double>>;
+using BvTypes = ::testing::Types<Sphere<float>, Sphere<double>, Aabb<float>, Aabb<double>, Obb<float>, Obb<double>>;
 TYPED_TEST_SUITE(BvhTest, BvTypes);
 
 TYPED_TEST(BvhTest, BuildInvariants) {
   using BV = TypeParam;
   using S = typename BvTraits<BV>::Scalar;
   const auto mesh = random_soup<S>(500, 1);
-  for (SplitRule rule : {SplitRule::SpatialMiddle, SplitRule::CentroidMedian}) {
+  for (SplitRule rule : {SplitRule::SpatialMiddle, SplitRule::CentroidMedian, SplitRule::Sah}) {
     for (int leaf : {1, 2, 4, 8}) {
-      MeshBvhConfig cfg;
-      cfg.build.split = rule;
-      cfg.build.leaf_size = leaf;
-      MeshBvh<BV> m(mesh, cfg);
-      std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
-      int leaves = 0;
-      EXPECT_EQ(check_node(m, 0, seen, leaf, leaves), 500);
-      for (int s : seen) ASSERT_EQ(s, 1);
-      EXPECT_EQ(static_cast<std::size_t>(2 * leaves - 1), m.tree().nodes.size());
-      // leaf positions map back to distinct rows of F
-      std::vector<int> rows(500, 0);
-      for (std::int32_t k = 0; k < 500; ++k) ++rows[static_cast<std::size_t>(m.triangle_id(k))];
-      for (int r : rows) ASSERT_EQ(r, 1);
+      for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp}) {
+        if (method == BuildMethod::BottomUp && rule != SplitRule::SpatialMiddle) continue;  // the split rule is top-down's
+        MeshBvhConfig cfg;
+        cfg.build.split = rule;
+        cfg.build.method = method;
+        cfg.build.leaf_size = leaf;
+        MeshBvh<BV> m(mesh, cfg);
+        std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
+        int leaves = 0;
+        EXPECT_EQ(check_node(m, 0, seen, leaf, leaves), 500);
+        for (int s : seen) ASSERT_EQ(s, 1);
+        EXPECT_EQ(static_cast<std::size_t>(2 * leaves - 1), m.tree().nodes.size());
+        // leaf positions map back to distinct rows of F
+        std::vector<int> rows(500, 0);
+        for (std::int32_t k = 0; k < 500; ++k) ++rows[static_cast<std::size_t>(m.triangle_id(k))];
+        for (int r : rows) ASSERT_EQ(r, 1);
+      }
     }
   }
 }
@@ -105,6 +112,12 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   for (int t = 0; t < 64; ++t) m.F.row(t) << 0, 1, 2;
   MeshBvh<BV> tree(m);
   EXPECT_EQ(bvh_stats(tree.tree()).leaves, 64u);
+  // bottom-up: equal primitives pair up, so the tree is balanced (depth log2 64)
+  MeshBvhConfig bottom_up;
+  bottom_up.build.method = BuildMethod::BottomUp;
+  const MeshBvh<BV> bu(m, bottom_up);
+  EXPECT_EQ(bvh_stats(bu.tree()).leaves, 64u);
+  EXPECT_EQ(bvh_stats(bu.tree()).max_depth, 6u);
   // zero-area triangles (all three vertices equal) are allowed
   TriangleMesh<S> z;
   z.V = Vertices<S>::Zero(1, 3);
@@ -120,6 +133,12 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
   const auto ma = random_soup<S>(300, 11, 1.0, 0.12);
   const auto mb = random_soup<S>(200, 12, 1.0, 0.12);
   MeshBvh<BV> a(ma), b(mb);
+  MeshBvhConfig sah;
+  sah.build.split = SplitRule::Sah;
+  MeshBvh<BV> a_sah(ma, sah), b_sah(mb, sah);
+  MeshBvhConfig bottom_up;
+  bottom_up.build.method = BuildMethod::BottomUp;
+  MeshBvh<BV> a_bu(ma, bottom_up), b_bu(mb, bottom_up);
   Rng rng(99);
   int colliding = 0;
   for (int pose = 0; pose < 30; ++pose) {
@@ -130,6 +149,8 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
     opt.all_pairs = true;
     const auto got = collide(a, pa, b, pb, opt);
     ASSERT_EQ(sorted(got.pairs), expected) << "pose " << pose;
+    ASSERT_EQ(sorted(collide(a_sah, pa, b_sah, pb, opt).pairs), expected) << "pose " << pose << " (SAH)";
+    ASSERT_EQ(sorted(collide(a_bu, pa, b_bu, pb, opt).pairs), expected) << "pose " << pose << " (bottom-up)";
     EXPECT_EQ(got.colliding, !expected.empty());
     EXPECT_EQ(collides(a, pa, b, pb), !expected.empty());
     colliding += !expected.empty();

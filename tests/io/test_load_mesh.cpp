@@ -409,7 +409,11 @@ TYPED_TEST(WrittenFiles, GltfNodeTransformsAreApplied) {
                 {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]
 })";
   const std::string path = tmp.write("two_instances.gltf", gltf);
-  const auto m = load_mesh<S>(path);
+  // glTF is not read by default (assimp's reader is not safe on hostile files); this file is ours
+  expect_invalid<S>(path, "not read by default");
+  LoadOptions trusted;
+  trusted.allow_unchecked_formats = true;
+  const auto m = load_mesh<S>(path, trusted);
   ASSERT_EQ(m.num_triangles(), 2);
   TriangleMesh<double> want;
   want.V.resize(6, 3);
@@ -418,7 +422,7 @@ TYPED_TEST(WrittenFiles, GltfNodeTransformsAreApplied) {
   want.F << 0, 1, 2, 3, 4, 5;
   EXPECT_EQ(triangle_set(m), triangle_set(want));
 
-  LoadOptions raw;
+  LoadOptions raw = trusted;
   raw.apply_node_transforms = false;
   const auto local = load_mesh<S>(path, raw);
   ASSERT_EQ(local.num_triangles(), 1);
@@ -507,11 +511,13 @@ TEST(LoadMeshErrors, GarbageBytes) {
     } catch (const InvalidInput& e) {
       const std::string msg = e.what();
       EXPECT_NE(msg.find(path), std::string::npos) << msg;
-      EXPECT_TRUE(msg.find("cannot be parsed") != std::string::npos || msg.find("no triangles") != std::string::npos) << msg;
+      EXPECT_TRUE(msg.find("cannot be parsed") != std::string::npos || msg.find("no triangles") != std::string::npos ||
+                  msg.find("not read by default") != std::string::npos || msg.find("unknown format") != std::string::npos)
+          << msg;
     }
   }
-  // plain text that is no mesh: assimp's error string is passed on
-  expect_invalid(tmp.write("notes.txt", "hello\nworld\n"), "cannot be parsed");
+  // plain text that is no mesh, under a name assimp reads by content
+  expect_invalid(tmp.write("notes.txt", "hello\nworld\n"), "unknown format");
 }
 
 TEST(LoadMeshErrors, TruncatedFiles) {
@@ -637,7 +643,26 @@ TEST(LoadMesh, AssimpTestModelsLoadOrThrowInvalidInput) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (!exts.count(ext)) continue;
     const std::string path = entry.path().string();
-    load_or_reject<float>(path, loaded, rejected);
+    // by default: formats other than OBJ, PLY, OFF and STL are refused at once
+    if (ext != ".obj" && ext != ".ply" && ext != ".off" && ext != ".stl") {
+      try {
+        load_mesh<float>(path);
+        ADD_FAILURE() << path << ": loaded with the default options";
+      } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("not read by default"), std::string::npos) << e.what();
+      }
+    }
+    // these are trusted files: every format assimp reads
+    LoadOptions trusted;
+    trusted.allow_unchecked_formats = true;
+    try {
+      const auto m = load_mesh<float>(path, trusted);
+      EXPECT_NO_THROW(validate_mesh(m)) << path;
+      ++loaded;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      ++rejected;
+    }
   }
   EXPECT_GT(loaded, 50) << rejected << " rejected";
 }

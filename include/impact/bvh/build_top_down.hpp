@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// Top-down construction: start with every primitive in the root; cut each node across the longest
-/// axis of its primitives' centroid box (at the middle, or at the median: BuildConfig::split);
+/// axis of its primitives' centroid box (at the middle, or at the median: BuildConfig::split), or
+/// where the binned surface-area heuristic is lowest on any axis (SplitRule::Sah);
 /// assign each primitive by its centroid; recurse until a node holds at most leaf_size primitives.
 /// Each node's BV is fitted by the caller's `fit` callable around that node's primitives (for a
 /// mesh: around the triangles' vertices), which is tighter than merging the children's BVs.
@@ -14,16 +15,87 @@
 #include "impact/core/error.hpp"
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 
 namespace impact {
 
+namespace detail {
+
+/// Half the surface area of a box (0 for an empty one).
+template <class S> S half_area(const Aabb<S>& b) {
+  if (b.empty()) return S(0);
+  const Vec3<S> e = b.extent();
+  return e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
+}
+
+/// Binned SAH over ids[begin, begin + count): the best cut (axis, bin) and its cost, or axis -1
+/// when every centroid falls in one bin on every axis. Centroids are binned over the centroid box.
+template <class S>
+void sah_split(const std::vector<Vec3<S>>& centroids, const std::vector<Aabb<S>>& boxes, const std::int32_t* ids,
+               std::int32_t count, const Aabb<S>& cbox, int bins, int& best_axis, int& best_bin) {
+  constexpr int kMaxBins = 256;
+  struct Bin {
+    Aabb<S> box;
+    std::int32_t n = 0;
+  };
+  std::array<Bin, kMaxBins> bin;
+  std::array<S, kMaxBins> right_cost;
+  S best = std::numeric_limits<S>::infinity();
+  best_axis = -1;
+  best_bin = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const S lo = cbox.min[axis], ext = cbox.max[axis] - lo;
+    if (!(ext > S(0))) continue;
+    const S scale = S(bins) / ext;
+    for (int b = 0; b < bins; ++b) bin[b] = Bin{};
+    for (std::int32_t k = 0; k < count; ++k) {
+      const std::int32_t p = ids[k];
+      const int b = std::min(bins - 1, static_cast<int>((centroids[p][axis] - lo) * scale));
+      bin[b].box.extend(boxes[p]);
+      ++bin[b].n;
+    }
+    // right_cost[b]: area * count of bins b..bins-1; then sweep from the left
+    Aabb<S> acc;
+    std::int32_t n = 0;
+    for (int b = bins - 1; b > 0; --b) {
+      acc.extend(bin[b].box);
+      n += bin[b].n;
+      right_cost[b] = half_area(acc) * S(n);
+    }
+    acc = Aabb<S>();
+    n = 0;
+    for (int b = 1; b < bins; ++b) {  // cut between bin b - 1 and bin b
+      acc.extend(bin[b - 1].box);
+      n += bin[b - 1].n;
+      if (n == 0 || n == count) continue;
+      const S cost = half_area(acc) * S(n) + right_cost[b];
+      if (cost < best) best = cost, best_axis = axis, best_bin = b;
+    }
+  }
+}
+
+}  // namespace detail
+
 /// Builds a tree over centroids.size() primitives.
 /// `fit(const std::int32_t* ids, std::size_t count) -> BV` returns a BV holding those primitives.
+/// `boxes` (one per primitive) are read by SplitRule::Sah only; without them SAH sees each
+/// primitive as its centroid.
 template <class BV, class Fit>
-Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& cfg = {}) {
+Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& cfg = {},
+                       const std::vector<Aabb<typename BvTraits<BV>::Scalar>>& boxes = {}) {
   using S = typename BvTraits<BV>::Scalar;
   if (cfg.leaf_size < 1) throw InvalidInput("build_top_down: leaf_size must be >= 1");
+  if (cfg.split == SplitRule::Sah && (cfg.sah_bins < 2 || cfg.sah_bins > 256))
+    throw InvalidInput("build_top_down: sah_bins must be in [2, 256]");
+  if (!boxes.empty() && boxes.size() != centroids.size())
+    throw InvalidInput("build_top_down: one box per primitive, or none");
+  std::vector<Aabb<S>> point_boxes;
+  if (cfg.split == SplitRule::Sah && boxes.empty()) {
+    point_boxes.reserve(centroids.size());
+    for (const auto& c : centroids) point_boxes.emplace_back(c, c);
+  }
+  const std::vector<Aabb<S>>& sah_boxes = boxes.empty() ? point_boxes : boxes;
   Bvh<BV> tree;
   const auto n = static_cast<std::int32_t>(centroids.size());
   if (n == 0) return tree;
@@ -49,6 +121,19 @@ Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& c
     std::int32_t mid;
     if (!(cbox.max[axis] > cbox.min[axis])) {
       mid = begin + count / 2;  // all centroids coincide: cut the range in half
+    } else if (cfg.split == SplitRule::Sah) {
+      int sah_axis, sah_bin;
+      detail::sah_split(centroids, sah_boxes, ids + begin, count, cbox, cfg.sah_bins, sah_axis, sah_bin);
+      if (sah_axis < 0) {
+        mid = begin + count / 2;  // unreachable when the centroid box has extent; kept for safety
+      } else {
+        const S lo = cbox.min[sah_axis], scale = S(cfg.sah_bins) / (cbox.max[sah_axis] - lo);
+        std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) {
+          return std::min(cfg.sah_bins - 1, static_cast<int>((centroids[p][sah_axis] - lo) * scale)) < sah_bin;
+        });
+        mid = static_cast<std::int32_t>(m - ids);
+        if (mid == begin || mid == begin + count) mid = begin + count / 2;
+      }
     } else if (cfg.split == SplitRule::CentroidMedian) {
       mid = begin + count / 2;
       std::nth_element(ids + begin, ids + mid, ids + begin + count,

@@ -8,6 +8,7 @@
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
 #pragma once
 
+#include "impact/bvh/build_bottom_up.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/refit.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
@@ -87,7 +88,13 @@ template <class BV> class MeshBvh {
       centroids[t] = tris_[t].centroid();
     }
     // Build over mesh order, then renumber primitives to leaf positions.
-    tree_ = build_top_down<BV>(centroids, fitter(), cfg_.build);
+    std::vector<Aabb<S>> boxes;  // the surface-area heuristic and the clustering weigh the triangles' boxes
+    if (cfg_.build.split == SplitRule::Sah || cfg_.build.method == BuildMethod::BottomUp) {
+      boxes.resize(m);
+      for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris_[t].a.cwiseMin(tris_[t].b).cwiseMin(tris_[t].c), tris_[t].a.cwiseMax(tris_[t].b).cwiseMax(tris_[t].c));
+    }
+    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(), cfg_.build)
+                                                        : build_top_down<BV>(centroids, fitter(), cfg_.build, boxes);
     ids_ = tree_.primitives;
     std::vector<Triangle<S>> ordered(m);
     for (std::size_t k = 0; k < m; ++k) ordered[k] = tris_[static_cast<std::size_t>(ids_[k])];

@@ -13,7 +13,8 @@ namespace impact {
 
 /// Continuous segment-segment test over linear motion.
 /// Inputs: edge a = (a0, a1) and edge b = (b0, b1) at t = 0 (suffix _t0) and t = 1 (suffix _t1);
-/// coordinates finite and below 1e100 in magnitude. Any configuration is accepted: parallel or
+/// coordinates finite and below 1e100 in magnitude, options in the ranges of CcdOptions (both
+/// checked in every build: InvalidInput otherwise). Any configuration is accepted: parallel or
 /// collinear edges, shared end points, zero-length edges, no motion, coplanar motion.
 /// Output (CcdResult): hit == false proves that for all t in [0, opt.t_max] the distance between
 /// the closed segments is greater than opt.min_separation. hit == true comes with a toi no later
@@ -33,7 +34,7 @@ CcdResult<S> edge_edge_ccd(const Vec3<S>& a0_t0, const Vec3<S>& a1_t0, const Vec
   double a[4][3], b[4][3];
   detail::ccd_load(a0_t0, a1_t0, b0_t0, b1_t0, a);
   detail::ccd_load(a0_t1, a1_t1, b0_t1, b1_t1, b);
-  detail::ccd_check(a, b, opt);
+  detail::ccd_check(a, b, opt, "edge_edge_ccd");
   return detail::ccd_result_cast<S>(detail::ccd_query<false>(a, b, opt));
 }
 

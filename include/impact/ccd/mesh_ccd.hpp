@@ -41,13 +41,20 @@ struct MeshMotion {
   Vec3<S> p1(int v) const { return end->row(v).transpose(); }
 };
 
-/// Validates a step (same vertex count at both ends, finite coordinates, indices in range) and
-/// returns its view. Throws InvalidInput.
+/// Validates a step (same vertex count at both ends, finite coordinates below 1e100 in magnitude,
+/// the range of the primitive tests, indices in range) and returns its view. Throws InvalidInput.
 template <class S>
 MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
   validate_mesh(start, faces, "mesh motion (start)");
   validate_mesh(end, faces, "mesh motion (end)");
   if (start.rows() != end.rows()) throw InvalidInput("mesh motion: start and end have different vertex counts");
+  for (const Vertices<S>* V : {&start, &end})
+    for (Eigen::Index i = 0; i < V->rows(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if (!(std::abs(static_cast<double>((*V)(i, k))) < detail::kCcdMaxCoordinate))
+          throw InvalidInput(std::string("mesh motion (") + (V == &start ? "start" : "end") + "): vertex " + std::to_string(i) +
+                             " has coordinate " + detail::ccd_number(static_cast<double>((*V)(i, k))) +
+                             ", outside the range |x| < 1e100 of the CCD tests");
   return {&start, &end, &faces};
 }
 
@@ -59,9 +66,13 @@ struct SweptMeshBvh {
   S inflate = S(0);  ///< >= min_separation / 2 exactly
 
   /// Builds the tree top-down over the triangles' swept-box centres, for queries with a minimum
-  /// separation up to `min_separation` (>= 0).
+  /// separation up to `min_separation` (finite, >= 0 and <= 1e100; InvalidInput otherwise).
   static SweptMeshBvh build(const MeshMotion<S>& m, double min_separation = 0.0, const BuildConfig& cfg = {}) {
-    IMPACT_ASSERT(min_separation >= 0.0);
+    if (!(min_separation >= 0.0 && min_separation <= detail::kCcdMaxCoordinate))
+      throw InvalidInput("SweptMeshBvh::build: min_separation must be finite, >= 0 and <= 1e100, is " +
+                         detail::ccd_number(min_separation));
+    if (m.start == nullptr || m.end == nullptr || m.faces == nullptr)
+      throw InvalidInput("SweptMeshBvh::build: empty mesh motion (use make_mesh_motion)");
     SweptMeshBvh b;
     b.inflate = static_cast<S>(min_separation / 2);
     if (static_cast<double>(b.inflate) * 2 < min_separation)
@@ -116,6 +127,23 @@ struct MeshCcdResult {
 };
 
 namespace detail {
+
+// Checks a mesh CCD query before any work (InvalidInput): the options, and each tree built for
+// this mesh (one box per triangle) with an inflation that covers the query's minimum separation.
+template <class S>
+void validate_mesh_ccd(const char* where, const CcdOptions& opt, const MeshMotion<S>& m, const SweptMeshBvh<S>& t,
+                       const char* which) {
+  ccd_validate_options(opt, where);
+  if (m.start == nullptr || m.end == nullptr || m.faces == nullptr)
+    throw InvalidInput(std::string(where) + ": empty mesh motion (use make_mesh_motion)");
+  if (t.tree.num_primitives() != static_cast<std::size_t>(m.faces->rows()))
+    throw InvalidInput(std::string(where) + ": the tree " + which + " has " + std::to_string(t.tree.num_primitives()) +
+                       " triangles, the mesh " + std::to_string(m.faces->rows()) + " (built for another mesh?)");
+  if (!(static_cast<double>(t.inflate) * 2 >= opt.min_separation))
+    throw InvalidInput(std::string(where) + ": the tree " + which + " was built for a minimum separation up to " +
+                       ccd_number(static_cast<double>(t.inflate) * 2) + ", the query asks for " + ccd_number(opt.min_separation) +
+                       " (its boxes could miss contacts: build it with SweptMeshBvh::build(motion, d))");
+}
 
 // Distinct primitive pairs gathered from overlapping triangle pairs: (vertex_mesh, vertex, face)
 // and (a0, a1, b0, b1), then sorted and deduplicated before testing.
@@ -199,10 +227,13 @@ MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, cons
 /// (built for a minimum separation >= opt.min_separation, then refitted). Returns every vertex-face pair (in
 /// both directions) and edge-edge pair that comes within opt.min_separation, with the earliest
 /// toi. No false negatives (see CcdResult); hits may include near misses within the tolerance.
+/// Throws InvalidInput (before any work) on bad options (see CcdOptions), a tree built for another
+/// mesh, or a tree built for a smaller minimum separation than opt.min_separation.
 template <class S>
 MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, const MeshMotion<S>& b, const SweptMeshBvh<S>& tb,
                           const CcdOptions& opt = {}) {
-  IMPACT_ASSERT(double(ta.inflate) * 2 >= opt.min_separation && double(tb.inflate) * 2 >= opt.min_separation);
+  detail::validate_mesh_ccd("mesh_ccd", opt, a, ta, "of mesh a");
+  detail::validate_mesh_ccd("mesh_ccd", opt, b, tb, "of mesh b");
   detail::MeshCcdCandidates c;
   std::size_t pairs = 0;
   traverse_pair(
@@ -219,10 +250,10 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
 
 /// Self CCD of one deforming mesh over one step, skipping adjacent primitives (a vertex against a
 /// face containing it, edges sharing a vertex). Vertex-face contacts have vertex_mesh 0; edge
-/// pairs are reported once with (a0, a1) < (b0, b1).
+/// pairs are reported once with (a0, a1) < (b0, b1). Throws InvalidInput like mesh_ccd.
 template <class S>
 MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}) {
-  IMPACT_ASSERT(double(t.inflate) * 2 >= opt.min_separation);
+  detail::validate_mesh_ccd("mesh_self_ccd", opt, m, t, "of the mesh");
   detail::MeshCcdCandidates c;
   std::size_t pairs = 0;
   traverse_self(

@@ -10,8 +10,12 @@
 namespace impact {
 
 /// Inputs of vertex_face_ccd and edge_edge_ccd. Lengths are in the units of the coordinates.
+/// Every entry point (vertex_face_ccd, edge_edge_ccd, mesh_ccd, mesh_self_ccd) checks the ranges
+/// given below in every build and throws InvalidInput with the reason otherwise: an out-of-range
+/// option would void the meaning of hit == false.
 struct CcdOptions {
-  /// d >= 0: a contact is any time at which the two primitives come within distance d.
+  /// d >= 0 (finite, at most 1e100): a contact is any time at which the two primitives come
+  /// within distance d.
   double min_separation = 0.0;
   /// The tests look at t in [0, t_max], 0 < t_max <= 1 (t = 1 is the end of the step).
   double t_max = 1.0;
@@ -19,12 +23,13 @@ struct CcdOptions {
   /// with every earlier time excluded, at which the primitives are within
   /// min_separation + 2 tolerance (up to rounding, about 1e-15 times the coordinate magnitude).
   /// Smaller gives a later (tighter) toi and is slower; the re-check below then decides whether
-  /// such a hit is a real contact. Never affects the no-false-negative guarantee.
+  /// such a hit is a real contact. Never affects the no-false-negative guarantee. Finite, >= 0.
   double tolerance = 1e-6;
   /// Work budget: the number of (t, u, v) boxes the search may examine. When it runs out the test
   /// reports a hit at the earliest time not yet excluded, with CcdResult::budget_exhausted set.
   /// A box costs about 0.1-0.5 us, so the default bounds a query to well under a millisecond; the
   /// query files of the benchmark need at most about 600 boxes at the default tolerance.
+  /// In [1, 2^22] (the search's memory grows by at most one 56-byte box per iteration).
   std::int64_t max_iterations = 2000;
   /// Re-check of hits. A hit of the search is first tested for a proof of a real contact (a
   /// simple root of the contact equations inside the domain, proved in interval arithmetic: the
@@ -35,7 +40,7 @@ struct CcdOptions {
   /// double rounding can separate (about 1e-15 times the coordinates). A box costs about 1 us,
   /// so an unproved hit (a contact exactly on an edge or vertex, tangential or coplanar, or a
   /// near miss) costs up to about 0.5 ms more by default; misses cost nothing more. 0 disables
-  /// the re-check (the double search alone).
+  /// the re-check (the double search alone). In [0, 2^22].
   std::int64_t recheck_iterations = 400;
 };
 

@@ -13,7 +13,8 @@ namespace impact {
 
 /// Continuous vertex-triangle test over linear motion.
 /// Inputs: the point p and the triangle (f0, f1, f2) at t = 0 (suffix 0) and t = 1 (suffix 1);
-/// coordinates finite and below 1e100 in magnitude. Any configuration is accepted: degenerate
+/// coordinates finite and below 1e100 in magnitude, options in the ranges of CcdOptions (both
+/// checked in every build: InvalidInput otherwise). Any configuration is accepted: degenerate
 /// (collinear or zero-area) triangles, coincident points, no motion, coplanar motion.
 /// Output (CcdResult): hit == false proves that for all t in [0, opt.t_max] the distance from
 /// p(t) to the closed triangle is greater than opt.min_separation. hit == true comes with a toi
@@ -32,7 +33,7 @@ CcdResult<S> vertex_face_ccd(const Vec3<S>& p0, const Vec3<S>& f00, const Vec3<S
   double a[4][3], b[4][3];
   detail::ccd_load(p0, f00, f10, f20, a);
   detail::ccd_load(p1, f01, f11, f21, b);
-  detail::ccd_check(a, b, opt);
+  detail::ccd_check(a, b, opt, "vertex_face_ccd");
   return detail::ccd_result_cast<S>(detail::ccd_query<true>(a, b, opt));
 }
 

@@ -14,6 +14,7 @@
 #pragma once
 
 #include "impact/fit/bounding_sphere.hpp"
+#include "impact/fit/obb_fit.hpp"
 #include "impact/geometry/aabb.hpp"
 #include "impact/geometry/obb.hpp"
 #include "impact/geometry/sphere.hpp"
@@ -21,9 +22,12 @@
 
 namespace impact {
 
-/// Options for fitting BVs; only spheres have a choice of method.
+/// Options for fitting BVs: spheres and oriented boxes have a choice of method.
 struct FitConfig {
   SphereFit sphere = SphereFit::AabbCenter;
+  /// How oriented boxes choose their axes. MeshBvh passes each node's triangles as consecutive
+  /// vertex triples, so the default weighs the triangles by area (see fit/obb_fit.hpp).
+  ObbFit obb = ObbFit::TriangleArea;
 };
 
 template <class BV> struct BvTraits;
@@ -73,6 +77,53 @@ template <class S_> struct BvTraits<Aabb<S_>> {
     return {c - e, c + e};
   }
   static Aabb<S> inflated(const Aabb<S>& a, S margin) { return {a.min.array() - margin, a.max.array() + margin}; }
+};
+
+template <class S_> struct BvTraits<Obb<S_>> {
+  using S = S_;
+  using Scalar = S_;
+  static constexpr const char* name = "obb";
+
+  static Obb<S> fit(const Vec3<S>* pts, std::size_t n, const FitConfig& cfg = {}) { return fit_obb(pts, n, cfg.obb); }
+  /// A box around both, on the axes of the larger one (refit by merging). Its corners are rounded
+  /// to S, so the result is grown by a bound of that rounding.
+  static Obb<S> merge(const Obb<S>& a, const Obb<S>& b) {
+    if ((a.half.array() < S(0)).any()) return b;
+    if ((b.half.array() < S(0)).any()) return a;
+    Vec3<S> ca[8], cb[8], pts[16];
+    obb_corners(a, ca);
+    obb_corners(b, cb);
+    std::copy(ca, ca + 8, pts);
+    std::copy(cb, cb + 8, pts + 8);
+    Obb<S> m = fit_obb_with_axes(pts, 16, size(a) >= size(b) ? a.axes : b.axes);
+    const S grow = S(8) * std::numeric_limits<S>::epsilon() *
+                   (std::max(a.center.cwiseAbs().maxCoeff(), b.center.cwiseAbs().maxCoeff()) + std::max(a.half.sum(), b.half.sum()));
+    m.half.array() += grow;
+    return m;
+  }
+  static S size(const Obb<S>& a) { return a.half.norm(); }
+  static Vec3<S> center(const Obb<S>& a) { return a.center; }
+  static bool overlap(const Obb<S>& a, const Obb<S>& b) { return overlap(a, b, RigidTransform<S>{}); }
+  /// Separating-axis test (15 axes) of a and xf(b) in a's frame. Conservative: every quantity of
+  /// the test is computed to within a few ulps of the magnitudes it involves (coordinates of the
+  /// centres and the translation, M; centre offset and extents, E), so 64 ulps of 3 M + E added to
+  /// every axis's radii covers the rounding of R, of the offset and the axes' departure from
+  /// orthonormality.
+  static bool overlap(const Obb<S>& a, const Obb<S>& b, const RigidTransform<S>& xf) {
+    const Vec3<S> cb = xf.apply(b.center);
+    const Mat3<S> R = a.axes.transpose() * (xf.R * b.axes);
+    const Vec3<S> t = a.axes.transpose() * (cb - a.center);
+    const S M = a.center.cwiseAbs().maxCoeff() + cb.cwiseAbs().maxCoeff() + xf.t.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
+    const S E = t.cwiseAbs().sum() + a.half.sum() + b.half.sum();
+    const S slack = S(64) * std::numeric_limits<S>::epsilon() * (S(3) * M + E) + std::numeric_limits<S>::denorm_min();
+    return obb_overlap<S>(a.half, R, t, b.half, slack);
+  }
+  static Obb<S> transformed(const Obb<S>& a, const RigidTransform<S>& xf) {
+    Obb<S> o{xf.apply(a.center), xf.R * a.axes, a.half};
+    o.half.array() += S(16) * std::numeric_limits<S>::epsilon() * (o.center.cwiseAbs().maxCoeff() + a.half.sum());
+    return o;
+  }
+  static Obb<S> inflated(const Obb<S>& a, S margin) { return {a.center, a.axes, (a.half.array() + margin).matrix()}; }
 };
 
 }  // namespace impact

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// load_mesh: reads any triangle-bearing format assimp understands (OBJ with v/vt/vn, STL ASCII
-/// and binary, PLY ASCII and binary, OFF, glTF, COLLADA, ...) into one TriangleMesh. Part of the
+/// load_mesh: reads a mesh file through assimp (by default OBJ with v/vt/vn, STL ASCII and
+/// binary, PLY ASCII and binary, OFF; on request every triangle-bearing format assimp reads:
+/// glTF, COLLADA, ...) into one TriangleMesh. Part of the
 /// separate target impact::io (links assimp); the core never includes it. Every failure (missing
 /// or unreadable file, parse error, no triangles, non-finite coordinates, bad indices) is reported
 /// as impact::InvalidInput naming the file and the reason.
@@ -11,16 +12,20 @@
 #include "impact/geometry/triangle_mesh.hpp"
 #include "impact/io/file_checks.hpp"
 
+#include <assimp/BaseImporter.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <algorithm>
 #include <array>
 #include <climits>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -39,7 +44,22 @@ struct LoadOptions {
   /// (a mesh referenced by several nodes appears once per reference; one no node references is
   /// left out). false: use the raw mesh coordinates, one copy per mesh of the file.
   bool apply_node_transforms = true;
+  /// false: read only the formats of default_mesh_formats() (PLY, OFF and STL, checked before
+  /// assimp sees them, and the readers that survived fuzzing); any other format throws
+  /// InvalidInput. true: also every other format assimp reads, for TRUSTED files only: assimp
+  /// 5.2's readers of many formats (ASE, X, glTF, ...) crash, hang or allocate without bound on
+  /// hostile input (tests/fuzz/fuzz_load_mesh.cpp finds such files within seconds).
+  bool allow_unchecked_formats = false;
 };
+
+/// The formats (file extensions) load_mesh reads by default: ply, off and stl, checked by
+/// io/file_checks.hpp before assimp, and obj. Files named otherwise need
+/// LoadOptions::allow_unchecked_formats, except .txt, .dat and unnamed files whose bytes start
+/// like PLY, OFF or ASCII STL, which are read as those.
+inline const std::vector<std::string>& default_mesh_formats() {
+  static const std::vector<std::string> formats = {"obj", "ply", "off", "stl"};
+  return formats;
+}
 
 namespace detail::loader {
 
@@ -88,6 +108,25 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
   return out;
 }
 
+/// Unregisters from `importer` every reader that does not list `format` among its extensions, so
+/// that assimp cannot hand the file to another reader by its content (it does so when the
+/// extension's readers decline it, or when several readers claim the extension). The removed
+/// readers are owned by `removed`.
+inline void keep_only_readers_of(Assimp::Importer& importer, const std::string& format,
+                                 std::vector<std::unique_ptr<Assimp::BaseImporter>>& removed) {
+  for (std::size_t i = importer.GetImporterCount(); i-- > 0;) {
+    const aiImporterDesc* desc = importer.GetImporterInfo(i);
+    bool keep = false;
+    if (desc != nullptr && desc->mFileExtensions != nullptr) {
+      std::istringstream words(desc->mFileExtensions);
+      for (std::string w; words >> w;) keep = keep || w == format;
+    }
+    if (keep) continue;
+    Assimp::BaseImporter* reader = importer.GetImporter(i);
+    if (reader != nullptr && importer.UnregisterLoader(reader) == aiReturn_SUCCESS) removed.emplace_back(reader);
+  }
+}
+
 }  // namespace detail::loader
 
 /// Loads every triangle of the file at `path` into one mesh of scalar S (float or double): all
@@ -100,14 +139,23 @@ inline std::vector<std::pair<unsigned, Eigen::Matrix4d>> mesh_instances(const ai
 /// spot.obj gives its 2,930 vertices, where assimp's seam-split vertices number 3,225 (and
 /// `assimp info`, with more post-processing, reports 3,441).
 ///
+/// Formats: see LoadOptions::allow_unchecked_formats and default_mesh_formats(). The format is the
+/// extension when assimp has a reader for it, else the file's first bytes (PLY, OFF, ASCII STL);
+/// only the readers of that format are kept, so assimp cannot divert the file to another reader.
+///
 /// The result passes validate_mesh. Throws InvalidInput, with the path and the reason in the
-/// message, when the file does not exist, is not a regular file, cannot be read, is empty, cannot
+/// message, when the format is not read (by default: not OBJ, PLY, OFF or STL), when the file does not exist, is not a regular file, cannot be read, is empty, cannot
 /// be parsed (assimp's error text is included), contains no triangles, has a NaN or infinite
-/// coordinate (or one that overflows S), has a face index out of range, is a PLY, OFF or ASCII
-/// STL file cut short of what its header or syntax declares, or holds more than INT_MAX vertices
-/// or triangles. A text file cut at a line boundary that is still a valid file (OBJ declares no
-/// counts) cannot be told from a complete one. Never prints. Cost: one pass of assimp plus
-/// O(triangles) expected time for welding; about 0.1 s for 270k triangles.
+/// coordinate (or one that overflows S), has a face index out of range, or holds more than INT_MAX
+/// vertices or triangles. PLY, OFF and STL files (recognised by their bytes as well as their name,
+/// since assimp reads .txt, .dat or unnamed files by content) are checked before assimp sees them
+/// (io/file_checks.hpp): they are rejected when cut short of what their header or syntax declares,
+/// when a declared count exceeds what the file's size can hold, when their header is malformed or
+/// holds stray control bytes, when a face has an empty index list (or, in OFF, more than 9
+/// corners), and when a non-numeric token stands where a number is due. A text file cut at a line
+/// boundary that is still a valid file (OBJ declares no counts) cannot be told from a complete
+/// one. Never prints. Cost: one pass of the checks and of assimp plus O(triangles) expected time
+/// for welding; about 0.1 s for 270k triangles.
 template <class S> TriangleMesh<S> load_mesh(const std::string& path, const LoadOptions& options = {}) {
   static_assert(is_supported_scalar_v<S>, "load_mesh: S must be float or double");
   namespace fs = std::filesystem;
@@ -118,15 +166,41 @@ template <class S> TriangleMesh<S> load_mesh(const std::string& path, const Load
   if (fs::is_directory(st)) detail::loader::fail(path, "is a directory, not a mesh file");
   if (!std::ifstream(path, std::ios::binary).good()) detail::loader::fail(path, "file cannot be opened for reading");
   if (fs::is_regular_file(st) && fs::file_size(path, ec) == 0 && !ec) detail::loader::fail(path, "file is empty");
-  detail::mesh_file::check(path);  // PLY, OFF and STL defects assimp would hang on or hide
+
+  // The format: the extension when assimp has a reader for it, else the first bytes (assimp
+  // would guess from them too, among all of its readers).
+  Assimp::Importer importer;
+  std::string ext = detail::mesh_file::extension_of(path);
+  const bool by_extension = !ext.empty() && importer.IsExtensionSupported("." + ext);
+  std::string bytes;
+  std::string format = ext;
+  if (!by_extension || ext == "ply" || ext == "off" || ext == "stl") {
+    bytes = detail::mesh_file::read_all_bytes(path);
+    if (!by_extension) format = detail::mesh_file::sniff_format(bytes);
+  }
+  const auto& defaults = default_mesh_formats();
+  const bool checked = format == "ply" || format == "off" || format == "stl";
+  if (!options.allow_unchecked_formats && std::find(defaults.begin(), defaults.end(), format) == defaults.end()) {
+    if (format.empty())
+      detail::loader::fail(path, "unknown format: the bytes are not PLY, OFF or ASCII STL and the extension is not a mesh format's");
+    detail::loader::fail(path, "format '." + format +
+                                   "' is not read by default (assimp's reader of it is not safe on hostile files); set "
+                                   "LoadOptions::allow_unchecked_formats for trusted files");
+  }
+  // PLY, OFF and STL defects assimp would hang, abort or allocate on, or hide
+  if (checked) detail::mesh_file::check_format(path, bytes, format, by_extension);
+  // only the readers of the format: assimp cannot divert the file to another reader
+  std::vector<std::unique_ptr<Assimp::BaseImporter>> removed;
+  if (!format.empty()) detail::loader::keep_only_readers_of(importer, format, removed);
 
   // No JoinIdenticalVertices when welding by position ourselves: it would only cost time.
   unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
   if (!options.merge_duplicate_vertices) flags |= aiProcess_JoinIdenticalVertices;
-  Assimp::Importer importer;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(path, flags);
+    // checked formats: assimp parses the very bytes that were checked
+    scene = checked ? importer.ReadFileFromMemory(bytes.data(), bytes.size(), flags, format.c_str())
+                    : importer.ReadFile(path, flags);
   } catch (const std::exception& e) {
     detail::loader::fail(path, std::string("cannot be parsed: ") + e.what());
   } catch (...) {

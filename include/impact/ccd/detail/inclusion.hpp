@@ -31,11 +31,14 @@
 #include "impact/ccd/detail/double_double.hpp"
 #include "impact/ccd/options.hpp"
 #include "impact/core/config.hpp"
+#include "impact/core/error.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace impact::detail {
@@ -432,18 +435,55 @@ inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
   return o;
 }
 
-/// Checks the preconditions shared by both tests (asserts only: hot path).
-inline void ccd_check(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
-  IMPACT_ASSERT(opt.min_separation >= 0.0);
-  IMPACT_ASSERT(opt.t_max > 0.0 && opt.t_max <= 1.0);
-  IMPACT_ASSERT(opt.tolerance >= 0.0);
-  for (int k = 0; k < 4; ++k)
+/// Largest iteration budget accepted, for the search and for the re-check. The search's heap
+/// grows by at most one box (56 bytes) per iteration and a box costs about 0.1-2 us, so this
+/// bounds one query to about 235 MB and a few seconds; a larger budget is an input error.
+inline constexpr std::int64_t kCcdMaxIterations = std::int64_t(1) << 22;
+
+/// Largest coordinate magnitude accepted by the primitive tests (their error bounds assume it).
+inline constexpr double kCcdMaxCoordinate = 1e100;
+
+/// A double for an error message (%g keeps tiny and huge values readable, NaN reads "nan").
+inline std::string ccd_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+/// Throws InvalidInput unless the options are usable: min_separation finite and >= 0, t_max in
+/// (0, 1], tolerance finite and >= 0, max_iterations in [1, kCcdMaxIterations],
+/// recheck_iterations in [0, kCcdMaxIterations]. `where` names the entry point. A few compares.
+inline void ccd_validate_options(const CcdOptions& opt, const char* where) {
+  const std::string w = std::string(where) + ": CcdOptions::";
+  if (!(opt.min_separation >= 0.0 && opt.min_separation <= kCcdMaxCoordinate))
+    throw InvalidInput(w + "min_separation must be finite, >= 0 and <= 1e100, is " + ccd_number(opt.min_separation));
+  if (!(opt.t_max > 0.0 && opt.t_max <= 1.0)) throw InvalidInput(w + "t_max must be in (0, 1], is " + ccd_number(opt.t_max));
+  if (!(opt.tolerance >= 0.0 && opt.tolerance <= std::numeric_limits<double>::max()))
+    throw InvalidInput(w + "tolerance must be finite and >= 0, is " + ccd_number(opt.tolerance));
+  if (opt.max_iterations < 1 || opt.max_iterations > kCcdMaxIterations)
+    throw InvalidInput(w + "max_iterations must be in [1, " + std::to_string(kCcdMaxIterations) + "], is " +
+                       std::to_string(opt.max_iterations));
+  if (opt.recheck_iterations < 0 || opt.recheck_iterations > kCcdMaxIterations)
+    throw InvalidInput(w + "recheck_iterations must be in [0, " + std::to_string(kCcdMaxIterations) + "], is " +
+                       std::to_string(opt.recheck_iterations));
+}
+
+/// Throws InvalidInput unless every coordinate of the 8 points is finite and below
+/// kCcdMaxCoordinate in magnitude. `where` names the entry point.
+inline void ccd_validate_points(const double (&p0)[4][3], const double (&p1)[4][3], const char* where) {
+  for (int k = 0; k < 8; ++k)
     for (int i = 0; i < 3; ++i) {
-      IMPACT_ASSERT(std::abs(p0[k][i]) < 1e100 && std::abs(p1[k][i]) < 1e100);
+      const double x = k < 4 ? p0[k][i] : p1[k - 4][i];
+      if (!(std::abs(x) < kCcdMaxCoordinate))
+        throw InvalidInput(std::string(where) + ": point " + std::to_string(k) + " (" + (k < 4 ? "t = 0" : "t = 1") +
+                           ") has coordinate " + ccd_number(x) + ", outside the finite range |x| < 1e100");
     }
-  (void)p0;
-  (void)p1;
-  (void)opt;
+}
+
+/// Validates a query (options and points); throws InvalidInput. Cheap next to the test itself.
+inline void ccd_check(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt, const char* where) {
+  ccd_validate_options(opt, where);
+  ccd_validate_points(p0, p1, where);
 }
 
 }  // namespace impact::detail

@@ -1,0 +1,585 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Internals of cloth_collision_step: the combined system (cloth vertices first, then every
+/// obstacle's, with infinite mass), the swept tree over all its triangles, the candidate
+/// primitive pairs, and the stages. Not part of the interface.
+#pragma once
+
+#include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/step_options.hpp"
+#include "impact/cloth/zone_projection.hpp"
+#include "impact/core/error.hpp"
+#include "impact/narrow/closest_point.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <vector>
+
+namespace impact::detail::cloth {
+
+/// A candidate primitive pair: vertex-face (v[0] against face v[1..3]) or edge-edge.
+struct Prim {
+  std::uint8_t ee = 0;
+  std::int32_t v[4] = {-1, -1, -1, -1};
+  friend bool operator<(const Prim& a, const Prim& b) {
+    if (a.ee != b.ee) return a.ee < b.ee;
+    return std::lexicographical_compare(a.v, a.v + 4, b.v, b.v + 4);
+  }
+  friend bool operator==(const Prim& a, const Prim& b) {
+    return a.ee == b.ee && a.v[0] == b.v[0] && a.v[1] == b.v[1] && a.v[2] == b.v[2] && a.v[3] == b.v[3];
+  }
+};
+
+/// Everything kept between steps (in a workspace): combined arrays, the tree.
+template <class S>
+struct System {
+  Faces F;                         // cloth triangles, then every obstacle's (offset)
+  std::vector<std::uint8_t> tri_obstacle;
+  std::int32_t n_cloth = 0;
+  Vertices<S> X0, X1;              // combined positions
+  std::vector<double> w;           // inverse masses (0 = infinite)
+  SweptMeshBvh<S> tree;
+  bool has_tree = false;
+  Faces tree_faces;                // the faces the tree was built for
+  S tree_inflate = S(0);
+};
+
+inline std::string pair_name(const Prim& p) {
+  auto s = [](std::int32_t v) { return std::to_string(v); };
+  if (p.ee) return "edge (" + s(p.v[0]) + "," + s(p.v[1]) + ")-edge (" + s(p.v[2]) + "," + s(p.v[3]) + ")";
+  return "vertex " + s(p.v[0]) + "-face (" + s(p.v[1]) + "," + s(p.v[2]) + "," + s(p.v[3]) + ")";
+}
+
+inline ClothPair to_pair(const Prim& p) {
+  ClothPair c;
+  c.edge_edge = p.ee != 0;
+  for (int k = 0; k < 4; ++k) c.v[k] = p.v[k];
+  return c;
+}
+
+template <class D>
+void check_coords(const Eigen::MatrixBase<D>& X, const std::string& what) {
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
+    for (Eigen::Index j = 0; j < X.cols(); ++j) {
+      const double c = static_cast<double>(X(i, j));
+      if (!std::isfinite(c)) throw InvalidInput(what + ": row " + std::to_string(i) + " has a NaN or infinite coordinate");
+      if (std::abs(c) >= 1e30) throw InvalidInput(what + ": row " + std::to_string(i) + " has a coordinate beyond 1e30");
+    }
+}
+
+template <class S>
+void validate_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm, const Vertices<S>& x0, const Vertices<S>& x1,
+                   const ClothObstacles<S>& obs, const ClothCollisionOptions<S>& o) {
+  const std::string fn = "cloth_collision_step: ";
+  validate_mesh(x0, F, "cloth_collision_step (cloth at x0)");
+  if (x1.rows() != x0.rows()) throw InvalidInput(fn + "x1 has " + std::to_string(x1.rows()) + " rows, x0 has " + std::to_string(x0.rows()));
+  if (wm.rows() != x0.rows())
+    throw InvalidInput(fn + "inverse_mass has " + std::to_string(wm.rows()) + " entries for " + std::to_string(x0.rows()) + " vertices");
+  check_coords(x0, fn + "x0");
+  check_coords(x1, fn + "x1");
+  for (Eigen::Index i = 0; i < wm.rows(); ++i)
+    if (!std::isfinite(static_cast<double>(wm[i])) || wm[i] < S(0))
+      throw InvalidInput(fn + "inverse_mass[" + std::to_string(i) + "] is negative, NaN or infinite (0 means infinite mass)");
+  for (std::size_t k = 0; k < obs.rigid.size(); ++k) {
+    const auto& r = obs.rigid[k];
+    const std::string w = fn + "rigid obstacle " + std::to_string(k);
+    if (!r.mesh) throw InvalidInput(w + ": no mesh");
+    validate_mesh(r.mesh->V, r.mesh->F, w);
+    check_coords(r.mesh->V, w);
+    if (!r.pose0.is_finite() || !r.pose1.is_finite()) throw InvalidInput(w + ": pose with a NaN or infinite entry");
+  }
+  for (std::size_t k = 0; k < obs.kinematic.size(); ++k) {
+    const auto& r = obs.kinematic[k];
+    const std::string w = fn + "kinematic obstacle " + std::to_string(k);
+    if (!r.x0 || !r.x1 || !r.faces) throw InvalidInput(w + ": missing x0, x1 or faces");
+    validate_mesh(*r.x0, *r.faces, w);
+    if (r.x1->rows() != r.x0->rows()) throw InvalidInput(w + ": x0 and x1 have different vertex counts");
+    check_coords(*r.x0, w + " x0");
+    check_coords(*r.x1, w + " x1");
+  }
+  const double h = static_cast<double>(o.thickness);
+  if (!(h > 0) || !std::isfinite(h)) throw InvalidInput(fn + "thickness must be positive and finite");
+  const double pd = static_cast<double>(o.proximity_distance);
+  if (!std::isfinite(pd) || (pd != 0 && pd < h)) throw InvalidInput(fn + "proximity_distance must be 0 (2 h) or >= thickness");
+  if (!std::isfinite(double(o.friction)) || o.friction < S(0)) throw InvalidInput(fn + "friction must be finite and >= 0");
+  if (!std::isfinite(double(o.separation_margin)) || o.separation_margin < S(0) || o.separation_margin > S(10))
+    throw InvalidInput(fn + "separation_margin must be in [0, 10]");
+  if (o.impulse_passes < 0 || o.max_zone_iterations < 0 || o.max_projection_iterations < 1)
+    throw InvalidInput(fn + "negative pass or iteration count");
+  if (!(o.projection_tolerance > S(0)) || !std::isfinite(double(o.projection_tolerance)))
+    throw InvalidInput(fn + "projection_tolerance must be positive and finite");
+  if (o.threads < 1) throw InvalidInput(fn + "threads must be >= 1");
+  if (!(o.ccd.tolerance >= 0) || !std::isfinite(o.ccd.tolerance) || o.ccd.max_iterations < 1 || o.ccd.recheck_iterations < 0)
+    throw InvalidInput(fn + "ccd options: tolerance must be finite and >= 0, max_iterations >= 1, recheck_iterations >= 0");
+}
+
+/// The stages over one step. Positions are the combined sys.X0 / sys.X1.
+template <class S>
+class Stepper {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  Stepper(System<S>& sys, const ClothCollisionOptions<S>& opt, ClothStepStats& stats) : sys_(sys), opt_(opt), stats_(stats) {
+    h_ = static_cast<double>(opt.thickness);
+    prox_ = opt.proximity_distance > S(0) ? static_cast<double>(opt.proximity_distance) : 2 * h_;
+    target_ = h_ * (1 + static_cast<double>(opt.separation_margin));
+    ccd_ = opt.ccd;
+    ccd_.min_separation = h_;
+    ccd_.t_max = 1.0;
+  }
+
+  void assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm, const Vertices<S>& x0, const Vertices<S>& x1,
+                const ClothObstacles<S>& obs) {
+    const auto t0 = Clock::now();
+    Eigen::Index nv = x0.rows(), nf = F.rows();
+    for (const auto& r : obs.rigid) nv += r.mesh->V.rows(), nf += r.mesh->F.rows();
+    for (const auto& k : obs.kinematic) nv += k.x0->rows(), nf += k.faces->rows();
+    sys_.n_cloth = static_cast<std::int32_t>(x0.rows());
+    sys_.X0.resize(nv, 3);
+    sys_.X1.resize(nv, 3);
+    sys_.F.resize(nf, 3);
+    sys_.w.assign(static_cast<std::size_t>(nv), 0.0);
+    sys_.tri_obstacle.assign(static_cast<std::size_t>(nf), 1);
+    sys_.X0.topRows(x0.rows()) = x0;
+    sys_.X1.topRows(x0.rows()) = x1;
+    sys_.F.topRows(F.rows()) = F;
+    for (Eigen::Index i = 0; i < F.rows(); ++i) sys_.tri_obstacle[static_cast<std::size_t>(i)] = 0;
+    for (Eigen::Index i = 0; i < x0.rows(); ++i) sys_.w[static_cast<std::size_t>(i)] = static_cast<double>(wm[i]);
+    Eigen::Index vo = x0.rows(), fo = F.rows();
+    for (const auto& r : obs.rigid) {
+      for (Eigen::Index i = 0; i < r.mesh->V.rows(); ++i) {
+        const Vec3<S> p = r.mesh->V.row(i).transpose();
+        sys_.X0.row(vo + i) = r.pose0.apply(p).transpose();
+        sys_.X1.row(vo + i) = r.pose1.apply(p).transpose();
+      }
+      sys_.F.middleRows(fo, r.mesh->F.rows()) = r.mesh->F.array() + static_cast<int>(vo);
+      vo += r.mesh->V.rows();
+      fo += r.mesh->F.rows();
+    }
+    for (const auto& k : obs.kinematic) {
+      sys_.X0.middleRows(vo, k.x0->rows()) = *k.x0;
+      sys_.X1.middleRows(vo, k.x0->rows()) = *k.x1;
+      sys_.F.middleRows(fo, k.faces->rows()) = k.faces->array() + static_cast<int>(vo);
+      vo += k.x0->rows();
+      fo += k.faces->rows();
+    }
+    check_coords(sys_.X0, "cloth_collision_step: rigid obstacle at pose0");
+    check_coords(sys_.X1, "cloth_collision_step: rigid obstacle at pose1");
+    changed_.assign(static_cast<std::size_t>(nv), 1);
+    // Coordinate scale, for the rounding margin of distances computed in double.
+    scale_ = std::max(sys_.X0.cwiseAbs().maxCoeff(), sys_.X1.cwiseAbs().maxCoeff());
+    const S inflate_needed = static_cast<S>(prox_ / 2);
+    if (sys_.has_tree && sys_.tree_faces.rows() == sys_.F.rows() && sys_.tree_faces == sys_.F && sys_.tree_inflate >= inflate_needed) {
+      refit_pending_ = true;
+    } else {
+      sys_.tree = SweptMeshBvh<S>::build(motion(), prox_);
+      sys_.has_tree = true;
+      sys_.tree_faces = sys_.F;
+      sys_.tree_inflate = sys_.tree.inflate;
+      refit_pending_ = false;
+    }
+    stats_.broad.ms += ms_since(t0);
+  }
+
+  /// Gathers the candidates of the current motion, classifies the start and throws on violations.
+  void check_start() {
+    gather();
+    stats_.candidates_vf = 0;
+    for (const auto& p : cand_) (p.ee ? stats_.candidates_ee : stats_.candidates_vf)++;
+    // Distances at x0 (double); the pairs near h get the exact-enough static CCD.
+    const double margin = 2 * ccd_.tolerance + 1e-4 * h_ + 64 * std::numeric_limits<double>::epsilon() * scale_;
+    std::vector<Prim> bad;
+    for (const auto& p : cand_) {
+      Contact c = closest(p, /*start=*/true);
+      if (c.dist < prox_) near_.push_back({p, c});
+      if (c.dist < h_ + margin) {
+        const auto r = ccd(p, /*static_start=*/true);
+        if (r.hit) bad.push_back(p);
+      }
+    }
+    if (!bad.empty()) {
+      if (opt_.on_start_violation == StartViolation::Throw) {
+        std::string msg = "cloth_collision_step: x0 has " + std::to_string(bad.size()) + " pair(s) closer than the thickness: ";
+        for (std::size_t i = 0; i < std::min<std::size_t>(bad.size(), 8); ++i) msg += (i ? ", " : "") + pair_name(bad[i]);
+        if (bad.size() > 8) msg += ", ...";
+        throw InvalidInput(msg);
+      }
+      excluded_ = bad;
+      std::sort(excluded_.begin(), excluded_.end());
+      for (const auto& p : bad) stats_.start_violations.push_back(to_pair(p));
+      near_.erase(std::remove_if(near_.begin(), near_.end(), [&](const Near& q) { return is_excluded(q.p); }), near_.end());
+    }
+  }
+
+  /// Stage 1: pairs within the proximity distance at x0 stop approaching (inelastic) with friction.
+  void proximity_stage() {
+    const auto t0 = Clock::now();
+    stats_.proximity.passes = 1;
+    for (const auto& q : near_) {
+      if (q.c.dist <= 0) continue;
+      ZoneConstraint k = constraint_of(q.p, q.c.a, q.c.n, q.c.dist);
+      if (apply_impulse(k)) ++stats_.proximity.collisions;
+    }
+    stats_.proximity.ms += ms_since(t0);
+  }
+
+  /// Stage 2: passes of CCD impulses, earliest first.
+  void impulse_stage() {
+    const auto t0 = Clock::now();
+    for (int pass = 0; pass < opt_.impulse_passes; ++pass) {
+      const auto hits = detect();
+      ++stats_.impulses.passes;
+      if (hits.empty()) break;
+      for (const auto& hit : hits) {
+        ZoneConstraint k = constraint_at_hit(hit);
+        if (apply_impulse(k)) ++stats_.impulses.collisions;
+      }
+    }
+    stats_.impulses.ms += ms_since(t0) - broad_ms_in_stage();
+  }
+
+  /// Stage 3: impact zones (Harmon 2008 or rigid).
+  void zone_stage() {
+    const auto t0 = Clock::now();
+    const std::size_t nv = sys_.w.size();
+    Vertices<S> xhat = sys_.X1;  // the positions each zone stays closest to
+    std::vector<std::int32_t> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](std::int32_t v) {
+      while (parent[static_cast<std::size_t>(v)] != v) {
+        parent[static_cast<std::size_t>(v)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
+        v = parent[static_cast<std::size_t>(v)];
+      }
+      return v;
+    };
+    std::vector<ZoneConstraint> all;
+    std::vector<std::int32_t> anchor;  // one movable vertex of each constraint (-1: none)
+    for (int round = 0; round < opt_.max_zone_iterations; ++round) {
+      const auto hits = detect();
+      ++stats_.zones.passes;
+      if (hits.empty()) break;
+      std::vector<std::int32_t> touched;
+      for (const auto& hit : hits) {
+        ZoneConstraint k = constraint_at_hit(hit);
+        std::int32_t first = -1;
+        for (int j = 0; j < k.count; ++j) {
+          if (!(sys_.w[static_cast<std::size_t>(k.v[j])] > 0)) continue;
+          if (first < 0) first = k.v[j];
+          else parent[static_cast<std::size_t>(find(k.v[j]))] = find(first);
+        }
+        all.push_back(k);
+        anchor.push_back(first);
+        if (first >= 0) touched.push_back(first);
+        ++stats_.zones.collisions;
+      }
+      // Zones touched in this round: every constraint of the zone, solved together.
+      std::vector<std::int32_t> roots;
+      for (auto v : touched) roots.push_back(find(v));
+      std::sort(roots.begin(), roots.end());
+      roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+      std::vector<std::vector<std::size_t>> members(roots.size());
+      for (std::size_t c = 0; c < all.size(); ++c) {
+        if (anchor[c] < 0) continue;
+        const auto it = std::lower_bound(roots.begin(), roots.end(), find(anchor[c]));
+        if (it != roots.end() && *it == find(anchor[c])) members[static_cast<std::size_t>(it - roots.begin())].push_back(c);
+      }
+      for (std::size_t z = 0; z < roots.size(); ++z) resolve_zone(all, members[z], roots[z], xhat, parent, find);
+    }
+    stats_.zones.ms += ms_since(t0) - broad_ms_in_stage();
+  }
+
+  /// Stage 4: the fail-safe. Colliding pairs' movable vertices go back to x0 until the CCD finds
+  /// nothing (boxes only shrink, so the candidates of one gathering stay a superset).
+  void failsafe_stage() {
+    const auto t0 = Clock::now();
+    auto hits = detect();
+    ++stats_.failsafe.passes;
+    while (!hits.empty()) {
+      bool froze = false;
+      for (const auto& hit : hits) {
+        bool any = false;
+        for (int j = 0; j < 4; ++j) {
+          const std::int32_t v = hit.p.v[j];
+          if (sys_.w[static_cast<std::size_t>(v)] > 0 && sys_.X1.row(v) != sys_.X0.row(v)) {
+            sys_.X1.row(v) = sys_.X0.row(v);
+            changed_[static_cast<std::size_t>(v)] = 1;
+            ++stats_.frozen_vertices;
+            froze = any = true;
+          }
+        }
+        if (any) ++stats_.failsafe.collisions;
+      }
+      if (!froze) break;
+      stats_.failsafe_used = true;
+      hits = test_changed();
+      ++stats_.failsafe.passes;
+    }
+    if (!hits.empty()) {
+      stats_.collision_free = false;
+      for (const auto& hit : hits) stats_.unresolved.push_back(to_pair(hit.p));
+    }
+    stats_.failsafe.ms += ms_since(t0) - broad_ms_in_stage();
+  }
+
+  void write_back(Vertices<S>& x1) const { x1 = sys_.X1.topRows(sys_.n_cloth); }
+
+ private:
+  struct Contact {
+    double dist = 0;
+    double a[4] = {0, 0, 0, 0};
+    Vec3<double> n = Vec3<double>::Zero();
+  };
+  struct Near {
+    Prim p;
+    Contact c;
+  };
+  struct Hit {
+    Prim p;
+    CcdResult<S> r;
+  };
+
+  static double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+  double broad_ms_in_stage() {
+    const double b = broad_acc_;
+    broad_acc_ = 0;
+    return b;
+  }
+
+  MeshMotion<S> motion() const { return {&sys_.X0, &sys_.X1, &sys_.F}; }
+  Vec3<double> p0(std::int32_t v) const { return sys_.X0.row(v).transpose().template cast<double>(); }
+  Vec3<double> p1(std::int32_t v) const { return sys_.X1.row(v).transpose().template cast<double>(); }
+
+  bool is_excluded(const Prim& p) const { return !excluded_.empty() && std::binary_search(excluded_.begin(), excluded_.end(), p); }
+
+  /// Refits the tree to the current motion and gathers every candidate pair (sorted, unique).
+  void gather() {
+    const auto t0 = Clock::now();
+    if (refit_pending_) sys_.tree.refit(motion());
+    refit_pending_ = true;  // the next gathering refits (positions may have moved)
+    detail::MeshCcdCandidates c;
+    const Faces& F = sys_.F;
+    traverse_self(
+        sys_.tree.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
+        [&](std::int32_t fa, std::int32_t fb) {
+          if (sys_.tri_obstacle[static_cast<std::size_t>(fa)] && sys_.tri_obstacle[static_cast<std::size_t>(fb)]) return true;
+          c.add_triangle_pair(F, fa, F, fb, true);
+          return true;
+        });
+    c.finish();
+    cand_.clear();
+    cand_.reserve(c.vf.size() + c.ee.size());
+    for (const auto& [mesh, v, f] : c.vf) {
+      (void)mesh;
+      Prim p;
+      p.ee = 0;
+      p.v[0] = v;
+      p.v[1] = F(f, 0), p.v[2] = F(f, 1), p.v[3] = F(f, 2);
+      cand_.push_back(p);
+    }
+    for (const auto& e : c.ee) {
+      Prim p;
+      p.ee = 1;
+      for (int k = 0; k < 4; ++k) p.v[k] = e[static_cast<std::size_t>(k)];
+      cand_.push_back(p);
+    }
+    const double ms = ms_since(t0);
+    stats_.broad.ms += ms;
+    broad_acc_ += ms;
+  }
+
+  CcdResult<S> ccd(const Prim& p, bool static_start) {
+    ++stats_.ccd_tests;
+    auto a = [&](int k) { return Vec3<S>(sys_.X0.row(p.v[k]).transpose()); };
+    auto b = [&](int k) { return static_start ? Vec3<S>(sys_.X0.row(p.v[k]).transpose()) : Vec3<S>(sys_.X1.row(p.v[k]).transpose()); };
+    if (p.ee) return edge_edge_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), ccd_);
+    return vertex_face_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), ccd_);
+  }
+
+  /// CCD over the pairs that may have changed: re-gathers (positions moved), then tests the
+  /// candidates with a vertex changed since the last detection and the previous hits.
+  std::vector<Hit> detect() {
+    gather();
+    return test_changed();
+  }
+
+  std::vector<Hit> test_changed() {
+    std::vector<Prim> todo;
+    for (const auto& p : cand_) {
+      bool ch = false;
+      for (int k = 0; k < 4; ++k) ch = ch || changed_[static_cast<std::size_t>(p.v[k])];
+      if (ch) todo.push_back(p);
+    }
+    for (const auto& h : last_hits_) todo.push_back(h.p);
+    std::sort(todo.begin(), todo.end());
+    todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
+    std::vector<Hit> hits;
+    for (const auto& p : todo) {
+      if (is_excluded(p)) continue;
+      const auto r = ccd(p, false);
+      if (r.hit) hits.push_back({p, r});
+    }
+    std::fill(changed_.begin(), changed_.end(), 0);
+    std::stable_sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi < y.r.toi; });
+    last_hits_ = hits;
+    return hits;
+  }
+
+  /// Closest points of a pair at x0 (start) or x1, in double: distance, weights, unit normal.
+  Contact closest(const Prim& p, bool start) const {
+    return closest_at(p, [&](int k) { return start ? p0(p.v[k]) : p1(p.v[k]); });
+  }
+
+  template <class Pos>
+  static Contact closest_at(const Prim& p, Pos&& X) {
+    Contact c;
+    if (p.ee) {
+      const auto r = closest_points_segment_segment(Segment<double>(X(0), X(1)), Segment<double>(X(2), X(3)));
+      c.a[0] = 1 - r.s, c.a[1] = r.s, c.a[2] = -(1 - r.t), c.a[3] = -r.t;
+    } else {
+      const auto r = closest_point_on_triangle(X(0), Triangle<double>(X(1), X(2), X(3)));
+      c.a[0] = 1, c.a[1] = -r.barycentric[0], c.a[2] = -r.barycentric[1], c.a[3] = -r.barycentric[2];
+    }
+    Vec3<double> d = Vec3<double>::Zero();
+    for (int k = 0; k < 4; ++k) d += c.a[k] * X(k);
+    c.dist = d.norm();
+    if (c.dist > 0) c.n = d / c.dist;
+    return c;
+  }
+
+  ZoneConstraint constraint_of(const Prim& p, const double* a, const Vec3<double>& n, double b) const {
+    ZoneConstraint k;
+    k.count = 4;
+    for (int j = 0; j < 4; ++j) k.v[j] = p.v[j], k.a[j] = a[j];
+    k.n = n;
+    k.b = b;
+    return k;
+  }
+
+  /// The constraint of a CCD hit: the closest points of the pair at toi give the weights and the
+  /// normal (their difference, about h long there); when they are too close to give a direction
+  /// (a hit reported on an exhausted budget), the primitives' normal oriented by the start.
+  ZoneConstraint constraint_at_hit(const Hit& hit) const {
+    const Prim& p = hit.p;
+    const double t = static_cast<double>(hit.r.toi);
+    auto X = [&](int k) { return Vec3<double>((1 - t) * p0(p.v[k]) + t * p1(p.v[k])); };
+    Contact c = closest_at(p, X);
+    if (c.dist > 0.25 * h_) return constraint_of(p, c.a, c.n, target_);
+    Vec3<double> d0 = Vec3<double>::Zero();
+    for (int k = 0; k < 4; ++k) d0 += c.a[k] * p0(p.v[k]);
+    Vec3<double> n = p.ee ? Vec3<double>((X(1) - X(0)).cross(X(3) - X(2))) : Vec3<double>((X(2) - X(1)).cross(X(3) - X(1)));
+    if (n.norm() > 0) {
+      n.normalize();
+      if (n.dot(d0) < 0) n = -n;
+    } else {
+      n = d0.norm() > 0 ? Vec3<double>(d0.normalized()) : Vec3<double>(0, 0, 1);
+    }
+    return constraint_of(p, c.a, n, target_);
+  }
+
+  double gap(const ZoneConstraint& k) const {
+    double g = 0;
+    for (int j = 0; j < k.count; ++j) g += k.a[j] * k.n.dot(p1(k.v[j]));
+    return g;
+  }
+
+  /// One inelastic impulse with Coulomb friction on end positions: after it the constraint's gap
+  /// reaches k.b (if some vertex is movable), and the tangential relative displacement over the
+  /// step shrinks by at most friction times the normal change. Returns whether it acted.
+  bool apply_impulse(const ZoneConstraint& k) {
+    const double g = gap(k);
+    if (g >= k.b) return false;
+    double denom = 0;
+    for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * sys_.w[static_cast<std::size_t>(k.v[j])];
+    if (!(denom > 0)) return false;
+    const double dn = k.b - g;
+    const double lam = dn / denom;
+    Vec3<double> rel = Vec3<double>::Zero();
+    for (int j = 0; j < k.count; ++j) rel += k.a[j] * (p1(k.v[j]) - p0(k.v[j]));
+    Vec3<double> tang = rel - k.n.dot(rel) * k.n;
+    const double tl = tang.norm();
+    const double mu = static_cast<double>(opt_.friction);
+    Vec3<double> push = lam * k.n;
+    if (tl > 0 && mu > 0) push -= (std::min(tl, mu * dn) / denom) * (tang / tl);
+    for (int j = 0; j < k.count; ++j) {
+      const double w = sys_.w[static_cast<std::size_t>(k.v[j])];
+      if (!(w > 0)) continue;
+      const Vec3<double> x = p1(k.v[j]) + (w * k.a[j]) * push;
+      sys_.X1.row(k.v[j]) = x.cast<S>().transpose();
+      changed_[static_cast<std::size_t>(k.v[j])] = 1;
+    }
+    return true;
+  }
+
+  template <class Find>
+  void resolve_zone(const std::vector<ZoneConstraint>& all, const std::vector<std::size_t>& idx, std::int32_t root, const Vertices<S>& xhat,
+                    const std::vector<std::int32_t>& parent, Find& find) {
+    (void)parent;
+    std::vector<ZoneConstraint> cons;
+    cons.reserve(idx.size());
+    bool immovable = false;
+    for (auto c : idx) {
+      cons.push_back(all[c]);
+      for (int j = 0; j < all[c].count; ++j) immovable = immovable || !(sys_.w[static_cast<std::size_t>(all[c].v[j])] > 0);
+    }
+    // The zone's movable vertices: those of its constraints (only they are ever joined).
+    std::vector<std::int32_t> verts;
+    for (const auto& k : cons)
+      for (int j = 0; j < k.count; ++j)
+        if (sys_.w[static_cast<std::size_t>(k.v[j])] > 0) verts.push_back(k.v[j]);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    (void)root;
+    (void)find;
+    ++stats_.zone_count;
+    stats_.largest_zone = std::max(stats_.largest_zone, verts.size());
+    // Start every zone from xhat for its vertices (the zone as a whole is re-solved).
+    bool done = false;
+    if (opt_.zone_method == ZoneMethod::Harmon || immovable) {
+      ZoneProjectionOptions po;
+      po.max_iterations = opt_.max_projection_iterations;
+      po.tolerance = static_cast<double>(opt_.projection_tolerance) * h_;
+      Vertices<S> out = sys_.X1;
+      for (auto v : verts) out.row(v) = xhat.row(v);
+      const auto r = project_zone(cons, sys_.w, out, out, po);
+      if (r.converged) {
+        for (auto v : verts) {
+          if (sys_.X1.row(v) != out.row(v)) changed_[static_cast<std::size_t>(v)] = 1;
+          sys_.X1.row(v) = out.row(v);
+        }
+        done = true;
+      }
+    }
+    if (!done && !immovable) {
+      Vertices<S> out = sys_.X1;
+      for (auto v : verts) out.row(v) = xhat.row(v);
+      rigid_zone_motion(verts, sys_.w, sys_.X0, out);
+      for (auto v : verts) {
+        if (sys_.X1.row(v) != out.row(v)) changed_[static_cast<std::size_t>(v)] = 1;
+        sys_.X1.row(v) = out.row(v);
+      }
+      ++stats_.rigid_zones;
+      done = true;
+    }
+    // A zone that could not be resolved stays as it is: the fail-safe takes it.
+  }
+
+  System<S>& sys_;
+  const ClothCollisionOptions<S>& opt_;
+  ClothStepStats& stats_;
+  double h_ = 0, prox_ = 0, target_ = 0, scale_ = 0;
+  CcdOptions ccd_;
+  bool refit_pending_ = false;
+  double broad_acc_ = 0;
+  std::vector<Prim> cand_, excluded_;
+  std::vector<Near> near_;
+  std::vector<Hit> last_hits_;
+  std::vector<std::uint8_t> changed_;
+};
+
+}  // namespace impact::detail::cloth

@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The interface of cloth_collision_step (cloth/collision_step.hpp): the obstacles of a step
+/// (rigid meshes with two poses, kinematic meshes with two vertex arrays), the options of every
+/// stage, and the statistics it returns.
+#pragma once
+
+#include "impact/ccd/options.hpp"
+#include "impact/core/types.hpp"
+#include "impact/geometry/transform.hpp"
+#include "impact/geometry/triangle_mesh.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace impact {
+
+/// A rigid obstacle: a triangle mesh in its own frame, placed by `pose0` at the start and `pose1`
+/// at the end of the step. Its vertices move linearly between pose0(v) and pose1(v) (the motion
+/// model of the CCD; for a rotation over a step this is the chord of the arc). Infinite mass.
+/// Non-owning: the mesh must outlive the call.
+template <class S>
+struct RigidObstacle {
+  const TriangleMesh<S>* mesh = nullptr;
+  RigidTransform<S> pose0, pose1;
+};
+
+/// A kinematic (scripted, possibly deforming) obstacle: its vertices at the start (`x0`) and end
+/// (`x1`) of the step and its triangles. Infinite mass. Non-owning.
+template <class S>
+struct KinematicObstacle {
+  const Vertices<S>* x0 = nullptr;
+  const Vertices<S>* x1 = nullptr;
+  const Faces* faces = nullptr;
+};
+
+/// Every obstacle of a step. Obstacles are never tested against each other.
+template <class S>
+struct ClothObstacles {
+  std::vector<RigidObstacle<S>> rigid;
+  std::vector<KinematicObstacle<S>> kinematic;
+};
+
+/// How the impact zones are resolved (stage 3).
+enum class ZoneMethod {
+  Harmon,  ///< inelastic projection (Harmon et al. 2008): momentum kept, sliding survives
+  Rigid,   ///< rigid impact zones (Provot 1997; Bridson 2002 section 7.4)
+};
+
+/// What to do when x0 itself has pairs closer than the thickness.
+enum class StartViolation {
+  Throw,   ///< InvalidInput naming the pairs (the default); nothing is modified
+  Report,  ///< list them in ClothStepStats::start_violations and exclude them from the step
+};
+
+/// Options of cloth_collision_step. Lengths are in the units of the coordinates.
+template <class S>
+struct ClothCollisionOptions {
+  /// h > 0: the guaranteed minimum separation of every tested pair over the step.
+  S thickness = S(0);
+  /// Stage 1: pairs within `proximity_distance` at x0 stop approaching. 0 means 2 h; otherwise it
+  /// must be >= h. Also the inflation of the swept boxes (candidates within it are gathered once).
+  bool proximity = true;
+  S proximity_distance = S(0);
+  /// Stage 2: at most `impulse_passes` passes of CCD impulses (0 skips the stage).
+  bool impulses = true;
+  int impulse_passes = 3;
+  /// Coulomb friction coefficient (>= 0) of the proximity and CCD impulses.
+  S friction = S(0.3);
+  /// The impulses and zones aim at a separation of (1 + separation_margin) h along the collision
+  /// normal at the end of the step, so that resting contact sits a little above h (>= 0).
+  S separation_margin = S(0.1);
+  /// Stage 3: impact zones, by `zone_method`, at most `max_zone_iterations` rounds of
+  /// (CCD, merge, resolve). The projection solver stops when every constraint of a zone is met to
+  /// `projection_tolerance` times h, or after `max_projection_iterations` active-set changes (the
+  /// zone then goes to the rigid method, then to the fail-safe).
+  bool zones = true;
+  ZoneMethod zone_method = ZoneMethod::Harmon;
+  int max_zone_iterations = 30;
+  int max_projection_iterations = 500;
+  S projection_tolerance = S(1e-6);
+  /// The primitive CCD's tolerance and budgets. min_separation and t_max are set by the step (h
+  /// and 1); the rest is used as given.
+  CcdOptions ccd{};
+  /// x0 closer than h somewhere: throw (default) or report and proceed.
+  StartViolation on_start_violation = StartViolation::Throw;
+  /// Threads for the batch parts (CCD over the candidates); 1 is the serial path. The result does
+  /// not depend on it.
+  int threads = 1;
+};
+
+/// Time and counts of one stage.
+struct ClothStageStats {
+  double ms = 0;                ///< wall time
+  std::size_t collisions = 0;   ///< pairs that needed a correction in this stage
+  int passes = 0;               ///< passes (CCD rounds) run
+};
+
+/// One pair of primitives, by global vertex index. Cloth vertices are 0..n-1; the vertices of
+/// obstacle k follow (rigid obstacles first, in order, then kinematic ones). Vertex-face:
+/// v[0] against the triangle (v[1], v[2], v[3]); edge-edge: (v[0], v[1]) against (v[2], v[3]).
+struct ClothPair {
+  bool edge_edge = false;
+  std::int32_t v[4] = {-1, -1, -1, -1};
+};
+
+/// Statistics of one call of cloth_collision_step.
+struct ClothStepStats {
+  ClothStageStats broad;      ///< swept tree build/refit and candidate gathering (all rounds)
+  ClothStageStats proximity;  ///< collisions = proximity pairs that got an impulse
+  ClothStageStats impulses;   ///< collisions = CCD hits handled by impulses, passes = CCD passes
+  ClothStageStats zones;      ///< collisions = constraints in zones, passes = zone rounds
+  ClothStageStats failsafe;   ///< collisions = hits that froze vertices, passes = its CCD rounds
+  double total_ms = 0;
+  std::size_t candidates_vf = 0, candidates_ee = 0;  ///< primitive pairs after the first gathering
+  std::size_t ccd_tests = 0;                         ///< primitive CCD tests run (all stages)
+  std::size_t zone_count = 0;                        ///< zones resolved (summed over rounds)
+  std::size_t largest_zone = 0;                      ///< vertices of the largest zone
+  std::size_t rigid_zones = 0;                       ///< zones resolved rigidly (method or fallback)
+  bool failsafe_used = false;
+  std::size_t frozen_vertices = 0;  ///< cloth vertices put back at x0 by the fail-safe
+  /// The final CCD found no pair within h (see the file comment); `unresolved` lists the pairs of
+  /// scripted (infinite-mass) motion it could not fix when false.
+  bool collision_free = true;
+  std::vector<ClothPair> unresolved;
+  /// With StartViolation::Report: the pairs closer than h at x0 (excluded from the step).
+  std::vector<ClothPair> start_violations;
+};
+
+}  // namespace impact

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: MIT
+// Oracles for the cloth collision step, independent of the step's own CCD and broad phase:
+//  - sampled_min_distance: every non-adjacent vertex-face and edge-edge pair of the combined
+//    arrays (all pairs, no tree), at K + 1 evenly spaced times of the linear motion, by closest
+//    points in double; a lower bound check between samples comes from the CCD oracle below;
+//  - all_pairs_ccd_hits: every such pair through vertex_face_ccd / edge_edge_ccd (no tree, no
+//    candidate filtering): checks that the step's broad phase missed nothing;
+//  - Scene: cloth + kinematic obstacles, combined the way the step numbers them.
+#pragma once
+
+#include "impact/ccd/edge_edge.hpp"
+#include "impact/ccd/vertex_face.hpp"
+#include "impact/cloth/collision_step.hpp"
+#include "impact/narrow/closest_point.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace cloth_test {
+
+using impact::Faces;
+using impact::Vec3;
+using impact::Vertices;
+
+template <class S>
+struct Combined {
+  Vertices<S> X0, X1;
+  Faces F;
+  std::vector<char> obstacle_tri;
+};
+
+template <class S>
+Combined<S> combine(const Faces& F, const Vertices<S>& x0, const Vertices<S>& x1, const impact::ClothObstacles<S>& obs) {
+  Combined<S> c;
+  Eigen::Index nv = x0.rows(), nf = F.rows();
+  for (const auto& k : obs.kinematic) nv += k.x0->rows(), nf += k.faces->rows();
+  c.X0.resize(nv, 3), c.X1.resize(nv, 3), c.F.resize(nf, 3);
+  c.obstacle_tri.assign(static_cast<std::size_t>(nf), 1);
+  c.X0.topRows(x0.rows()) = x0, c.X1.topRows(x0.rows()) = x1, c.F.topRows(F.rows()) = F;
+  for (Eigen::Index i = 0; i < F.rows(); ++i) c.obstacle_tri[static_cast<std::size_t>(i)] = 0;
+  Eigen::Index vo = x0.rows(), fo = F.rows();
+  for (const auto& k : obs.kinematic) {
+    c.X0.middleRows(vo, k.x0->rows()) = *k.x0;
+    c.X1.middleRows(vo, k.x0->rows()) = *k.x1;
+    c.F.middleRows(fo, k.faces->rows()) = k.faces->array() + int(vo);
+    vo += k.x0->rows(), fo += k.faces->rows();
+  }
+  return c;
+}
+
+/// Calls f(is_edge_edge, v0, v1, v2, v3) for every non-adjacent primitive pair of distinct
+/// triangles, not both obstacle ones (duplicates across triangle pairs included).
+template <class S, class Fn>
+void for_all_pairs(const Combined<S>& c, Fn&& f) {
+  const auto nf = c.F.rows();
+  for (Eigen::Index a = 0; a < nf; ++a)
+    for (Eigen::Index b = a + 1; b < nf; ++b) {
+      if (c.obstacle_tri[std::size_t(a)] && c.obstacle_tri[std::size_t(b)]) continue;
+      const int ia[3] = {c.F(a, 0), c.F(a, 1), c.F(a, 2)}, ib[3] = {c.F(b, 0), c.F(b, 1), c.F(b, 2)};
+      auto in = [](const int* t, int v) { return t[0] == v || t[1] == v || t[2] == v; };
+      for (int k = 0; k < 3; ++k) {
+        if (!in(ib, ia[k])) f(false, ia[k], ib[0], ib[1], ib[2]);
+        if (!in(ia, ib[k])) f(false, ib[k], ia[0], ia[1], ia[2]);
+      }
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const int a0 = ia[i], a1 = ia[(i + 1) % 3], b0 = ib[j], b1 = ib[(j + 1) % 3];
+          if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
+          f(true, a0, a1, b0, b1);
+        }
+    }
+}
+
+template <class S>
+double sampled_min_distance(const Combined<S>& c, int K = 32) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int s = 0; s <= K; ++s) {
+    const double t = double(s) / K;
+    auto X = [&](int v) {
+      return Vec3<double>((1 - t) * c.X0.row(v).transpose().template cast<double>() + t * c.X1.row(v).transpose().template cast<double>());
+    };
+    for_all_pairs(c, [&](bool ee, int v0, int v1, int v2, int v3) {
+      double d2;
+      if (ee)
+        d2 = impact::closest_points_segment_segment(impact::Segment<double>(X(v0), X(v1)), impact::Segment<double>(X(v2), X(v3))).squared_distance;
+      else
+        d2 = impact::closest_point_on_triangle(X(v0), impact::Triangle<double>(X(v1), X(v2), X(v3))).squared_distance;
+      best = std::min(best, std::sqrt(d2));
+    });
+  }
+  return best;
+}
+
+template <class S>
+int all_pairs_ccd_hits(const Combined<S>& c, double min_separation) {
+  impact::CcdOptions o;
+  o.min_separation = min_separation;
+  int hits = 0;
+  auto P0 = [&](int v) { return Vec3<S>(c.X0.row(v).transpose()); };
+  auto P1 = [&](int v) { return Vec3<S>(c.X1.row(v).transpose()); };
+  for_all_pairs(c, [&](bool ee, int v0, int v1, int v2, int v3) {
+    const auto r = ee ? impact::edge_edge_ccd(P0(v0), P0(v1), P0(v2), P0(v3), P1(v0), P1(v1), P1(v2), P1(v3), o)
+                      : impact::vertex_face_ccd(P0(v0), P0(v1), P0(v2), P0(v3), P1(v0), P1(v1), P1(v2), P1(v3), o);
+    hits += r.hit ? 1 : 0;
+  });
+  return hits;
+}
+
+}  // namespace cloth_test

@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: MIT
+// cloth_collision_step against oracles written here (cloth_oracles.hpp: all-pairs sampled
+// distances by closest points, all-pairs CCD without a tree) and the exact verify_cloth_state:
+// a vertex at 1000 m/s, bad input, float and double.
+#include "cloth_oracles.hpp"
+#include "impact/cloth/collision_step.hpp"
+#include "impact/cloth/verify_state.hpp"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+using namespace impact;
+using cloth_test::combine;
+
+template <class S>
+class ClothStep : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(ClothStep, Scalars);
+
+template <class S>
+Vertices<S> rows(std::initializer_list<std::array<double, 3>> r) {
+  Vertices<S> V(static_cast<Eigen::Index>(r.size()), 3);
+  Eigen::Index i = 0;
+  for (const auto& p : r) V.row(i++) << S(p[0]), S(p[1]), S(p[2]);
+  return V;
+}
+
+/// A static obstacle: the big triangle in the plane z = 0.
+template <class S>
+struct Floor {
+  Vertices<S> V = rows<S>({{-10, -10, 0}, {10, -10, 0}, {0, 10, 0}});
+  Faces F = (Faces(1, 3) << 0, 1, 2).finished();
+};
+
+// A small cloth triangle falls at 1000 m/s (dt = 0.01: 10 units per step) through a static floor.
+TYPED_TEST(ClothStep, VertexAt1000MetresPerSecondStopsAboveTheFloor) {
+  using S = TypeParam;
+  Floor<S> floor;
+  ClothObstacles<S> obs;
+  obs.kinematic.push_back({&floor.V, &floor.V, &floor.F});
+  const Faces F = (Faces(1, 3) << 0, 1, 2).finished();
+  const Vertices<S> x0 = rows<S>({{0, 0, 0.05}, {0.1, 0, 0.06}, {0, 0.1, 0.07}});
+  Vertices<S> x1 = x0;
+  x1.col(2).array() -= S(10);   // 1000 m/s * 0.01 s
+  x1.col(0).array() += S(0.3);  // and sliding sideways
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(3);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  opt.friction = S(0);
+  const Vertices<S> x1_in = x1;
+  const auto st = cloth_collision_step(F, w, x0, x1, obs, opt);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_FALSE(st.failsafe_used);
+  EXPECT_GT(st.impulses.collisions + st.zones.collisions, 0u);
+  const auto c = combine(F, x0, x1, obs);
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, 1e-3), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c), 1e-3);
+  // It stops at the floor (within the separation target), and without friction keeps sliding.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(double(x1(i, 2)), 1e-3);
+    EXPECT_LT(double(x1(i, 2)), 0.08);
+    EXPECT_NEAR(double(x1(i, 0)), double(x1_in(i, 0)), 1e-5);
+  }
+  const auto rep = verify_cloth_state(F, x1, obs, ObstacleTime::End, ClothVerifyOptions{1.0, 16});
+  EXPECT_EQ(rep.intersections, 0u);
+  EXPECT_GE(rep.min_distance, 1e-3);
+}
+
+// Two cloth triangles (separate components): one shot through the other, both movable.
+TYPED_TEST(ClothStep, ClothShotThroughClothIsStopped) {
+  using S = TypeParam;
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  const Vertices<S> x0 = rows<S>({{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, {0, 0, 0.1}, {0.05, 0, 0.1}, {0, 0.05, 0.12}});
+  Vertices<S> x1 = x0;
+  for (int i = 3; i < 6; ++i) x1(i, 2) -= S(10);
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  const auto st = cloth_collision_step(F, w, x0, x1, ClothObstacles<S>{}, opt);
+  EXPECT_TRUE(st.collision_free);
+  const auto c = combine(F, x0, x1, ClothObstacles<S>{});
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, 1e-3), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c), 1e-3);
+  EXPECT_EQ(verify_cloth_state(F, x1, ClothObstacles<S>{}).intersections, 0u);
+  // Equal masses, inelastic: the momentum along z is shared (total z displacement kept).
+  double zsum0 = 0, zsum1 = 0;
+  for (int i = 0; i < 6; ++i) zsum0 += double(x0(i, 2)), zsum1 += double(x1(i, 2));
+  EXPECT_NEAR(zsum1 - zsum0, -30.0, 1e-3 * 30);
+}
+
+TYPED_TEST(ClothStep, BadInputThrowsAndModifiesNothing) {
+  using S = TypeParam;
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  const Vertices<S> x0 = rows<S>({{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, {0, 0, 0.1}, {0.05, 0, 0.1}, {0, 0.05, 0.12}});
+  Vertices<S> x1 = x0;
+  x1(3, 2) -= S(1);
+  const Vertices<S> keep = x1;
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  const ClothObstacles<S> none;
+  auto expect_throw = [&](auto&& call, const char* what) {
+    EXPECT_THROW(call(), InvalidInput) << what;
+    EXPECT_TRUE(x1 == keep) << what;
+  };
+  {
+    auto o = opt;
+    o.thickness = S(0);
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "h = 0");
+    o.thickness = std::numeric_limits<S>::quiet_NaN();
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "h NaN");
+    o = opt;
+    o.proximity_distance = S(5e-4);
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "proximity < h");
+    o = opt;
+    o.friction = S(-1);
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "friction < 0");
+  }
+  {
+    auto w2 = w;
+    w2[2] = S(-1);
+    expect_throw([&] { cloth_collision_step(F, w2, x0, x1, none, opt); }, "negative inverse mass");
+    w2[2] = std::numeric_limits<S>::quiet_NaN();
+    expect_throw([&] { cloth_collision_step(F, w2, x0, x1, none, opt); }, "NaN mass");
+    Eigen::Matrix<S, Eigen::Dynamic, 1> w3 = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(5);
+    expect_throw([&] { cloth_collision_step(F, w3, x0, x1, none, opt); }, "mass size");
+  }
+  {
+    auto bad0 = x0;
+    bad0(4, 1) = std::numeric_limits<S>::infinity();
+    expect_throw([&] { cloth_collision_step(F, w, bad0, x1, none, opt); }, "Inf in x0");
+    Vertices<S> short0 = x0.topRows(5);
+    expect_throw([&] { cloth_collision_step(F, w, short0, x1, none, opt); }, "size mismatch / index out of range");
+    Vertices<S> nan1 = x1;
+    nan1(0, 0) = std::numeric_limits<S>::quiet_NaN();
+    const Vertices<S> nan_keep = nan1;
+    EXPECT_THROW(cloth_collision_step(F, w, x0, nan1, none, opt), InvalidInput);
+    EXPECT_TRUE(nan1.topRows(1).hasNaN() && nan1.bottomRows(5) == nan_keep.bottomRows(5));
+  }
+  {
+    // x0 closer than h: vertex 3 at 5e-4 above the first triangle.
+    auto close0 = x0;
+    close0(3, 2) = S(5e-4);
+    try {
+      cloth_collision_step(F, w, close0, x1, none, opt);
+      ADD_FAILURE() << "no throw";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 3-face (0,1,2)"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(x1 == keep);
+    auto o = opt;
+    o.on_start_violation = StartViolation::Report;
+    Vertices<S> x1r = x1;
+    const auto st = cloth_collision_step(F, w, close0, x1r, none, o);
+    ASSERT_FALSE(st.start_violations.empty());
+    EXPECT_EQ(st.start_violations[0].v[0], 3);
+  }
+  {
+    // An obstacle with an out-of-range index.
+    Floor<S> floor;
+    Faces badF = floor.F;
+    badF(0, 2) = 7;
+    ClothObstacles<S> obs;
+    obs.kinematic.push_back({&floor.V, &floor.V, &badF});
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, obs, opt); }, "obstacle index");
+  }
+}
+
+}  // namespace

@@ -1,0 +1,176 @@
+// SPDX-License-Identifier: MIT
+// Fuzz target: MeshBvh trees (sphere and AABB) built on small random meshes decoded from the input
+// (3-16 vertices on a small integer grid, 1-24 triangles with any indices: duplicates, shared
+// edges, zero-area and coincident triangles are all common), under exact poses (a signed axis
+// permutation and an integer translation). Checked against brute force written here:
+//  - collide (all pairs) and collides against every triangle pair decided by the exact integer
+//    separating-axis test (tests/narrow/int_oracle.hpp) on the posed integer vertices;
+//  - self_collide against every non-adjacent pair of the mesh, decided the same way;
+//  - ray_mesh_first_hit and ray_mesh_any_hit against a loop over every triangle with the narrow
+//    phase's ray test (this checks that the traversal never loses a hit: the same t, exactly).
+#include "fuzz_input.hpp"
+#include "impact/bvh/mesh_bvh.hpp"
+#include "impact/query/mesh_collide.hpp"
+#include "impact/query/ray_mesh.hpp"
+#include "narrow/int_oracle.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+using impact::test::IPoint;
+using Pairs = std::vector<std::pair<std::int32_t, std::int32_t>>;
+
+struct IntMesh {
+  std::vector<IPoint> V;
+  std::vector<std::array<int, 3>> F;
+};
+
+/// A rotation that permutes and flips axes (det +1) and an integer translation: exact in floats.
+struct IntPose {
+  int perm[3] = {0, 1, 2};
+  int sign[3] = {1, 1, 1};
+  IPoint t{0, 0, 0};
+  IPoint apply(const IPoint& p) const {
+    IPoint q;
+    for (int i = 0; i < 3; ++i) q[std::size_t(i)] = sign[i] * p[std::size_t(perm[i])] + t[std::size_t(i)];
+    return q;
+  }
+  template <class S> impact::RigidTransform<S> transform() const {
+    impact::Mat3<S> R = impact::Mat3<S>::Zero();
+    for (int i = 0; i < 3; ++i) R(i, perm[i]) = S(sign[i]);
+    return impact::RigidTransform<S>(R, impact::Vec3<S>(S(t[0]), S(t[1]), S(t[2])));
+  }
+};
+
+IntMesh read_mesh(impact::fuzz::Input& in, std::int64_t r) {
+  IntMesh m;
+  const int n = 3 + int(in.byte() % 14), f = 1 + int(in.byte() % 24);
+  for (int i = 0; i < n; ++i) m.V.push_back({in.range(-r, r), in.range(-r, r), in.range(-r, r)});
+  for (int i = 0; i < f; ++i) m.F.push_back({int(in.byte()) % n, int(in.byte()) % n, int(in.byte()) % n});
+  return m;
+}
+
+IntPose read_pose(impact::fuzz::Input& in, std::int64_t r) {
+  static const int perms[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
+  IntPose p;
+  const std::uint8_t b = in.byte();
+  const int k = b % 6;
+  for (int i = 0; i < 3; ++i) p.perm[i] = perms[k][i];
+  p.sign[0] = (b & 8u) ? -1 : 1;
+  p.sign[1] = (b & 16u) ? -1 : 1;
+  // det = parity(perm) * product of signs must be +1
+  const int parity = k < 3 ? 1 : -1;
+  p.sign[2] = parity * p.sign[0] * p.sign[1];
+  for (auto& x : p.t) x = in.range(-r, r);
+  return p;
+}
+
+std::array<IPoint, 3> posed(const IntMesh& m, int t, const IntPose& pose) {
+  return {pose.apply(m.V[std::size_t(m.F[std::size_t(t)][0])]), pose.apply(m.V[std::size_t(m.F[std::size_t(t)][1])]),
+          pose.apply(m.V[std::size_t(m.F[std::size_t(t)][2])])};
+}
+
+template <class S> impact::TriangleMesh<S> to_mesh(const IntMesh& m) {
+  impact::TriangleMesh<S> out;
+  out.V.resize(Eigen::Index(m.V.size()), 3);
+  out.F.resize(Eigen::Index(m.F.size()), 3);
+  for (std::size_t i = 0; i < m.V.size(); ++i)
+    for (int d = 0; d < 3; ++d) out.V(Eigen::Index(i), d) = S(m.V[i][std::size_t(d)]);
+  for (std::size_t i = 0; i < m.F.size(); ++i)
+    for (int d = 0; d < 3; ++d) out.F(Eigen::Index(i), d) = m.F[i][std::size_t(d)];
+  return out;
+}
+
+std::string pairs_text(const Pairs& p) {
+  std::string s;
+  for (const auto& [a, b] : p) s += " (" + std::to_string(a) + "," + std::to_string(b) + ")";
+  return s.empty() ? " none" : s;
+}
+
+template <class BV, class S> void check(const IntMesh& A, const IntMesh& B, const IntPose& pa, const IntPose& pb,
+                                        const std::vector<std::pair<IPoint, IPoint>>& rays, const char* name) {
+  const auto ma = to_mesh<S>(A), mb = to_mesh<S>(B);
+  const impact::MeshBvh<BV> ta(ma), tb(mb);
+  const auto pose_a = pa.transform<S>(), pose_b = pb.transform<S>();
+
+  // mesh against mesh
+  Pairs want;
+  for (int i = 0; i < int(A.F.size()); ++i)
+    for (int j = 0; j < int(B.F.size()); ++j)
+      if (impact::test::triangles_intersect_int(posed(A, i, pa), posed(B, j, pb))) want.emplace_back(i, j);
+  impact::CollideOptions all;
+  all.all_pairs = true;
+  Pairs got = impact::collide(ta, pose_a, tb, pose_b, all).pairs;
+  std::sort(got.begin(), got.end());
+  if (got != want) impact::fuzz::fail(std::string(name) + " collide: pairs" + pairs_text(got) + ", exact" + pairs_text(want));
+  if (impact::collides(ta, pose_a, tb, pose_b) != !want.empty())
+    impact::fuzz::fail(std::string(name) + " collides disagrees with the exact pairs" + pairs_text(want));
+
+  // self-collision of A (non-adjacent pairs: no shared vertex index)
+  Pairs self_want;
+  const IntPose identity;
+  for (int i = 0; i < int(A.F.size()); ++i)
+    for (int j = i + 1; j < int(A.F.size()); ++j) {
+      bool adjacent = false;
+      for (int x : A.F[std::size_t(i)])
+        for (int y : A.F[std::size_t(j)]) adjacent = adjacent || x == y;
+      if (!adjacent && impact::test::triangles_intersect_int(posed(A, i, identity), posed(A, j, identity))) self_want.emplace_back(i, j);
+    }
+  Pairs self_got = impact::self_collide(ta, all).pairs;
+  std::sort(self_got.begin(), self_got.end());
+  if (self_got != self_want)
+    impact::fuzz::fail(std::string(name) + " self_collide: pairs" + pairs_text(self_got) + ", exact" + pairs_text(self_want));
+
+  // rays against mesh A at pose_a: brute force over every triangle in A's frame
+  for (const auto& [o, d] : rays) {
+    const impact::Ray<S> ray{impact::Vec3<S>(S(o[0]), S(o[1]), S(o[2])), impact::Vec3<S>(S(d[0]), S(d[1]), S(d[2]))};
+    const impact::Vec3<S> lo = pose_a.R.transpose() * (ray.origin - pose_a.t), ld = pose_a.R.transpose() * ray.direction;
+    std::optional<S> best;
+    if (ld.squaredNorm() != S(0)) {
+      for (int i = 0; i < ma.num_triangles(); ++i) {
+        const impact::PreparedRay<S> pr(impact::Ray<S>(lo, ld, best ? *best : ray.t_max));
+        const auto h = impact::detail::ray_mesh_triangle_hit(pr, ma.triangle(i));
+        if (h && (!best || h->t < *best)) best = h->t;
+      }
+    }
+    const auto first = impact::ray_mesh_first_hit(ta, ray, pose_a);
+    const std::string where = std::string(name) + " ray (" + std::to_string(o[0]) + "," + std::to_string(o[1]) + "," +
+                              std::to_string(o[2]) + ") dir (" + std::to_string(d[0]) + "," + std::to_string(d[1]) + "," +
+                              std::to_string(d[2]) + ")";
+    if (first.has_value() != best.has_value() || (first && first->t != *best))
+      impact::fuzz::fail(where + ": first hit " + (first ? std::to_string(double(first->t)) : "none") + ", brute force " +
+                         (best ? std::to_string(double(*best)) : "none"));
+    if (impact::ray_mesh_any_hit(ta, ray, pose_a) != best.has_value())
+      impact::fuzz::fail(where + ": any hit disagrees with brute force");
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  impact::fuzz::Input in(data, size);
+  const std::uint8_t mode = in.byte();
+  const std::int64_t r = std::int64_t(1) << (1 + mode % 6);  // grid [-r, r], r = 2 .. 64
+  const IntMesh A = read_mesh(in, r), B = read_mesh(in, r);
+  const IntPose pa = read_pose(in, r), pb = read_pose(in, r);
+  std::vector<std::pair<IPoint, IPoint>> rays;
+  for (int k = 0; k < 4 && in.left() > 0; ++k) {
+    IPoint o{in.range(-2 * r, 2 * r), in.range(-2 * r, 2 * r), in.range(-2 * r, 2 * r)};
+    IPoint d{in.range(-4, 4), in.range(-4, 4), in.range(-4, 4)};
+    rays.emplace_back(o, d);
+  }
+  // every generated mesh is valid input (finite, indices in range): MeshBvh must not refuse it
+  if (mode & 64u) {
+    check<impact::Sphere<float>, float>(A, B, pa, pb, rays, "sphere float");
+    check<impact::Aabb<float>, float>(A, B, pa, pb, rays, "aabb float");
+  } else {
+    check<impact::Sphere<double>, double>(A, B, pa, pb, rays, "sphere double");
+    check<impact::Aabb<double>, double>(A, B, pa, pb, rays, "aabb double");
+  }
+  return 0;
+}
