@@ -137,13 +137,13 @@ inline std::unique_ptr<ClothScene> make_cloth_scene(const ClothSceneConfig& c) {
     } else if (c.scene == "spin") {
       const Vec3<double> centre(0, 0, sphere_r);
       const double omega = 2 * pi;  // one turn per second
-      s->rigid.push_back({"sphere", sphere(sphere_r, 4), [centre, omega](double t) {
+      s->rigid.push_back({"sphere", sphere(sphere_r, 3), [centre, omega](double t) {
                             const Mat3<double> R = rot_z(omega * t);
                             return RigidTransform<double>(R, centre);
                           }});
       s->friction = 0.5;
     } else {
-      TriangleMesh<double> m = sphere(sphere_r, 4);
+      TriangleMesh<double> m = sphere(sphere_r, 3);
       m.V.col(2).array() += sphere_r;
       s->rigid.push_back(fixed("sphere", std::move(m)));
     }

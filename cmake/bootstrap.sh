@@ -6,14 +6,14 @@
 # It installs the Debian packages it needs (apt-get, as root or through sudo), configures a Release
 # build with warnings as errors in build/release (IMPACT_BUILD_DIR overrides), then builds and runs
 # the collision benchmark, or builds everything and runs the whole ctest suite. Set IMPACT_DATA_DIR to a folder that
-# holds meshes/ and ccd-queries/ to run the data-driven tests (they report SKIPPED without it).
+# holds meshes/ and ccd-queries/ to run the data-driven tests (they report SKIPPED without it, and FAIL when CI=true).
 set -euo pipefail
 
 mode="${1:-test}"
 [ $# -gt 0 ] && shift
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev)
+packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev libboost-dev)
 # the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
 [ "$mode" = test ] && packages+=(assimp-testmodels)
 # the bench mode also installs matplotlib for benches/plot.py (charts from the benches' --json)

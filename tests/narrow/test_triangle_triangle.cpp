@@ -219,17 +219,11 @@ TYPED_TEST(TriTri, IntersectionPointLiesOnBothTriangles) {
     ++checked;
     double size = 0;
     for (int k = 0; k < 3; ++k) size = std::max({size, double(ta[k].cwiseAbs().maxCoeff()), double(tb[k].cwiseAbs().maxCoeff())});
-    // the construction is ill-conditioned when the planes are nearly parallel: scale the tolerance
-    // by 1 / sin(angle between the planes)
-    const double sin_angle = ta.template cast<double>().normal().cross(tb.template cast<double>().normal()).norm();
-    // and by the slivers' shape (twice the area over the longest edge squared)
-    auto shape = [](const Triangle<double>& t) {
-      const double l = std::max({(t.b - t.a).squaredNorm(), (t.c - t.b).squaredNorm(), (t.a - t.c).squaredNorm()});
-      return l > 0 ? t.scaled_normal().norm() / l : 1.0;
-    };
-    const double cond = hit->coplanar ? 1.0
-                                      : 1.0 / std::max(sin_angle * shape(ta.template cast<double>()) * shape(tb.template cast<double>()), 1e-12);
-    const double tol = size * cond * (std::is_same_v<S, float> ? 1e-5 : 1e-11);
+    // a fixed tolerance, relative to the coordinates (measured at most 4.3e-8 in float and 2.2e-12 in
+    // double on these pairs, nearly parallel planes included): every check can fail
+    const double tol = size * (std::is_same_v<S, float> ? 2e-7 : 1e-11);
+    const S na = hit->normal_a.norm();
+    EXPECT_TRUE(na == S(0) || std::abs(na - S(1)) < S(1e-5));
     EXPECT_LE(dist_to_tri(hit->point, ta), tol);
     EXPECT_LE(dist_to_tri(hit->point, tb), tol);
     if (!hit->coplanar) {
@@ -238,8 +232,6 @@ TYPED_TEST(TriTri, IntersectionPointLiesOnBothTriangles) {
       EXPECT_LE(dist_to_tri(hit->q, ta), tol);
       EXPECT_LE(dist_to_tri(hit->q, tb), tol);
     }
-    const S na = hit->normal_a.norm();
-    EXPECT_TRUE(na == S(0) || std::abs(na - S(1)) < S(1e-5));
   }
   EXPECT_GT(checked, 1000);
 }

@@ -119,25 +119,43 @@ TEST(MeshCollideFcl, AllPairsMatchBruteForceOnRealMeshes) {
   }
 }
 
-TEST(MeshCollideFcl, AllPairsMatchFclPairSets) {
-  IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
-  IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
-  const auto A = load_data(env), B = load_data(rob);
+namespace {
+
+/// All-pairs sets of both trees against FCL's (BVHModel<OBBRSS>, num_max_contacts unlimited) on
+/// the same poses; returns the number of pairs found.
+int all_pairs_against_fcl(const TriangleMesh<double>& A, const TriangleMesh<double>& B, int poses, std::uint64_t seed) {
   const auto fa = make_fcl_model<fcl::OBBRSSd>(A);
   const auto fb = make_fcl_model<fcl::OBBRSSd>(B);
-  MeshBvh<Sphere<double>> ma(A), mb(B);
+  const MeshBvh<Sphere<double>> sa(A), sb(B);
+  const MeshBvh<Aabb<double>> aa(A), ab(B);
   CollideOptions all;
   all.all_pairs = true;
   int pairs = 0;
-  for (const auto& p : random_poses_around(A, B, 300, 9)) {
+  for (const auto& p : random_poses_around(A, B, poses, seed)) {
     const auto f = fcl_all_pairs<fcl::OBBRSSd>(fa, RigidTransform<double>{}, fb, p);
     const std::set<std::pair<int, int>> expected(f.begin(), f.end());
-    const auto got = collide(ma, RigidTransform<double>{}, mb, p, all).pairs;
-    const std::set<std::pair<int, int>> got_set(got.begin(), got.end());
-    EXPECT_EQ(got_set, expected);
+    const auto gs = collide(sa, RigidTransform<double>{}, sb, p, all).pairs;
+    const auto ga = collide(aa, RigidTransform<double>{}, ab, p, all).pairs;
+    using PairSet = std::set<std::pair<int, int>>;
+    EXPECT_EQ(PairSet(gs.begin(), gs.end()), expected) << "sphere tree";
+    EXPECT_EQ(PairSet(ga.begin(), ga.end()), expected) << "aabb tree";
     pairs += int(expected.size());
   }
-  EXPECT_GT(pairs, 0);
+  return pairs;
+}
+
+}  // namespace
+
+TEST(MeshCollideFcl, AllPairsMatchFclPairSets) {
+  IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
+  IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
+  EXPECT_GT(all_pairs_against_fcl(load_data(env), load_data(rob), 300, 9), 0);
+}
+
+TEST(MeshCollideFcl, AllPairsMatchFclPairSetsBunny) {
+  IMPACT_REQUIRE_DATA(bunny, "meshes/stanford-bunny.obj");
+  const auto m = load_data(bunny);
+  EXPECT_GT(all_pairs_against_fcl(m, m, IMPACT_TEST_SANITIZED ? 10 : 60, 10), 0);
 }
 
 TEST(MeshCollideFcl, MeshInsideClosedMeshDoesNotCollide) {

@@ -47,6 +47,36 @@ TYPED_TEST(Response, CoulombFrictionSticksOrSlides) {
   EXPECT_NEAR(r.velocity.z(), S(0), S(1e-6));
 }
 
+// Friction with restitution: the friction limit is mu (1 + epsilon) |u.n| (the whole normal velocity
+// change), not mu |u.n|. Analytic answers, in a tilted frame with a moving collider (exact values
+// rotated, so the tolerance is a few ulps of the speeds).
+TYPED_TEST(Response, FrictionLimitScalesWithRestitution) {
+  using S = TypeParam;
+  const S tol = S(64) * std::numeric_limits<S>::epsilon() * S(8);
+  const Eigen::AngleAxis<S> tilt(S(0.7), Vec3<S>(1, -2, 3).normalized());
+  const Mat3<S> R = tilt.toRotationMatrix();
+  const Vec3<S> n = R * Vec3<S>::UnitZ();
+  const Vec3<S> vc = R * Vec3<S>(0.25, -0.5, 0.125);
+  // local relative velocity (ut, 0, -2): j = (1 + 0.5) 2 = 3, limit = 0.5 j = 1.5
+  const Material<S> m{S(0.5), S(0.5)};
+  // |ut| = 1.2 <= 1.5 sticks (with the limit 0.5 * 2 = 1 it would slide)
+  auto r = respond<S>(vc + R * Vec3<S>(1.2, 0, -2), n, vc, m);
+  EXPECT_TRUE(r.sticking);
+  EXPECT_NEAR(r.normal_impulse, S(3), tol);
+  EXPECT_LT((r.velocity - (vc + R * Vec3<S>(0, 0, 1))).norm(), tol);
+  // |ut| = 3 slides to 3 - 1.5 = 1.5 (with the limit 1 it would keep 2); the normal part is -eps u.n = 1
+  r = respond<S>(vc + R * Vec3<S>(3, 0, -2), n, vc, m);
+  EXPECT_FALSE(r.sticking);
+  EXPECT_LT((r.velocity - (vc + R * Vec3<S>(1.5, 0, 1))).norm(), tol);
+  // a tangential direction off the axes: ut = (1.8, 2.4, 0), |ut| = 3, scaled by 1 - 1.5 / 3
+  r = respond<S>(vc + R * Vec3<S>(1.8, 2.4, -2), n, vc, Material<S>{S(0.5), S(0.5)});
+  EXPECT_LT((r.velocity - (vc + R * Vec3<S>(0.9, 1.2, 1))).norm(), tol);
+  // epsilon 1: j = 4, mu = 0.25 gives limit 1: |ut| = 0.9 sticks and the normal speed is kept
+  r = respond<S>(vc + R * Vec3<S>(0, 0.9, -2), n, vc, Material<S>{S(1), S(0.25)});
+  EXPECT_TRUE(r.sticking);
+  EXPECT_LT((r.velocity - (vc + R * Vec3<S>(0, 0, 2))).norm(), tol);
+}
+
 TYPED_TEST(Response, RestingThresholdAndMovingCollider) {
   using S = TypeParam;
   const Vec3<S> n = Vec3<S>::UnitZ();

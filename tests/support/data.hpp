@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Test data location: ctest sets IMPACT_DATA_DIR from the CMake cache variable of the same name.
-// Tests that need data call IMPACT_REQUIRE_DATA(path) which skips (GTEST_SKIP) when it is absent.
+// Tests that need data call IMPACT_REQUIRE_DATA(path) which skips (GTEST_SKIP) when it is absent,
+// except in CI (environment variable CI = "true", set by CI runners): there a missing data folder or
+// file fails the test, so a data-driven oracle cannot silently stop running.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -27,9 +29,18 @@ inline std::string data_file(const std::string& rel) {
   return f.good() ? p : std::string();
 }
 
+/// True when the environment variable CI is "true" (GitHub Actions, GitLab CI and others set it).
+inline bool in_ci() {
+  const char* ci = std::getenv("CI");
+  return ci && std::string(ci) == "true";
+}
+
 }  // namespace impact::test
 
-/// Declares `var` as the path of `rel` under IMPACT_DATA_DIR, or skips the test without it.
-#define IMPACT_REQUIRE_DATA(var, rel)                                                    \
-  const std::string var = ::impact::test::data_file(rel);                                \
+/// Declares `var` as the path of `rel` under IMPACT_DATA_DIR, or skips the test without it (fails
+/// it in CI).
+#define IMPACT_REQUIRE_DATA(var, rel)                                                           \
+  const std::string var = ::impact::test::data_file(rel);                                       \
+  if (var.empty() && ::impact::test::in_ci())                                                   \
+    FAIL() << "CI=true: IMPACT_DATA_DIR not set or " << (rel) << " missing (data-driven oracle)"; \
   if (var.empty()) GTEST_SKIP() << "IMPACT_DATA_DIR not set or " << (rel) << " missing"

@@ -6,6 +6,11 @@
 /// its triangles' vertices, and keeps the triangles in leaf order so leaf tests read memory in
 /// sequence. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
+///
+/// Thread safety: every const member and every query taking a `const MeshBvh&` (collides,
+/// collide, self_collide, ray casts, closest points, distance grids built on it) only reads, so
+/// any number of threads may query one tree at once. set_vertices() (and assignment) edits: it
+/// must not overlap any other call on the same tree.
 #pragma once
 
 #include "impact/bvh/build_bottom_up.hpp"
@@ -36,6 +41,21 @@ template <class BV> class MeshBvh {
   const TriangleMesh<S>& mesh() const { return mesh_; }
   const MeshBvhConfig& config() const { return cfg_; }
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(tris_.size()); }
+  /// An upper bound of |x|_inf over the mesh's vertices and the tree's node centres: the scale at
+  /// which the mesh queries bound the rounding of moving this mesh by a pose (mesh_collide.hpp).
+  S coordinate_bound() const { return coordinate_bound_; }
+  /// Heap bytes held by this object beyond sizeof(*this): the copied mesh (V, F), the tree's nodes
+  /// and primitive permutation, the leaf-ordered triangles and their ids (capacities, not sizes).
+  std::size_t memory_bytes() const { return mesh_bytes() + tree_bytes(); }
+  /// The part of memory_bytes() held by the copied mesh arrays V and F.
+  std::size_t mesh_bytes() const {
+    return static_cast<std::size_t>(mesh_.V.size()) * sizeof(S) + static_cast<std::size_t>(mesh_.F.size()) * sizeof(int);
+  }
+  /// The part of memory_bytes() beyond the mesh: nodes, permutation, leaf-ordered triangles, ids.
+  std::size_t tree_bytes() const {
+    return tree_.nodes.capacity() * sizeof(BvhNode<BV>) + tree_.primitives.capacity() * sizeof(std::int32_t) +
+           tris_.capacity() * sizeof(Triangle<S>) + ids_.capacity() * sizeof(std::int32_t);
+  }
 
   /// Triangle at leaf position k (the primitive ids the traversals hand out).
   const Triangle<S>& triangle(std::int32_t k) const { return tris_[static_cast<std::size_t>(k)]; }
@@ -59,24 +79,27 @@ template <class BV> class MeshBvh {
     validate_mesh(V, mesh_.F);
     mesh_.V = V;
     gather_triangles();
-    refit(tree_, fitter(), mode);
+    std::vector<Vec3<S>> scratch;
+    refit(tree_, fitter(scratch), mode);
+    update_coordinate_bound();
   }
 
  private:
   void gather_triangles() {
     for (std::size_t k = 0; k < ids_.size(); ++k) tris_[k] = mesh_.triangle(ids_[k]);
   }
-  /// Fits a BV around the vertices of the triangles at leaf positions ids[0..n).
-  auto fitter() {
-    return [this](const std::int32_t* ids, std::size_t n) {
-      scratch_.resize(3 * n);
+  /// Fits a BV around the vertices of the triangles at leaf positions ids[0..n), gathering them in
+  /// the caller's scratch buffer (a local of build/set_vertices: it is not kept with the tree).
+  auto fitter(std::vector<Vec3<S>>& buf) {
+    return [this, &buf](const std::int32_t* ids, std::size_t n) {
+      buf.resize(3 * n);
       for (std::size_t i = 0; i < n; ++i) {
         const Triangle<S>& t = tris_[static_cast<std::size_t>(ids[i])];
-        scratch_[3 * i] = t.a;
-        scratch_[3 * i + 1] = t.b;
-        scratch_[3 * i + 2] = t.c;
+        buf[3 * i] = t.a;
+        buf[3 * i + 1] = t.b;
+        buf[3 * i + 2] = t.c;
       }
-      return Traits::fit(scratch_.data(), scratch_.size(), cfg_.fit);
+      return Traits::fit(buf.data(), buf.size(), cfg_.fit);
     };
   }
   void build() {
@@ -93,13 +116,20 @@ template <class BV> class MeshBvh {
       boxes.resize(m);
       for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris_[t].a.cwiseMin(tris_[t].b).cwiseMin(tris_[t].c), tris_[t].a.cwiseMax(tris_[t].b).cwiseMax(tris_[t].c));
     }
-    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(), cfg_.build)
-                                                        : build_top_down<BV>(centroids, fitter(), cfg_.build, boxes);
+    std::vector<Vec3<S>> scratch;
+    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(scratch), cfg_.build)
+                                                        : build_top_down<BV>(centroids, fitter(scratch), cfg_.build, boxes);
     ids_ = tree_.primitives;
     std::vector<Triangle<S>> ordered(m);
     for (std::size_t k = 0; k < m; ++k) ordered[k] = tris_[static_cast<std::size_t>(ids_[k])];
     tris_ = std::move(ordered);
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
+    update_coordinate_bound();
+  }
+  void update_coordinate_bound() {
+    S bound = mesh_.V.size() > 0 ? mesh_.V.cwiseAbs().maxCoeff() : S(0);
+    for (const auto& node : tree_.nodes) bound = std::max(bound, Traits::center(node.bv).cwiseAbs().maxCoeff());
+    coordinate_bound_ = bound;
   }
 
   TriangleMesh<S> mesh_;
@@ -107,7 +137,7 @@ template <class BV> class MeshBvh {
   Bvh<BV> tree_;
   std::vector<Triangle<S>> tris_;  // leaf order
   std::vector<std::int32_t> ids_;  // leaf position -> row of F
-  std::vector<Vec3<S>> scratch_;
+  S coordinate_bound_ = 0;
 };
 
 }  // namespace impact

@@ -17,7 +17,10 @@
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/triangle_triangle.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -55,36 +58,150 @@ template <class S> struct CollideResult {
 
 namespace detail {
 
-/// Conservative: false only when the sphere (centre c, radius r) cannot touch the triangle. Four
-/// separating axes: the triangle's normal and its three in-plane edge normals. Much tighter than a
-/// sphere around a long thin triangle, which is what makes leaf-versus-node tests pay off. The
-/// radius is padded relatively so rounding can only make the test accept more.
+/// Conservative: false only when the closed sphere (centre c, radius r) provably shares no point
+/// with the closed triangle t, for the exact values given. Four separating axes: the triangle's
+/// normal and its three in-plane edge normals. Much tighter than a sphere around a long thin
+/// triangle, which is what makes leaf-versus-node tests pay off. float input is evaluated in double.
+///
+/// Why it is conservative (u = unit roundoff of the evaluation type T, no overflow: any inf or NaN
+/// gives "may touch"). An axis w may be any vector: its value is not trusted, only used. The sphere
+/// and the triangle are disjoint when every vertex v gives w.(c - v) > r |w| (the triangle lies
+/// wholly beyond the sphere on one side), or every vertex gives w.(v - c) > r |w| (other side).
+/// For each vertex, q = fl(c - v) has |q_i - (c - v)_i| <= u |c - v|_i, and s = fl(w . q) then
+/// differs from w.(c - v) by at most gamma_4 A_v with A_v = sum_i |w_i| |c_i - v_i| (Higham,
+/// Accuracy and Stability of Numerical Algorithms, 3.1: any order of a 3-term dot product, FMA or
+/// not). With qmax the componentwise largest |q| over the vertices, beta = fl(8u |w|.qmax) + mu is
+/// at least twice gamma_4 A_v for every v (the rounding of |w|.qmax is below 4u of it), and mu =
+/// the least normal number covers the absolute errors of products that underflow. Then lo =
+/// fl(min_v s - beta) > 0 gives min_v w.(c - v) >= lo / (1 + u) (the half of beta left over covers
+/// the rounding of the subtraction); the same holds for -max_v s on the other side (the side is
+/// the one the first vertex suggests: a separation on the other side would need the first vertex
+/// there too). The reach
+/// fl(rr fl(rr fl(w.w))) + mu, rr = fl(r (1 + 8u)), is at least (r |w|)^2 (1 + 8u) when w.w is
+/// normal (checked; an intermediate that underflows leaves a true value below mu), and lo^2 >
+/// reach, computed, implies (lo / (1 + u))^2 > (r |w|)^2: the exact separation.
+/// The error scale is the distance from c to the vertices actually used, not the triangle's size
+/// alone: a small sphere at a vertex of a large triangle is culled only when it is apart by more
+/// than about 8u times its distance to the far vertices, as it must be when the axis itself is
+/// rounded at the scale of the triangle.
 template <class S> inline bool sphere_may_touch_triangle(const Vec3<S>& c, S r, const Triangle<S>& t) {
-  const S rr = r * (S(1) + S(64) * std::numeric_limits<S>::epsilon());
-  const Vec3<S> n = (t.b - t.a).cross(t.c - t.a);
-  const S nn = n.squaredNorm();
-  if (!(nn > S(0))) return true;  // degenerate triangle: no plane to test against
-  const S d = n.dot(c - t.a);
-  if (d * d > rr * rr * nn) return false;
-  const Vec3<S>* v[3] = {&t.a, &t.b, &t.c};
-  for (int k = 0; k < 3; ++k) {
-    const Vec3<S>& p = *v[k];
-    const Vec3<S> m = (*v[(k + 1) % 3] - p).cross(n);  // points away from the triangle for CCW (a, b, c) about n
-    const S e = m.dot(c - p);
-    if (e > S(0) && e * e > rr * rr * m.squaredNorm()) return false;
-  }
+  using T = std::conditional_t<(sizeof(S) < sizeof(double)), double, S>;
+  constexpr T u = std::numeric_limits<T>::epsilon() / T(2);
+  constexpr T mu = std::numeric_limits<T>::min();
+  constexpr T inf = std::numeric_limits<T>::infinity();
+  const Vec3<T> p = c.template cast<T>();
+  const Vec3<T> v0 = t.a.template cast<T>(), v1 = t.b.template cast<T>(), v2 = t.c.template cast<T>();
+  const Vec3<T> q0 = p - v0;
+  const T rr = T(r) * (T(1) + T(8) * u);
+  // True when w separates the sphere from the triangle (on the + side of w, or on either side).
+  // A quick look at the first vertex rules most axes out; "does not separate" is always a safe
+  // answer, so only a claimed separation is confirmed with the bound.
+  auto separates = [&](const Vec3<T>& w, bool both_sides) {
+    const T ww = w.squaredNorm();
+    const T reach2 = rr * (rr * ww) + mu;  // >= (r |w|)^2 (1 + 8u), see below
+    const T s0 = w.dot(q0);
+    if (!(s0 * s0 > reach2) || (s0 < T(0) && !both_sides)) return false;
+    if (!(ww >= mu)) return false;  // subnormal axis: no verdict
+    const Vec3<T> q1 = p - v1, q2 = p - v2;
+    const Vec3<T> qmax = q0.cwiseAbs().cwiseMax(q1.cwiseAbs()).cwiseMax(q2.cwiseAbs());
+    const T beta = T(8) * u * w.cwiseAbs().dot(qmax) + mu;  // bounds the error of each s
+    if (!(beta < inf)) return false;                           // an overflow or NaN in w or q
+    const T s1 = w.dot(q1), s2 = w.dot(q2);
+    const T lo = s0 > T(0) ? std::min(s0, std::min(s1, s2)) - beta : -std::max(s0, std::max(s1, s2)) - beta;
+    return lo > T(0) && lo * lo > reach2;
+  };
+  const Vec3<T> e0 = v1 - v0, e2 = v0 - v2;
+  const Vec3<T> n = e0.cross(-e2);
+  if (separates(n, true)) return false;
+  // in-plane edge normals, pointing away from the triangle for CCW (a, b, c) about n
+  if (separates(e0.cross(n), false)) return false;
+  if (separates((v2 - v1).cross(n), false)) return false;
+  if (separates(e2.cross(n), false)) return false;
   return true;
 }
 
-/// Node test of the mesh queries for sphere trees: the spheres must overlap and, when exactly one
-/// node is a leaf, the other node's sphere must touch one of the leaf's triangles. For other BV
-/// types, the BV test alone.
+/// Per-query padding of the node tests of mesh_collide for a relative transform b_to_a = (M, t)
+/// that is not exactly the identity. Each bound below is a forward error bound at the scale of the
+/// inputs actually used: P_a and P_b bound the coordinates (and node centres) of each mesh
+/// (MeshBvh::coordinate_bound), u is the unit roundoff of S, gamma_k = k u / (1 - k u) <= (k+1) u.
+///  - The narrow phase tests A's triangle against fl(M v + t) for B's vertices v. Component i of
+///    fl(M p + t) is off by at most gamma_4 (sum_j |M_ij| |p_j| + |t_i|) <= e_b := 8u (|M|_inf P_b +
+///    |t|_inf) for |p|_inf <= P_b (Higham 3.1); in length, sqrt(3) e_b.
+///  - M is the rounded product of the poses, maybe not orthonormal. With G = M^T M - I,
+///    |G|_2 <= sum_ij |G_ij| <= g := (sum_ij |fl(G_ij)|)(1 + 16u) + 16u (|M|_F^2 + 3) (each entry
+///    rounded by gamma_4 (sum_k |M_ki| |M_kj| + 1)), so |M|_2 <= sqrt(1 + g) and the least singular
+///    value of M is at least sqrt(1 - g); M M^T - I has the same 2-norm as G.
+///  - Sphere of B (centre c, radius r) seen from A: every vertex fl(M v + t) of B's triangles in it
+///    lies within |M|_2 r + 2 sqrt(3) e_b of fl(M c + t) (both rounded by at most sqrt(3) e_b).
+///  - Sphere of A (centre c, radius r) seen from B, for B's leaf triangles tested in B's frame at
+///    c' = fl(M^T c + t'), t' = fl(-(M^T t)): if a point x of A's triangle (|x - c| <= r) lies on
+///    B's moved triangle, the same barycentric point z of B's triangle has |M z + t - x| <=
+///    sqrt(3) e_b. With rho = M c' + t - c = (M M^T - I)(c - t) + M (d1 + d2), d2 the rounding of
+///    t' (<= gamma_3 |M|_1 |t|_inf a component) and d1 that of c' (<= gamma_4 (|M|_1 P_a + |t'|_inf)),
+///    |z - c'| <= (r + sqrt(3) e_b + |rho|) / sqrt(1 - g), which is the radius used (g < 1/2 is
+///    required, else this cull is off).
+///  - Box of B (centre cb, half extents eb, rounded from its min/max by at most 2u P_b) seen from A
+///    (centre ca, half extents ea, rounded by at most 2u P_a): obb_overlap covers its own rounding
+///    for an orthonormal R. The narrow phase's vertex rounding and the rounding of fl(M cb + t) - ca
+///    (at most e_b + u (|M|_inf P_b + |t|_inf + P_a) a component) enlarge A's box by a cube
+///    (Minkowski sum, exact for an axis-aligned box). For a non-orthonormal M, the radius of B on
+///    the axes built from M's columns is off by at most g times the sum of B's half extents: B's
+///    half extents are enlarged by 4 g sum(eb) (each unit of padding adds at least 1 - 2g to B's
+///    radius on any axis obb_overlap uses).
+/// Every computed pad is rounded up by a factor (1 + 4u) or more; P_a, P_b, |t| and the norms are
+/// exact or rounded within that factor.
+template <class S> struct PosePad {
+  bool identity = true;  ///< M = I and t = 0 exactly: B's vertices are not moved by rounding
+  S stretch = 1;         ///< >= |M|_2
+  S b_abs = 0;           ///< 2 sqrt(3) e_b: added to B's sphere radius seen from A
+  bool a_ok = true;      ///< the cull of B's leaf triangles against A's sphere may run
+  S a_scale = 1, a_abs = 0;  ///< A's sphere radius seen from B: (r + a_abs) a_scale
+  S box_a = 0, box_b = 0, box_g = 0;  ///< AABB: ea + box_a, eb + box_b + box_g sum(eb)
+
+  PosePad() = default;
+  PosePad(const RigidTransform<S>& x, S pa, S pb) {
+    const Mat3<S>& M = x.R;
+    identity = M == Mat3<S>::Identity() && (x.t.array() == S(0)).all();
+    if (identity) return;
+    constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+    const S up = S(1) + S(4) * u;
+    const Mat3<S> G = M.transpose() * M - Mat3<S>::Identity();
+    const S g = G.cwiseAbs().sum() * (S(1) + S(16) * u) + S(16) * u * (M.squaredNorm() + S(3));
+    const S m_inf = M.cwiseAbs().rowwise().sum().maxCoeff(), m_one = M.cwiseAbs().colwise().sum().maxCoeff();
+    const S t_inf = x.t.cwiseAbs().maxCoeff();
+    const S sqrt3 = S(1.7320508075688773) * up;
+    stretch = std::sqrt(S(1) + g) * up;
+    const S e_b = S(8) * u * (m_inf * pb + t_inf) * up;
+    b_abs = S(2) * sqrt3 * e_b * up;
+    a_ok = g < S(0.5);
+    if (a_ok) {
+      const S t2_inf = (m_one * t_inf) * (S(1) + S(4) * u);  // |t'|_inf bound
+      const S d2 = S(4) * u * m_one * t_inf;
+      const S d1 = S(5) * u * (m_one * pa + t2_inf);
+      const S rho = g * sqrt3 * (pa + t_inf) + stretch * sqrt3 * (d1 + d2);
+      a_abs = (sqrt3 * e_b + rho) * up;
+      a_scale = up * up / std::sqrt(S(1) - g);
+    }
+    box_a = (e_b + S(2) * u * (m_inf * pb + t_inf + pa) + S(2) * u * pa) * S(2) * up;
+    box_b = S(4) * u * pb * up;
+    box_g = S(4) * g * up;
+  }
+};
+
+/// Node test of the mesh queries: the BVs must overlap (spheres and AABBs padded by PosePad for the
+/// rounding of the relative transform; other BVs by their traits) and, for sphere trees when exactly one node is a leaf, the other node's
+/// sphere must touch one of the leaf's triangles. Conservative: never false for a node pair under
+/// which the narrow phase would find a pair (see PosePad and sphere_may_touch_triangle).
 template <class BV> struct MeshNodeOverlap {
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV>& a;
   const MeshBvh<BV>& b;
   RigidTransform<S> b_to_a, a_to_b;
   std::uint64_t* tests;
+  PosePad<S> pad;
+
+  MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
+      : a(a_), b(b_), b_to_a(x), a_to_b(x.inverse()), tests(counter), pad(x, a_.coordinate_bound(), b_.coordinate_bound()) {}
 
   bool leaf_touches(const MeshBvh<BV>& m, const BvhNode<BV>& leaf, const Vec3<S>& c, S r) const {
     for (std::int32_t k = leaf.first; k < leaf.first + leaf.count; ++k)
@@ -93,12 +210,30 @@ template <class BV> struct MeshNodeOverlap {
   }
   bool operator()(const BvhNode<BV>& na, const BvhNode<BV>& nb) const {
     ++*tests;
-    if (!BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a)) return false;
     if constexpr (std::is_same_v<BV, Sphere<S>>) {
-      if (na.is_leaf() && !nb.is_leaf()) return leaf_touches(a, na, b_to_a.apply(nb.bv.center), nb.bv.radius);
-      if (nb.is_leaf() && !na.is_leaf()) return leaf_touches(b, nb, a_to_b.apply(na.bv.center), na.bv.radius);
+      constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+      const Vec3<S> cb = pad.identity ? nb.bv.center : b_to_a.apply(nb.bv.center);
+      const S rb = pad.identity ? nb.bv.radius : (pad.stretch * nb.bv.radius + pad.b_abs) * (S(1) + S(4) * u);
+      const S rs = na.bv.radius + rb;
+      // the squared distance and the squared sum are each within a relative 4u of their values
+      if (!((na.bv.center - cb).squaredNorm() <= rs * rs * (S(1) + S(16) * u))) return false;
+      if (na.is_leaf() && !nb.is_leaf()) return leaf_touches(a, na, cb, rb);
+      if (nb.is_leaf() && !na.is_leaf()) {
+        if (pad.identity) return leaf_touches(b, nb, na.bv.center, na.bv.radius);
+        if (!pad.a_ok) return true;
+        return leaf_touches(b, nb, a_to_b.apply(na.bv.center), (na.bv.radius + pad.a_abs) * pad.a_scale);
+      }
+      return true;
+    } else if constexpr (std::is_same_v<BV, Aabb<S>>) {
+      if (pad.identity) return BvTraits<BV>::overlap(na.bv, nb.bv);
+      const Vec3<S> ea = (na.bv.max - na.bv.min) / S(2) + Vec3<S>::Constant(pad.box_a);
+      const Vec3<S> eb0 = (nb.bv.max - nb.bv.min) / S(2);
+      const Vec3<S> eb = eb0 + Vec3<S>::Constant(pad.box_b + pad.box_g * eb0.sum());
+      const Vec3<S> tb = b_to_a.apply(nb.bv.center()) - na.bv.center();
+      return obb_overlap<S>(ea, b_to_a.R, tb, eb);
+    } else {
+      return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }
-    return true;
   }
 };
 
@@ -129,7 +264,7 @@ CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const
   validate_pose(pose_b, "collide", "pose_b");
   CollideResult<S> result;
   const RigidTransform<S> b_to_a = relative_transform(pose_a, pose_b);
-  const detail::MeshNodeOverlap<BV> overlap{a, b, b_to_a, b_to_a.inverse(), &result.stats.bv_tests};
+  const detail::MeshNodeOverlap<BV> overlap(a, b, b_to_a, &result.stats.bv_tests);
   auto visit = [&](std::int32_t p, std::int32_t q) {
     ++result.stats.primitive_tests;
     const Triangle<S>& ta = a.triangle(p);
@@ -156,7 +291,7 @@ bool collides(const MeshBvh<BV>& a, const RigidTransform<typename BvTraits<BV>::
   const RigidTransform<S> b_to_a = relative_transform(pose_a, pose_b);
   QueryStats st;
   bool hit = false;
-  const detail::MeshNodeOverlap<BV> overlap{a, b, b_to_a, b_to_a.inverse(), &st.bv_tests};
+  const detail::MeshNodeOverlap<BV> overlap(a, b, b_to_a, &st.bv_tests);
   traverse_pair_nodes(
       a.tree(), b.tree(), overlap,
       [&](std::int32_t p, std::int32_t q) {
@@ -177,7 +312,13 @@ template <class BV> CollideResult<typename BvTraits<BV>::Scalar> self_collide(co
   CollideResult<S> result;
   auto overlap = [&](const BV& x, const BV& y) {
     ++result.stats.bv_tests;
-    return BvTraits<BV>::overlap(x, y);
+    if constexpr (std::is_same_v<BV, Sphere<S>>) {
+      // padded: the squared distance and the squared sum are each within a relative 4u
+      const S rs = x.radius + y.radius;
+      return (x.center - y.center).squaredNorm() <= rs * rs * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
+    } else {
+      return BvTraits<BV>::overlap(x, y);  // exact comparisons for boxes
+    }
   };
   auto visit = [&](std::int32_t p, std::int32_t q) {
     if (m.adjacent(p, q)) return true;

@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: MIT
+// Tree quality and query work, guarded: BV tests and triangle tests of mesh–mesh queries (boolean
+// and all pairs, sphere and AABB trees) on fixed meshes and fixed seeded poses, summed over the
+// poses, must stay within a factor kFactor of the counts recorded when this test was written (the
+// library at that commit, GCC 12, x86-64). A worse tree (an off-by-one in the top-down partition
+// did 12.7x more BV tests on the bunny, every other test green) or a weaker cull fails here; an
+// improvement beyond the factor fails too, on purpose: record the new counts then (run with
+// IMPACT_PRINT_COUNTS=1 to print them). Generated meshes run everywhere, the data meshes when
+// IMPACT_DATA_DIR is set (required in CI).
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/mesh_collide.hpp"
+#include "support/data.hpp"
+#include "support/obj_reader.hpp"
+#include "support/poses.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+using namespace impact;
+using namespace impact::test;
+
+namespace {
+
+constexpr double kFactor = 1.25;
+
+struct Work {
+  std::uint64_t bool_bv = 0, bool_prim = 0, all_bv = 0, all_prim = 0;
+};
+
+template <class BV> Work measure(const TriangleMesh<double>& A, const TriangleMesh<double>& B, int poses, std::uint64_t seed) {
+  const MeshBvh<BV> a(A), b(B);
+  Work w;
+  CollideOptions all;
+  all.all_pairs = true;
+  for (const auto& p : random_poses_around(A, B, poses, seed)) {
+    QueryStats st;
+    collides(a, RigidTransform<double>{}, b, p, &st);
+    w.bool_bv += st.bv_tests;
+    w.bool_prim += st.primitive_tests;
+    const auto r = collide(a, RigidTransform<double>{}, b, p, all);
+    w.all_bv += r.stats.bv_tests;
+    w.all_prim += r.stats.primitive_tests;
+  }
+  return w;
+}
+
+void expect_within(const char* what, std::uint64_t got, std::uint64_t recorded) {
+  EXPECT_LE(double(got), kFactor * double(recorded)) << what << ": " << got << " against " << recorded << " recorded (more work)";
+  EXPECT_GE(double(got) * kFactor, double(recorded)) << what << ": " << got << " against " << recorded
+                                                     << " recorded (less work: record the new counts)";
+}
+
+void check(const char* name, const Work& got, const Work& recorded) {
+  if (std::getenv("IMPACT_PRINT_COUNTS"))
+    std::printf("%s: {%llu, %llu, %llu, %llu}\n", name, (unsigned long long)got.bool_bv, (unsigned long long)got.bool_prim,
+                (unsigned long long)got.all_bv, (unsigned long long)got.all_prim);
+  SCOPED_TRACE(name);
+  expect_within("boolean BV tests", got.bool_bv, recorded.bool_bv);
+  expect_within("boolean triangle tests", got.bool_prim, recorded.bool_prim);
+  expect_within("all-pairs BV tests", got.all_bv, recorded.all_bv);
+  expect_within("all-pairs triangle tests", got.all_prim, recorded.all_prim);
+}
+
+}  // namespace
+
+TEST(WorkCounts, GeneratedTorusIcosphere) {
+  const auto A = make_torus<double>(1.0, 0.35, 96, 48), B = make_icosphere<double>(0.6, 4);
+  check("torus/icosphere sphere", measure<Sphere<double>>(A, B, 200, 1201), {53656, 1605, 977668, 111250});
+  check("torus/icosphere aabb", measure<Aabb<double>>(A, B, 200, 1201), {25654, 739, 573382, 75822});
+}
+
+TEST(WorkCounts, Bunny) {
+  IMPACT_REQUIRE_DATA(path, "meshes/stanford-bunny.obj");
+  const auto m = read_obj<double>(path);
+  check("bunny/bunny sphere", measure<Sphere<double>>(m, m, 100, 1202), {16072, 414, 1265782, 135658});
+  check("bunny/bunny aabb", measure<Aabb<double>>(m, m, 100, 1202), {7278, 340, 680788, 92897});
+}
+
+TEST(WorkCounts, EnvRob) {
+  IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
+  IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
+  const auto A = read_obj<double>(env), B = read_obj<double>(rob);
+  check("env/rob sphere", measure<Sphere<double>>(A, B, 200, 1203), {56261, 12734, 244740, 85355});
+  check("env/rob aabb", measure<Aabb<double>>(A, B, 200, 1203), {19981, 2961, 104656, 27681});
+}
