@@ -48,7 +48,8 @@ struct MeshMotion {
 };
 
 /// Validates a step (same vertex count at both ends, finite coordinates below 1e100 in magnitude,
-/// the range of the primitive tests, indices in range) and returns its view. Throws InvalidInput.
+/// so that the swept boxes grown by a minimum separation stay finite, indices in range) and
+/// returns its view. Throws InvalidInput.
 template <class S>
 MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
   validate_mesh(start, faces, "mesh motion (start)");
@@ -60,7 +61,7 @@ MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end,
         if (!(std::abs(static_cast<double>((*V)(i, k))) < detail::kCcdMaxCoordinate))
           throw InvalidInput(std::string("mesh motion (") + (V == &start ? "start" : "end") + "): vertex " + std::to_string(i) +
                              " has coordinate " + detail::ccd_number(static_cast<double>((*V)(i, k))) +
-                             ", outside the range |x| < 1e100 of the CCD tests");
+                             ", outside the range |x| < 1e100 of the mesh CCD");
   return {&start, &end, &faces};
 }
 
