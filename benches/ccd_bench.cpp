@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T]
 //                  [--max-iterations N] [--recheck N] [--repeat R] [--generated N] [--no-sweep]
+//                  [--transform NAME] [--no-metamorphic]
 // Runs vertex_face_ccd and edge_edge_ccd over CCD query files with exact ground truth and reports,
 // per file and in total, for each kind: queries, positives, false positives, false negatives and
 // the mean, p99 and max time per query in microseconds; then a sweep of tolerance, minimum
@@ -10,7 +11,14 @@
 // and without that it generates queries (constructed contacts with known truth, and random ones
 // whose truth is unknown and not counted in FP/FN). The time of a query is the minimum over R
 // runs (default 3), which filters out preemption on a shared machine.
+// Metamorphic section (after the sweep; --no-metamorphic skips it): every transform of
+// tests/ccd/ccd_transforms.hpp that keeps the exact answer (time reversal, face vertex rotation
+// and reflection, swapped and reversed edges, axis permutation, mirroring, scaling by 2^40 and
+// 2^-40, exact translation) applied to every query, with FP, FN, budget exhaustions, decisions
+// that differ from the untransformed query's, and mean/p99/max time. --transform NAME runs the
+// main table on the transformed queries instead.
 #include "bench_util.hpp"
+#include "ccd/ccd_transforms.hpp"
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/vertex_face.hpp"
 #include "support/ccd_queries.hpp"
@@ -35,8 +43,9 @@ struct QuerySet {
 
 struct Row {
   std::string file, kind;
-  std::size_t queries = 0, positives = 0, fp = 0, fn = 0;
+  std::size_t queries = 0, positives = 0, fp = 0, fn = 0, exhausted = 0;
   double mean = 0, p99 = 0, max = 0;
+  std::vector<char> hits;  // per query
 };
 
 impact::CcdResult<double> run_one(const std::string& kind, const CcdQueryRecord& q, const impact::CcdOptions& o) {
@@ -63,6 +72,8 @@ Row run_set(const QuerySet& s, const impact::CcdOptions& o) {
     }
     us.push_back(best);
     ++r.queries;
+    r.hits.push_back(res.hit ? 1 : 0);
+    r.exhausted += res.budget_exhausted ? 1 : 0;
     if (s.truth[i] == 1) ++r.positives;
     if (s.truth[i] == 1 && !res.hit) ++r.fn;
     if (s.truth[i] == 0 && res.hit) ++r.fp;
@@ -158,6 +169,7 @@ std::string json_row(const Row& r, bool with_file) {
       .add("positives", r.positives)
       .add("false_positives", r.fp)
       .add("false_negatives", r.fn)
+      .add("budget_exhausted", r.exhausted)
       .add("mean_us", r.mean)
       .add("p99_us", r.p99)
       .add("max_us", r.max);
@@ -176,7 +188,8 @@ int main(int argc, char** argv) {
   std::string json;
   impact::CcdOptions opt;
   std::size_t generated = 0;
-  bool sweep = true;
+  bool sweep = true, metamorphic = true;
+  std::string transform;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -202,10 +215,23 @@ int main(int argc, char** argv) {
       generated = std::stoul(next());
     else if (a == "--no-sweep")
       sweep = false;
+    else if (a == "--no-metamorphic")
+      metamorphic = false;
+    else if (a == "--transform") {
+      transform = next();
+      const auto& names = impact::test::ccd_transform_names();
+      if (std::find(names.begin(), names.end(), transform) == names.end()) {
+        std::fprintf(stderr, "unknown transform %s\n", transform.c_str());
+        return 2;
+      }
+    }
     else if (a == "--help" || a == "-h") {
       std::printf(
           "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--recheck N] "
-          "[--repeat R] [--generated N] [--no-sweep]\n");
+          "[--repeat R] [--generated N] [--no-sweep] [--transform NAME] [--no-metamorphic]\n");
+      std::printf("transforms:");
+      for (const auto& n : impact::test::ccd_transform_names()) std::printf(" %s", n.c_str());
+      std::printf("\n");
       return 0;
     } else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
@@ -235,24 +261,43 @@ int main(int argc, char** argv) {
     generate(generated ? generated : 2000, sets);
   }
 
+  if (!transform.empty()) {
+    // Transform every query that it applies to (the others are left out of the run).
+    for (auto& s : sets) {
+      QuerySet t;
+      t.file = s.file;
+      t.kind = s.kind;
+      for (std::size_t i = 0; i < s.queries.size(); ++i) {
+        auto q = s.queries[i];
+        if (!impact::test::apply_ccd_transform(transform, s.kind, q)) continue;
+        t.queries.push_back(q);
+        t.truth.push_back(s.truth[i]);
+      }
+      s = std::move(t);
+    }
+    std::printf("transform %s applied to every query it applies to\n", transform.c_str());
+  }
   std::printf("tolerance %g, min_separation %g, max_iterations %lld, recheck_iterations %lld, time = min of %d runs per query\n",
               opt.tolerance, opt.min_separation, static_cast<long long>(opt.max_iterations),
               static_cast<long long>(opt.recheck_iterations), g_repeat);
   std::printf("%-52s %-12s %8s %9s %6s %6s %10s %10s %10s\n", "file", "kind", "queries", "positives", "FP", "FN", "mean_us",
               "p99_us", "max_us");
-  std::vector<std::string> results, totals, sweeps;
+  std::vector<std::string> results, totals, sweeps, metamorphics;
   for (const auto& s : sets) {
     const Row r = run_set(s, opt);
     print_row(r);
     results.push_back(json_row(r, true));
   }
   bool any_fn = false;
+  std::map<std::string, Row> base;
   for (const std::string kind : {"vertex-face", "edge-edge"}) {
     const Row r = total(sets, kind, opt);
     if (r.queries == 0) continue;
     print_row(r);
+    std::printf("%-52s %-12s budget exhausted on %zu queries\n", "", kind.c_str(), r.exhausted);
     totals.push_back(json_row(r, false));
     any_fn = any_fn || r.fn > 0;
+    base[kind] = r;
   }
 
   if (sweep) {
@@ -288,6 +333,35 @@ int main(int argc, char** argv) {
       }
   }
 
+  if (metamorphic && transform.empty()) {
+    std::printf(
+        "\nmetamorphic: each transform applied to every query of the kinds it applies to (exact, so the ground truth holds); "
+        "changed = decisions that differ from the untransformed query's\n");
+    std::printf("%-14s %-12s %8s %6s %6s %8s %8s %10s %10s %10s\n", "transform", "kind", "queries", "FP", "FN", "budget", "changed",
+                "mean_us", "p99_us", "max_us");
+    for (const auto& name : impact::test::ccd_transform_names())
+      for (const std::string kind : {"vertex-face", "edge-edge"}) {
+        if (!impact::test::ccd_transform_applies(name, kind) || base.count(kind) == 0) continue;
+        std::vector<QuerySet> tsets;
+        std::size_t skipped = 0;
+        for (const auto& s : sets) {
+          if (s.kind != kind) continue;
+          QuerySet t = s;
+          for (auto& q : t.queries) skipped += impact::test::apply_ccd_transform(name, kind, q) ? 0 : 1;
+          tsets.push_back(std::move(t));
+        }
+        const Row r = total(tsets, kind, opt);
+        std::size_t changed = 0;
+        for (std::size_t i = 0; i < r.hits.size(); ++i) changed += r.hits[i] != base[kind].hits[i];
+        any_fn = any_fn || r.fn > 0;
+        std::printf("%-14s %-12s %8zu %6zu %6zu %8zu %8zu %10.3f %10.3f %10.3f%s\n", name.c_str(), kind.c_str(), r.queries, r.fp, r.fn,
+                    r.exhausted, changed, r.mean, r.p99, r.max, skipped ? " (some not transformed)" : "");
+        impact::bench::JsonObject j;
+        j.add("transform", name).add("changed_decisions", changed).add("not_transformed", skipped).raw("row", json_row(r, false));
+        metamorphics.push_back(j.str());
+      }
+  }
+
   if (!json.empty()) {
     impact::bench::JsonObject o;
     o.add("tolerance", opt.tolerance)
@@ -296,7 +370,9 @@ int main(int argc, char** argv) {
         .add("recheck_iterations", static_cast<long long>(opt.recheck_iterations))
         .raw("results", impact::bench::JsonObject::array(results))
         .raw("totals", impact::bench::JsonObject::array(totals))
-        .raw("sweep", impact::bench::JsonObject::array(sweeps));
+        .raw("sweep", impact::bench::JsonObject::array(sweeps))
+        .raw("metamorphic", impact::bench::JsonObject::array(metamorphics));
+    if (!transform.empty()) o.add("transform", transform);
     if (!impact::bench::write_file(json, o.str())) {
       std::fprintf(stderr, "impact-ccd-bench: cannot write %s\n", json.c_str());
       return 1;

@@ -3,7 +3,7 @@
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
 //                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--grid G]
-//                          [--compact C] [--seed X] [--json FILE]
+//                          [--compact C] [--threads T] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -24,6 +24,12 @@
 // (64 by default; 0: none), built once before the runs and not timed (its build time is printed);
 // --compact C gives the backtracking and reference colliders a CompactBvh copy of the tree with
 // leaves of up to C triangles for their ray casts (4 by default; 0: none).
+// --threads T (default: the hardware concurrency) adds the threads rows: backtracking and
+// projection stepped by step_particles with StepOptions::threads = 1 and = T, both timed by the
+// wall clock in the same run, and checked to end in exactly the same state (positions and
+// velocities bit for bit). Their speed-up is printed by the wall clock and by the CPU times (one
+// thread's CPU time over max(the caller's CPU time, the workers' per worker)), which is what an
+// idle machine would show when the wall clock measures the neighbours too.
 // Each method runs twice from the same start: once timed, once audited for escapes (the audit's
 // tree walks between steps would disturb the timing); the bench checks that both end alike.
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
@@ -39,8 +45,11 @@
 #include "impact/response/particle_step.hpp"
 #include "support/obj_reader.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <tuple>
 #include <ctime>
 #include <random>
 #include <string>
@@ -60,11 +69,13 @@ struct Args {
   int leaf = 1;
   int grid = 64;
   int compact = 4;
+  int threads = 0;
   std::uint64_t seed = 1;
 };
 
 struct Row {
   std::string method;
+  int threads = 1;
   int particles = 0, steps = 0;
   double rate = 0, pos_err_mean = 0, pos_err_max = 0, energy_rel_err = 0, impact_share = 0;
   int escaped = 0;
@@ -106,9 +117,13 @@ template <class S> struct RunResult {
   double impact_share = 0;
 };
 
+/// Wall-clock seconds (the threads rows: a parallel run spends CPU time on several threads).
+double wall_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
 template <class S>
 RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
-                 const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every) {
+                 const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every, bool wall = false) {
+  const auto thread_seconds = [wall] { return wall ? wall_seconds() : ::thread_seconds(); };
   RunResult<S> r;
   std::vector<std::uint32_t> id(ps.size());  // id[i]: the initial index of the particle now at i
   for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
@@ -188,6 +203,41 @@ RunResult<S> measure(const std::vector<Particle<S>>& ps, const ColliderSet<S, Aa
   return audited;
 }
 
+double process_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// A threads row: the run (wall clock, as RunResult::seconds) and the CPU time of the calling
+/// thread and of the process over the whole run.
+template <class S> struct ThreadsRun {
+  RunResult<S> r;
+  double caller = 0, process = 0;
+};
+
+/// The threads rows: the timed run (no audit) with opt.threads = 1 and = threads; exits when the
+/// two end differently. Returns {1-thread, T-thread}.
+template <class S>
+std::pair<ThreadsRun<S>, ThreadsRun<S>> measure_threads(const std::vector<Particle<S>>& ps, const ColliderSet<S, Aabb<S>>& cs,
+                                                        const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container, StepOptions<S> opt,
+                                                        double dt, int steps, int sort_every, int threads) {
+  ThreadsRun<S> out[2];
+  for (int k = 0; k < 2; ++k) {
+    opt.threads = k == 0 ? 1 : threads;
+    const double c0 = thread_seconds(), p0 = process_seconds();
+    out[k].r = run(ps, cs, audit_mesh, container, opt, dt, steps, 1, false, sort_every, true);
+    out[k].caller = thread_seconds() - c0;
+    out[k].process = process_seconds() - p0;
+  }
+  for (std::size_t i = 0; i < ps.size(); ++i)
+    if (out[0].r.final[i].position != out[1].r.final[i].position || out[0].r.final[i].velocity != out[1].r.final[i].velocity) {
+      std::fprintf(stderr, "impact-particles-bench: %d threads end differently from 1 (particle %zu)\n", threads, i);
+      std::exit(1);
+    }
+  return {std::move(out[0]), std::move(out[1])};
+}
+
 }  // namespace
 
 template <class S> int run_all(const Args& a) {
@@ -236,6 +286,7 @@ template <class S> int run_all(const Args& a) {
   }
 
   StepOptions<S> opt;
+  opt.threads = 1;  // the method rows: one thread (thread CPU time); the threads rows below vary it
   opt.free_ball_factor = a.free_ball;
   opt.gravity = Vec3<S>(0, -speed / (50 * a.dt), 0);  // changes the speed by its own size in 50 steps
   const Material<S> elastic = Material<S>::elastic();
@@ -292,16 +343,34 @@ template <class S> int run_all(const Args& a) {
     w.pos_err_max = sm.max;
     return w;
   };
-  const std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
-                                 row("reference", ref, n_ref, a.substeps)};
-  std::printf("%-10s %9s %6s %16s %8s %12s %12s %14s %12s\n", "method", "particles", "steps", "particle_steps/s", "escaped",
+  std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
+                           row("reference", ref, n_ref, a.substeps)};
+  // threads rows (wall clock): the escapes and errors are those of the audited one-thread rows
+  // above, since the runs end in the same state (checked)
+  const int threads = resolve_threads(a.threads);
+  std::vector<std::tuple<std::string, double, double>> speedups;  // name, by the wall clock, by the CPU times
+  for (const auto& [name, cs, base_index] : {std::make_tuple("backtrack", &cs_bt, 0), std::make_tuple("project", &cs_pr, 1)}) {
+    const auto [one, many] = measure_threads(ps, *cs, bvh, container, opt, a.dt, a.steps, a.sort_every, threads);
+    const Row base = rows[std::size_t(base_index)];  // a copy: rows grows below
+    for (const auto* r : {&one, &many}) {
+      Row w = base;
+      w.method = std::string(name) + "-wall";
+      w.threads = r == &one ? 1 : threads;
+      w.rate = double(a.particles) * a.steps / std::max(r->r.seconds, 1e-12);
+      rows.push_back(w);
+    }
+    // on an idle machine the T-thread run takes at least max(caller CPU, the workers' CPU / (T - 1))
+    const double workers = threads > 1 ? (many.process - many.caller) / (threads - 1) : 0;
+    speedups.emplace_back(name, one.r.seconds / std::max(many.r.seconds, 1e-12), one.caller / std::max({many.caller, workers, 1e-12}));
+  }
+  std::printf("%-14s %7s %9s %6s %16s %8s %12s %12s %14s %12s\n", "method", "threads", "particles", "steps", "particle_steps/s", "escaped",
               "pos_err_mean", "pos_err_max", "energy_rel_err", "impact_share");
   std::vector<std::string> items;
   for (const auto& w : rows) {
-    std::printf("%-10s %9d %6d %16.4g %8d %12.4g %12.4g %14.4g %12.3f\n", w.method.c_str(), w.particles, w.steps, w.rate, w.escaped,
-                w.pos_err_mean, w.pos_err_max, w.energy_rel_err, w.impact_share);
+    std::printf("%-14s %7d %9d %6d %16.4g %8d %12.4g %12.4g %14.4g %12.3f\n", w.method.c_str(), w.threads, w.particles, w.steps, w.rate,
+                w.escaped, w.pos_err_mean, w.pos_err_max, w.energy_rel_err, w.impact_share);
     bench::JsonObject o;
-    o.add("method", w.method).add("particles", w.particles).add("steps", w.steps).add("particle_steps_per_s", w.rate);
+    o.add("method", w.method).add("threads", w.threads).add("particles", w.particles).add("steps", w.steps).add("particle_steps_per_s", w.rate);
     o.add("escaped", w.escaped).add("pos_err_mean", w.pos_err_mean).add("pos_err_max", w.pos_err_max).add("energy_rel_err", w.energy_rel_err);
     o.add("impact_share", w.impact_share);
     items.push_back(o.str());
@@ -309,6 +378,9 @@ template <class S> int run_all(const Args& a) {
   std::printf("share of particle-steps with an impact (backtrack): %.1f%%; reference: %d sub-steps\n", 100 * bt.impact_share,
               a.substeps);
   if (n_naive > 0) std::printf("backtrack / naive speed: %.0fx\n", rows[0].rate / std::max(rows[2].rate, 1e-300));
+  for (const auto& [name, x, y] : speedups)
+    std::printf("%s, %d threads / 1 thread (same final state): %.2fx by the wall clock, %.2fx by the CPU times%s\n", name.c_str(),
+                threads, x, y, a.particles < 512 ? " (fewer than 512 particles: stepped serially)" : "");
   if (!a.json.empty()) {
     bench::JsonObject top;
     top.add("bench", "impact-particles-bench").add("mesh", mesh_name).add("triangles", mesh.num_triangles()).add("dt", a.dt);
@@ -328,7 +400,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
                  "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
-                 "                              [--grid G] [--compact C] [--seed X] [--json FILE]\n");
+                 "                              [--grid G] [--compact C] [--threads T] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -347,6 +419,7 @@ int main(int argc, char** argv) {
     else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
     else if (s == "--compact" && (v = next())) a.compact = std::max(0, std::atoi(v));
     else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
+    else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
     else if (s == "--json" && (v = next())) a.json = v;
     else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;

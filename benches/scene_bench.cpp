@@ -4,7 +4,7 @@
 //
 //   impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]
 //                      [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]
-//                      [--bullet-deferred 0|1] [--only NAME] [--json FILE]
+//                      [--bullet-deferred 0|1] [--only NAME] [--threads T] [--json FILE]
 //
 // A scene of N objects (70% spheres of radius 0.2..0.8, 30% small meshes: an 80-triangle icosphere
 // and a 144-triangle torus) uniform in a cube sized for 0.1 objects per unit volume; a fraction F is
@@ -24,7 +24,13 @@
 // --only NAME keeps the methods whose name contains NAME (for profiling one of them).
 // Then the same for an all-static scene (F = 0), and a scaling table for N = 10^2 .. --scaling-max.
 // Times are CPU time of the bench thread (setup excluded from ms/step, --warmup untimed steps
-// first), so that a loaded machine does not distort the comparison.
+// first), so that a loaded machine does not distort the comparison; the impact scenes of these
+// rows run with SceneOptions::threads = 1.
+// Last, the threads table (--threads T, default the hardware concurrency): Scene::find_pairs and
+// Scene::collide on 1 and on T threads on the main scene; the T-thread pairs must equal the
+// 1-thread pairs in the same order (else exit status 3). Speed-ups by the wall clock and by the
+// CPU times (see Times::cpu_speedup), since on a shared machine the wall clock measures the
+// neighbours too.
 #include "bench_util.hpp"
 #include "impact/broad/scene.hpp"
 #include "impact/geometry/mesh_generators.hpp"
@@ -45,6 +51,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <cstdlib>
 #include <ctime>
 #include <functional>
@@ -78,6 +85,7 @@ struct Args {
   double bullet_prediction = 2.0;
   bool bullet_deferred = false;
   std::string only;
+  int threads = 0;
   std::string json;
 };
 
@@ -85,7 +93,7 @@ struct Args {
   std::fprintf(stderr,
                "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]\n"
                "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]\n"
-               "                          [--bullet-deferred 0|1] [--only NAME] [--json FILE]\n",
+               "                          [--bullet-deferred 0|1] [--only NAME] [--threads T] [--json FILE]\n",
                msg);
   std::exit(2);
 }
@@ -118,6 +126,8 @@ Args parse(int argc, char** argv) {
       a.bullet_deferred = std::atoi(next().c_str()) != 0;
     else if (s == "--only")
       a.only = next();
+    else if (s == "--threads")
+      a.threads = std::atoi(next().c_str());
     else if (s == "--json")
       a.json = next();
     else if (s == "-h" || s == "--help")
@@ -246,6 +256,7 @@ class ImpactMethod {
   ImpactMethod(BroadPhaseKind kind, const World& w, const Meshes& m) : w_(w), m_(m) {
     SceneOptions o;
     o.broad_phase = kind;
+    o.threads = 1;  // one thread: the CPU time of the bench thread is the method's time
     scene_ = std::make_unique<Scene<double>>(o);
   }
   void setup() {
@@ -551,6 +562,89 @@ std::string json_row(const Row& r) {
   return o.str();
 }
 
+double wall_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+double process_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// Time of one query: wall clock, CPU time of the calling thread and of the whole process.
+struct Times {
+  double wall = 0, caller = 0, process = 0;
+  template <class F>
+  void add(F&& f) {
+    const double w = wall_seconds(), c = cpu_seconds(), p = process_seconds();
+    f();
+    wall += wall_seconds() - w;
+    caller += cpu_seconds() - c;
+    process += process_seconds() - p;
+  }
+  /// The speed-up over `one` (a one-thread run) on an otherwise idle machine, from CPU times: the
+  /// caller runs the serial parts and its share of the parallel ones, the workers share the rest,
+  /// so the run takes at least max(caller, (process - caller) / (threads - 1)).
+  double cpu_speedup(const Times& one, int threads) const {
+    const double workers = threads > 1 ? (process - caller) / (threads - 1) : 0;
+    return one.caller / std::max({caller, workers, 1e-12});
+  }
+};
+
+/// The threads table: find_pairs and collide on 1 and on `threads` threads, same scene and
+/// motion. Reports the wall-clock speed-up and, because wall time on a shared machine measures
+/// the neighbours too, the speed-up the CPU times give (Times::cpu_speedup). Returns the number
+/// of steps whose T-thread answer differs from the 1-thread one (pairs, in order).
+std::size_t run_threads(const Args& args, const Meshes& meshes, int threads, std::vector<std::string>& json) {
+  std::size_t differ = 0;
+  std::printf("\nthreads, %ld objects, %.0f%% dynamic, %d steps: ms/step (1 thread: CPU time; %d threads: wall clock, CPU of the calling\n"
+              "thread, CPU of the process), speed-up by the wall clock and by the CPU times\n",
+              args.objects, 100 * args.dynamic, args.steps, threads);
+  std::printf("  %-22s %-10s %9s %9s %9s %9s %9s %9s\n", "method", "query", "1 thread", "wall", "caller", "process", "wall x", "cpu x");
+  for (const BroadPhaseKind kind : {BroadPhaseKind::StaticDynamic, BroadPhaseKind::Hierarchical}) {
+    const char* name = kind == BroadPhaseKind::StaticDynamic ? "impact-static-dynamic" : "impact-hierarchical";
+    World world(args.objects, args.dynamic, args.seed);
+    std::unique_ptr<Scene<double>> sc[2];
+    for (int k = 0; k < 2; ++k) {
+      SceneOptions o;
+      o.broad_phase = kind;
+      o.threads = k == 0 ? 1 : threads;
+      sc[k] = std::make_unique<Scene<double>>(o);
+      for (std::size_t i = 0; i < world.obj.size(); ++i) {
+        const auto& ob = world.obj[i];
+        const Shape<double> shape = ob.kind == 0 ? Shape<double>::sphere(ob.radius)
+                                                 : Shape<double>::mesh_of(ob.kind == 1 ? meshes.ico_bvh : meshes.torus_bvh);
+        sc[k]->add(i, shape, ob.pose, {ob.dynamic ? BodyType::Dynamic : BodyType::Static});
+      }
+      sc[k]->find_pairs();  // builds the trees
+    }
+    Times pairs_t[2], collide_t[2];
+    for (int s = 0; s < args.steps; ++s) {
+      world.advance();
+      PairResult p[2];
+      SceneCollideResult<double> c[2];
+      for (int k = 0; k < 2; ++k) {
+        for (const std::int32_t i : world.dynamic_ids) sc[k]->set_pose(ObjectId(i), world.obj[std::size_t(i)].pose);
+        pairs_t[k].add([&] { p[k] = sc[k]->find_pairs(); });  // the edits' deferred work included, as in the rows above
+        collide_t[k].add([&] { c[k] = sc[k]->collide(); });
+      }
+      if (p[0].pairs != p[1].pairs || c[0].pairs != c[1].pairs) ++differ;
+    }
+    for (const auto& [query, t] : {std::make_pair("find_pairs", pairs_t), std::make_pair("collide", collide_t)}) {
+      const double ms = 1e3 / args.steps;
+      std::printf("  %-22s %-10s %9.3f %9.3f %9.3f %9.3f %8.2fx %8.2fx\n", name, query, ms * t[0].caller, ms * t[1].wall, ms * t[1].caller,
+                  ms * t[1].process, t[0].wall / std::max(t[1].wall, 1e-12), t[1].cpu_speedup(t[0], threads));
+      bench::JsonObject o;
+      o.add("method", name).add("query", query).add("objects", static_cast<long long>(args.objects)).add("threads", threads);
+      o.add("ms_per_step_1_thread", ms * t[0].caller).add("ms_per_step_wall", ms * t[1].wall);
+      o.add("ms_per_step_caller_cpu", ms * t[1].caller).add("ms_per_step_process_cpu", ms * t[1].process);
+      o.add("speedup_wall", t[0].wall / std::max(t[1].wall, 1e-12)).add("speedup_cpu", t[1].cpu_speedup(t[0], threads));
+      o.add("steps_differing", static_cast<long long>(differ));
+      json.push_back(o.str());
+    }
+  }
+  std::printf("  threads: %d; steps whose answers differ from one thread: %zu\n", threads, differ);
+  return differ;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -616,6 +710,8 @@ int main(int argc, char** argv) {
     }
     std::printf("\n");
   }
+  std::vector<std::string> json_threads;
+  total_mismatches += run_threads(args, meshes, resolve_threads(args.threads), json_threads);
   std::printf("\ntotal mismatches: %zu\n", total_mismatches);
 
   if (!args.json.empty()) {
@@ -627,6 +723,7 @@ int main(int argc, char** argv) {
     o.add("bullet_prediction", args.bullet_prediction).add("bullet_deferred", args.bullet_deferred);
     o.raw("rows", bench::JsonObject::array(json_rows));
     o.raw("scaling", bench::JsonObject::array(json_scaling));
+    o.raw("threads", bench::JsonObject::array(json_threads));
     if (!bench::write_file(args.json, o.str())) {
       std::fprintf(stderr, "cannot write %s\n", args.json.c_str());
       return 1;

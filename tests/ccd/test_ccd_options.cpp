@@ -161,8 +161,9 @@ TYPED_TEST(CcdOptionsTest, ToleranceTightensToi) {
     const auto r = falling_point<S>(S(0.25), S(0.25), S(1), S(-1), o);
     ASSERT_TRUE(r.hit);
     EXPECT_LE(r.toi, S(0.5));
-    // At toi the point is within the tolerance of the triangle: |z(toi)| = 2 (0.5 - toi).
-    EXPECT_LE(2 * (0.5 - double(r.toi)), 2 * tol + 1e-6);
+    // At toi the point is within 2 tolerance L of the triangle, L = 2 the query's extent (z from
+    // 1 to -1): |z(toi)| = 2 (0.5 - toi).
+    EXPECT_LE(2 * (0.5 - double(r.toi)), 2 * tol * 2 + 1e-6);
   }
 }
 
@@ -196,6 +197,43 @@ TYPED_TEST(CcdOptionsTest, EdgeEdgeBasic) {
   // Shifted beyond the end of a: a miss.
   const V<S> s(S(1.5), 0, 0);
   EXPECT_FALSE(impact::edge_edge_ccd(a0, a1, V<S>(b00 + s), V<S>(b10 + s), a0, a1, V<S>(b01 + s), V<S>(b11 + s)).hit);
+}
+
+}  // namespace
+
+namespace {
+
+// The dev set's last false positive (erleben-cube-cliff-edges/vertex-face/data_0_0.csv, query
+// 123): a still vertex at (0, 1/2, 1) and a face whose z coordinates are all 1 or 1 - 2^-53. Exact
+// arithmetic (rational, outside this library) puts the closest approach over [0, 1] at t = 1,
+// 1.64e-32 from the face's plane with the vertex inside the triangle (u = 1.48e-16, v = 0.222):
+// the contact would come at t = 1 + 1.48e-16, after the step. Error bounds relative to the
+// coordinates' magnitude (2^-94 * 1.5 = 9e-29 in double-double) could never separate that gap,
+// whatever the re-check budget; relative to the query's extent around a reference point
+// (2^-94 * 2^-53 in z) the re-check proves the miss.
+TEST(CcdRecheck, CliffEdgesQuery123IsAMiss) {
+  using V = impact::Vec3<double>;
+  const V p[8] = {V(0x0.0p+0, 0x1.0000000000000p-1, 0x1.0000000000000p+0),
+                  V(0x1.2dd09ec3fef69p-54, 0x1.075adf7b1a9d2p-1, 0x1.fffffffffffffp-1),
+                  V(0x1.0000000000000p+0, 0x1.83ad6fbd8d4e9p+0, 0x1.fffffffffffffp-1),
+                  V(-0x1.031462598eaffp-56, 0x1.83ad6fbd8d4e8p+0, 0x1.fffffffffffffp-1),
+                  V(0x0.0p+0, 0x1.0000000000000p-1, 0x1.0000000000000p+0),
+                  V(-0x1.60a2909c8caaap-53, 0x1.1c4a18930a7fap-2, 0x1.0000000000000p+0),
+                  V(0x1.0000000000000p+0, 0x1.47128624c29ffp+0, 0x1.fffffffffffffp-1),
+                  V(-0x1.2ba6d303b4eb8p-53, 0x1.47128624c29fep+0, 0x1.0000000000000p+0)};
+  impact::CcdOptions o;
+  o.recheck_iterations = 0;  // the double search alone cannot separate it
+  auto r = impact::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
+  EXPECT_TRUE(r.hit);
+  o = {};  // the default re-check proves the miss
+  r = impact::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
+  EXPECT_FALSE(r.hit);
+  EXPECT_FALSE(r.budget_exhausted);
+  EXPECT_GT(r.recheck_iterations, 0);
+  EXPECT_LT(r.recheck_iterations, o.recheck_iterations);
+  // The same time reversed and with the face's vertices rotated.
+  EXPECT_FALSE(impact::vertex_face_ccd(p[4], p[5], p[6], p[7], p[0], p[1], p[2], p[3]).hit);
+  EXPECT_FALSE(impact::vertex_face_ccd(p[0], p[2], p[3], p[1], p[4], p[6], p[7], p[5]).hit);
 }
 
 }  // namespace

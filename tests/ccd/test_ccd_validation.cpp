@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
-// Bad input to every CCD entry point (issue 12, D12): out-of-range options, NaN/Inf and
-// out-of-range coordinates, trees built for a smaller minimum separation or for another mesh. Each
-// throws InvalidInput with the reason in every build (before, release builds answered
-// hit == false for real contacts), and the boundary values of each range are accepted.
+// Bad input to every CCD entry point (issue 12, D12): out-of-range options, NaN/Inf coordinates
+// (and, for the mesh CCD, coordinates beyond 1e100), trees built for a smaller minimum separation
+// or for another mesh. Each throws InvalidInput with the reason in every build (before, release
+// builds answered hit == false for real contacts), and the boundary values of each range are
+// accepted.
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
 #include "impact/ccd/vertex_face.hpp"
@@ -58,7 +59,6 @@ TEST(CcdValidation, BadOptionsThrow) {
       {"min_separation", [](auto& o) { o.min_separation = -1e-9; }},
       {"min_separation", [](auto& o) { o.min_separation = kNaN; }},
       {"min_separation", [](auto& o) { o.min_separation = kInf; }},
-      {"min_separation", [](auto& o) { o.min_separation = 2e100; }},
       {"tolerance", [](auto& o) { o.tolerance = kNaN; }},
       {"tolerance", [](auto& o) { o.tolerance = -1e-6; }},
       {"tolerance", [](auto& o) { o.tolerance = kInf; }},
@@ -97,8 +97,9 @@ TEST(CcdValidation, BoundaryOptionsAccepted) {
   EXPECT_TRUE(crossing_vf(o).hit);
   EXPECT_TRUE(crossing_ee(o).hit);
   o = {};
-  o.min_separation = 1e100;
+  o.min_separation = std::numeric_limits<double>::max();
   EXPECT_TRUE(crossing_vf(o).hit);
+  EXPECT_EQ(crossing_vf(o).toi, 0.0);
   o = {};
   o.t_max = std::numeric_limits<double>::denorm_min();
   EXPECT_FALSE(crossing_vf(o).hit);  // the contact is at t = 1/2
@@ -107,7 +108,7 @@ TEST(CcdValidation, BoundaryOptionsAccepted) {
 TEST(CcdValidation, BadCoordinatesThrow) {
   const impact::CcdOptions o;
   for (int k = 0; k < 8; ++k)
-    for (double bad : {kNaN, kInf, -kInf, 1e100, -3e200}) {
+    for (double bad : {kNaN, kInf, -kInf}) {
       expect_invalid([&] { crossing_vf(o, k, bad); }, "vertex_face_ccd: point " + std::to_string(k));
       expect_invalid([&] { crossing_ee(o, k, bad); }, "edge_edge_ccd: point " + std::to_string(k));
     }
@@ -115,9 +116,10 @@ TEST(CcdValidation, BadCoordinatesThrow) {
   const float fnan = std::numeric_limits<float>::quiet_NaN();
   const impact::Vec3<float> z(0, 0, 0), x(1, 0, 0), y(0, 1, 0), n(0, fnan, 0);
   expect_invalid([&] { impact::edge_edge_ccd(z, x, z, y, z, x, n, y); }, "point 6");
-  // just inside the range
-  EXPECT_NO_THROW(crossing_vf(o, 5, 9.9e99));
-  EXPECT_NO_THROW(crossing_ee(o, 5, -9.9e99));
+  // any finite magnitude is in range (the tests are scale-free)
+  EXPECT_NO_THROW(crossing_vf(o, 5, std::numeric_limits<double>::max()));
+  EXPECT_NO_THROW(crossing_ee(o, 5, -std::numeric_limits<double>::max()));
+  EXPECT_NO_THROW(crossing_ee(o, 2, std::numeric_limits<double>::denorm_min()));
 }
 
 // A 3 x 3 grid sheet in z = z0 moving by dz.

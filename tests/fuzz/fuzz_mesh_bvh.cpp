@@ -2,7 +2,9 @@
 // Fuzz target: MeshBvh trees (sphere and AABB) built on small random meshes decoded from the input
 // (3-16 vertices on a small integer grid, 1-24 triangles with any indices: duplicates, shared
 // edges, zero-area and coincident triangles are all common), under exact poses (a signed axis
-// permutation and an integer translation). Checked against brute force written here:
+// permutation and an integer translation); or, mixed-scale, a mesh of big triangles (vertices up
+// to 2^18) against a cluster of small ones next to one of its vertices. Checked against brute
+// force written here:
 //  - collide (all pairs) and collides against every triangle pair decided by the exact integer
 //    separating-axis test (tests/narrow/int_oracle.hpp) on the posed integer vertices;
 //  - self_collide against every non-adjacent pair of the mesh, decided the same way;
@@ -156,8 +158,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   impact::fuzz::Input in(data, size);
   const std::uint8_t mode = in.byte();
   const std::int64_t r = std::int64_t(1) << (1 + mode % 6);  // grid [-r, r], r = 2 .. 64
-  const IntMesh A = read_mesh(in, r), B = read_mesh(in, r);
-  const IntPose pa = read_pose(in, r), pb = read_pose(in, r);
+  IntMesh A, B;
+  IntPose pa, pb;
+  if (mode & 128u) {
+    // mixed scales: A's vertices anywhere in [-2^18, 2^18], B a cluster of small triangles within
+    // r of one of A's vertices (big triangles touching small ones: the plane distances of the
+    // culls are rounded at A's scale), B posed by a small integer translation only
+    A = read_mesh(in, std::int64_t(1) << 18);
+    B = read_mesh(in, r);
+    const IPoint anchor = A.V[std::size_t(in.byte()) % A.V.size()];
+    B.V[0] = {0, 0, 0};  // B's first vertex on the anchor: touching at a shared point is common
+    for (auto& v : B.V)
+      for (std::size_t i = 0; i < 3; ++i) v[i] += anchor[i];
+    if (in.flag())
+      for (auto& x : pb.t) x = in.range(-2, 2);
+  } else {
+    A = read_mesh(in, r);
+    B = read_mesh(in, r);
+    pa = read_pose(in, r);
+    pb = read_pose(in, r);
+  }
   std::vector<std::pair<IPoint, IPoint>> rays;
   for (int k = 0; k < 4 && in.left() > 0; ++k) {
     IPoint o{in.range(-2 * r, 2 * r), in.range(-2 * r, 2 * r), in.range(-2 * r, 2 * r)};

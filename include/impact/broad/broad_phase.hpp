@@ -18,17 +18,30 @@
 /// calls; the scene holds one of them in a std::variant and dispatches once per call):
 ///   void insert(std::int32_t slot, const ObjectTable<S>&)      a new object
 ///   void remove(std::int32_t slot, const ObjectTable<S>&)      before the slot is freed
-///   void moved(std::int32_t slot, const ObjectTable<S>&)       tight box changed (deferred flush)
+///   void moved(std::int32_t slot, const ObjectTable<S>&)       tight box changed (deferred)
 ///   void activity_changed(std::int32_t slot, const ObjectTable<S>&)  sleeping flag toggled
 ///   void filter_changed(std::int32_t slot, const ObjectTable<S>&)    filter or ignore list changed
-///   bool find_pairs(const ObjectTable<S>&, Visit&&, BroadPhaseStats&)
+///   void update(const ObjectTable<S>&, BroadPhaseStats&, int threads)
+///        applies what the edits above deferred (refits, rebuilds, cached candidates); the scene
+///        calls it once after edits, before the next query. May use `threads` threads.
+///   bool find_pairs(const ObjectTable<S>&, Visit&&, BroadPhaseStats&) const
 ///        calls visit(slot_a, slot_b) -> bool for every pair of the rule, each once; stops and
-///        returns false when visit returns false.
+///        returns false when visit returns false. Requires update() since the last edit.
+///   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const
+///   bool find_pairs_part(const ObjectTable<S>&, const PairTask&, Visit&&, BroadPhaseStats&) const
+///        find_pairs cut into independent parts (about `want`, fewer for small scenes): running
+///        find_pairs_part on each task in order visits exactly find_pairs' pairs in find_pairs'
+///        order, with the same work counters summed, so parts can run on different threads and
+///        their outputs be joined in task order (the scene's parallel queries).
+///
+/// Thread safety: edits and update() mutate; the const calls only read the broad phase and the
+/// object table, so any number of threads may run them at once between edits.
 #pragma once
 
 #include "impact/core/config.hpp"
 #include "impact/geometry/aabb.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 #include <unordered_set>
@@ -129,6 +142,16 @@ struct ObjectTable {
   }
 };
 
+/// One independent part of a broad phase's find_pairs (see split_pairs above). Its fields mean
+/// what the broad phase that made it says: a node pair of a tree traversal (i, j) with the node
+/// tests of its ancestors (pre_bv_tests), or a range [begin, end) of a list of objects.
+struct PairTask {
+  std::uint8_t kind = 0;
+  std::int32_t i = -1, j = -1;
+  std::uint64_t pre_bv_tests = 0;
+  std::size_t begin = 0, end = 0;
+};
+
 namespace detail {
 
 /// Rules 2 and 3 for a pair whose activity (rule 1) the caller has established, with counting.
@@ -156,9 +179,14 @@ struct is_broad_phase<
                 decltype(std::declval<B&>().moved(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
                 decltype(std::declval<B&>().activity_changed(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
                 decltype(std::declval<B&>().filter_changed(std::int32_t{}, std::declval<const ObjectTable<S>&>())),
-                decltype(bool(std::declval<B&>().find_pairs(std::declval<const ObjectTable<S>&>(),
-                                                            std::declval<bool (&)(std::int32_t, std::int32_t)>(),
-                                                            std::declval<BroadPhaseStats&>())))>> : std::true_type {};
+                decltype(std::declval<B&>().update(std::declval<const ObjectTable<S>&>(), std::declval<BroadPhaseStats&>(), int{})),
+                decltype(bool(std::declval<const B&>().find_pairs(std::declval<const ObjectTable<S>&>(),
+                                                                  std::declval<bool (&)(std::int32_t, std::int32_t)>(),
+                                                                  std::declval<BroadPhaseStats&>()))),
+                decltype(std::vector<PairTask>(std::declval<const B&>().split_pairs(std::declval<const ObjectTable<S>&>(), std::size_t{}))),
+                decltype(bool(std::declval<const B&>().find_pairs_part(std::declval<const ObjectTable<S>&>(), std::declval<const PairTask&>(),
+                                                                       std::declval<bool (&)(std::int32_t, std::int32_t)>(),
+                                                                       std::declval<BroadPhaseStats&>())))>> : std::true_type {};
 
 }  // namespace detail
 

@@ -18,6 +18,10 @@
 /// traversal skips node pairs with no active leaf on either side, so static–static and sleeping
 /// pairs are never reached. Pair traversal descends the larger node first (FCL's collisionRecurse
 /// rule, written iteratively), for the tree against itself and against another tree.
+///
+/// Thread safety: the const members of DynamicTree (query, self_pairs, cross_pairs and their
+/// split/seeded forms) only read: any number of threads may call them at once while no thread
+/// edits the tree (insert, remove, update, set_active, rebuild, maybe_rebuild).
 #pragma once
 
 #include "impact/broad/broad_phase.hpp"
@@ -25,6 +29,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <cstdint>
 #include <vector>
 
@@ -180,13 +185,27 @@ class DynamicTree {
     return true;
   }
 
+  /// A node pair where a pair traversal can start, and the node tests its ancestors in the
+  /// traversal took (counted by whichever part of a split traversal reaches it first).
+  struct PairSeed {
+    std::int32_t i = null, j = null;
+    std::uint64_t pre_bv_tests = 0;
+  };
+
   /// Calls visit(object_a, object_b) once for every unordered pair of leaves whose fat boxes
   /// overlap and of which at least one is active. Larger node first; stops when visit returns false.
   template <class Visit>
   bool self_pairs(Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null) return true;
+    return self_pairs_from(PairSeed{root_, root_, 0}, visit, st);
+  }
+
+  /// self_pairs restricted to the subtraversal below one seed of split_self_pairs().
+  template <class Visit>
+  bool self_pairs_from(const PairSeed& seed, Visit&& visit, BroadPhaseStats& st) const {
+    st.bv_tests += seed.pre_bv_tests;
     detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-    stack.push({root_, root_});
+    stack.push({seed.i, seed.j});
     while (!stack.empty()) {
       const auto [i, j] = stack.pop();
       const Node& ni = node(i);
@@ -207,13 +226,31 @@ class DynamicTree {
     return true;
   }
 
+  /// Splits self_pairs into at least `want` seeds where the tree allows (fewer for small trees):
+  /// running self_pairs_from on each seed in order visits exactly the pairs of self_pairs, in its
+  /// order, with the same work counters summed (the split itself counts nothing). Seeds are
+  /// independent: they can run on different threads. O(seeds) beyond the first levels' tests.
+  std::vector<PairSeed> split_self_pairs(std::size_t want) const {
+    std::vector<PairSeed> seeds;
+    if (root_ == null) return seeds;
+    seeds.push_back({root_, root_, 0});
+    return split_seeds(*this, std::move(seeds), want, true);
+  }
+
   /// Calls visit(object_of_this, object_of_other) for every leaf pair of the two trees whose fat
   /// boxes overlap and of which at least one is active. Larger node first.
   template <class Visit>
   bool cross_pairs(const DynamicTree& other, Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null || other.root_ == null) return true;
+    return cross_pairs_from(other, PairSeed{root_, other.root_, 0}, visit, st);
+  }
+
+  /// cross_pairs restricted to the subtraversal below one seed of split_cross_pairs().
+  template <class Visit>
+  bool cross_pairs_from(const DynamicTree& other, const PairSeed& seed, Visit&& visit, BroadPhaseStats& st) const {
+    st.bv_tests += seed.pre_bv_tests;
     detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-    stack.push({root_, other.root_});
+    stack.push({seed.i, seed.j});
     while (!stack.empty()) {
       const auto [i, j] = stack.pop();
       const Node& ni = node(i);
@@ -225,6 +262,14 @@ class DynamicTree {
         if (!visit(ni.object(), nj.object())) return false;
     }
     return true;
+  }
+
+  /// Splits cross_pairs like split_self_pairs splits self_pairs.
+  std::vector<PairSeed> split_cross_pairs(const DynamicTree& other, std::size_t want) const {
+    std::vector<PairSeed> seeds;
+    if (root_ == null || other.root_ == null) return seeds;
+    seeds.push_back({root_, other.root_, 0});
+    return split_seeds(other, std::move(seeds), want, false);
   }
 
   const Node& node(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)]; }
@@ -305,6 +350,51 @@ class DynamicTree {
       stack.push({i, nj.child[0]});
     }
     return true;
+  }
+
+  /// Replaces, round by round, every seed the traversal would expand by its children in the
+  /// traversal's pop order (the first child inherits the parent's test count), until there are
+  /// `want` seeds or nothing left to expand. Seeds the traversal would cull or report stay as they
+  /// are: their own tests are counted when they run.
+  std::vector<PairSeed> split_seeds(const DynamicTree& other, std::vector<PairSeed> seeds, std::size_t want, bool self) const {
+    for (int round = 0; round < 64 && seeds.size() < want; ++round) {
+      std::vector<PairSeed> next;
+      next.reserve(seeds.size() * 3);
+      bool grew = false;
+      for (const PairSeed& s : seeds) {
+        const Node& ni = node(s.i);
+        if (self && s.i == s.j) {
+          if (ni.is_leaf() || !ni.active) {
+            next.push_back(s);
+            continue;
+          }
+          // pop order of the pushes (c0,c1), (c1,c1), (c0,c0)
+          next.push_back({ni.child[0], ni.child[0], s.pre_bv_tests});
+          next.push_back({ni.child[1], ni.child[1], 0});
+          next.push_back({ni.child[0], ni.child[1], 0});
+          grew = true;
+          continue;
+        }
+        const Node& nj = other.node(s.j);
+        if (!(ni.active | nj.active) || !overlap(ni.box, nj.box) || (ni.is_leaf() && nj.is_leaf())) {
+          next.push_back(s);
+          continue;
+        }
+        // descend() pushes X1 then X0: X0 is popped first
+        const std::uint64_t pre = s.pre_bv_tests + 1;
+        if (nj.is_leaf() || (!ni.is_leaf() && size(ni.box) >= size(nj.box))) {
+          next.push_back({ni.child[0], s.j, pre});
+          next.push_back({ni.child[1], s.j, 0});
+        } else {
+          next.push_back({s.i, nj.child[0], pre});
+          next.push_back({s.i, nj.child[1], 0});
+        }
+        grew = true;
+      }
+      seeds.swap(next);
+      if (!grew) break;
+    }
+    return seeds;
   }
 
   std::int32_t allocate() {
@@ -483,11 +573,15 @@ class DynamicTree {
 };
 
 /// The hierarchical broad phase: two DynamicTrees, one over the static objects (tight leaves) and
-/// one over the dynamic ones (fattened leaves, sleeping ones flagged inactive). Per call, moved
-/// objects are refitted (reinserted only when they leave their fat box; unmoved ones are not
-/// touched), then the dynamic tree is traversed against itself and against the static tree, larger
-/// node first, skipping node pairs without an active object. Unlike the static/dynamic split,
-/// static objects can be added, removed or moved incrementally without a rebuild.
+/// one over the dynamic ones (fattened leaves, sleeping ones flagged inactive). At update() (the
+/// scene's first query after edits), moved objects are refitted (reinserted only when they leave
+/// their fat box; unmoved ones are not touched); find_pairs() then traverses the dynamic tree
+/// against itself and against the static tree, larger node first, skipping node pairs without an
+/// active object. Unlike the static/dynamic split, static objects can be added, removed or moved
+/// incrementally without a rebuild.
+///
+/// Thread safety: find_pairs, split_pairs and find_pairs_part are const and read only: any number
+/// of threads may run them at once between updates. Edits and update() must not overlap any call.
 template <class S>
 class HierarchicalBroadPhase {
  public:
@@ -515,23 +609,47 @@ class HierarchicalBroadPhase {
   }
   void filter_changed(std::int32_t, const ObjectTable<S>&) {}
 
+  /// Applies the moves since the last update: refits (reinsertions for objects that left their fat
+  /// box) and rebuilds of degraded trees. Serial (tree edits); `threads` is unused.
+  void update(const ObjectTable<S>& t, BroadPhaseStats& st, int /*threads*/) { flush(t, st); }
+
   template <class Visit>
-  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
-    flush(t, st);
-    const auto leaf_pair = [&](std::int32_t a, std::int32_t b) {
-      if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
-      if (!detail::test_pair(t, a, b, st)) return true;
-      ++st.pairs_found;
-      return bool(visit(a, b));
-    };
+  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
+    const auto leaf_pair = pair_filter(t, visit, st);
     if (!dynamic_.self_pairs(leaf_pair, st)) return false;
     return dynamic_.cross_pairs(static_, leaf_pair, st);
+  }
+
+  /// Parts of find_pairs (broad_phase.hpp): seeds of the dynamic tree's self traversal, then of
+  /// its traversal against the static tree.
+  std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
+    std::vector<PairTask> tasks;
+    for (const auto& seed : dynamic_.split_self_pairs(want)) tasks.push_back({0, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
+    for (const auto& seed : dynamic_.split_cross_pairs(static_, want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
+    return tasks;
+  }
+  template <class Visit>
+  bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
+    const auto leaf_pair = pair_filter(t, visit, st);
+    const typename DynamicTree<S>::PairSeed seed{task.i, task.j, task.pre_bv_tests};
+    return task.kind == 0 ? dynamic_.self_pairs_from(seed, leaf_pair, st) : dynamic_.cross_pairs_from(static_, seed, leaf_pair, st);
   }
 
   const DynamicTree<S>& static_tree() const { return static_; }
   const DynamicTree<S>& dynamic_tree() const { return dynamic_; }
 
  private:
+  /// The leaf-pair visitor of the traversals: rules 1 to 3 of the pair rule, then visit.
+  template <class Visit>
+  static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
+    return [&t, &visit, &st](std::int32_t a, std::int32_t b) {
+      if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
+      if (!detail::test_pair(t, a, b, st)) return true;
+      ++st.pairs_found;
+      return bool(visit(a, b));
+    };
+  }
+
   void grow(std::int32_t slot) {
     if (static_cast<std::size_t>(slot) >= leaf_.size()) {
       leaf_.resize(static_cast<std::size_t>(slot) + 1, DynamicTree<S>::null);

@@ -16,6 +16,19 @@
 /// negative or non-finite sizes, unknown or duplicate ids, removing twice); a throwing call leaves
 /// the scene unchanged. Pair semantics are those of broad_phase.hpp: static–static and sleeping
 /// pairs never appear, filtered pairs are dropped before any geometry test.
+///
+/// Thread safety: the queries (find_pairs, for_each_pair, collide, any_collision and the const
+/// accessors) are const and may be called from any number of threads at once on a scene that no
+/// thread is editing. Edits (add, remove, set_pose, set_position, set_sleeping, set_filter,
+/// ignore_pair, unignore_pair) and update() must not overlap any other call on the same scene.
+/// The broad phase's deferred work (refits, rebuilds, cached candidates) is done once, by the first
+/// query after edits (the others wait for it) or ahead of time by update().
+///
+/// Threads: find_pairs and collide run on SceneOptions::threads threads (default: the hardware
+/// concurrency; 1 is the serial path) when the scene holds at least parallel_min_objects objects.
+/// The answer never depends on the thread count: the same pairs (and contacts) in the same order,
+/// and the same work counters, as the serial path. for_each_pair, whose visitor is the caller's,
+/// is always serial.
 #pragma once
 
 #include "impact/broad/all_pairs.hpp"
@@ -23,12 +36,45 @@
 #include "impact/broad/narrow_dispatch.hpp"
 #include "impact/broad/static_dynamic.hpp"
 #include "impact/core/error.hpp"
+#include "impact/core/parallel.hpp"
 
+#include <atomic>
+#include <limits>
+#include <mutex>
 #include <string>
 #include <unordered_map>
 #include <variant>
 
 namespace impact {
+
+namespace detail {
+/// "Edits are pending" and the lock under which the first query after them applies them. Copying
+/// a scene copies the flag (a new lock).
+class PendingEdits {
+ public:
+  PendingEdits() = default;
+  PendingEdits(const PendingEdits& o) : pending_(o.pending_.load()) {}
+  PendingEdits& operator=(const PendingEdits& o) {
+    pending_.store(o.pending_.load());
+    return *this;
+  }
+  /// An edit happened (edits never run concurrently with queries).
+  void mark() { pending_.store(true, std::memory_order_relaxed); }
+  /// Runs apply() once if edits are pending; concurrent callers wait for it.
+  template <class F>
+  void apply(F&& f) {
+    if (!pending_.load(std::memory_order_acquire)) return;
+    std::lock_guard<std::mutex> lock(m_);
+    if (!pending_.load(std::memory_order_relaxed)) return;
+    f();
+    pending_.store(false, std::memory_order_release);
+  }
+
+ private:
+  std::atomic<bool> pending_{false};
+  std::mutex m_;
+};
+}  // namespace detail
 
 /// Static objects never move (moving one is allowed but rebuilds the static tree); dynamic ones
 /// may move every step.
@@ -48,6 +94,11 @@ struct SceneOptions {
   BroadPhaseKind broad_phase = BroadPhaseKind::StaticDynamic;
   DynamicTreeOptions tree{};  ///< the incremental trees (Hierarchical, and StaticDynamic's dynamic part)
   int static_leaf_size = 2;   ///< objects per leaf of StaticDynamic's static tree
+  /// Threads of find_pairs, collide and the deferred broad-phase work: <= 0 the hardware
+  /// concurrency, 1 the serial path. Results do not depend on it.
+  int threads = 0;
+  /// Scenes with fewer objects run serially (a parallel call costs a few microseconds).
+  std::size_t parallel_min_objects = 1000;
 };
 
 /// Two objects, a < b.
@@ -143,6 +194,7 @@ class Scene {
     ids_.emplace(id, slot);
     ++count_;
     std::visit([&](auto& b) { b.insert(slot, table_); }, broad_);
+    pending_.mark();
   }
 
   /// Removes an object. Throws InvalidInput when the id is unknown (also when removed already).
@@ -150,6 +202,7 @@ class Scene {
     const std::int32_t slot = slot_of(id, "Scene::remove");
     const auto s = static_cast<std::size_t>(slot);
     std::visit([&](auto& b) { b.remove(slot, table_); }, broad_);
+    pending_.mark();
     if (table_.ignore_count(slot)) {
       for (auto it = table_.ignored.begin(); it != table_.ignored.end();) {
         const auto x = std::int32_t(*it >> 32), y = std::int32_t(*it & 0xffffffffu);
@@ -181,6 +234,7 @@ class Scene {
     objects_[s].pose = pose;
     table_.box(slot) = box;
     std::visit([&](auto& b) { b.moved(slot, table_); }, broad_);
+    pending_.mark();
   }
   /// Moves an object by translation only (the rotation is kept).
   void set_position(ObjectId id, const Vec3<S>& p) {
@@ -198,6 +252,7 @@ class Scene {
     if (nf == f) return;
     f = nf;
     std::visit([&](auto& b) { b.activity_changed(slot, table_); }, broad_);
+    pending_.mark();
   }
 
   /// Replaces an object's group/mask filter.
@@ -205,6 +260,7 @@ class Scene {
     const std::int32_t slot = slot_of(id, "Scene::set_filter");
     table_.filter(slot) = filter;
     std::visit([&](auto& b) { b.filter_changed(slot, table_); }, broad_);
+    pending_.mark();
   }
 
   /// Never report the pair {a, b} (forgotten when either object is removed). Throws for unknown
@@ -236,18 +292,32 @@ class Scene {
   const RigidTransform<S>& pose(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::pose"))].pose; }
   const Shape<S>& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
 
+  /// Applies the edits since the last query to the broad phase now (refits, rebuilds, cached
+  /// candidates), adding its work to *stats; otherwise the first query after edits does it. An
+  /// edit-class call: not concurrent with any other call. Useful before querying from many threads.
+  void update(BroadPhaseStats* stats = nullptr) {
+    BroadPhaseStats st;
+    apply_pending(st);
+    if (stats) *stats += st;
+  }
+
+  /// Sets SceneOptions::threads (an edit-class call).
+  void set_threads(int threads) { opt_.threads = threads; }
+  /// The thread count the next find_pairs or collide will use (1 below parallel_min_objects).
+  int query_threads() const { return count_ < opt_.parallel_min_objects ? 1 : resolve_threads(opt_.threads); }
+
   /// Calls visit(ObjectId a, ObjectId b) -> bool (a < b) for every pair of the pair rule
   /// (broad_phase.hpp), each once, without allocating; stops when visit returns false. Returns
-  /// false when stopped.
+  /// false when stopped. Serial (visit runs on the calling thread).
   template <class Visit>
-  bool for_each_pair(Visit&& visit, BroadPhaseStats& stats) {
+  bool for_each_pair(Visit&& visit, BroadPhaseStats& stats) const {
+    apply_pending(stats);
     return std::visit(
-        [&](auto& b) {
+        [&](const auto& b) {
           return b.find_pairs(
               table_,
               [&](std::int32_t x, std::int32_t y) {
-                ObjectId ia = objects_[static_cast<std::size_t>(x)].id, ib = objects_[static_cast<std::size_t>(y)].id;
-                if (ib < ia) std::swap(ia, ib);
+                const auto [ia, ib] = ids_of(x, y);
                 return bool(visit(ia, ib));
               },
               stats);
@@ -256,44 +326,117 @@ class Scene {
   }
 
   /// The broad-phase pairs: objects whose world AABBs overlap, after the skip rules and filters.
-  PairResult find_pairs() {
+  /// In the same order for every thread count.
+  PairResult find_pairs() const {
     PairResult r;
-    for_each_pair(
-        [&](ObjectId a, ObjectId b) {
-          r.pairs.push_back({a, b});
-          return true;
+    apply_pending(r.stats);
+    const int threads = query_threads();
+    if (threads <= 1) {
+      std::visit(
+          [&](const auto& b) {
+            b.find_pairs(
+                table_,
+                [&](std::int32_t x, std::int32_t y) {
+                  const auto [ia, ib] = ids_of(x, y);
+                  r.pairs.push_back({ia, ib});
+                  return true;
+                },
+                r.stats);
+          },
+          broad_);
+      return r;
+    }
+    struct Part {
+      std::vector<ObjectPair> pairs;
+      BroadPhaseStats stats;
+    };
+    std::visit(
+        [&](const auto& b) {
+          const std::vector<PairTask> tasks = b.split_pairs(table_, 8 * std::size_t(threads));
+          std::vector<Part> parts(tasks.size());
+          parallel_for(tasks.size(), threads, [&](std::size_t k) {
+            Part& part = parts[k];
+            b.find_pairs_part(
+                table_, tasks[k],
+                [&](std::int32_t x, std::int32_t y) {
+                  const auto [ia, ib] = ids_of(x, y);
+                  part.pairs.push_back({ia, ib});
+                  return true;
+                },
+                part.stats);
+          });
+          std::size_t total = 0;
+          for (const Part& p : parts) total += p.pairs.size();
+          r.pairs.reserve(total);
+          for (const Part& p : parts) {
+            r.pairs.insert(r.pairs.end(), p.pairs.begin(), p.pairs.end());
+            r.stats += p.stats;
+          }
         },
-        r.stats);
+        broad_);
     return r;
   }
 
   /// Broad phase, then the narrow phase (narrow_dispatch.hpp) on each candidate pair: the pairs
   /// whose shapes touch, with contacts when asked for. stop_at_first stops both phases at the first
-  /// colliding pair.
-  SceneCollideResult<S> collide(const SceneCollideOptions& options = {}) {
+  /// colliding pair. The same pairs, contacts and counters (in the same order) for every thread
+  /// count; with stop_at_first, the pair the serial path would find first.
+  SceneCollideResult<S> collide(const SceneCollideOptions& options = {}) const {
     SceneCollideResult<S> r;
-    for_each_pair_slots(
-        [&](std::int32_t x, std::int32_t y) {
-          const Object* oa = &objects_[static_cast<std::size_t>(x)];
-          const Object* ob = &objects_[static_cast<std::size_t>(y)];
-          if (ob->id < oa->id) std::swap(oa, ob);
-          ++r.stats.narrow_tests;
-          ShapeContact<S> c;
-          if (!shapes_intersect(oa->shape, oa->pose, ob->shape, ob->pose, options.contacts ? &c : nullptr)) return true;
-          r.colliding = true;
-          r.pairs.push_back({oa->id, ob->id});
-          if (options.contacts) {
-            ++r.stats.contacts;
-            r.contacts.push_back({oa->id, ob->id, c});
+    apply_pending(r.stats);
+    const int threads = query_threads();
+    if (threads <= 1) {
+      std::visit(
+          [&](const auto& b) {
+            b.find_pairs(
+                table_, [&](std::int32_t x, std::int32_t y) { return narrow_pair(x, y, options, r.pairs, r.contacts, r.stats); },
+                r.stats);
+          },
+          broad_);
+      r.colliding = !r.pairs.empty();
+      return r;
+    }
+    struct Part {
+      std::vector<ObjectPair> pairs;
+      std::vector<SceneContact<S>> contacts;
+      BroadPhaseStats stats;
+    };
+    std::visit(
+        [&](const auto& b) {
+          const std::vector<PairTask> tasks = b.split_pairs(table_, 8 * std::size_t(threads));
+          std::vector<Part> parts(tasks.size());
+          // With stop_at_first, the lowest part that found a pair: later parts give up (their
+          // results would be dropped); earlier ones run to their end or their own first pair.
+          std::atomic<std::size_t> first_hit{std::numeric_limits<std::size_t>::max()};
+          parallel_for(tasks.size(), threads, [&](std::size_t k) {
+            if (options.stop_at_first && first_hit.load(std::memory_order_relaxed) < k) return;
+            Part& part = parts[k];
+            b.find_pairs_part(
+                table_, tasks[k],
+                [&](std::int32_t x, std::int32_t y) {
+                  if (options.stop_at_first && first_hit.load(std::memory_order_relaxed) < k) return false;
+                  if (narrow_pair(x, y, options, part.pairs, part.contacts, part.stats)) return true;
+                  std::size_t f = first_hit.load(std::memory_order_relaxed);
+                  while (k < f && !first_hit.compare_exchange_weak(f, k, std::memory_order_relaxed)) {
+                  }
+                  return false;
+                },
+                part.stats);
+          });
+          for (const Part& p : parts) {
+            r.pairs.insert(r.pairs.end(), p.pairs.begin(), p.pairs.end());
+            r.contacts.insert(r.contacts.end(), p.contacts.begin(), p.contacts.end());
+            r.stats += p.stats;
+            if (options.stop_at_first && !p.pairs.empty()) break;
           }
-          return !options.stop_at_first;
         },
-        r.stats);
+        broad_);
+    r.colliding = !r.pairs.empty();
     return r;
   }
 
   /// True when any two objects touch (stops at the first pair found).
-  bool any_collision(BroadPhaseStats* stats = nullptr) {
+  bool any_collision(BroadPhaseStats* stats = nullptr) const {
     SceneCollideOptions o;
     o.stop_at_first = true;
     const auto r = collide(o);
@@ -325,11 +468,40 @@ class Scene {
           if (!table_.is_static(sb)) bp.filter_changed(sb, table_);
         },
         broad_);
+    pending_.mark();
   }
 
-  template <class Visit>
-  bool for_each_pair_slots(Visit&& visit, BroadPhaseStats& stats) {
-    return std::visit([&](auto& b) { return b.find_pairs(table_, visit, stats); }, broad_);
+  /// Applies pending edits to the broad phase (once; concurrent queries wait for it).
+  void apply_pending(BroadPhaseStats& stats) const {
+    pending_.apply([&] {
+      const int threads = query_threads();
+      std::visit([&](auto& b) { b.update(table_, stats, threads); }, broad_);
+    });
+  }
+
+  /// The ids of slots x and y, smaller first.
+  std::pair<ObjectId, ObjectId> ids_of(std::int32_t x, std::int32_t y) const {
+    ObjectId ia = objects_[static_cast<std::size_t>(x)].id, ib = objects_[static_cast<std::size_t>(y)].id;
+    if (ib < ia) std::swap(ia, ib);
+    return {ia, ib};
+  }
+
+  /// The narrow phase of one candidate pair, appended to pairs/contacts when the shapes touch.
+  /// Returns whether the traversal goes on (false: stop at this first colliding pair).
+  bool narrow_pair(std::int32_t x, std::int32_t y, const SceneCollideOptions& options, std::vector<ObjectPair>& pairs,
+                   std::vector<SceneContact<S>>& contacts, BroadPhaseStats& stats) const {
+    const Object* oa = &objects_[static_cast<std::size_t>(x)];
+    const Object* ob = &objects_[static_cast<std::size_t>(y)];
+    if (ob->id < oa->id) std::swap(oa, ob);
+    ++stats.narrow_tests;
+    ShapeContact<S> c;
+    if (!shapes_intersect(oa->shape, oa->pose, ob->shape, ob->pose, options.contacts ? &c : nullptr)) return true;
+    pairs.push_back({oa->id, ob->id});
+    if (options.contacts) {
+      ++stats.contacts;
+      contacts.push_back({oa->id, ob->id, c});
+    }
+    return !options.stop_at_first;
   }
 
   std::int32_t slot_of(ObjectId id, const char* where) const {
@@ -393,7 +565,9 @@ class Scene {
   std::unordered_map<ObjectId, std::int32_t> ids_;
   std::vector<std::int32_t> free_;
   std::size_t count_ = 0;
-  std::variant<AllPairsBroadPhase<S>, StaticDynamicBroadPhase<S>, HierarchicalBroadPhase<S>> broad_;
+  /// Mutable: the first query after edits applies them (apply_pending, under pending_'s lock).
+  mutable std::variant<AllPairsBroadPhase<S>, StaticDynamicBroadPhase<S>, HierarchicalBroadPhase<S>> broad_;
+  mutable detail::PendingEdits pending_;
 };
 
 }  // namespace impact

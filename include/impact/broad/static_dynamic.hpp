@@ -15,11 +15,19 @@
 /// dynamic pairs + output) per call instead of O(static * dynamic + dynamic^2). Adding, removing or
 /// moving a static object marks the static tree for a rebuild at the next call, which also
 /// re-queries every dynamic object: static objects are meant to stay put.
+///
+/// Everything cached (refits, static candidates, tight-box hits) is brought up to date by update(),
+/// which the scene runs once after edits; find_pairs then only reads, so any number of threads may
+/// run it (and split_pairs / find_pairs_part) at once between edits. Edits and update() must not
+/// overlap any other call.
 #pragma once
 
 #include "impact/broad/dynamic_tree.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/traverse.hpp"
+#include "impact/core/parallel.hpp"
+
+#include <algorithm>
 
 namespace impact {
 
@@ -105,8 +113,10 @@ class StaticDynamicBroadPhase {
       cand_epoch_[static_cast<std::size_t>(slot)] = 0;
   }
 
-  template <class Visit>
-  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) {
+  /// Applies the edits since the last update: refits and reinsertions of moved objects, rebuilds;
+  /// then the static-tree queries of the objects whose fat box changed (on `threads` threads,
+  /// each object writing only its own candidates) and the tight-box re-tests of those that moved.
+  void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
     flush(t, st);
     // Dynamic against static. Objects whose fat box changed query the static tree, in Morton
     // order of their centres so that consecutive queries walk the same part of the tree (the
@@ -120,66 +130,121 @@ class StaticDynamicBroadPhase {
       for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box(a).center(), root.min, scale);
       std::sort(need_.begin(), need_.end());
     }
-    for (const auto& item : need_) {
-      const std::int32_t a = item.second;
-      const auto sa = static_cast<std::size_t>(a);
-      std::vector<std::int32_t>& cand = cand_[sa];
-      cand.clear();
-      ++st.static_queries;
-      const Aabb<S>& fat = dyn_.box(leaf_[sa]);
-      traverse(
-          static_tree_,
-          [&](const Aabb<S>& bv) {
-            ++st.bv_tests;
-            return overlap(bv, fat);
-          },
-          [&](std::int32_t k) {
-            const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
-            ++st.bv_tests;
-            if (!overlap(t.box(b), fat)) return true;
-            if (t.accepts(a, b))
-              cand.push_back(b);
-            else
-              ++st.pairs_filtered;
-            return true;
-          });
-      cand_epoch_[sa] = epoch_;
-      stale_[sa] = 1;
-    }
-    // Hits from the tight box, recomputed only for objects that moved.
-    for (const std::int32_t a : dynamics_) {
-      if (!t.active(a)) continue;  // sleeping: its static pairs are inactive pairs
+    for_chunks(need_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) { query_static(t, need_[k].second, cs); });
+    // Hits from the tight box, recomputed only for active objects that moved (sleeping ones'
+    // static pairs are inactive pairs: they wait until the object wakes).
+    stale_list_.clear();
+    for (const std::int32_t a : dynamics_)
+      if (t.active(a) && stale_[static_cast<std::size_t>(a)]) stale_list_.push_back(a);
+    for_chunks(stale_list_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
+      const std::int32_t a = stale_list_[k];
       const auto sa = static_cast<std::size_t>(a);
       std::vector<std::int32_t>& hits = hits_[sa];
-      if (stale_[sa]) {
-        hits.clear();
-        const Aabb<S>& box = t.box(sa);
-        for (const std::int32_t b : cand_[sa]) {
-          ++st.pairs_tested;
-          if (overlap(box, t.box(b))) hits.push_back(b);
-        }
-        stale_[sa] = 0;
+      hits.clear();
+      const Aabb<S>& box = t.box(sa);
+      for (const std::int32_t b : cand_[sa]) {
+        ++cs.pairs_tested;
+        if (overlap(box, t.box(b))) hits.push_back(b);
       }
-      for (const std::int32_t b : hits) {
-        ++st.pairs_found;
-        if (!visit(a, b)) return false;
-      }
-    }
-    // Dynamic against dynamic.
-    return dyn_.self_pairs(
-        [&](std::int32_t a, std::int32_t b) {
-          if (!t.active(a) && !t.active(b)) return true;
-          if (!detail::test_pair(t, a, b, st)) return true;
-          ++st.pairs_found;
-          return bool(visit(a, b));
-        },
-        st);
+      stale_[sa] = 0;
+    });
+  }
+
+  template <class Visit>
+  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
+    if (!static_pairs(t, 0, dynamics_.size(), visit, st)) return false;
+    return dyn_.self_pairs(pair_filter(t, visit, st), st);
+  }
+
+  /// Parts of find_pairs: ranges of the dynamic objects' static pairs, then seeds of the dynamic
+  /// tree's self traversal.
+  std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
+    std::vector<PairTask> tasks;
+    const std::size_t n = dynamics_.size();
+    const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
+    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
+    for (const auto& seed : dyn_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
+    return tasks;
+  }
+  template <class Visit>
+  bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
+    if (task.kind == 0) return static_pairs(t, task.begin, task.end, visit, st);
+    return dyn_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
   const DynamicTree<S>& dynamic_tree() const { return dyn_; }
   const Bvh<Aabb<S>>& static_tree() const { return static_tree_; }
 
  private:
+  /// The cached static pairs of dynamics_[begin, end) (active ones).
+  template <class Visit>
+  bool static_pairs(const ObjectTable<S>& t, std::size_t begin, std::size_t end, Visit& visit, BroadPhaseStats& st) const {
+    for (std::size_t p = begin; p < end; ++p) {
+      const std::int32_t a = dynamics_[p];
+      if (!t.active(a)) continue;
+      for (const std::int32_t b : hits_[static_cast<std::size_t>(a)]) {
+        ++st.pairs_found;
+        if (!visit(a, b)) return false;
+      }
+    }
+    return true;
+  }
+
+  /// The dynamic tree's leaf-pair visitor: rules 1 to 3 of the pair rule, then visit.
+  template <class Visit>
+  static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
+    return [&t, &visit, &st](std::int32_t a, std::int32_t b) {
+      if (!t.active(a) && !t.active(b)) return true;
+      if (!detail::test_pair(t, a, b, st)) return true;
+      ++st.pairs_found;
+      return bool(visit(a, b));
+    };
+  }
+
+  /// Static-tree query of dynamic object a with its fat box: its accepted candidates.
+  void query_static(const ObjectTable<S>& t, std::int32_t a, BroadPhaseStats& st) {
+    const auto sa = static_cast<std::size_t>(a);
+    std::vector<std::int32_t>& cand = cand_[sa];
+    cand.clear();
+    ++st.static_queries;
+    const Aabb<S>& fat = dyn_.box(leaf_[sa]);
+    traverse(
+        static_tree_,
+        [&](const Aabb<S>& bv) {
+          ++st.bv_tests;
+          return overlap(bv, fat);
+        },
+        [&](std::int32_t k) {
+          const std::int32_t b = static_slots_[static_cast<std::size_t>(k)];
+          ++st.bv_tests;
+          if (!overlap(t.box(b), fat)) return true;
+          if (t.accepts(a, b))
+            cand.push_back(b);
+          else
+            ++st.pairs_filtered;
+          return true;
+        });
+    cand_epoch_[sa] = epoch_;
+    stale_[sa] = 1;
+  }
+
+  /// body(k, stats) for k in [0, n), on `threads` threads when n is large enough to pay; the
+  /// counters of every chunk added to st (integer sums: the same totals for any thread count).
+  template <class Body>
+  static void for_chunks(std::size_t n, int threads, BroadPhaseStats& st, Body&& body) {
+    constexpr std::size_t grain = 64;
+    if (threads <= 1 || n < 2 * grain) {
+      for (std::size_t k = 0; k < n; ++k) body(k, st);
+      return;
+    }
+    std::vector<BroadPhaseStats> chunk_stats((n + grain - 1) / grain);
+    parallel_for_ranges(n, grain, threads, [&](std::size_t b, std::size_t e) {
+      BroadPhaseStats& cs = chunk_stats[b / grain];
+      for (std::size_t k = b; k < e; ++k) body(k, cs);
+    });
+    for (const auto& cs : chunk_stats) st += cs;
+  }
+
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
     if (n > leaf_.size()) {
@@ -250,7 +315,8 @@ class StaticDynamicBroadPhase {
   std::vector<std::vector<std::int32_t>> hits_;               // dynamic slot -> those overlapping its tight box
   std::vector<std::uint32_t> cand_epoch_;                     // cand_ valid when equal to epoch_
   std::vector<std::uint8_t> stale_;                           // hits_ must be recomputed from cand_
-  std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query
+  std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query (update's scratch)
+  std::vector<std::int32_t> stale_list_;                      // active slots whose hits_ update recomputes (update's scratch)
   std::uint32_t epoch_ = 1;
 };
 

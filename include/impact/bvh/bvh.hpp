@@ -4,6 +4,9 @@
 /// node's two children are adjacent (left = first, right = first + 1); a leaf covers the range
 /// [first, first + count) of `primitives`, a permutation of the primitive ids given to the builder.
 /// Builders (build_top_down.hpp) fill it, refit.hpp updates it, traverse*.hpp walk it.
+///
+/// Thread safety: traversals take a `const Bvh&` and only read: any number of threads may walk one
+/// tree at once. refit() and rebuilding write: not concurrently with any traversal of that tree.
 #pragma once
 
 #include "impact/fit/bv_traits.hpp"

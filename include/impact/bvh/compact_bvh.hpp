@@ -13,6 +13,9 @@
 /// that is conservative on the source tree is conservative here and tests a superset of the
 /// primitives, in leaves no larger than leaf_size (or the source's leaves, if larger). Rebuild
 /// it when the source tree changes (refit).
+///
+/// Thread safety: immutable after construction; any number of threads may cast through one
+/// CompactBvh at once. Rebuilding (assigning a new one) must not overlap those casts.
 #pragma once
 
 #include "impact/bvh/bvh.hpp"

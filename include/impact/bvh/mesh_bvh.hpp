@@ -6,6 +6,11 @@
 /// its triangles' vertices, and keeps only the leaf order of the triangles (their rows of F): a
 /// triangle's vertices are read from the copied mesh. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
+///
+/// Thread safety: every const member and every query taking a `const MeshBvh&` (collides,
+/// collide, self_collide, ray casts, closest points, distance grids built on it) only reads, so
+/// any number of threads may query one tree at once. set_vertices() (and assignment) edits: it
+/// must not overlap any other call on the same tree.
 #pragma once
 
 #include "impact/bvh/build_bottom_up.hpp"

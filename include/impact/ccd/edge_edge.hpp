@@ -13,8 +13,8 @@ namespace impact {
 
 /// Continuous segment-segment test over linear motion.
 /// Inputs: edge a = (a0, a1) and edge b = (b0, b1) at t = 0 (suffix _t0) and t = 1 (suffix _t1);
-/// coordinates finite and below 1e100 in magnitude, options in the ranges of CcdOptions (both
-/// checked in every build: InvalidInput otherwise). Any configuration is accepted: parallel or
+/// coordinates finite (any magnitude: the test is scale-free, see CcdOptions), options in the
+/// ranges of CcdOptions (both checked in every build: InvalidInput otherwise). Any configuration is accepted: parallel or
 /// collinear edges, shared end points, zero-length edges, no motion, coplanar motion.
 /// Output (CcdResult): hit == false proves that for all t in [0, opt.t_max] the distance between
 /// the closed segments is greater than opt.min_separation. hit == true comes with a toi no later

@@ -8,6 +8,11 @@
 /// vertex-face and edge-edge tests (vertex_face_ccd, edge_edge_ccd) on the distinct primitive
 /// pairs they give. Self CCD skips adjacent primitives: a vertex against a face it belongs to and
 /// two edges sharing a vertex. Conservative like the primitive tests: no contact is missed.
+///
+/// Threads: mesh_ccd and mesh_self_ccd run their primitive tests on a `threads` count (the
+/// answer does not depend on it); they only read the motions and trees, so concurrent calls on
+/// shared trees are safe. SweptMeshBvh::refit and build edit: not concurrently with queries on
+/// the same tree.
 #pragma once
 
 #include "impact/bvh/build_top_down.hpp"
@@ -16,6 +21,7 @@
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/swept_volume.hpp"
 #include "impact/ccd/vertex_face.hpp"
+#include "impact/core/parallel.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
 
 #include <algorithm>
@@ -42,7 +48,8 @@ struct MeshMotion {
 };
 
 /// Validates a step (same vertex count at both ends, finite coordinates below 1e100 in magnitude,
-/// the range of the primitive tests, indices in range) and returns its view. Throws InvalidInput.
+/// so that the swept boxes grown by a minimum separation stay finite, indices in range) and
+/// returns its view. Throws InvalidInput.
 template <class S>
 MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end, const Faces& faces) {
   validate_mesh(start, faces, "mesh motion (start)");
@@ -54,7 +61,7 @@ MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end,
         if (!(std::abs(static_cast<double>((*V)(i, k))) < detail::kCcdMaxCoordinate))
           throw InvalidInput(std::string("mesh motion (") + (V == &start ? "start" : "end") + "): vertex " + std::to_string(i) +
                              " has coordinate " + detail::ccd_number(static_cast<double>((*V)(i, k))) +
-                             ", outside the range |x| < 1e100 of the CCD tests");
+                             ", outside the range |x| < 1e100 of the mesh CCD");
   return {&start, &end, &faces};
 }
 
@@ -180,44 +187,59 @@ struct MeshCcdCandidates {
   }
 };
 
+/// The primitive tests of the deduplicated candidates: vertex-face pairs in order, then edge-edge
+/// pairs, on `threads` threads (chunks of candidates, each with its own contact list, joined in
+/// candidate order): the contacts, their order and the counters do not depend on the thread count.
 template <class S>
-MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt) {
+MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt,
+                              int threads) {
   c.finish();
-  MeshCcdResult<S> r;
-  r.toi = static_cast<S>(opt.t_max);
-  auto record = [&](MeshCcdContact<S> k) {
-    r.hit = true;
-    r.toi = std::min(r.toi, k.result.toi);
-    r.contacts.push_back(k);
+  const std::size_t nvf = c.vf.size(), n = nvf + c.ee.size();
+  // test k (vertex-face k for k < nvf, else edge-edge k - nvf); appends a hit to out
+  const auto test = [&](std::size_t k, std::vector<MeshCcdContact<S>>& out) {
+    if (k < nvf) {
+      const auto& [mesh, v, f] = c.vf[k];
+      const MeshMotion<S>& mv = mesh == 0 ? a : b;
+      const MeshMotion<S>& mf = mesh == 0 ? b : a;
+      const Faces& F = *mf.faces;
+      const auto res = vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)),
+                                       mf.p1(F(f, 1)), mf.p1(F(f, 2)), opt);
+      if (!res.hit) return;
+      MeshCcdContact<S> h;
+      h.kind = MeshCcdKind::VertexFace;
+      h.vertex_mesh = mesh;
+      h.vertex = v;
+      h.face = f;
+      h.result = res;
+      out.push_back(h);
+    } else {
+      const auto& [a0, a1, b0, b1] = c.ee[k - nvf];
+      const auto res = edge_edge_ccd(a.p0(a0), a.p0(a1), b.p0(b0), b.p0(b1), a.p1(a0), a.p1(a1), b.p1(b0), b.p1(b1), opt);
+      if (!res.hit) return;
+      MeshCcdContact<S> h;
+      h.kind = MeshCcdKind::EdgeEdge;
+      h.a0 = a0, h.a1 = a1, h.b0 = b0, h.b1 = b1;
+      h.result = res;
+      out.push_back(h);
+    }
   };
-  for (const auto& [mesh, v, f] : c.vf) {
-    const MeshMotion<S>& mv = mesh == 0 ? a : b;
-    const MeshMotion<S>& mf = mesh == 0 ? b : a;
-    const Faces& F = *mf.faces;
-    const auto res = vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)),
-                                     mf.p1(F(f, 1)), mf.p1(F(f, 2)), opt);
-    ++r.primitive_tests;
-    if (res.hit) {
-      MeshCcdContact<S> k;
-      k.kind = MeshCcdKind::VertexFace;
-      k.vertex_mesh = mesh;
-      k.vertex = v;
-      k.face = f;
-      k.result = res;
-      record(k);
-    }
+  MeshCcdResult<S> r;
+  r.primitive_tests = n;
+  constexpr std::size_t grain = 512;
+  const int t = resolve_threads(threads);
+  if (t <= 1 || n < 2 * grain) {
+    for (std::size_t k = 0; k < n; ++k) test(k, r.contacts);
+  } else {
+    std::vector<std::vector<MeshCcdContact<S>>> parts((n + grain - 1) / grain);
+    parallel_for_ranges(n, grain, t, [&](std::size_t begin, std::size_t end) {
+      auto& out = parts[begin / grain];
+      for (std::size_t k = begin; k < end; ++k) test(k, out);
+    });
+    for (const auto& p : parts) r.contacts.insert(r.contacts.end(), p.begin(), p.end());
   }
-  for (const auto& [a0, a1, b0, b1] : c.ee) {
-    const auto res = edge_edge_ccd(a.p0(a0), a.p0(a1), b.p0(b0), b.p0(b1), a.p1(a0), a.p1(a1), b.p1(b0), b.p1(b1), opt);
-    ++r.primitive_tests;
-    if (res.hit) {
-      MeshCcdContact<S> k;
-      k.kind = MeshCcdKind::EdgeEdge;
-      k.a0 = a0, k.a1 = a1, k.b0 = b0, k.b1 = b1;
-      k.result = res;
-      record(k);
-    }
-  }
+  r.toi = static_cast<S>(opt.t_max);
+  for (const auto& h : r.contacts) r.toi = std::min(r.toi, h.result.toi);
+  r.hit = !r.contacts.empty();
   return r;
 }
 
@@ -227,11 +249,15 @@ MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, cons
 /// (built for a minimum separation >= opt.min_separation, then refitted). Returns every vertex-face pair (in
 /// both directions) and edge-edge pair that comes within opt.min_separation, with the earliest
 /// toi. No false negatives (see CcdResult); hits may include near misses within the tolerance.
+///
+/// `threads`: threads of the primitive tests (<= 0 the hardware concurrency, 1 serial; fewer than
+/// 1,024 candidate pairs run serially). The contacts, their order, toi and the counters are the
+/// same for every thread count.
 /// Throws InvalidInput (before any work) on bad options (see CcdOptions), a tree built for another
 /// mesh, or a tree built for a smaller minimum separation than opt.min_separation.
 template <class S>
 MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, const MeshMotion<S>& b, const SweptMeshBvh<S>& tb,
-                          const CcdOptions& opt = {}) {
+                          const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_ccd", opt, a, ta, "of mesh a");
   detail::validate_mesh_ccd("mesh_ccd", opt, b, tb, "of mesh b");
   detail::MeshCcdCandidates c;
@@ -243,7 +269,7 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
         c.add_triangle_pair(*a.faces, fa, *b.faces, fb, false);
         return true;
       });
-  auto r = detail::run_mesh_ccd(c, a, b, opt);
+  auto r = detail::run_mesh_ccd(c, a, b, opt, threads);
   r.triangle_pairs = pairs;
   return r;
 }
@@ -251,8 +277,9 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
 /// Self CCD of one deforming mesh over one step, skipping adjacent primitives (a vertex against a
 /// face containing it, edges sharing a vertex). Vertex-face contacts have vertex_mesh 0; edge
 /// pairs are reported once with (a0, a1) < (b0, b1). Throws InvalidInput like mesh_ccd.
+/// `threads` as for mesh_ccd.
 template <class S>
-MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}) {
+MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_self_ccd", opt, m, t, "of the mesh");
   detail::MeshCcdCandidates c;
   std::size_t pairs = 0;
@@ -263,7 +290,7 @@ MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t,
         c.add_triangle_pair(*m.faces, fa, *m.faces, fb, true);
         return true;
       });
-  auto r = detail::run_mesh_ccd(c, m, m, opt);
+  auto r = detail::run_mesh_ccd(c, m, m, opt, threads);
   r.triangle_pairs = pairs;
   return r;
 }

@@ -13,8 +13,8 @@ namespace impact {
 
 /// Continuous vertex-triangle test over linear motion.
 /// Inputs: the point p and the triangle (f0, f1, f2) at t = 0 (suffix 0) and t = 1 (suffix 1);
-/// coordinates finite and below 1e100 in magnitude, options in the ranges of CcdOptions (both
-/// checked in every build: InvalidInput otherwise). Any configuration is accepted: degenerate
+/// coordinates finite (any magnitude: the test is scale-free, see CcdOptions), options in the
+/// ranges of CcdOptions (both checked in every build: InvalidInput otherwise). Any configuration is accepted: degenerate
 /// (collinear or zero-area) triangles, coincident points, no motion, coplanar motion.
 /// Output (CcdResult): hit == false proves that for all t in [0, opt.t_max] the distance from
 /// p(t) to the closed triangle is greater than opt.min_separation. hit == true comes with a toi

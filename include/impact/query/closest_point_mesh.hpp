@@ -104,14 +104,18 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
                                                                       : std::numeric_limits<S>::infinity();
   std::int32_t best_leaf = -1;
   TrianglePoint<S> best_tp;
+  // Once a triangle is found only a strictly closer one replaces it, so nodes at the distance
+  // found are pruned too (bound just below it): without that, a mesh whose triangles are all at
+  // the same distance (coincident vertices) had every node and triangle visited.
+  auto bound = [&]() { return best_leaf >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; };
   traverse_nearest(
       mesh.tree(),
       [&](const BV& bv) -> std::optional<S> {
         const S d2 = detail::squared_distance_to_bv(p, bv);
-        if (d2 > best) return std::nullopt;
+        if (d2 > bound()) return std::nullopt;
         return d2;
       },
-      [&]() { return best; },
+      bound,
       [&](std::int32_t k) {
         const TrianglePoint<S> tp = detail::closest_on_triangle(p, mesh.triangle(k));
         const S d2 = (p - tp.point).squaredNorm();

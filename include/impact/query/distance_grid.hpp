@@ -32,10 +32,15 @@
 /// (no tighter than a cell) cannot clear. Exact: the skipped triangles cannot meet the segment's
 /// box, and the patch's triangles lie in the slab, which the segment (convex) does not meet.
 /// Segments whose box misses the mesh's box meet nothing either.
+///
+/// Thread safety: immutable after construction; every query is const and may run from any number
+/// of threads at once (the particles' parallel step does). The mesh tree it was built from must
+/// not be edited (set_vertices) while the grid is in use; rebuild the grid after such an edit.
 #pragma once
 
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
+#include "impact/core/parallel.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
 
@@ -62,6 +67,9 @@ struct DistanceGridConfig {
   /// Start nodes and slabs for segments of up to this many cells around their midpoint's cell;
   /// 0: none.
   S start_node_reach = S(1);
+  /// Threads of the build (<= 0: the hardware concurrency, 1: serial); the grid is the same, bit
+  /// for bit, for every count (each cell is computed on its own).
+  int threads = 0;
 };
 
 /// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
@@ -97,20 +105,23 @@ class DistanceGrid {
     const auto& tree = mesh.tree();
     std::vector<std::pair<std::int32_t, std::int32_t>> range;  // primitive range of each subtree
     if (reach_ > S(0)) range = subtree_ranges(tree), patches_.resize(cells);
-    std::vector<std::int32_t> ids;  // scratch: the triangles near a cell
     ClosestPointOptions<S> opt;
     opt.max_distance = cfg.max_distance;
-    std::size_t idx = 0;
-    for (int z = 0; z < n_[2]; ++z)
-      for (int y = 0; y < n_[1]; ++y)
-        for (int x = 0; x < n_[0]; ++x, ++idx) {
-          const Vec3<S> c = center(x, y, z);
-          const auto r = closest_point_on_mesh(mesh, c, RigidTransform<S>(), opt);
-          S d = r ? r->distance : cfg.max_distance;
-          d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
-          dist[idx] = d > S(0) ? d : S(0);
-          if (reach_ > S(0)) patches_[idx] = patch(mesh, range, grown_cell(c, S(4) * eps * scale), ids);
-        }
+    // one row of cells (fixed y, z) per index: each cell's sample and patch depend on that cell only
+    const std::size_t rows = static_cast<std::size_t>(n_[1]) * static_cast<std::size_t>(n_[2]);
+    parallel_for(rows, rows >= 64 ? cfg.threads : 1, [&](std::size_t row) {
+      std::vector<std::int32_t> ids;  // scratch: the triangles near a cell
+      const int y = static_cast<int>(row % static_cast<std::size_t>(n_[1])), z = static_cast<int>(row / static_cast<std::size_t>(n_[1]));
+      std::size_t idx = row * static_cast<std::size_t>(n_[0]);
+      for (int x = 0; x < n_[0]; ++x, ++idx) {
+        const Vec3<S> c = center(x, y, z);
+        const auto r = closest_point_on_mesh(mesh, c, RigidTransform<S>(), opt);
+        S d = r ? r->distance : cfg.max_distance;
+        d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
+        dist[idx] = d > S(0) ? d : S(0);
+        if (reach_ > S(0)) patches_[idx] = patch(mesh, range, grown_cell(c, S(4) * eps * scale), ids);
+      }
+    });
     // 8-bit storage, rounded down: k * quantum <= the sample (checked with the very expression
     // lower_bound() evaluates)
     S top = S(0);

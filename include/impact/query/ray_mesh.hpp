@@ -240,6 +240,11 @@ struct FirstHitCast {
   }
   /// False when nothing can be hit (zero direction, negative t_max).
   bool valid() const { return d.squaredNorm() != S(0) && best >= S(0); }
+  /// The largest node entry still worth entering: best before a hit; once a hit is found only a
+  /// strictly earlier one replaces it, and a node's entry is a lower bound of its triangles' t,
+  /// so nodes entered at best itself are pruned too (else a mesh of coincident triangles, all hit
+  /// at the same t, had every node and triangle visited).
+  S bound() const { return best_leaf >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; }
   bool visit(std::int32_t k) {
     if (stats) ++stats->triangle_tests;
     pr.ray.t_max = best;
@@ -290,7 +295,7 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
         if (c.finite && !detail::may_overlap(c.seg, bv)) return R();
         return detail::ray_bv_entry(c.o, c.d, c.inv, bv, c.best);
       },
-      [&]() { return c.best; }, [&](std::int32_t k) { return c.visit(k); }, start_node);
+      [&]() { return c.bound(); }, [&](std::int32_t k) { return c.visit(k); }, start_node);
   return c.result(ray, pose);
 }
 
@@ -317,7 +322,7 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
       keys[side] = t ? *t : std::numeric_limits<S>::quiet_NaN();
     }
   };
-  auto bound = [&]() { return c.best; };
+  auto bound = [&]() { return c.bound(); };
   auto visit = [&](std::int32_t k) { return c.visit(k); };
   const std::int32_t start = fast.from_source(start_node);
   const std::size_t pairs = std::isfinite(c.inv[0]) && std::isfinite(c.inv[1]) && std::isfinite(c.inv[2])

@@ -27,6 +27,12 @@
 /// the collider's frame at the segment's start and end times (exact for translation, second order
 /// in the step for rotation); the response uses the collider's velocity at the contact point.
 /// Call ColliderSet::advance(dt) after each step to move the poses.
+///
+/// Thread safety: the queries on a ColliderSet and its colliders are const and read only (the
+/// meshes, trees, compact trees and grids they point to included), so any number of threads may
+/// step particles against one set at once; step_particles does so itself (StepOptions::threads).
+/// Editing the set (adding colliders, changing poses, advance()) or a mesh it points to
+/// (set_vertices) must not overlap any query.
 #pragma once
 
 #include "impact/geometry/aabb.hpp"

@@ -54,17 +54,25 @@ struct CcdBoxLater {
   bool operator()(const CcdBox& a, const CcdBox& b) const { return a.t0 > b.t0 || (a.t0 == b.t0 && a.depth < b.depth); }
 };
 
-/// Absolute floor of the error bounds, covering underflow of products (far below any real input).
+/// Absolute floor of the error bounds, covering underflow: of products and double-double low
+/// parts (each at most 2^-1074 off), and of the power-of-two scaling of coordinates 2^1022 times
+/// smaller than the largest one (ccd_normalise; at most 2^-1075 off, which moves F by less than
+/// 2^-1070). The scaled coordinates are below 2 in magnitude, so this is far below any gap the
+/// search could resolve.
 inline constexpr double kCcdTinyError = 1e-290;
 
 /// The arithmetic the search runs in: double for the search itself, DoubleDouble for the re-check
 /// of hits. `value_exponent`: the corner values of F are within 2^value_exponent m of exact (m the
 /// magnitude bound); `direction_exponent`: the same for n . F, relative to sum |n_i| m_i.
 /// With u the unit roundoff of one operation (2^-53 for double, 2^-103 for DoubleDouble, see
-/// double_double.hpp), the moving point x0 + t (x1 - x0) is within 5 u m of exact, the differences
-/// and products of either formulation add at most 45 u m more (all intermediates stay below 6 m),
-/// and a dot product with n adds 3 u sum |n_i| m_i. The bounds used, 512 u m and 1024 u sum |n_i|
-/// m_i, leave a margin of 10x, which also covers the rounding of lo - err and of |n_i| to double.
+/// double_double.hpp) and m the bound on |x - r| (points relative to the reference point r, see
+/// CcdQuery), the moving point (x0 - r) + t (x1 - x0) is within 6 u m of exact (x0 - r and
+/// x1 - x0 rounded once each, |x1 - x0| <= 2 m), the differences and products of either
+/// formulation add at most 45 u m more (all intermediates stay below 6 m), and a dot product with
+/// n adds 3 u sum |n_i| m_i. The bounds used, 512 u m and 1024 u sum |n_i| m_i, leave a margin of
+/// 10x, which also covers m being computed in double and the rounding of lo - err and of |n_i|.
+/// The queries reach the search scaled by a power of two (ccd_normalise), so every coordinate is
+/// below 2 in magnitude: nothing overflows, and what underflows is covered by kCcdTinyError.
 template <class T> struct CcdArith;
 template <> struct CcdArith<double> {
   static constexpr int value_exponent = -44;      // 512 * 2^-53
@@ -81,12 +89,17 @@ template <> struct CcdArith<DoubleDouble> {
   static DoubleDouble abs(const DoubleDouble& x) { return detail::abs(x); }
 };
 
-/// The four moving points of a query: x0 at t = 0 and dx = x1 - x0 (rounded in double, exact in
-/// DoubleDouble), with the per-axis magnitude bound and error bound.
+/// The four moving points of a query, relative to a reference point r (the first point at t = 0):
+/// x0 - r at t = 0 and dx = x1 - x0 (both rounded in double, exact in DoubleDouble), with the
+/// per-axis magnitude bound and error bound. F is a difference of two moving points, so it is the
+/// same function of the points relative to r; computing it from them makes the rounding errors,
+/// and so the bounds, relative to the query's extent around r instead of to its distance from the
+/// origin: a translated query is searched alike (identically when the translation is exact), and
+/// a query whose coordinates differ by far less than their magnitude gets bounds it can beat.
 template <class T> struct CcdQuery {
   T x0[4][3];
   T dx[4][3];
-  double mag[3];  ///< max |coordinate| over the 8 input points, per axis
+  double mag[3];  ///< max |x - r| over the 8 input points x, per axis (computed in double)
   double err[3];  ///< bound on |computed - exact| of any corner value of F, per axis
 };
 
@@ -96,14 +109,16 @@ template <class T> inline double error_bound(double m) { return std::ldexp(m, Cc
 
 template <class T> inline CcdQuery<T> make_ccd_query(const double (&p0)[4][3], const double (&p1)[4][3]) {
   CcdQuery<T> q{};
-  for (int i = 0; i < 3; ++i) q.mag[i] = 0.0;
-  for (int k = 0; k < 4; ++k)
-    for (int i = 0; i < 3; ++i) {
-      q.x0[k][i] = p0[k][i];
+  for (int i = 0; i < 3; ++i) {
+    const double r = p0[0][i];
+    q.mag[i] = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      q.x0[k][i] = CcdArith<T>::difference(p0[k][i], r);
       q.dx[k][i] = CcdArith<T>::difference(p1[k][i], p0[k][i]);
-      q.mag[i] = std::max(q.mag[i], std::max(std::abs(p0[k][i]), std::abs(p1[k][i])));
+      q.mag[i] = std::max(q.mag[i], std::max(std::abs(p0[k][i] - r), std::abs(p1[k][i] - r)));
     }
-  for (int i = 0; i < 3; ++i) q.err[i] = error_bound<T>(q.mag[i]);
+    q.err[i] = error_bound<T>(q.mag[i]);
+  }
   return q;
 }
 
@@ -198,8 +213,9 @@ inline void ccd_corners(const CcdQuery<T>& q, const CcdBox& b, T (&f)[8][3], T (
 }
 
 /// The search in arithmetic T (double, or DoubleDouble for the re-check). p0/p1: the 4 points at
-/// t = 0 and t = 1 (vertex-face: p, f0, f1, f2; edge-edge: a0, a1, b0, b1). Preconditions: finite
-/// coordinates below 1e100 in magnitude, d >= 0, 0 < t_max <= 1. Besides the tolerance, a corner
+/// t = 0 and t = 1 (vertex-face: p, f0, f1, f2; edge-edge: a0, a1, b0, b1). Preconditions: the
+/// query normalised by ccd_normalise (coordinates below 2 in magnitude), 0 <= d <= 8,
+/// 0 < t_max <= 1. Besides the tolerance, a corner
 /// is accepted when rounding alone keeps it from being proved farther than d away (a single point
 /// cannot be split further), which is what ends the re-check on real contacts.
 template <bool VertexFace, class T = double>
@@ -366,12 +382,65 @@ inline CcdResult<double> inclusion_ccd(const double (&p0)[4][3], const double (&
   return r;
 }
 
-/// The test: the search in double, then, for a hit that is not proved real (contact_proof.hpp),
-/// the re-check in DoubleDouble without the tolerance (CcdOptions::recheck_iterations), which
-/// turns the hit into a miss when it proves that no contact happens; otherwise the double
-/// search's answer stands.
+/// A query scaled by 2^-e so that its largest coordinate magnitude is in [1, 2), with the options
+/// in the scaled units: the minimum separation scaled (rounded up, capped at 8, farther than any
+/// two points of the scaled query can be) and the tolerance made absolute, tolerance times the
+/// query's extent (the largest side of the box around its 8 points). Scaling by a power of two is
+/// exact (up to underflow, see kCcdTinyError), so queries that differ by a power-of-two scale
+/// are searched identically: the same decisions, iterations and toi, at any magnitude.
+struct CcdNormalised {
+  double p0[4][3], p1[4][3];
+  CcdOptions opt;
+};
+
+inline CcdNormalised ccd_normalise(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
+  CcdNormalised n;
+  double m = 0.0;
+  for (int k = 0; k < 4; ++k)
+    for (int i = 0; i < 3; ++i) m = std::max(m, std::max(std::abs(p0[k][i]), std::abs(p1[k][i])));
+  const int e = m > 0.0 ? std::ilogb(m) : 0;
+  if (e > -1000 && e < 1000) {  // one exact product each (2^-e is a normal double)
+    const double s = std::ldexp(1.0, -e);
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < 3; ++i) {
+        n.p0[k][i] = p0[k][i] * s;
+        n.p1[k][i] = p1[k][i] * s;
+      }
+  } else {
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < 3; ++i) {
+        n.p0[k][i] = std::ldexp(p0[k][i], -e);
+        n.p1[k][i] = std::ldexp(p1[k][i], -e);
+      }
+  }
+  double extent = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    double lo = n.p0[0][i], hi = lo;
+    for (int k = 0; k < 4; ++k) {
+      lo = std::min(lo, std::min(n.p0[k][i], n.p1[k][i]));
+      hi = std::max(hi, std::max(n.p0[k][i], n.p1[k][i]));
+    }
+    extent = std::max(extent, hi - lo);
+  }
+  n.opt = opt;
+  double d = std::ldexp(opt.min_separation, -e);
+  if (std::ldexp(d, e) < opt.min_separation) d = std::nextafter(d, std::numeric_limits<double>::infinity());
+  n.opt.min_separation = std::min(d, 8.0);
+  n.opt.tolerance = opt.tolerance * extent;
+  return n;
+}
+
+/// The test: the query normalised (ccd_normalise), the search in double, then, for a hit that is
+/// not proved real (contact_proof.hpp), the re-check in DoubleDouble without the tolerance
+/// (CcdOptions::recheck_iterations), which turns the hit into a miss when it proves that no
+/// contact happens; otherwise the double search's answer stands. toi, u, v are unitless, so the
+/// result needs no scaling back.
 template <bool VertexFace>
-inline CcdResult<double> ccd_query(const double (&p0)[4][3], const double (&p1)[4][3], const CcdOptions& opt) {
+inline CcdResult<double> ccd_query(const double (&raw0)[4][3], const double (&raw1)[4][3], const CcdOptions& raw_opt) {
+  const CcdNormalised n = ccd_normalise(raw0, raw1, raw_opt);
+  const auto& p0 = n.p0;
+  const auto& p1 = n.p1;
+  const CcdOptions& opt = n.opt;
   CcdResult<double> r = inclusion_ccd<VertexFace>(p0, p1, opt);
   if (!r.hit || opt.recheck_iterations <= 0) return r;
   if (!r.budget_exhausted && ccd_prove_contact<VertexFace>(p0, p1, opt, r.toi, r.u, r.v)) return r;  // a real contact
@@ -440,7 +509,8 @@ inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
 /// bounds one query to about 235 MB and a few seconds; a larger budget is an input error.
 inline constexpr std::int64_t kCcdMaxIterations = std::int64_t(1) << 22;
 
-/// Largest coordinate magnitude accepted by the primitive tests (their error bounds assume it).
+/// Largest coordinate magnitude of the mesh CCD (mesh_ccd.hpp), whose swept boxes must stay
+/// finite when grown by the minimum separation. The primitive tests take any finite coordinates.
 inline constexpr double kCcdMaxCoordinate = 1e100;
 
 /// A double for an error message (%g keeps tiny and huge values readable, NaN reads "nan").
@@ -455,8 +525,8 @@ inline std::string ccd_number(double x) {
 /// recheck_iterations in [0, kCcdMaxIterations]. `where` names the entry point. A few compares.
 inline void ccd_validate_options(const CcdOptions& opt, const char* where) {
   const std::string w = std::string(where) + ": CcdOptions::";
-  if (!(opt.min_separation >= 0.0 && opt.min_separation <= kCcdMaxCoordinate))
-    throw InvalidInput(w + "min_separation must be finite, >= 0 and <= 1e100, is " + ccd_number(opt.min_separation));
+  if (!(opt.min_separation >= 0.0 && opt.min_separation <= std::numeric_limits<double>::max()))
+    throw InvalidInput(w + "min_separation must be finite and >= 0, is " + ccd_number(opt.min_separation));
   if (!(opt.t_max > 0.0 && opt.t_max <= 1.0)) throw InvalidInput(w + "t_max must be in (0, 1], is " + ccd_number(opt.t_max));
   if (!(opt.tolerance >= 0.0 && opt.tolerance <= std::numeric_limits<double>::max()))
     throw InvalidInput(w + "tolerance must be finite and >= 0, is " + ccd_number(opt.tolerance));
@@ -468,15 +538,15 @@ inline void ccd_validate_options(const CcdOptions& opt, const char* where) {
                        std::to_string(opt.recheck_iterations));
 }
 
-/// Throws InvalidInput unless every coordinate of the 8 points is finite and below
-/// kCcdMaxCoordinate in magnitude. `where` names the entry point.
+/// Throws InvalidInput unless every coordinate of the 8 points is finite (any finite magnitude is
+/// in range: the queries are normalised, see ccd_normalise). `where` names the entry point.
 inline void ccd_validate_points(const double (&p0)[4][3], const double (&p1)[4][3], const char* where) {
   for (int k = 0; k < 8; ++k)
     for (int i = 0; i < 3; ++i) {
       const double x = k < 4 ? p0[k][i] : p1[k - 4][i];
-      if (!(std::abs(x) < kCcdMaxCoordinate))
+      if (!std::isfinite(x))
         throw InvalidInput(std::string(where) + ": point " + std::to_string(k) + " (" + (k < 4 ? "t = 0" : "t = 1") +
-                           ") has coordinate " + ccd_number(x) + ", outside the finite range |x| < 1e100");
+                           ") has a non-finite coordinate " + ccd_number(x));
     }
 }
 
