@@ -131,6 +131,16 @@ template <class BV, class S> void check(const IntMesh& A, const IntMesh& B, cons
   // rays against mesh A at pose_a: brute force over every triangle in A's frame
   for (const auto& [o, d] : rays) {
     const impact::Ray<S> ray{impact::Vec3<S>(S(o[0]), S(o[1]), S(o[2])), impact::Vec3<S>(S(d[0]), S(d[1]), S(d[2]))};
+    if (ray.direction == impact::Vec3<S>::Zero()) {  // not a ray: the queries reject it (validate_ray)
+      bool threw = false;
+      try {
+        (void)impact::ray_mesh_first_hit(ta, ray, pose_a);
+      } catch (const impact::InvalidInput&) {
+        threw = true;
+      }
+      if (!threw) impact::fuzz::fail(std::string(name) + " ray with a zero direction accepted");
+      continue;
+    }
     const impact::Vec3<S> lo = pose_a.R.transpose() * (ray.origin - pose_a.t), ld = pose_a.R.transpose() * ray.direction;
     std::optional<S> best;
     if (ld.squaredNorm() != S(0)) {

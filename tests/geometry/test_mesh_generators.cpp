@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <array>
 #include <cmath>
 #include <map>
@@ -237,6 +239,38 @@ TEST(MeshGenerators, InvalidParametersThrow) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("make_torus"), std::string::npos);
   }
+}
+
+// Infinite or NaN sizes made NaN vertices; counts whose triangle total overflows an int were
+// undefined behaviour or a huge allocation; sizes beyond CoordinateRange made meshes that no tree
+// accepts. Each now throws InvalidInput before allocating.
+TEST(MeshGenerators, NonFiniteHugeAndOverflowingParametersThrow) {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  // the counts go through volatile: constants would let the compiler warn about the loops that
+  // the checks never let run
+  volatile int big_count = 1 << 16, huge_count = 1 << 20, int_max = std::numeric_limits<int>::max();
+  EXPECT_THROW(make_uv_sphere<double>(inf, 8, 4), InvalidInput);
+  EXPECT_THROW(make_uv_sphere<double>(nan, 8, 4), InvalidInput);
+  EXPECT_THROW(make_uv_sphere<double>(1e300, 8, 4), InvalidInput);
+  EXPECT_THROW(make_uv_sphere<float>(1e10f, 8, 4), InvalidInput);
+  EXPECT_THROW(make_uv_sphere<double>(1.0, big_count, big_count), InvalidInput);
+  EXPECT_THROW(make_icosphere<double>(inf, 1), InvalidInput);
+  EXPECT_THROW(make_icosphere<double>(1e-300, 1), InvalidInput);
+  EXPECT_THROW(make_torus<double>(inf, 1.0, 8, 8), InvalidInput);
+  EXPECT_THROW(make_torus<double>(nan, 0.5, 8, 8), InvalidInput);
+  EXPECT_THROW(make_torus<double>(1.0, 0.5, huge_count, huge_count), InvalidInput);
+  EXPECT_THROW(make_grid<double>(big_count, big_count, 1.0), InvalidInput);
+  EXPECT_THROW(make_grid<double>(int_max, 2, 1.0), InvalidInput);
+  EXPECT_THROW(make_grid<double>(3, 3, inf), InvalidInput);
+  EXPECT_THROW(make_grid<double>(3, 3, nan), InvalidInput);
+  EXPECT_THROW(make_box<double>(Eigen::Vector3d(1, nan, 1)), InvalidInput);
+  EXPECT_THROW(make_box<double>(Eigen::Vector3d(1, inf, 1)), InvalidInput);
+  EXPECT_THROW(make_random_soup<double>(int_max, 1), InvalidInput);
+  EXPECT_THROW(make_random_soup<double>(10, 1, inf, 0.1), InvalidInput);
+  EXPECT_THROW(make_random_soup<double>(10, 1, 1.0, nan), InvalidInput);
+  // the ends of the ranges are valid and give meshes that validate
+  EXPECT_NO_THROW(validate_mesh(make_uv_sphere<float>(0x1p27f, 8, 4)));
+  EXPECT_NO_THROW(validate_mesh(make_box<double>(Eigen::Vector3d::Constant(0x1p200))));
 }
 
 }  // namespace

@@ -138,8 +138,8 @@ TYPED_TEST(RayMesh, ParallelRaysAndSurfaceStarts) {
   ASSERT_TRUE(back.has_value());
   EXPECT_FALSE(back->front_face);
   EXPECT_NEAR(back->t, S(0.5), S(1e-6));
-  // zero direction: no hit
-  EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>::Zero(), S(1))).has_value());
+  // zero direction: not a ray (it used to return no hit, even from a point on the surface)
+  EXPECT_THROW(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>::Zero(), S(1))), InvalidInput);
 }
 
 // Swept sphere: the BVH query equals the minimum over all triangles, and at the returned time

@@ -142,7 +142,9 @@ class Scene {
                 "every broad phase implements the interface of broad_phase.hpp");
 
  public:
+  /// Throws InvalidInput for options outside their ranges (check_options).
   explicit Scene(const SceneOptions& opt = {}) : opt_(opt) {
+    check_options(opt);
     switch (opt.broad_phase) {
       case BroadPhaseKind::AllPairs:
         broad_.template emplace<AllPairsBroadPhase<S>>();
@@ -511,12 +513,22 @@ class Scene {
   }
 
   static void check_pose(const RigidTransform<S>& pose, const char* where, ObjectId id) {
-    if (!pose.is_finite()) throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not finite");
-    // R^T R = I within sqrt(eps) (float) or 1e-6 (double: rotations converted from float pass).
-    const S tol = std::max(std::sqrt(std::numeric_limits<S>::epsilon()), S(1e-6));
-    const Mat3<S> e = pose.R.transpose() * pose.R - Mat3<S>::Identity();
-    if (e.cwiseAbs().maxCoeff() > tol || pose.R.determinant() <= S(0))
-      throw InvalidInput(std::string(where) + ": pose of object " + std::to_string(id) + " is not a rotation");
+    validate_pose(pose, where, ("pose of object " + std::to_string(id)).c_str());
+  }
+
+  /// A broad phase of the enum, static_leaf_size >= 1, the tree's fat_fraction, fat_margin and
+  /// predict finite and >= 0, its rebuild_ratio finite and >= 1.
+  static void check_options(const SceneOptions& opt) {
+    constexpr const char* where = "Scene";
+    require(opt.broad_phase == BroadPhaseKind::AllPairs || opt.broad_phase == BroadPhaseKind::StaticDynamic ||
+                opt.broad_phase == BroadPhaseKind::Hierarchical,
+            where, "options.broad_phase is not a BroadPhaseKind");
+    validate_in_range(opt.static_leaf_size, 1, 1 << 20, where, "options.static_leaf_size");
+    validate_nonnegative(opt.tree.fat_fraction, where, "options.tree.fat_fraction");
+    validate_nonnegative(opt.tree.fat_margin, where, "options.tree.fat_margin");
+    validate_nonnegative(opt.tree.predict, where, "options.tree.predict");
+    validate_finite(opt.tree.rebuild_ratio, where, "options.tree.rebuild_ratio");
+    require(opt.tree.rebuild_ratio >= 1.0, where, "options.tree.rebuild_ratio must be >= 1");
   }
 
   static void check_shape(const Shape<S>& shape, ObjectId id) {
@@ -524,11 +536,10 @@ class Scene {
     switch (shape.kind) {
       case ShapeKind::Sphere:
       case ShapeKind::Particle:
-        if (!(shape.radius >= S(0)) || !std::isfinite(shape.radius)) throw InvalidInput(who + ": radius must be finite and >= 0");
+        validate_length(shape.radius, who.c_str(), "radius");
         break;
       case ShapeKind::Box:
-        if (!all_finite(shape.half) || (shape.half.array() < S(0)).any())
-          throw InvalidInput(who + ": half extents must be finite and >= 0");
+        for (int k = 0; k < 3; ++k) validate_length(shape.half[k], who.c_str(), "half extent");
         break;
       case ShapeKind::Mesh:
         if (!shape.mesh) throw InvalidInput(who + ": null mesh");

@@ -20,6 +20,7 @@
 
 #include "impact/bvh/bvh.hpp"
 #include "impact/bvh/traversal_stack.hpp"
+#include "impact/core/validate.hpp"
 #include "impact/geometry/aabb.hpp"
 
 #include <algorithm>
@@ -85,8 +86,10 @@ class CompactBvh {
   CompactBvh() = default;
 
   /// Copies `tree`, collapsing subtrees of at most leaf_size (>= 1) primitives into leaves. O(nodes).
+  /// Throws InvalidInput for leaf_size < 1.
   template <class S>
   explicit CompactBvh(const Bvh<Aabb<S>>& tree, int leaf_size = 4) : primitives_(tree.primitives) {
+    validate_in_range(leaf_size, 1, std::numeric_limits<int>::max(), "CompactBvh", "leaf_size");
     if (tree.empty()) return;
     const auto m = tree.nodes.size();
     // primitive count and first primitive of every subtree (children come after their parent)

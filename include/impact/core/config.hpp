@@ -24,3 +24,13 @@
 #define IMPACT_LIKELY(x) (x)
 #define IMPACT_UNLIKELY(x) (x)
 #endif
+
+/// Keeps a rarely taken function out of its callers (its stack frame and code stay off the hot
+/// path).
+#if defined(__GNUC__) || defined(__clang__)
+#define IMPACT_NOINLINE __attribute__((noinline))
+#elif defined(_MSC_VER)
+#define IMPACT_NOINLINE __declspec(noinline)
+#else
+#define IMPACT_NOINLINE
+#endif

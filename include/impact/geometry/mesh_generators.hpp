@@ -4,7 +4,9 @@
 /// box (closed, outward-oriented, no duplicate positions), a flat grid (an open cloth-like sheet)
 /// and a random triangle soup. Everything here is deterministic and platform-independent: the
 /// soup uses its own SplitMix64 generator rather than the standard distributions, whose output
-/// differs between standard libraries. Invalid parameters throw InvalidInput.
+/// differs between standard libraries. Invalid parameters throw InvalidInput: sizes that are not
+/// finite, not positive or outside CoordinateRange (core/validate.hpp), too few segments, or more
+/// than detail::generators::kMaxTriangles triangles.
 #pragma once
 
 #include "impact/core/error.hpp"
@@ -49,6 +51,19 @@ inline void require(bool ok, const char* fn, const std::string& why) {
 
 inline constexpr double pi = 3.14159265358979323846;
 
+/// The most triangles a generator makes (2^26, about 3 GB of double vertices for a soup): larger
+/// requests throw InvalidInput instead of overflowing an int or the memory.
+inline constexpr std::int64_t kMaxTriangles = std::int64_t(1) << 26;
+
+inline void require_triangles(std::int64_t triangles, const char* fn) {
+  require(triangles <= kMaxTriangles, fn,
+          "would make " + std::to_string(triangles) + " triangles, more than " + std::to_string(kMaxTriangles));
+}
+
+/// A length parameter: finite and within [CoordinateRange::min_scale, CoordinateRange::max] (a
+/// generated mesh must pass validate_mesh).
+template <class S> bool length_ok(S x) { return x >= CoordinateRange<S>::min_scale && x <= CoordinateRange<S>::max; }
+
 }  // namespace generators
 
 }  // namespace detail
@@ -58,17 +73,19 @@ inline constexpr double pi = 3.14159265358979323846;
 /// clockwise seen from outside). Vertices: slices*(stacks-1) + 2; triangles: 2*slices*(stacks-1).
 /// Throws InvalidInput on radius <= 0 or too few segments.
 template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int stacks = 16) {
-  detail::generators::require(radius > S(0), "make_uv_sphere", "radius must be positive");
+  detail::generators::require(detail::generators::length_ok(radius), "make_uv_sphere", "radius must be positive, finite and within CoordinateRange");
   detail::generators::require(slices >= 3 && stacks >= 2, "make_uv_sphere", "needs slices >= 3 and stacks >= 2");
+  detail::generators::require_triangles(2 * std::int64_t(slices) * (std::int64_t(stacks) - 1), "make_uv_sphere");
   const int rings = stacks - 1;
   TriangleMesh<S> m;
-  m.V.resize(slices * rings + 2, 3);
-  m.F.resize(2 * slices * rings, 3);
+  m.V.resize(Eigen::Index(slices) * rings + 2, 3);
+  m.F.resize(2 * Eigen::Index(slices) * rings, 3);
   const double r = static_cast<double>(radius);
-  const int north = 0, south = slices * rings + 1;
+  const int north = 0, south = static_cast<int>(Eigen::Index(slices) * rings + 1);
   m.V.row(north) << S(0), S(0), radius;
   m.V.row(south) << S(0), S(0), -radius;
-  auto ring_vertex = [slices](int i, int j) { return 1 + i * slices + (j % slices); };
+  // 64-bit index arithmetic: the counts are bounded above, the compiler cannot see it
+  auto ring_vertex = [slices](int i, int j) { return static_cast<int>(1 + std::int64_t(i) * slices + (j % slices)); };
   for (int i = 0; i < rings; ++i) {
     const double theta = detail::generators::pi * (i + 1) / stacks;
     for (int j = 0; j < slices; ++j) {
@@ -77,7 +94,7 @@ template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int
           static_cast<S>(r * std::sin(theta) * std::sin(phi)), static_cast<S>(r * std::cos(theta));
     }
   }
-  int t = 0;
+  Eigen::Index t = 0;
   for (int j = 0; j < slices; ++j) m.F.row(t++) << north, ring_vertex(0, j), ring_vertex(0, j + 1);
   for (int i = 0; i + 1 < rings; ++i) {
     for (int j = 0; j < slices; ++j) {
@@ -95,7 +112,7 @@ template <class S> TriangleMesh<S> make_uv_sphere(S radius, int slices = 32, int
 /// sphere. Outward-oriented. Triangles: 20 * 4^subdivisions; vertices: 10 * 4^subdivisions + 2.
 /// Throws InvalidInput on radius <= 0 or subdivisions outside [0, 10].
 template <class S> TriangleMesh<S> make_icosphere(S radius, int subdivisions = 3) {
-  detail::generators::require(radius > S(0), "make_icosphere", "radius must be positive");
+  detail::generators::require(detail::generators::length_ok(radius), "make_icosphere", "radius must be positive, finite and within CoordinateRange");
   detail::generators::require(subdivisions >= 0 && subdivisions <= 10, "make_icosphere", "subdivisions must be in [0, 10]");
   const double g = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<Eigen::Vector3d> P = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
@@ -141,11 +158,14 @@ template <class S> TriangleMesh<S> make_icosphere(S radius, int subdivisions = 3
 /// to 2 pi^2 R r^2. Throws InvalidInput on invalid radii or too few segments.
 template <class S> TriangleMesh<S> make_torus(S R, S r, int nu = 48, int nv = 24) {
   detail::generators::require(r > S(0) && R > r, "make_torus", "needs 0 < r < R");
+  detail::generators::require(detail::generators::length_ok(r) && detail::generators::length_ok(S(R + r)), "make_torus",
+                              "R + r and r must be finite and within CoordinateRange");
   detail::generators::require(nu >= 3 && nv >= 3, "make_torus", "needs nu >= 3 and nv >= 3");
+  detail::generators::require_triangles(2 * std::int64_t(nu) * std::int64_t(nv), "make_torus");
   TriangleMesh<S> m;
-  m.V.resize(nu * nv, 3);
-  m.F.resize(2 * nu * nv, 3);
-  auto id = [nu, nv](int i, int j) { return (i % nu) * nv + (j % nv); };
+  m.V.resize(Eigen::Index(nu) * nv, 3);
+  m.F.resize(2 * Eigen::Index(nu) * nv, 3);
+  auto id = [nu, nv](int i, int j) { return static_cast<int>(std::int64_t(i % nu) * nv + (j % nv)); };
   for (int i = 0; i < nu; ++i) {
     const double theta = 2 * detail::generators::pi * i / nu;
     for (int j = 0; j < nv; ++j) {
@@ -155,7 +175,7 @@ template <class S> TriangleMesh<S> make_torus(S R, S r, int nu = 48, int nv = 24
           static_cast<S>(static_cast<double>(r) * std::sin(phi));
     }
   }
-  int t = 0;
+  Eigen::Index t = 0;
   for (int i = 0; i < nu; ++i) {
     for (int j = 0; j < nv; ++j) {
       const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
@@ -172,16 +192,17 @@ template <class S> TriangleMesh<S> make_torus(S R, S r, int nu = 48, int nv = 24
 /// nx < 1, ny < 1 or size <= 0.
 template <class S> TriangleMesh<S> make_grid(int nx, int ny, S size = S(1)) {
   detail::generators::require(nx >= 1 && ny >= 1, "make_grid", "needs nx >= 1 and ny >= 1");
-  detail::generators::require(size > S(0), "make_grid", "size must be positive");
+  detail::generators::require(detail::generators::length_ok(size), "make_grid", "size must be positive, finite and within CoordinateRange");
+  detail::generators::require_triangles(2 * std::int64_t(nx) * std::int64_t(ny), "make_grid");
   TriangleMesh<S> m;
-  m.V.resize((nx + 1) * (ny + 1), 3);
-  m.F.resize(2 * nx * ny, 3);
+  m.V.resize((Eigen::Index(nx) + 1) * (Eigen::Index(ny) + 1), 3);
+  m.F.resize(2 * Eigen::Index(nx) * ny, 3);
   const double h = static_cast<double>(size);
-  auto id = [nx](int i, int j) { return i + j * (nx + 1); };
+  auto id = [nx](int i, int j) { return static_cast<int>(i + std::int64_t(j) * (std::int64_t(nx) + 1)); };
   for (int j = 0; j <= ny; ++j)
     for (int i = 0; i <= nx; ++i)
       m.V.row(id(i, j)) << static_cast<S>(h * (double(i) / nx - 0.5)), static_cast<S>(h * (double(j) / ny - 0.5)), S(0);
-  int t = 0;
+  Eigen::Index t = 0;
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
@@ -197,7 +218,9 @@ template <class S> TriangleMesh<S> make_grid(int nx, int ny, S size = S(1)) {
 /// that axis (bit 0: x, bit 1: y, bit 2: z), -h otherwise. Throws InvalidInput on a non-positive
 /// half extent.
 template <class S> TriangleMesh<S> make_box(const Vec3<S>& half_extents) {
-  detail::generators::require((half_extents.array() > S(0)).all(), "make_box", "half extents must be positive");
+  detail::generators::require(detail::generators::length_ok(half_extents.minCoeff()) && detail::generators::length_ok(half_extents.maxCoeff()) &&
+                                  all_finite(half_extents),
+                              "make_box", "half extents must be positive, finite and within CoordinateRange");
   TriangleMesh<S> m;
   m.V.resize(8, 3);
   for (int k = 0; k < 8; ++k)
@@ -220,7 +243,10 @@ template <class S> TriangleMesh<S> make_box(const Vec3<S>& half_extents) {
 /// extent < 0 or tri_size <= 0.
 template <class S> TriangleMesh<S> make_random_soup(int n, std::uint64_t seed, S extent = S(1), S tri_size = S(0.1)) {
   detail::generators::require(n >= 1, "make_random_soup", "needs n >= 1");
+  detail::generators::require_triangles(n, "make_random_soup");
   detail::generators::require(extent >= S(0) && tri_size > S(0), "make_random_soup", "needs extent >= 0 and tri_size > 0");
+  detail::generators::require(detail::generators::length_ok(S(extent + tri_size)), "make_random_soup",
+                              "extent + tri_size must be finite and within CoordinateRange");
   detail::SplitMix64 rng(seed);
   const double e = static_cast<double>(extent), h = 0.5 * static_cast<double>(tri_size);
   TriangleMesh<S> m;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "impact/core/types.hpp"
+#include "impact/core/validate.hpp"
 
 namespace impact {
 
@@ -17,6 +18,21 @@ template <class S> struct Ray {
   Ray(const Vec3<S>& o, const Vec3<S>& d, S tmax = std::numeric_limits<S>::infinity()) : origin(o), direction(d), t_max(tmax) {}
   Vec3<S> at(S s) const { return origin + s * direction; }
 };
+
+/// Throws InvalidInput unless `ray` is a query the ray casts can answer: origin and direction
+/// finite and within CoordinateRange (core/validate.hpp), the direction's largest component at
+/// least CoordinateRange::min_scale (so not zero), and t_max >= 0 (+infinity allowed; NaN
+/// rejected). Run once per public query.
+template <class S> void validate_ray(const Ray<S>& ray, const char* where, const char* name = "ray") {
+  const std::string n(name);
+  validate_coordinates(ray.origin, where, (n + ".origin").c_str());
+  validate_coordinates(ray.direction, where, (n + ".direction").c_str());
+  require(ray.direction != Vec3<S>::Zero(), where, n + ".direction must be non-zero");
+  require(ray.direction.cwiseAbs().maxCoeff() >= CoordinateRange<S>::min_scale, where,
+          n + ".direction is too short: its largest component must be at least " + detail::to_text(CoordinateRange<S>::min_scale) +
+              " (CoordinateRange, core/validate.hpp)");
+  validate_nonnegative_or_inf(ray.t_max, where, (n + ".t_max").c_str());
+}
 
 /// The closed segment from p to q.
 template <class S> struct Segment {

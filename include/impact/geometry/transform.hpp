@@ -6,6 +6,11 @@
 #pragma once
 
 #include "impact/core/types.hpp"
+#include "impact/core/validate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
 
 namespace impact {
 
@@ -37,7 +42,35 @@ template <class S> struct RigidTransform {
   }
   template <class T> RigidTransform<T> cast() const { return {R.template cast<T>(), t.template cast<T>()}; }
   bool is_finite() const { return all_finite(R) && all_finite(t); }
+  /// True when R is a rotation within `tol`: every entry of R^T R - I at most tol in magnitude and
+  /// det R > 0 (false for NaN entries).
+  bool is_rigid(S tol) const {
+    const Mat3<S> e = R.transpose() * R - Mat3<S>::Identity();
+    return e.cwiseAbs().maxCoeff() <= tol && R.determinant() > S(0);
+  }
 };
+
+/// The tolerance of validate_pose on R^T R - I: sqrt(epsilon) for float, 1e-6 for double (so that
+/// rotations converted from float pass).
+template <class S> inline S rotation_tolerance() { return std::max(std::sqrt(std::numeric_limits<S>::epsilon()), S(1e-6)); }
+
+/// Throws InvalidInput unless `pose` is a rigid transform every query can rely on: R and t finite,
+/// t within CoordinateRange (core/validate.hpp), R orthonormal within rotation_tolerance<S>() (each entry of R^T R - I) and det R > 0 (a proper
+/// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
+/// culling wrong without any sign of it, hence the check at every public query (about 40 flops).
+template <class S> void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
+  if (!pose.is_finite()) {
+    std::ostringstream s;
+    s << where << ": " << name << " must be finite (R and t have a NaN or infinite entry)";
+    throw InvalidInput(s.str());
+  }
+  validate_coordinates(pose.t, where, (std::string(name) + ".t").c_str());
+  if (!pose.is_rigid(rotation_tolerance<S>())) {
+    std::ostringstream s;
+    s << where << ": " << name << ".R must be a rotation (R^T R = I within " << rotation_tolerance<S>() << ", det R > 0)";
+    throw InvalidInput(s.str());
+  }
+}
 
 /// Transform that maps coordinates of frame b into frame a, given both poses in a common frame.
 template <class S> RigidTransform<S> relative_transform(const RigidTransform<S>& pose_a, const RigidTransform<S>& pose_b) {

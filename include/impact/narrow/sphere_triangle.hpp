@@ -104,10 +104,14 @@ inline std::optional<SphereTriangleSweepHit<S>> sweep_sphere_triangle(const Vec3
     const S ee = e.squaredNorm();
     if (!(ee > S(0))) continue;
     const Vec3<S> m = p0 - e0;
+    // |(m + t d) x e|^2 / |e|^2 = r^2, divided by |e|^2 so that every coefficient is a squared
+    // length: the discriminant is then a fourth power of the lengths, not an eighth, and neither
+    // over- nor underflows within the library's coordinate range (core/validate.hpp)
     const Vec3<S> A = d.cross(e), B = m.cross(e);
-    const S c = B.squaredNorm() - rr * ee;
+    const S inv_ee = S(1) / ee;
+    const S c = B.squaredNorm() * inv_ee - rr;
     if (!(c > S(0))) continue;  // inside the infinite cylinder: an endpoint sphere comes first
-    const S t = detail::first_entry_root(A.squaredNorm(), A.dot(B), c);
+    const S t = detail::first_entry_root(A.squaredNorm() * inv_ee, A.dot(B) * inv_ee, c);
     if (t < S(0) || t >= best) continue;
     const S s = (m + t * d).dot(e) / ee;
     if (s >= S(0) && s <= S(1)) best = t, feature = edge_feature[k];

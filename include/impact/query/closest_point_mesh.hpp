@@ -74,7 +74,8 @@ template <class S> inline S squared_distance_to_bv(const Vec3<S>& p, const Spher
 /// Options of closest_point_on_mesh.
 template <class S> struct ClosestPointOptions {
   /// Only points closer than this are searched for; farther ones give no result. Bounding the
-  /// search makes the query cheap for points far from the surface.
+  /// search makes the query cheap for points far from the surface. >= 0 or +infinity (NaN and
+  /// negative values throw InvalidInput).
   S max_distance = std::numeric_limits<S>::infinity();
 };
 
@@ -92,12 +93,14 @@ template <class S> struct ClosestPointMeshResult {
   Vec3<S> normal = Vec3<S>::Zero();
 };
 
-/// Closest point on the mesh (placed by `pose`) to `query`, or nothing when the mesh is farther
-/// than options.max_distance. Cost O(log n) typical.
+namespace detail {
+
+/// closest_point_on_mesh without the argument checks, for callers that validated them once
+/// (the particle step, the distance grid's build).
 template <class BV>
-std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_point_on_mesh(
-    const MeshBvh<BV>& mesh, const Vec3<typename BvTraits<BV>::Scalar>& query,
-    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}, const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options = {}) {
+std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_point_on_mesh_unchecked(
+    const MeshBvh<BV>& mesh, const Vec3<typename BvTraits<BV>::Scalar>& query, const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
+    const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options) {
   using S = typename BvTraits<BV>::Scalar;
   const Vec3<S> p = pose.R.transpose() * (query - pose.t);
   S best = options.max_distance < std::numeric_limits<S>::infinity() ? options.max_distance * options.max_distance
@@ -140,6 +143,22 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
   if (best_tp.feature != TriangleFeature::Face && dn > S(0)) n = diff / dn;
   r.normal = pose.R * n;
   return r;
+}
+
+}  // namespace detail
+
+/// Closest point on the mesh (placed by `pose`) to `query`, or nothing when the mesh is farther
+/// than options.max_distance. Cost O(log n) typical. Throws InvalidInput for a query not finite
+/// or beyond CoordinateRange (core/validate.hpp), a pose that is not rigid (validate_pose) or options.max_distance NaN or negative.
+template <class BV>
+std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_point_on_mesh(
+    const MeshBvh<BV>& mesh, const Vec3<typename BvTraits<BV>::Scalar>& query,
+    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}, const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options = {}) {
+  constexpr const char* where = "closest_point_on_mesh";
+  validate_coordinates(query, where, "query");
+  validate_pose(pose, where);
+  validate_nonnegative_or_inf(options.max_distance, where, "options.max_distance");
+  return detail::closest_point_on_mesh_unchecked(mesh, query, pose, options);
 }
 
 }  // namespace impact

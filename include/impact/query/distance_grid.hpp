@@ -40,6 +40,7 @@
 
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
+#include "impact/core/validate.hpp"
 #include "impact/core/parallel.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
@@ -55,21 +56,29 @@ namespace impact {
 /// Options of a DistanceGrid.
 template <class S>
 struct DistanceGridConfig {
-  /// Cells along the longest side of the mesh's bounding box (>= 1); memory is about
-  /// 17 * resolution^3 * (the box's volume / the longest side's cube) bytes (1 without start
-  /// nodes).
+  /// Cells along the longest side of the mesh's bounding box, in [1, kMaxResolution]; memory is
+  /// about 17 * resolution^3 * (the box's volume / the longest side's cube) bytes (1 without start
+  /// nodes) once built, plus sizeof(S) a cell during the build. The grid's whole count of cells
+  /// (padding included) must not exceed kMaxCells.
   int resolution = 64;
-  /// Cells added around the mesh's bounding box on every side (>= 0): tighter bounds just outside.
+  /// Cells added around the mesh's bounding box on every side, in [0, kMaxPadding]: tighter
+  /// bounds just outside.
   int padding = 2;
   /// Samples farther than this from the mesh store this value (a valid lower bound); bounding the
-  /// build's closest-point queries makes it faster. Infinity: exact samples everywhere.
+  /// build's closest-point queries makes it faster. >= 0; infinity: exact samples everywhere.
   S max_distance = std::numeric_limits<S>::infinity();
-  /// Start nodes and slabs for segments of up to this many cells around their midpoint's cell;
-  /// 0: none.
+  /// Start nodes and slabs for segments of up to this many cells around their midpoint's cell,
+  /// in [0, kMaxReach]; 0: none.
   S start_node_reach = S(1);
   /// Threads of the build (<= 0: the hardware concurrency, 1: serial); the grid is the same, bit
   /// for bit, for every count (each cell is computed on its own).
   int threads = 0;
+
+  static constexpr int kMaxResolution = 4096;
+  static constexpr int kMaxPadding = 1024;
+  static constexpr int kMaxReach = 64;
+  /// 2^27 cells: 2.1 GiB of start nodes and slabs, 128 MiB of bounds.
+  static constexpr std::int64_t kMaxCells = std::int64_t(1) << 27;
 };
 
 /// Conservative distance bounds to a mesh in the mesh's own (local) frame. See the file comment.
@@ -80,21 +89,40 @@ class DistanceGrid {
  public:
   DistanceGrid() = default;
 
-  /// Samples the distance to `mesh` (its local frame) on a grid over its bounding box.
+  /// Samples the distance to `mesh` (its local frame) on a grid over its bounding box. Throws
+  /// InvalidInput, before allocating anything, for a config outside the ranges its fields state.
   template <class BV>
   explicit DistanceGrid(const MeshBvh<BV>& mesh, const DistanceGridConfig<S>& cfg = {}) {
     static_assert(std::is_same_v<typename BvTraits<BV>::Scalar, S>, "DistanceGrid: scalar of the mesh");
     Aabb<S> box;
     const auto& V = mesh.mesh().V;
     for (Eigen::Index i = 0; i < V.rows(); ++i) box.extend(Vec3<S>(V.row(i).transpose()));
-    const int res = std::max(cfg.resolution, 1), pad = std::max(cfg.padding, 0);
+    constexpr const char* where = "DistanceGrid";
+    using Cfg = DistanceGridConfig<S>;
+    validate_in_range(cfg.resolution, 1, Cfg::kMaxResolution, where, "config.resolution");
+    validate_in_range(cfg.padding, 0, Cfg::kMaxPadding, where, "config.padding");
+    validate_nonnegative_or_inf(cfg.max_distance, where, "config.max_distance");
+    validate_nonnegative(cfg.start_node_reach, where, "config.start_node_reach");
+    require(cfg.start_node_reach <= S(Cfg::kMaxReach), where, "config.start_node_reach must be at most 64 cells");
+    const int res = cfg.resolution, pad = cfg.padding;
+    const Vec3<S> ext = box.extent();
+    const S h = std::max(ext.maxCoeff() / S(res), std::numeric_limits<S>::min() * S(1e6));
+    int n[3];
+    std::int64_t total = 1;
+    for (int k = 0; k < 3; ++k) {
+      // ext[k] / h <= res up to rounding: no overflow, counted in 64 bits
+      n[k] = std::max(1, static_cast<int>(std::ceil(std::min(ext[k] / h, S(Cfg::kMaxResolution + 1))))) + 2 * pad;
+      total *= n[k];
+    }
+    if (total > Cfg::kMaxCells)
+      throw InvalidInput(std::string(where) + ": " + std::to_string(n[0]) + " x " + std::to_string(n[1]) + " x " + std::to_string(n[2]) +
+                         " cells (config.resolution and config.padding) exceed the bound of " + std::to_string(Cfg::kMaxCells));
     box_ = box;
     size_ = box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).sum();
-    const Vec3<S> ext = box.extent();
-    h_ = std::max(ext.maxCoeff() / S(res), std::numeric_limits<S>::min() * S(1e6));
+    h_ = h;
     inv_h_ = S(1) / h_;
     for (int k = 0; k < 3; ++k) {
-      n_[k] = std::max(1, static_cast<int>(std::ceil(ext[k] / h_))) + 2 * pad;
+      n_[k] = n[k];
       origin_[k] = box.center()[k] - S(0.5) * h_ * S(n_[k]);
     }
     const S eps = std::numeric_limits<S>::epsilon();
@@ -115,7 +143,7 @@ class DistanceGrid {
       std::size_t idx = row * static_cast<std::size_t>(n_[0]);
       for (int x = 0; x < n_[0]; ++x, ++idx) {
         const Vec3<S> c = center(x, y, z);
-        const auto r = closest_point_on_mesh(mesh, c, RigidTransform<S>(), opt);
+        const auto r = detail::closest_point_on_mesh_unchecked(mesh, c, RigidTransform<S>(), opt);
         S d = r ? r->distance : cfg.max_distance;
         d = d * (S(1) - S(64) * eps) - S(64) * eps * (c.cwiseAbs().maxCoeff() + scale);
         dist[idx] = d > S(0) ? d : S(0);

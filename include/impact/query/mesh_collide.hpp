@@ -14,6 +14,7 @@
 
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse_pair.hpp"
+#include "impact/geometry/transform.hpp"
 #include "impact/narrow/triangle_triangle.hpp"
 
 #include <algorithm>
@@ -252,12 +253,15 @@ template <class S> MeshContact<S> make_contact(const Triangle<S>& ta, const Tria
 }  // namespace detail
 
 /// Colliding triangle pairs of mesh a (at pose_a) and mesh b (at pose_b). Both trees must use the
-/// same BV type. Boolean mode (default) stops at the first pair found.
+/// same BV type. Boolean mode (default) stops at the first pair found. Throws InvalidInput when a
+/// pose is not rigid (validate_pose).
 template <class BV>
 CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const RigidTransform<typename BvTraits<BV>::Scalar>& pose_a,
                                                      const MeshBvh<BV>& b, const RigidTransform<typename BvTraits<BV>::Scalar>& pose_b,
                                                      const CollideOptions& options = {}) {
   using S = typename BvTraits<BV>::Scalar;
+  validate_pose(pose_a, "collide", "pose_a");
+  validate_pose(pose_b, "collide", "pose_b");
   CollideResult<S> result;
   const RigidTransform<S> b_to_a = relative_transform(pose_a, pose_b);
   const detail::MeshNodeOverlap<BV> overlap(a, b, b_to_a, &result.stats.bv_tests);
@@ -276,11 +280,14 @@ CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const
   return result;
 }
 
-/// Boolean query: true when the meshes intersect. Stops at the first colliding pair.
+/// Boolean query: true when the meshes intersect. Stops at the first colliding pair. Throws
+/// InvalidInput when a pose is not rigid (validate_pose).
 template <class BV>
 bool collides(const MeshBvh<BV>& a, const RigidTransform<typename BvTraits<BV>::Scalar>& pose_a, const MeshBvh<BV>& b,
               const RigidTransform<typename BvTraits<BV>::Scalar>& pose_b, QueryStats* stats = nullptr) {
   using S = typename BvTraits<BV>::Scalar;
+  validate_pose(pose_a, "collides", "pose_a");
+  validate_pose(pose_b, "collides", "pose_b");
   const RigidTransform<S> b_to_a = relative_transform(pose_a, pose_b);
   QueryStats st;
   bool hit = false;

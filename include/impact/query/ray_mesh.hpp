@@ -273,18 +273,24 @@ struct FirstHitCast {
 
 }  // namespace detail
 
-/// First hit of the ray origin + t * direction, t in [0, ray.t_max], against the mesh placed in
-/// the world by `pose`. A segment p -> q is the ray (p, q - p, 1). Returns nothing when the ray
-/// misses or the direction is zero. Ties between triangles at the same t (a shared edge) return
-/// one of them. Cost O(log n) for rays that pass near few triangles.
-///
-/// `start_node` (the root by default) restricts the search to one subtree of mesh.tree(): the
-/// caller guarantees that every triangle the ray can hit lies in it (e.g. DistanceGrid::start_node).
+namespace detail {
+
+/// The checks of the public ray casts: a valid ray (validate_ray), a rigid pose (validate_pose)
+/// and a start node of the mesh's tree.
 template <class BV>
-std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh,
-                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
-                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
-                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+void validate_ray_cast(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::Scalar>& ray,
+                       const RigidTransform<typename BvTraits<BV>::Scalar>& pose, std::int32_t start_node, const char* where) {
+  validate_ray(ray, where);
+  validate_pose(pose, where);
+  validate_in_range<std::int64_t>(start_node, 0, static_cast<std::int64_t>(mesh.tree().nodes.size()) - 1, where, "start_node");
+}
+
+/// ray_mesh_first_hit without the argument checks (callers that validated them once).
+template <class BV>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_unchecked(const MeshBvh<BV>& mesh,
+                                                                                      const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                                      const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
+                                                                                      RayMeshStats* stats, std::int32_t start_node) {
   detail::FirstHitCast<BV> c(mesh, ray, pose, stats, true);
   if (!c.valid()) return std::nullopt;
   traverse_nearest(
@@ -299,15 +305,12 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   return c.result(ray, pose);
 }
 
-/// The same first hit, walking `fast`, a CompactBvh of mesh.tree() (bvh/compact_bvh.hpp), from
-/// the node standing for `start_node` (a node of mesh.tree(), with the same guarantee): the same
-/// t (the triangle may differ only among triangles hit at exactly the same t), faster when the
-/// mesh's tree does not fit in cache. `fast` must be built from mesh.tree() after its last change.
+/// ray_mesh_first_hit through a CompactBvh without the argument checks.
 template <class BV>
-std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh, const CompactBvh& fast,
-                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
-                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
-                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_unchecked(const MeshBvh<BV>& mesh, const CompactBvh& fast,
+                                                                                      const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                                      const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
+                                                                                      RayMeshStats* stats, std::int32_t start_node) {
   using S = typename BvTraits<BV>::Scalar;
   assert(fast.num_primitives() == static_cast<std::size_t>(mesh.num_triangles()));
   detail::FirstHitCast<BV> c(mesh, ray, pose, stats, false);
@@ -332,13 +335,53 @@ std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(cons
   return c.result(ray, pose);
 }
 
-/// True when the ray hits any triangle for t in [0, ray.t_max] (same rules as the first hit).
-/// Depth-first, stops at the first triangle found: cheaper than the first hit for visibility and
-/// tunnelling checks.
+}  // namespace detail
+
+/// First hit of the ray origin + t * direction, t in [0, ray.t_max], against the mesh placed in
+/// the world by `pose`. A segment p -> q is the ray (p, q - p, 1). Returns nothing when the ray
+/// misses. Ties between triangles at the same t (a shared edge) return one of them. Cost
+/// O(log n) for rays that pass near few triangles.
+///
+/// `start_node` (the root by default) restricts the search to one subtree of mesh.tree(): the
+/// caller guarantees that every triangle the ray can hit lies in it (e.g. DistanceGrid::start_node).
+///
+/// Throws InvalidInput for a non-finite origin or direction, a zero direction, t_max NaN or
+/// negative (validate_ray), a pose that is not rigid (validate_pose), or a start node outside
+/// the tree.
+template <class BV>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh,
+                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
+                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+  detail::validate_ray_cast(mesh, ray, pose, start_node, "ray_mesh_first_hit");
+  return detail::ray_mesh_first_hit_unchecked(mesh, ray, pose, stats, start_node);
+}
+
+/// The same first hit, walking `fast`, a CompactBvh of mesh.tree() (bvh/compact_bvh.hpp), from
+/// the node standing for `start_node` (a node of mesh.tree(), with the same guarantee): the same
+/// t (the triangle may differ only among triangles hit at exactly the same t), faster when the
+/// mesh's tree does not fit in cache. `fast` must be built from mesh.tree() after its last change
+/// (InvalidInput when its primitive count differs from the mesh's); the other checks are those of
+/// the first overload.
+template <class BV>
+std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit(const MeshBvh<BV>& mesh, const CompactBvh& fast,
+                                                                            const Ray<typename BvTraits<BV>::Scalar>& ray,
+                                                                            const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {},
+                                                                            RayMeshStats* stats = nullptr, std::int32_t start_node = 0) {
+  detail::validate_ray_cast(mesh, ray, pose, start_node, "ray_mesh_first_hit");
+  require(fast.num_primitives() == static_cast<std::size_t>(mesh.num_triangles()), "ray_mesh_first_hit",
+          "the CompactBvh `fast` was not built from this mesh's tree (primitive counts differ)");
+  return detail::ray_mesh_first_hit_unchecked(mesh, fast, ray, pose, stats, start_node);
+}
+
+/// True when the ray hits any triangle for t in [0, ray.t_max] (same rules and checks as the
+/// first hit). Depth-first, stops at the first triangle found: cheaper than the first hit for
+/// visibility and tunnelling checks.
 template <class BV>
 bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::Scalar>& ray,
                       const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}) {
   using S = typename BvTraits<BV>::Scalar;
+  detail::validate_ray_cast(mesh, ray, pose, 0, "ray_mesh_any_hit");
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return false;

@@ -58,15 +58,16 @@ inline std::optional<SweptSphereHit<S>> swept_sphere_triangle(const Vec3<S>& o, 
 
 }  // namespace detail
 
-/// First hit of the sphere with centre ray.origin + t * ray.direction, t in [0, ray.t_max], and
-/// radius `radius` (>= 0; 0 falls back to the ray query) against the mesh placed by `pose`.
+namespace detail {
+
+/// swept_sphere_mesh_first_hit without the argument checks (callers that validated them once).
 template <class BV>
-std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_first_hit(
+std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_first_hit_unchecked(
     const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::Scalar>& ray, typename BvTraits<BV>::Scalar radius,
-    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}) {
+    const RigidTransform<typename BvTraits<BV>::Scalar>& pose) {
   using S = typename BvTraits<BV>::Scalar;
   if (!(radius > S(0))) {
-    const auto h = ray_mesh_first_hit(mesh, ray, pose);
+    const auto h = ray_mesh_first_hit_unchecked(mesh, ray, pose, nullptr, 0);
     if (!h) return std::nullopt;
     SweptSphereHit<S> s;
     s.t = h->t;
@@ -98,6 +99,22 @@ std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_f
   out->point = pose.apply(out->point);
   out->normal = pose.R * out->normal;
   return out;
+}
+
+}  // namespace detail
+
+/// First hit of the sphere with centre ray.origin + t * ray.direction, t in [0, ray.t_max], and
+/// radius `radius` (>= 0; 0 falls back to the ray query) against the mesh placed by `pose`.
+/// Throws InvalidInput for a radius NaN, negative or beyond CoordinateRange, and on the checks of
+/// ray_mesh_first_hit (ray and pose).
+template <class BV>
+std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_first_hit(
+    const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::Scalar>& ray, typename BvTraits<BV>::Scalar radius,
+    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}) {
+  constexpr const char* where = "swept_sphere_mesh_first_hit";
+  validate_length(radius, where, "radius");
+  detail::validate_ray_cast(mesh, ray, pose, 0, where);
+  return detail::swept_sphere_mesh_first_hit_unchecked(mesh, ray, radius, pose);
 }
 
 }  // namespace impact

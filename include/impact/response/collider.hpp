@@ -415,7 +415,7 @@ template <class BV> struct MeshCollider {
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     if (r > S(0)) {
-      const auto h = swept_sphere_mesh_first_hit(*mesh, Ray<S>(o, d, t_max), r);
+      const auto h = detail::swept_sphere_mesh_first_hit_unchecked(*mesh, Ray<S>(o, d, t_max), r, RigidTransform<S>());
       if (!h) return std::nullopt;
       return LocalHit<S>{h->t, h->point, h->normal};
     }
@@ -424,8 +424,8 @@ template <class BV> struct MeshCollider {
       start = distance_grid->start_node(o, Vec3<S>(o + t_max * d));
       if (start == DistanceGrid<S>::kNoTriangle) return std::nullopt;
     }
-    const auto h = compact_tree ? ray_mesh_first_hit(*mesh, *compact_tree, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start)
-                                : ray_mesh_first_hit(*mesh, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start);
+    const auto h = compact_tree ? detail::ray_mesh_first_hit_unchecked(*mesh, *compact_tree, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start)
+                                : detail::ray_mesh_first_hit_unchecked(*mesh, Ray<S>(o, d, t_max), RigidTransform<S>(), nullptr, start);
     if (!h) return std::nullopt;
     return LocalHit<S>{h->t, h->point, h->front_face ? h->normal : Vec3<S>(-h->normal)};
   }
@@ -452,13 +452,13 @@ template <class BV> struct MeshCollider {
     // nothing; the factor keeps well clear of its rounding)
     if (distance_grid && !(distance_grid->lower_bound(q) <= opt.max_distance * (S(1) + S(64) * std::numeric_limits<S>::epsilon())))
       return std::nullopt;
-    const auto c = closest_point_on_mesh(*mesh, q, RigidTransform<S>(), opt);
+    const auto c = detail::closest_point_on_mesh_unchecked(*mesh, q, RigidTransform<S>(), opt);
     if (!c) return std::nullopt;
     int want = side == ColliderSide::Inside ? -1 : 1;
     if (side == ColliderSide::TwoSided) {
       ClosestPointOptions<S> o0;
       o0.max_distance = S(2) * travel + r + offset;
-      const auto c0 = closest_point_on_mesh(*mesh, q0, RigidTransform<S>(), o0);
+      const auto c0 = detail::closest_point_on_mesh_unchecked(*mesh, q0, RigidTransform<S>(), o0);
       if (c0) {
         const int s0 = side_of(q0, *c0);
         want = s0 == 0 ? 1 : s0;
@@ -546,8 +546,62 @@ template <class S, class BV = Aabb<S>> struct ColliderSet {
     for_each([&](const auto& c, int) { m = m || c.motion.moving(); });
     return m;
   }
-  /// Moves every collider's pose forward by dt (call after each step).
+  /// Throws InvalidInput unless every collider can be stepped against: a rigid pose
+  /// (validate_pose) and finite velocities (the linear one within CoordinateRange), restitution in [0, 1], friction finite and >= 0, a
+  /// strategy and side of the enum; planes with an offset within CoordinateRange and a unit normal (within
+  /// rotation_tolerance), spheres with a centre and a radius (>= 0) within CoordinateRange, boxes
+  /// with a centre (validate_pose), rotation axes and half extents (>= 0) within it; meshes with a mesh, and a
+  /// compact_tree built from it when set. `where` names the caller in the message. O(colliders).
+  void validate(const char* where) const {
+    int index = 0;
+    auto name = [&](const char* kind, const char* field) {
+      return std::string(kind) + " collider " + std::to_string(index) + " " + field;
+    };
+    auto common = [&](const auto& c, const char* kind) {
+      validate_pose(c.motion.pose, where, name(kind, "motion.pose").c_str());
+      validate_coordinates(c.motion.linear_velocity, where, name(kind, "motion.linear_velocity").c_str());
+      validate_finite(c.motion.angular_velocity, where, name(kind, "motion.angular_velocity").c_str());
+      const S e = c.material.restitution;
+      require(e >= S(0) && e <= S(1), where, name(kind, "material.restitution") + " must be in [0, 1]");
+      validate_nonnegative(c.material.friction, where, name(kind, "material.friction").c_str());
+      require(c.strategy == Strategy::Inherit || c.strategy == Strategy::Backtrack || c.strategy == Strategy::Project, where,
+              name(kind, "strategy") + " is not a Strategy");
+    };
+    auto side_ok = [](ColliderSide sd) { return sd == ColliderSide::Outside || sd == ColliderSide::Inside || sd == ColliderSide::TwoSided; };
+    for (const auto& c : planes) {
+      common(c, "plane");
+      validate_length(std::abs(c.plane.offset), where, name("plane", "|plane.offset|").c_str());
+      require(all_finite(c.plane.normal) && std::abs(c.plane.normal.norm() - S(1)) <= rotation_tolerance<S>(), where,
+              name("plane", "plane.normal") + " must be a unit vector");
+      ++index;
+    }
+    for (const auto& c : spheres) {
+      common(c, "sphere");
+      validate_coordinates(c.sphere.center, where, name("sphere", "sphere.center").c_str());
+      validate_length(c.sphere.radius, where, name("sphere", "sphere.radius").c_str());
+      require(side_ok(c.side), where, name("sphere", "side") + " is not a ColliderSide");
+      ++index;
+    }
+    for (const auto& c : boxes) {
+      common(c, "box");
+      for (int k = 0; k < 3; ++k) validate_length(c.box.half[k], where, name("box", "box.half").c_str());
+      validate_pose(RigidTransform<S>(c.box.axes, c.box.center), where, name("box", "box").c_str());
+      require(side_ok(c.side), where, name("box", "side") + " is not a ColliderSide");
+      ++index;
+    }
+    for (const auto& c : meshes) {
+      common(c, "mesh");
+      require(c.mesh != nullptr, where, name("mesh", "mesh") + " is null");
+      require(side_ok(c.side), where, name("mesh", "side") + " is not a ColliderSide");
+      require(!c.compact_tree || c.compact_tree->num_primitives() == static_cast<std::size_t>(c.mesh->num_triangles()), where,
+              name("mesh", "compact_tree") + " was not built from its mesh's tree (primitive counts differ)");
+      ++index;
+    }
+  }
+  /// Moves every collider's pose forward by dt (call after each step). Throws InvalidInput, with
+  /// nothing moved, for dt NaN or infinite.
   void advance(S dt) {
+    validate_finite(dt, "ColliderSet::advance", "dt");
     for (auto& c : planes) c.motion.advance(dt);
     for (auto& c : spheres) c.motion.advance(dt);
     for (auto& c : boxes) c.motion.advance(dt);

@@ -524,22 +524,76 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV>& colliders, 
 
 }  // namespace detail
 
+namespace detail {
+
+/// Throws InvalidInput unless dt is finite, >= 0 and within CoordinateRange and the options are
+/// usable: gravity finite (|g|_inf dt^2 within CoordinateRange),
+/// max_iterations >= 0, rest_speed, rest_speed_factor, offset_ulps, surface_offset and
+/// free_ball_factor finite and >= 0, the strategy Backtrack or Project.
+template <class S> void validate_step_options(S dt, const StepOptions<S>& opt, const char* where) {
+  validate_length(dt, where, "dt");
+  validate_finite(opt.gravity, where, "options.gravity");
+  require(opt.gravity.cwiseAbs().maxCoeff() * dt * dt <= CoordinateRange<S>::max, where,
+          "options.gravity * dt^2 must be within CoordinateRange (core/validate.hpp)");
+  validate_in_range(opt.max_iterations, 0, std::numeric_limits<int>::max(), where, "options.max_iterations");
+  validate_nonnegative(opt.rest_speed, where, "options.rest_speed");
+  validate_nonnegative(opt.rest_speed_factor, where, "options.rest_speed_factor");
+  validate_nonnegative(opt.offset_ulps, where, "options.offset_ulps");
+  validate_nonnegative(opt.surface_offset, where, "options.surface_offset");
+  validate_nonnegative(opt.free_ball_factor, where, "options.free_ball_factor");
+  require(opt.strategy == Strategy::Backtrack || opt.strategy == Strategy::Project, where,
+          "options.strategy must be Backtrack or Project (Inherit is for colliders)");
+}
+
+/// Throws InvalidInput unless the particle's position and free-ball centre are finite and within
+/// CoordinateRange (core/validate.hpp), its velocity finite with |v|_inf dt within it, its radius
+/// finite, >= 0 and within it, and its free radius not NaN (the step itself stores +infinity when
+/// no collider is in reach; negative: a cool-down). `index` names
+/// it in the message. A few comparisons, no allocation unless it throws.
+template <class S> void validate_particle(const Particle<S>& p, std::size_t index, S dt, const char* where) {
+  constexpr S lim = CoordinateRange<S>::max;
+  const bool ok = all_finite(p.position) && all_finite(p.velocity) && all_finite(p.free_center) && !std::isnan(p.free_radius) &&
+                  p.radius >= S(0) && p.radius <= lim && p.position.cwiseAbs().maxCoeff() <= lim &&
+                  p.free_center.cwiseAbs().maxCoeff() <= lim && p.velocity.cwiseAbs().maxCoeff() * dt <= lim;
+  if (IMPACT_LIKELY(ok)) return;
+  const std::string n = "particle " + std::to_string(index);
+  validate_coordinates(p.position, where, (n + " position").c_str());
+  validate_finite(p.velocity, where, (n + " velocity").c_str());
+  require(p.velocity.cwiseAbs().maxCoeff() * dt <= lim, where, n + " velocity * dt must be within CoordinateRange (core/validate.hpp)");
+  validate_length(p.radius, where, (n + " radius").c_str());
+  validate_coordinates(p.free_center, where, (n + " free_center").c_str());
+  require(!std::isnan(p.free_radius), where, n + " free_radius must not be NaN");
+}
+
+}  // namespace detail
+
 /// Advances one particle by dt against the colliders (see the file comment). `on_leg(from, to)`
 /// is called for every straight piece of path the particle actually travels during
 /// backtracking, for audits and visualisation. Returns this particle-step's counters.
+/// Throws InvalidInput, with nothing modified, for a non-finite particle, a negative radius, dt
+/// NaN, infinite or negative, bad options (detail::validate_step_options) or an invalid collider
+/// (ColliderSet::validate): checks of O(colliders) per call.
 template <class S, class BV, class LegObserver = detail::NoLegObserver>
 StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt,
                         LegObserver&& on_leg = {}) {
+  detail::validate_step_options(dt, opt, "step_particle");
+  colliders.validate("step_particle");
+  detail::validate_particle(p, 0, dt, "step_particle");
   return detail::step_particle_in(p, colliders, dt, opt, detail::StepContext<S>(colliders, dt, opt), on_leg);
 }
 
 /// A permutation of the particles along a Morton (Z-order) curve over their bounding box, 21 bits
 /// per axis. Stepping particles in this order makes consecutive queries touch the same tree nodes
 /// (better cache use on large meshes); reorder every few steps, since particles drift apart.
-/// O(n) (a radix sort of the codes).
+/// O(n) (a radix sort of the codes). Throws InvalidInput for a particle with a NaN or infinite
+/// position.
 template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Particle<S>>& particles) {
   Aabb<S> box;
-  for (const auto& p : particles) box.extend(p.position);
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (IMPACT_UNLIKELY(!all_finite(particles[i].position)))
+      validate_finite(particles[i].position, "spatial_order", ("particle " + std::to_string(i) + " position").c_str());
+    box.extend(particles[i].position);
+  }
   const Vec3<S> ext = box.extent().cwiseMax(Vec3<S>::Constant(std::numeric_limits<S>::min()));
   auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit
     v &= 0x1fffff;
@@ -555,7 +609,9 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
     std::uint64_t code = 0;
     for (int k = 0; k < 3; ++k) {
       const double t = double((particles[i].position[k] - box.min[k]) / ext[k]);
-      const auto q = static_cast<std::uint64_t>(std::min(std::max(t, 0.0), 1.0) * 2097151.0);
+      // in [0, 1] for finite positions; a box wider than the largest double gives t = NaN, sent
+      // to 0 (the cast of a NaN would be undefined)
+      const auto q = static_cast<std::uint64_t>((t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0) * 2097151.0);
       code |= spread(q) << k;
     }
     keys[i] = {code, static_cast<std::uint32_t>(i)};
@@ -578,9 +634,14 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
 
 /// Advances every particle by dt, each independently, on opt.threads threads (chunks of 256
 /// particles handed out dynamically; the colliders are only read). Returns the summed counters.
-/// The particles and counters are the same, bit for bit, for every thread count.
+/// The particles and counters are the same, bit for bit, for every thread count. Throws
+/// InvalidInput, before any particle moves, on the checks of step_particle (one pass over the
+/// particles, then the colliders and options once).
 template <class S, class BV>
 StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
+  detail::validate_step_options(dt, opt, "step_particles");
+  colliders.validate("step_particles");
+  for (std::size_t i = 0; i < particles.size(); ++i) detail::validate_particle(particles[i], i, dt, "step_particles");
   const detail::StepContext<S> ctx(colliders, dt, opt);
   const auto run = [&](std::size_t begin, std::size_t end) {
     StepStats st;
