@@ -90,6 +90,7 @@ struct Row {
   int colliding = 0, mismatches = 0;
   double bv_tests = -1, tri_tests = -1;
   double ratio = 0;  // FCL OBBRSS median / this median
+  double tree_bytes_per_tri = -1;  // impact: MeshBvh::tree_bytes() per triangle, beyond the mesh's V and F
 };
 
 }  // namespace
@@ -186,6 +187,8 @@ int main(int argc, char** argv) {
     const double build_ms = seconds_since(t0) * 1e3;
     Row rb_{"impact", bvname, "boolean", build_ms, {}, 0, 0, 0, 0, 0};
     Row ra_{"impact", bvname, "all_pairs", build_ms, {}, 0, 0, 0, 0, 0};
+    rb_.tree_bytes_per_tri = ra_.tree_bytes_per_tri =
+        double(ma.tree_bytes() + mb.tree_bytes()) / double(ma.num_triangles() + mb.num_triangles());
     std::vector<double> tb, ta;
     CollideOptions all;
     all.all_pairs = true;
@@ -231,6 +234,10 @@ int main(int argc, char** argv) {
     std::printf("%-7s %-7s %-10s %10.2f %11.2f %11.2f %9d %10d %12s %12s %13.2f\n", r.library.c_str(), r.bv.c_str(), r.query.c_str(),
                 r.build_ms, r.us.median, r.us.mean, r.colliding, r.mismatches, bvt, trt, r.ratio);
   }
+  for (const Row& r : rows)
+    if (r.tree_bytes_per_tri >= 0 && r.query == "boolean")
+      std::printf("memory: impact %s tree %.1f bytes per triangle beyond the mesh (nodes, permutation, triangle ids)\n", r.bv.c_str(),
+                  r.tree_bytes_per_tri);
   std::printf("\nmismatches: boolean answers (or all-pairs pair sets) that differ from FCL OBBRSS on the same pose.\n");
 
   // impact's answers against FCL OBBRSS (FCL's OBB row is printed, as a check of the peer, but is
@@ -246,6 +253,7 @@ int main(int argc, char** argv) {
       o.add("library", r.library).add("bv", r.bv).add("query", r.query).add("build_ms", r.build_ms).add("median_us", r.us.median);
       o.add("mean_us", r.us.mean).add("p99_us", r.us.p99).add("max_us", r.us.max).add("colliding", r.colliding).add("mismatches", r.mismatches);
       if (r.bv_tests >= 0) o.add("bv_tests_mean", r.bv_tests).add("tri_tests_mean", r.tri_tests);
+      if (r.tree_bytes_per_tri >= 0) o.add("tree_bytes_per_triangle", r.tree_bytes_per_tri);
       o.add("speedup_vs_fcl_obbrss", r.ratio);
       items.push_back(o.str());
     }

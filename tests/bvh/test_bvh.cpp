@@ -273,3 +273,27 @@ TEST(TraversalStack, LifoAcrossTheOverflow) {
     EXPECT_TRUE(stack.empty());
   }
 }
+
+// D14: a mesh's tree keeps nothing of its build (the fitting scratch is a local) and the sphere and
+// AABB trees stay within 120 bytes per triangle beyond the mesh's own arrays (nodes, primitive
+// permutation and triangle ids; the triangles are read from the mesh), before and after a refit.
+template <class BV> void expect_tree_bytes_within(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, double bound) {
+  MeshBvh<BV> t(m);
+  const double per_tri = double(t.tree_bytes()) / double(t.num_triangles());
+  EXPECT_LE(per_tri, bound) << BvTraits<BV>::name;
+  EXPECT_GT(per_tri, 8.0) << BvTraits<BV>::name;  // counts the nodes at least
+  EXPECT_EQ(t.mesh_bytes(), std::size_t(m.V.size()) * sizeof(typename BvTraits<BV>::Scalar) + std::size_t(m.F.size()) * sizeof(int));
+  EXPECT_EQ(t.memory_bytes(), t.mesh_bytes() + t.tree_bytes());
+  const std::size_t before = t.tree_bytes();
+  t.set_vertices(m.V * typename BvTraits<BV>::Scalar(2), RefitMode::Fit);
+  EXPECT_EQ(t.tree_bytes(), before) << BvTraits<BV>::name;
+}
+
+TEST(MeshBvhMemory, SphereAndAabbTreesWithin120BytesPerTriangle) {
+  const auto m = random_soup<double>(3000, 91);
+  expect_tree_bytes_within<Sphere<double>>(m, 120);
+  expect_tree_bytes_within<Aabb<double>>(m, 120);
+  const auto mf = random_soup<float>(3000, 92);
+  expect_tree_bytes_within<Sphere<float>>(mf, 120);
+  expect_tree_bytes_within<Aabb<float>>(mf, 120);
+}

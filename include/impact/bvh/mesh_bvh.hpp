@@ -3,8 +3,8 @@
 /// MeshBvh<BV>: a triangle mesh together with its hierarchy, the object every mesh query takes.
 /// Construction validates the arrays (throws InvalidInput on empty meshes, NaN/Inf coordinates,
 /// out-of-range indices), copies them, builds the tree top-down with each node's BV fitted around
-/// its triangles' vertices, and keeps the triangles in leaf order so leaf tests read memory in
-/// sequence. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
+/// its triangles' vertices, and keeps only the leaf order of the triangles (their rows of F): a
+/// triangle's vertices are read from the copied mesh. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
 ///
 /// Thread safety: every const member and every query taking a `const MeshBvh&` (collides,
@@ -40,25 +40,31 @@ template <class BV> class MeshBvh {
   const Bvh<BV>& tree() const { return tree_; }
   const TriangleMesh<S>& mesh() const { return mesh_; }
   const MeshBvhConfig& config() const { return cfg_; }
-  std::int32_t num_triangles() const { return static_cast<std::int32_t>(tris_.size()); }
+  std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
   /// An upper bound of |x|_inf over the mesh's vertices and the tree's node centres: the scale at
   /// which the mesh queries bound the rounding of moving this mesh by a pose (mesh_collide.hpp).
   S coordinate_bound() const { return coordinate_bound_; }
   /// Heap bytes held by this object beyond sizeof(*this): the copied mesh (V, F), the tree's nodes
-  /// and primitive permutation, the leaf-ordered triangles and their ids (capacities, not sizes).
+  /// and primitive permutation, the triangles' rows of F in leaf order (capacities, not sizes).
   std::size_t memory_bytes() const { return mesh_bytes() + tree_bytes(); }
   /// The part of memory_bytes() held by the copied mesh arrays V and F.
   std::size_t mesh_bytes() const {
     return static_cast<std::size_t>(mesh_.V.size()) * sizeof(S) + static_cast<std::size_t>(mesh_.F.size()) * sizeof(int);
   }
-  /// The part of memory_bytes() beyond the mesh: nodes, permutation, leaf-ordered triangles, ids.
+  /// The part of memory_bytes() beyond the mesh: nodes, permutation, triangle ids in leaf order.
   std::size_t tree_bytes() const {
     return tree_.nodes.capacity() * sizeof(BvhNode<BV>) + tree_.primitives.capacity() * sizeof(std::int32_t) +
-           tris_.capacity() * sizeof(Triangle<S>) + ids_.capacity() * sizeof(std::int32_t);
+           ids_.capacity() * sizeof(std::int32_t);
   }
 
-  /// Triangle at leaf position k (the primitive ids the traversals hand out).
-  const Triangle<S>& triangle(std::int32_t k) const { return tris_[static_cast<std::size_t>(k)]; }
+  /// Triangle at leaf position k (the primitive ids the traversals hand out), read from the copied
+  /// mesh through the triangle's row of F (no per-triangle copy of the coordinates is kept: D14).
+  Triangle<S> triangle(std::int32_t k) const {
+    const int* f = mesh_.F.data() + 3 * static_cast<std::size_t>(ids_[static_cast<std::size_t>(k)]);  // row-major
+    const S* v = mesh_.V.data();  // row-major: vertex i at v + 3 i
+    return Triangle<S>(Vec3<S>(v[3 * f[0]], v[3 * f[0] + 1], v[3 * f[0] + 2]), Vec3<S>(v[3 * f[1]], v[3 * f[1] + 1], v[3 * f[1] + 2]),
+                       Vec3<S>(v[3 * f[2]], v[3 * f[2] + 1], v[3 * f[2] + 2]));
+  }
   /// Row of F of the triangle at leaf position k.
   std::int32_t triangle_id(std::int32_t k) const { return ids_[static_cast<std::size_t>(k)]; }
   /// Vertex indices of the triangle at leaf position k.
@@ -78,23 +84,19 @@ template <class BV> class MeshBvh {
     if (V.rows() != mesh_.V.rows()) throw InvalidInput("MeshBvh::set_vertices: vertex count changed");
     validate_mesh(V, mesh_.F);
     mesh_.V = V;
-    gather_triangles();
     std::vector<Vec3<S>> scratch;
-    refit(tree_, fitter(scratch), mode);
+    refit(tree_, fitter(scratch, [this](std::int32_t k) { return triangle(k); }), mode);
     update_coordinate_bound();
   }
 
  private:
-  void gather_triangles() {
-    for (std::size_t k = 0; k < ids_.size(); ++k) tris_[k] = mesh_.triangle(ids_[k]);
-  }
   /// Fits a BV around the vertices of the triangles at leaf positions ids[0..n), gathering them in
   /// the caller's scratch buffer (a local of build/set_vertices: it is not kept with the tree).
-  auto fitter(std::vector<Vec3<S>>& buf) {
-    return [this, &buf](const std::int32_t* ids, std::size_t n) {
+  template <class Get> auto fitter(std::vector<Vec3<S>>& buf, Get get) {
+    return [this, &buf, get](const std::int32_t* ids, std::size_t n) {
       buf.resize(3 * n);
       for (std::size_t i = 0; i < n; ++i) {
-        const Triangle<S>& t = tris_[static_cast<std::size_t>(ids[i])];
+        const Triangle<S> t = get(ids[i]);
         buf[3 * i] = t.a;
         buf[3 * i + 1] = t.b;
         buf[3 * i + 2] = t.c;
@@ -105,25 +107,24 @@ template <class BV> class MeshBvh {
   void build() {
     const auto m = static_cast<std::size_t>(mesh_.F.rows());
     std::vector<Vec3<S>> centroids(m);
-    tris_.resize(m);
+    std::vector<Triangle<S>> tris(m);  // mesh order, for the build only
     for (std::size_t t = 0; t < m; ++t) {
-      tris_[t] = mesh_.triangle(static_cast<int>(t));
-      centroids[t] = tris_[t].centroid();
+      tris[t] = mesh_.triangle(static_cast<int>(t));
+      centroids[t] = tris[t].centroid();
     }
     // Build over mesh order, then renumber primitives to leaf positions.
     std::vector<Aabb<S>> boxes;  // the surface-area heuristic and the clustering weigh the triangles' boxes
     if (cfg_.build.split == SplitRule::Sah || cfg_.build.method == BuildMethod::BottomUp) {
       boxes.resize(m);
-      for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris_[t].a.cwiseMin(tris_[t].b).cwiseMin(tris_[t].c), tris_[t].a.cwiseMax(tris_[t].b).cwiseMax(tris_[t].c));
+      for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris[t].a.cwiseMin(tris[t].b).cwiseMin(tris[t].c), tris[t].a.cwiseMax(tris[t].b).cwiseMax(tris[t].c));
     }
     std::vector<Vec3<S>> scratch;
-    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(scratch), cfg_.build)
-                                                        : build_top_down<BV>(centroids, fitter(scratch), cfg_.build, boxes);
+    auto get = [&tris](std::int32_t t) { return tris[static_cast<std::size_t>(t)]; };
+    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(scratch, get), cfg_.build)
+                                                        : build_top_down<BV>(centroids, fitter(scratch, get), cfg_.build, boxes);
     ids_ = tree_.primitives;
-    std::vector<Triangle<S>> ordered(m);
-    for (std::size_t k = 0; k < m; ++k) ordered[k] = tris_[static_cast<std::size_t>(ids_[k])];
-    tris_ = std::move(ordered);
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
+    tree_.nodes.shrink_to_fit();
     update_coordinate_bound();
   }
   void update_coordinate_bound() {
@@ -135,7 +136,6 @@ template <class BV> class MeshBvh {
   TriangleMesh<S> mesh_;
   MeshBvhConfig cfg_;
   Bvh<BV> tree_;
-  std::vector<Triangle<S>> tris_;  // leaf order
   std::vector<std::int32_t> ids_;  // leaf position -> row of F
   S coordinate_bound_ = 0;
 };

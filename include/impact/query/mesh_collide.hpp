@@ -326,11 +326,10 @@ template <class BV> CollideResult<typename BvTraits<BV>::Scalar> self_collide(co
     if (!triangles_intersect(m.triangle(p), m.triangle(q))) return true;
     result.colliding = true;
     std::int32_t ia = m.triangle_id(p), ib = m.triangle_id(q);
-    const Triangle<S>* ta = &m.triangle(p);
-    const Triangle<S>* tb = &m.triangle(q);
+    Triangle<S> ta = m.triangle(p), tb = m.triangle(q);
     if (ia > ib) std::swap(ia, ib), std::swap(ta, tb);
     result.pairs.emplace_back(ia, ib);
-    if (options.contacts) result.contacts.push_back(detail::make_contact(*ta, *tb, RigidTransform<S>{}, ia, ib));
+    if (options.contacts) result.contacts.push_back(detail::make_contact(ta, tb, RigidTransform<S>{}, ia, ib));
     return options.all_pairs && result.pairs.size() < options.max_pairs;
   };
   traverse_self(m.tree(), overlap, visit);
