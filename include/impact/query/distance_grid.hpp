@@ -317,7 +317,7 @@ class DistanceGrid {
     S lo = std::numeric_limits<S>::infinity(), hi = -lo, size = S(0);
     for (const std::int32_t k : ids)
       for (int j = 0; j < 3; ++j) {
-        const Vec3<S>& v = mesh.triangle(k)[j];
+        const Vec3<S> v = mesh.triangle(k)[j];  // triangle() returns by value
         const S t = n.dot(v);
         lo = std::min(lo, t);
         hi = std::max(hi, t);

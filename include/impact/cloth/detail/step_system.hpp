@@ -216,6 +216,7 @@ class Stepper {
       for (const auto& p : bad) stats_.start_violations.push_back(to_pair(p));
       near_.erase(std::remove_if(near_.begin(), near_.end(), [&](const Near& q) { return is_excluded(q.p); }), near_.end());
     }
+    broad_acc_ = 0;  // the start's gathering is counted in stats_.broad; no stage subtracts it
   }
 
   /// Stage 1: pairs within the proximity distance at x0 stop approaching (inelastic) with friction.
