@@ -180,7 +180,7 @@ TEST(CcdValidation, MeshEntryPointsThrow) {
   // coordinates out of range
   impact::Vertices<double> far = A.V1;
   far(4, 1) = 1e100;
-  expect_invalid([&] { impact::make_mesh_motion(A.V0, far, A.F); }, "mesh motion (end): vertex 4 has coordinate 1e+100");
+  expect_invalid([&] { impact::make_mesh_motion(A.V0, far, A.F); }, "mesh motion (end): vertex 4");  // named by the mesh validation's range check
   far(4, 1) = kNaN;
   expect_invalid([&] { impact::make_mesh_motion(far, A.V1, A.F); }, "mesh motion (start): vertex 4");
 }
