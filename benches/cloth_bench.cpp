@@ -17,7 +17,11 @@
 // 4 H; "inf" beyond), the kinetic energy the collision step removed (sum m (|v1|^2 - |v1'|^2) / 2
 // over the free vertices) and the change of the free vertices' linear momentum by the collision
 // step relative to their momentum (nonzero where obstacles or pinned vertices push; in pure
-// self-contact the zones should keep it).
+// self-contact the zones should keep it). In total also: the collision step's process CPU time
+// (std::clock: with --threads 1 the time of the one thread, unaffected by waiting on a loaded
+// machine), the zones' momentum error (ClothStepStats::zone_momentum_error, linear and angular),
+// and the broad phase's work per step: candidate pairs, gatherings, CCD tests, and candidate tests
+// settled by the distance bound.
 // --method: harmon = every stage with Harmon's inelastic zones; rigid = rigid impact zones;
 // impulses = proximity and CCD impulses only (then the fail-safe).
 // --speed V: the bullet's speed in the shot scene (m/s, default 1000).
@@ -33,6 +37,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -128,6 +133,7 @@ int main(int argc, char** argv) {
     else return usage();
   }
   if (a.steps < 0) a.steps = default_steps(a.scene.scene);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // one line per step, also into a file
   if (!(a.dt > 0) || !(a.thickness > 0) || a.threads < 1 || a.every < 1 || a.steps < 1) return usage();
   if (a.method != "harmon" && a.method != "rigid" && a.method != "impulses") return usage();
 
@@ -172,10 +178,11 @@ int main(int argc, char** argv) {
               "impul", "zones", "fsafe", "coll", "pass", "zones", "lgst", "fs", "inter", "min_sep", "E_removed", "dp_rel");
 
   std::vector<std::string> rows;
-  std::vector<double> dyn_ms, coll_ms;
+  std::vector<double> dyn_ms, coll_ms, coll_cpu_ms;
   double stage_ms[5] = {0, 0, 0, 0, 0};
+  std::size_t candidates_total = 0, ccd_total = 0, skipped_total = 0, gatherings_total = 0;
   std::size_t max_inter = 0, total_inter_steps = 0, failsafe_steps = 0, collisions_total = 0, zones_total = 0, largest_zone = 0;
-  double min_sep = std::numeric_limits<double>::infinity(), energy_removed = 0, worst_dp = 0;
+  double min_sep = std::numeric_limits<double>::infinity(), energy_removed = 0, worst_dp = 0, zone_dp = 0, zone_dl = 0;
   ScriptedVertices<double> script;
   for (int step = 0; step < a.steps; ++step) {
     const double t0 = step * a.dt, t1 = (step + 1) * a.dt;
@@ -188,6 +195,7 @@ int main(int argc, char** argv) {
     Vertices<double> x1 = pred.x1;
     const ClothObstacles<double> obstacles = s.obstacles(t0, t1);
     c0 = Clock::now();
+    const std::clock_t cpu0 = std::clock();
     ClothStepStats st;
     try {
       st = cloth_collision_step<double>(s.rest.F, inverse_mass, s.x, x1, obstacles, opt, &workspace);
@@ -196,6 +204,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     const double cms = ms_since(c0);
+    const double ccpu = 1e3 * double(std::clock() - cpu0) / CLOCKS_PER_SEC;
     // energy and momentum the collision step took out
     double e_removed = 0;
     Vec3<double> p_before = Vec3<double>::Zero(), p_after = Vec3<double>::Zero();
@@ -219,43 +228,58 @@ int main(int argc, char** argv) {
     const int passes = st.impulses.passes + st.zones.passes + st.failsafe.passes;
     dyn_ms.push_back(dms);
     coll_ms.push_back(cms);
+    coll_cpu_ms.push_back(ccpu);
     const double stg[5] = {st.broad.ms, st.proximity.ms, st.impulses.ms, st.zones.ms, st.failsafe.ms};
     for (int k = 0; k < 5; ++k) stage_ms[k] += stg[k];
     max_inter = std::max(max_inter, rep.intersections);
     total_inter_steps += rep.intersections > 0;
     failsafe_steps += st.failsafe_used;
     collisions_total += collisions;
+    candidates_total += st.candidates_vf + st.candidates_ee;
+    ccd_total += st.ccd_tests;
+    skipped_total += st.ccd_skipped;
+    gatherings_total += static_cast<std::size_t>(st.broad.passes);
     zones_total += st.zone_count;
     largest_zone = std::max(largest_zone, st.largest_zone);
     min_sep = std::min(min_sep, rep.min_distance);
     energy_removed += e_removed;
     worst_dp = std::max(worst_dp, dp_rel);
+    zone_dp = std::max(zone_dp, st.zone_momentum_error);
+    zone_dl = std::max(zone_dl, st.zone_angular_momentum_error);
     if (step % a.every == 0 || step + 1 == a.steps || rep.intersections > 0)
       std::printf("%5d %8.2f %8.2f %7.2f %7.2f %7.2f %7.2f %7.2f %6zu %4d %5zu %6zu %3d %5zu %10.3e %11.4e %9.2e\n", step, dms, cms, stg[0], stg[1],
                   stg[2], stg[3], stg[4], collisions, passes, st.zone_count, st.largest_zone, st.failsafe_used ? 1 : 0, rep.intersections,
                   rep.min_distance, e_removed, dp_rel);
     JsonObject row;
-    row.add("step", step).add("dynamics_ms", dms).add("collision_ms", cms).add("collisions", collisions).add("zones", st.zone_count)
+    row.add("step", step).add("dynamics_ms", dms).add("collision_ms", cms).add("collision_cpu_ms", ccpu).add("collisions", collisions).add("zones", st.zone_count)
         .add("largest_zone", st.largest_zone).add("failsafe", st.failsafe_used).add("intersections", rep.intersections)
-        .raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed);
+        .raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed)
+        .add("zone_momentum_error", st.zone_momentum_error).add("zone_angular_momentum_error", st.zone_angular_momentum_error);
     rows.push_back(row.str());
   }
 
-  const bench::Summary cs = bench::summarize(coll_ms), ds = bench::summarize(dyn_ms);
+  const bench::Summary cs = bench::summarize(coll_ms), ds = bench::summarize(dyn_ms), cc = bench::summarize(coll_cpu_ms);
   std::printf("totals: dynamics %.2f ms/step mean; collision %.2f ms/step mean (median %.2f, max %.2f): broad %.2f, proximity %.2f, "
               "impulses %.2f, zones %.2f, fail-safe %.2f ms/step\n",
               ds.mean, cs.mean, cs.median, cs.max, stage_ms[0] / a.steps, stage_ms[1] / a.steps, stage_ms[2] / a.steps, stage_ms[3] / a.steps,
               stage_ms[4] / a.steps);
+  std::printf("totals: collision CPU time (process, one thread: the wall time above includes waiting on a loaded machine) %.2f ms/step "
+              "mean, max %.2f\n",
+              cc.mean, cc.max);
   std::printf("totals: collisions %zu, zones %zu, largest zone %zu, fail-safe in %zu step(s), exact intersections: max %zu, in %zu step(s); "
               "min separation %s m (h = %g); kinetic energy removed %.6g J; worst relative momentum change %.3g\n",
               collisions_total, zones_total, largest_zone, failsafe_steps, max_inter, total_inter_steps, num(min_sep).c_str(), a.thickness,
               energy_removed, worst_dp);
+  std::printf("totals: zones' momentum error (largest, relative): linear %.3g, angular about x0 %.3g\n", zone_dp, zone_dl);
+  std::printf("totals: broad phase per step: %.1f candidate pairs, %.2f gatherings; %.1f CCD tests, %.1f candidate tests settled by the "
+              "distance bound\n",
+              double(candidates_total) / a.steps, double(gatherings_total) / a.steps, double(ccd_total) / a.steps, double(skipped_total) / a.steps);
 
   if (!a.json.empty()) {
     JsonObject totals;
-    totals.add("collision_ms_mean", cs.mean).add("collision_ms_max", cs.max).add("dynamics_ms_mean", ds.mean)
+    totals.add("collision_ms_mean", cs.mean).add("collision_ms_max", cs.max).add("collision_cpu_ms_mean", cc.mean).add("dynamics_ms_mean", ds.mean)
         .add("intersections_max", max_inter).raw("min_separation", num(min_sep)).add("failsafe", failsafe_steps)
-        .add("energy_removed", energy_removed);
+        .add("energy_removed", energy_removed).add("zone_momentum_error", zone_dp).add("zone_angular_momentum_error", zone_dl);
     JsonObject out;
     out.add("bench", "impact-cloth-bench").add("scene", s.name).add("method", a.method).add("vertices", nv).add("triangles", nt)
         .add("steps", a.steps).add("impulse_passes", opt.impulse_passes).raw("rows", JsonObject::array(rows)).raw("totals", totals.str());

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: MIT
 // cloth_collision_step against oracles written here (cloth_oracles.hpp: all-pairs sampled
 // distances by closest points, all-pairs CCD without a tree) and the exact verify_cloth_state:
-// a vertex at 1000 m/s, bad input, float and double.
+// a vertex at 1000 m/s, bad input, float and double; the broad phase of a step: candidates gathered
+// once, gathered again when a vertex is pushed out of its envelope, CCD skipped by the distance
+// bound where nothing approaches.
 #include "cloth_oracles.hpp"
 #include "impact/cloth/collision_step.hpp"
 #include "impact/cloth/verify_state.hpp"
+#include "impact/geometry/mesh_generators.hpp"
 
 #include <gtest/gtest.h>
 
@@ -165,6 +168,70 @@ TYPED_TEST(ClothStep, BadInputThrowsAndModifiesNothing) {
     obs.kinematic.push_back({&floor.V, &floor.V, &badF});
     expect_throw([&] { cloth_collision_step(F, w, x0, x1, obs, opt); }, "obstacle index");
   }
+}
+
+// A floor rising 0.5 in one step pushes a resting cloth triangle (A) far out of the envelope the
+// step gathered its candidates for (its swept box and h around it) and into a second cloth
+// triangle (B) hanging above it, which A's first candidates never met: only a new gathering sees
+// A against B. Without it A would pass through B; the all-pairs oracles say nothing does.
+TYPED_TEST(ClothStep, PushedOutOfItsEnvelopeIsGatheredAgain) {
+  using S = TypeParam;
+  Floor<S> floor;
+  Vertices<S> floor1 = floor.V;
+  floor1.col(2).array() += S(0.5);
+  ClothObstacles<S> obs;
+  obs.kinematic.push_back({&floor.V, &floor1, &floor.F});
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  const Vertices<S> x0 =
+      rows<S>({{0, 0, 0.05}, {0.1, 0, 0.05}, {0, 0.1, 0.05}, {-0.05, -0.05, 0.3}, {0.2, -0.05, 0.3}, {-0.05, 0.2, 0.3}});
+  Vertices<S> x1 = x0;  // both at rest
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  const auto st = cloth_collision_step(F, w, x0, x1, obs, opt);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_GE(st.broad.passes, 2);  // gathered again after A left its envelope
+  const auto c = combine(F, x0, x1, obs);
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, 1e-3), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c), 1e-3);
+  // Floor, then A, then B, each at least h above the one below.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(double(x1(i, 2)), 0.5 + 1e-3);
+    for (int j = 3; j < 6; ++j) EXPECT_GE(double(x1(j, 2)) - double(x1(i, 2)), 1e-3 * 0.999);
+  }
+}
+
+// A sheet translating rigidly, far from everything: its candidates (neighbours within the
+// proximity distance) are gathered once, and every one is settled by the distance bound (distance
+// at x0 minus relative motion, here 0, stays above h) without a CCD test; nothing changes.
+TYPED_TEST(ClothStep, RigidlyMovingSheetNeedsNoCcd) {
+  using S = TypeParam;
+  const auto g = make_grid<S>(8, 8, S(1));  // cells of 1/8
+  const Vertices<S> x0 = g.V;
+  Vertices<S> x1 = x0;
+  x1.col(0).array() += S(0.02);
+  x1.col(2).array() -= S(0.05);
+  const Vertices<S> x1_in = x1;
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(x0.rows());
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(0.04);  // the envelopes (grown by h + h) reach the neighbouring cells
+  opt.proximity = false;
+  const auto st = cloth_collision_step(g.F, w, x0, x1, ClothObstacles<S>{}, opt);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_EQ(st.broad.passes, 1);
+  EXPECT_GT(st.candidates_vf + st.candidates_ee, 100u);
+  EXPECT_EQ(st.ccd_tests, 0u);
+  EXPECT_GE(st.ccd_skipped, st.candidates_vf + st.candidates_ee);
+  EXPECT_TRUE(x1 == x1_in);
+  // The same sheet bending about its middle: pairs across the bend move relative to each other,
+  // so they get CCD tests, and over all pairs nothing comes within h.
+  Vertices<S> fold = x0;
+  for (Eigen::Index i = 0; i < x0.rows(); ++i)
+    if (x0(i, 0) > S(0)) fold(i, 2) = S(-2) * x0(i, 0);  // the grid spans [-0.5, 0.5]^2
+  const auto st2 = cloth_collision_step(g.F, w, x0, fold, ClothObstacles<S>{}, opt);
+  EXPECT_TRUE(st2.collision_free);
+  EXPECT_GT(st2.ccd_tests, 0u);
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(combine(g.F, x0, fold, ClothObstacles<S>{}), 0.04), 0);
 }
 
 }  // namespace

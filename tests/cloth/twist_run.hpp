@@ -24,10 +24,12 @@ struct TwistResult {
   std::size_t intersections_seen = 0;
   double min_distance = 0;
   std::size_t zones = 0, failsafe_steps = 0;
+  std::size_t ccd_tests = 0, collisions = 0;
+  std::vector<double> final_x;  // the last positions, row by row
 };
 
 template <class S>
-TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method, int verify_every) {
+TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method, int verify_every, int threads = 1) {
   using namespace impact;
   auto g = make_grid<S>(n, n, S(1));
   const double h = 0.2 / n, dt = 0.01;
@@ -50,6 +52,7 @@ TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method,
   ClothCollisionOptions<S> opt;
   opt.thickness = S(h);
   opt.zone_method = method;
+  opt.threads = threads;
   ClothCollisionWorkspace<S> ws;
   TwistResult res;
   for (int s = 1; s <= steps; ++s) {
@@ -78,6 +81,8 @@ TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method,
     res.not_collision_free += st.collision_free ? 0 : 1;
     res.zones += st.zone_count;
     res.failsafe_steps += st.failsafe_used ? 1 : 0;
+    res.ccd_tests += st.ccd_tests;
+    res.collisions += st.proximity.collisions + st.impulses.collisions + st.zones.collisions + st.failsafe.collisions;
     xprev = x;
     x = x1;
     res.steps_run = s;
@@ -88,6 +93,8 @@ TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method,
       if (rep.min_distance < h || rep.intersections) ADD_FAILURE() << "step " << s << ": " << rep.intersections << " intersections, min distance " << rep.min_distance;
     }
   }
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (int k = 0; k < 3; ++k) res.final_x.push_back(double(x(i, k)));
   return res;
 }
 

@@ -111,7 +111,9 @@ struct ClothPair {
 
 /// Statistics of one call of cloth_collision_step.
 struct ClothStepStats {
-  ClothStageStats broad;      ///< swept tree build/refit and candidate gathering (all rounds)
+  /// Swept tree build/refit and candidate gathering; passes = gatherings (1 unless a vertex
+  /// left its envelope during the step, see the README's broad-phase paragraph).
+  ClothStageStats broad;
   ClothStageStats proximity;  ///< collisions = proximity pairs that got an impulse
   ClothStageStats impulses;   ///< collisions = CCD hits handled by impulses, passes = CCD passes
   ClothStageStats zones;      ///< collisions = constraints in zones, passes = zone rounds
@@ -119,9 +121,21 @@ struct ClothStepStats {
   double total_ms = 0;
   std::size_t candidates_vf = 0, candidates_ee = 0;  ///< primitive pairs after the first gathering
   std::size_t ccd_tests = 0;                         ///< primitive CCD tests run (all stages)
+  /// Candidate tests settled without a CCD: the pair's distance at x0 minus its largest relative
+  /// vertex displacement stays above h (a proof that it never comes within h).
+  std::size_t ccd_skipped = 0;
   std::size_t zone_count = 0;                        ///< zones resolved (summed over rounds)
   std::size_t largest_zone = 0;                      ///< vertices of the largest zone
   std::size_t rigid_zones = 0;                       ///< zones resolved rigidly (method or fallback)
+  /// The zones' momentum error: over the zones of finite-mass vertices only (a zone holding an
+  /// obstacle or pinned vertex is legitimately pushed), the largest change of the zone's linear
+  /// momentum by its resolution, |sum m (x1' - xhat)| / sum m |xhat - x0| (xhat: the end positions
+  /// before the zones; 0 up to rounding for both methods), and of its angular momentum about its
+  /// centre of mass c at x0, |sum m (x0 - c) x (x1' - xhat)| / sum m |x0 - c| |xhat - x0|. The
+  /// angular one is not 0: Harmon's projection keeps it about the configuration where each
+  /// constraint's normal is taken (the contact at the time of impact), not about x0; a rigid
+  /// zone's finite rotation keeps it to first order in the rotation angle.
+  double zone_momentum_error = 0, zone_angular_momentum_error = 0;
   bool failsafe_used = false;
   std::size_t frozen_vertices = 0;  ///< cloth vertices put back at x0 by the fail-safe
   /// The final CCD found no pair within h (see the file comment); `unresolved` lists the pairs of
