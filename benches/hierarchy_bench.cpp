@@ -21,7 +21,7 @@
 // --json FILE writes one row per structure and query (structure, bv, builder, query, build_ms,
 // bytes_per_triangle, median_us, mean_us, tests, bv_tests, primitive_tests, refit_ms, mismatches).
 #include "bench_util.hpp"
-#include "impact/bvh/kd_tree.hpp"
+#include "impact/query/kd_tree.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/closest_point_mesh.hpp"

@@ -14,10 +14,12 @@
 /// split must leave fewer triangles on each side than in the cell, so coincident triangles make
 /// one leaf instead of a deep chain.
 ///
-/// Numerical contract. Rays: the first hit is the smallest t among the triangles the library's
-/// watertight test hits (narrow/ray_triangle.hpp with ray_mesh.hpp's tie rule at t = 0), the same
-/// t the BVH casts return; each cell's parameter interval is widened by a bound of its rounding,
-/// so a hit on a splitting plane is never lost. Closest point: the nearest triangle's point by the
+/// Numerical contract. Rays: the first hit is the smallest t among the triangles hit by the
+/// library's triangle rule (detail::ray_mesh_triangle_hit of query/ray_mesh.hpp: the watertight
+/// test, t raised to the triangle's box entry, the tie rule at t = 0), the same t the BVH casts
+/// return; each cell's parameter interval is widened by a bound of its rounding, so a hit on a
+/// splitting plane is never lost. It lives in query/ beside the casts whose rule it shares (as
+/// DistanceGrid does). Closest point: the nearest triangle's point by the
 /// narrow phase's closest_point_on_triangle; cells are skipped only when their (rounded) squared
 /// distance exceeds the best by more than a bound of that rounding, so the result is the minimum
 /// over all triangles, as a brute force computes it.
@@ -33,6 +35,7 @@
 #include "impact/geometry/triangle_mesh.hpp"
 #include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/ray_triangle.hpp"
+#include "impact/query/ray_mesh.hpp"
 
 #include <algorithm>
 #include <array>
@@ -135,6 +138,7 @@ template <class S> class KdTree {
       t1 = std::min(t1, b);
     }
     if (!(t0 <= t1)) return std::nullopt;
+    const Vec3<S> inv_safe = detail::safe_inverse(d);
     S best = ray.t_max;
     std::int32_t best_tri = -1;
     RayTriangleHit<S> best_hit;
@@ -184,8 +188,7 @@ template <class S> class KdTree {
         const std::int32_t t = refs_[static_cast<std::size_t>(k)];
         if (stats) ++stats->triangle_tests;
         pr.ray.t_max = best;
-        auto h = intersect_ray_triangle(pr, mesh_.triangle(t));
-        if (h && h->t == S(0) && !h->front) h.reset();  // ray_mesh.hpp's tie rule at t = 0
+        const auto h = detail::ray_mesh_triangle_hit(pr, inv_safe, mesh_.triangle(t));
         if (h && (best_tri < 0 || h->t < best)) {
           best = h->t;
           best_tri = t;

@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
-// The kd-tree over triangles (bvh/kd_tree.hpp): ray and segment first hits against brute force
-// over all triangles (the same watertight triangle test and tie rule, no tree) and against the
+// The kd-tree over triangles (query/kd_tree.hpp): ray and segment first hits against brute force
+// over all triangles (the library's triangle rule, detail::ray_mesh_triangle_hit, no tree) and the
 // AABB tree's cast, closest points against brute force; float and double; random soups, a closed
 // mesh hit through its vertices and edges, axis-aligned rays along splitting planes, and
 // degenerate meshes (coincident triangles, slivers, very unequal sizes, a flat grid) with bounded
 // depth and references; bad input throws.
-#include "impact/bvh/kd_tree.hpp"
+#include "impact/query/kd_tree.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "support/meshes.hpp"
@@ -19,13 +19,13 @@ using namespace impact::test;
 
 namespace {
 
-/// Smallest t over all triangles (NaN on a miss): the narrow phase's test, ray_mesh.hpp's tie rule.
+/// Smallest t over all triangles (NaN on a miss) by the library's triangle rule (ray_mesh.hpp).
 template <class S> S brute_first_hit(const TriangleMesh<S>& m, const Ray<S>& r) {
   const PreparedRay<S> pr(r);
   S best = std::numeric_limits<S>::quiet_NaN();
   for (int t = 0; t < m.num_triangles(); ++t) {
-    const auto h = intersect_ray_triangle(pr, m.triangle(t));
-    if (!h || (h->t == S(0) && !h->front)) continue;
+    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+    if (!h) continue;
     if (std::isnan(best) || h->t < best) best = h->t;
   }
   return best;
@@ -53,7 +53,7 @@ template <class S> int expect_rays_match(const KdTree<S>& kd, const TriangleMesh
     }
     EXPECT_EQ(h->t, expected) << "ray " << k;
     // the reported triangle is hit at that t
-    const auto th = intersect_ray_triangle(PreparedRay<S>(rays[k]), m.triangle(h->triangle));
+    const auto th = detail::ray_mesh_triangle_hit(PreparedRay<S>(rays[k]), m.triangle(h->triangle));
     EXPECT_TRUE(th && th->t == h->t) << "ray " << k;
   }
   return hits;
