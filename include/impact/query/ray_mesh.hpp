@@ -228,7 +228,8 @@ struct FirstHitCast {
         stats(st),
         o(pose.R.transpose() * (ray.origin - pose.t)),
         d(pose.R.transpose() * ray.direction),
-        best(ray.t_max) {
+        best(ray.t_max),
+        bound_(ray.t_max) {
     inv = detail::safe_inverse(d);
     pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
     finite = segment_box && ray.t_max < std::numeric_limits<S>::infinity();
@@ -244,7 +245,7 @@ struct FirstHitCast {
   /// strictly earlier one replaces it, and a node's entry is a lower bound of its triangles' t,
   /// so nodes entered at best itself are pruned too (else a mesh of coincident triangles, all hit
   /// at the same t, had every node and triangle visited).
-  S bound() const { return best_leaf >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; }
+  S bound() const { return bound_; }
   bool visit(std::int32_t k) {
     if (stats) ++stats->triangle_tests;
     pr.ray.t_max = best;
@@ -253,9 +254,11 @@ struct FirstHitCast {
       best = h->t;
       best_leaf = k;
       best_bary = Vec3<S>(h->u, h->v, h->w);
+      bound_ = std::nextafter(best, -std::numeric_limits<S>::infinity());  // kept, not recomputed at every node
     }
     return true;
   }
+  S bound_;
   std::optional<RayMeshHit<S>> result(const Ray<S>& ray, const RigidTransform<S>& pose) const {
     if (best_leaf < 0) return std::nullopt;
     RayMeshHit<S> hit;

@@ -130,7 +130,9 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   std::int32_t best_k = -1;
   Vec3<S> best_bary = Vec3<S>::Zero();
   // after a hit only a strictly earlier one replaces it, so nodes entered at best are pruned
-  auto bound = [&]() { return best_k >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; };
+  // (the bound is kept, not recomputed at every node)
+  S bound_value = best;
+  auto bound = [&]() { return bound_value; };
   const bool finite = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
   const WideSlab<S> slab(o, inv);
   auto keys_of = [&](const WideBvhNode& n, S (&keys)[4]) {
@@ -163,6 +165,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
           best = h->t;
           best_k = k;
           best_bary = Vec3<S>(h->u, h->v, h->w);
+          bound_value = std::nextafter(best, -std::numeric_limits<S>::infinity());
         }
       }
     } else {
