@@ -12,9 +12,10 @@
 /// the t = 0 tie rule). The node tests are conservative: the slab test runs in S on the float
 /// boxes (rounded outward, exact in S), and the exit parameter is padded (PBRT's robust slab
 /// test), so no triangle the ray crosses is pruned by rounding. Ties as in ray_mesh_first_hit:
-/// after a hit, nodes entered at exactly its t are pruned, so among triangles met at one edge,
-/// vertex or plane, whose computed t differ in their last bits, the one returned may be a few
-/// ulps later than the smallest.
+/// after a hit, nodes entered at exactly its t are pruned; a triangle's t is never below the
+/// entry into its own box (detail::ray_mesh_triangle_hit), which the float boxes hold, and the
+/// slab test is monotone in the box, so that pruning is exact: the t returned is the smallest of a
+/// loop over every triangle.
 #pragma once
 
 #include "impact/bvh/traversal_stack.hpp"
@@ -130,9 +131,8 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   std::int32_t best_k = -1;
   Vec3<S> best_bary = Vec3<S>::Zero();
   // after a hit only a strictly earlier one replaces it, so nodes entered at best are pruned
-  // (the bound is kept, not recomputed at every node)
-  S bound_value = best;
-  auto bound = [&]() { return bound_value; };
+  S limit = best;
+  auto bound = [&]() { return limit; };
   const bool finite = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
   const WideSlab<S> slab(o, inv);
   auto keys_of = [&](const WideBvhNode& n, S (&keys)[4]) {
@@ -160,12 +160,12 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
       for (std::int32_t k = first; k < first + count; ++k) {
         ++triangle_tests;
         pr.ray.t_max = best;
-        const auto h = ray_mesh_triangle_hit(pr, wide.triangle(k));
+        const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));
         if (h && (best_k < 0 || h->t < best)) {
           best = h->t;
           best_k = k;
           best_bary = Vec3<S>(h->u, h->v, h->w);
-          bound_value = std::nextafter(best, -std::numeric_limits<S>::infinity());
+          limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
         }
       }
     } else {
