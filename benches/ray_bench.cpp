@@ -34,7 +34,7 @@
 // parallel_for over the rays), wrong answers against the referee (missed: no hit reported though
 // the segment crosses the mesh; touched: the first contact missed (no hit, or a later one
 // reported), where the segment only touches the surface, e.g. grazes a silhouette vertex: the
-// points 256 grid spacings before and after the contact are on the same side of the surface,
+// points 256 (or 4096) grid spacings before and after the contact are on the same side of the surface,
 // judged by the parity of exact crossings to far points (right for closed meshes; on open ones,
 // like the bunny with its holes, a contact at the boundary stays counted as missed or skipped);
 // extra: the reported triangle is not crossed; skipped: the reported triangle is crossed strictly
@@ -265,18 +265,23 @@ int side(const RayReferee& referee, const IPoint& q) {
   return odd >= 2 ? 1 : 0;
 }
 
-/// True when the segment's points 256 grid spacings before and after its first contact (rounded
-/// to the grid) are on the same side of the mesh: the segment touches the surface there (a
-/// silhouette vertex or edge) without passing through it.
+/// True when the segment's points 256, or 4096, grid spacings before and after its first contact
+/// (rounded to the grid) are on the same side of the mesh: the segment touches the surface there
+/// (a silhouette vertex or edge) without passing through it. (Two distances: for a segment
+/// almost tangent to the surface, rounding the nearer points to the grid can put one of them
+/// inside; the farther pair is then still right.)
 bool touch_only(const RayReferee& referee, const Vec3<double>& o, const Vec3<double>& d, double t_max, const RayReferee::First& ref, double g) {
   const double t = t_max * double(ref.num) / double(ref.den);
-  const double dt = 256 * g / d.norm();
   auto at = [&](double tt) {
     Vec3<double> q = o + tt * d;
     for (int k = 0; k < 3; ++k) q[k] = snap(q[k], g);
     return to_int(q, g);
   };
-  return side(referee, at(std::max(t - dt, 0.0))) == side(referee, at(std::min(t + dt, t_max)));
+  for (const double spacings : {256.0, 4096.0}) {
+    const double dt = spacings * g / d.norm();
+    if (side(referee, at(std::max(t - dt, 0.0))) == side(referee, at(std::min(t + dt, t_max)))) return true;
+  }
+  return false;
 }
 
 /// True when every edge of the mesh is shared by exactly two triangles (the touch classification
