@@ -3,7 +3,7 @@
 // OBBRSS and OBB trees, in one run, on the same meshes and the same random poses.
 //
 //   impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]
-//                        [--split middle|median|sah|bottom-up] [--leaf N] [--json FILE]
+//                        [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--json FILE]
 //
 // Mesh B defaults to mesh A; without meshes a built-in generated scene is used (a torus against an
 // icosphere). Poses come from tests/support/poses.hpp: A stays at the origin, B gets a uniformly
@@ -39,7 +39,7 @@ struct Args {
 [[noreturn]] void usage(const char* msg) {
   std::fprintf(stderr,
                "%s\nusage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
-               "                            [--split middle|median|sah|bottom-up] [--leaf N] [--json FILE]\n",
+               "                            [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--json FILE]\n",
                msg);
   std::exit(2);
 }
@@ -67,8 +67,8 @@ Args parse(int argc, char** argv) {
   if (a.poses < 1) usage("--poses must be >= 1");
   if (a.leaf < 1) usage("--leaf must be >= 1");
   if (a.bv != "sphere" && a.bv != "aabb" && a.bv != "obb" && a.bv != "all") usage("--bv must be sphere, aabb, obb or all");
-  if (a.split != "middle" && a.split != "median" && a.split != "sah" && a.split != "bottom-up")
-    usage("--split must be middle, median, sah or bottom-up");
+  if (a.split != "middle" && a.split != "median" && a.split != "sah" && a.split != "bottom-up" && a.split != "incremental")
+    usage("--split must be middle, median, sah, bottom-up or incremental");
   if (!pos.empty()) a.mesh_a = pos[0];
   a.mesh_b = pos.size() > 1 ? pos[1] : a.mesh_a;
   return a;
@@ -181,6 +181,7 @@ int main(int argc, char** argv) {
     cfg.build.leaf_size = args.leaf;
     cfg.build.split = args.split == "median" ? SplitRule::CentroidMedian : args.split == "sah" ? SplitRule::Sah : SplitRule::SpatialMiddle;
     if (args.split == "bottom-up") cfg.build.method = BuildMethod::BottomUp;
+    if (args.split == "incremental") cfg.build.method = BuildMethod::Incremental;
     auto t0 = Clock::now();
     MeshBvh<BV> ma(A, cfg);
     MeshBvh<BV> mb(B, cfg);

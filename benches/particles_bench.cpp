@@ -15,7 +15,13 @@
 //  - naive:      backtracking with every triangle tested (a one-leaf tree), for the first M
 //                particles;
 //  - reference:  backtracking with K sub-steps per step, for the first R particles: the
-//                accuracy reference of the position errors.
+//                accuracy reference of the position errors;
+//  - embree-user: (when built with Embree 3) the loop a user would write on Embree: the mesh and
+//                the container in one RTC_BUILD_QUALITY_HIGH scene, one rtcIntersect1 (float) per
+//                leg of the free-flight chord, at a hit a move there backed off 1e-5 of the
+//                diagonal along the chord and the same elastic response (reflection about the
+//                hit's normal), at most max_iterations legs a step; its escapes are audited like
+//                backtracking's (every move it makes, against the mesh, exactly).
 // --free-ball F sets StepOptions::free_ball_factor (0 disables the free-ball cache); --sort-every N
 // reorders the particles along a Morton curve every N steps (spatial_order, timed; 0: never);
 // --float runs everything in single precision (double by default); --leaf L sets the tree's
@@ -53,6 +59,10 @@
 #include <ctime>
 #include <random>
 #include <string>
+
+#ifdef IMPACT_HAVE_EMBREE
+#include <embree3/rtcore.h>
+#endif
 
 using namespace impact;
 using impact::bench::Clock;
@@ -203,6 +213,164 @@ RunResult<S> measure(const std::vector<Particle<S>>& ps, const ColliderSet<S, Aa
   return audited;
 }
 
+
+#ifdef IMPACT_HAVE_EMBREE
+/// The peer a user would write with Intel Embree 3: the mesh and the container's 12 triangles in
+/// one scene (RTC_BUILD_QUALITY_HIGH, float vertices), and a step loop of its own: the chord of
+/// the free flight over the rest of the step cast with one rtcIntersect1 per leg; at a hit the
+/// particle moves there, backed off along the chord by `offset`, and its velocity at the time of
+/// impact (the chord fraction of the rest of the step) is reflected about the hit's normal
+/// turned against the chord (the elastic material: restitution 1, no friction); at most
+/// max_iterations legs a step, the rest of the step dropped after the last.
+class EmbreeParticles {
+ public:
+  EmbreeParticles(const TriangleMesh<double>& m, const Aabb<double>& container) {
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("rtcNewDevice failed");
+    scene_ = rtcNewScene(device_);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    add(m.V, m.F);
+    // the container: 12 triangles
+    Vertices<double> V(8, 3);
+    for (int i = 0; i < 8; ++i)
+      V.row(i) << (i & 1 ? container.max.x() : container.min.x()), (i & 2 ? container.max.y() : container.min.y()),
+          (i & 4 ? container.max.z() : container.min.z());
+    Faces F(12, 3);
+    F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+    add(V, F);
+    rtcCommitScene(scene_);
+  }
+  ~EmbreeParticles() {
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+  }
+  EmbreeParticles(const EmbreeParticles&) = delete;
+  EmbreeParticles& operator=(const EmbreeParticles&) = delete;
+
+  /// One particle's step of length dt (see the class comment); on_leg(from, to) sees every move.
+  template <class S, class OnLeg>
+  bool step(Particle<S>& p, S dt, const Vec3<S>& g, int max_iterations, S offset, OnLeg&& on_leg) const {
+    Vec3<S> x = p.position, v = p.velocity;
+    S left = dt;
+    bool hit_any = false;
+    for (int it = 0; it < max_iterations && left > S(0); ++it) {
+      const Vec3<S> c = v * left + S(0.5) * left * left * g;  // the chord of the free flight
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      RTCRayHit rh;
+      rh.ray.org_x = float(x.x()), rh.ray.org_y = float(x.y()), rh.ray.org_z = float(x.z());
+      rh.ray.dir_x = float(c.x()), rh.ray.dir_y = float(c.y()), rh.ray.dir_z = float(c.z());
+      rh.ray.tnear = 0.0f;
+      rh.ray.tfar = 1.0f;
+      rh.ray.mask = 0xFFFFFFFFu;
+      rh.ray.time = 0.0f;
+      rh.ray.flags = 0;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene_, &ctx, &rh);
+      if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        on_leg(x, Vec3<S>(x + c));
+        x += c;
+        v += left * g;
+        left = S(0);
+        break;
+      }
+      hit_any = true;
+      const S t = S(rh.ray.tfar), len = c.norm();
+      Vec3<S> n(S(rh.hit.Ng_x), S(rh.hit.Ng_y), S(rh.hit.Ng_z));
+      n.normalize();
+      if (n.dot(c) > S(0)) n = -n;
+      const S back = len > S(0) ? std::min(t, offset / len) : t;
+      const Vec3<S> to = x + (t - back) * c;
+      on_leg(x, to);
+      x = to;
+      const S tau = t * left;
+      v += tau * g;
+      const S vn = v.dot(n);
+      if (vn < S(0)) v -= S(2) * vn * n;
+      left -= tau;
+    }
+    p.position = x;
+    p.velocity = v;
+    return hit_any;
+  }
+
+ private:
+  void add(const Vertices<double>& V, const Faces& F) {
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), std::size_t(V.rows())));
+    auto* f = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), std::size_t(F.rows())));
+    for (Eigen::Index i = 0; i < V.rows(); ++i)
+      for (int k = 0; k < 3; ++k) v[3 * i + k] = float(V(i, k));
+    for (Eigen::Index t = 0; t < F.rows(); ++t)
+      for (int k = 0; k < 3; ++k) f[3 * t + k] = unsigned(F(t, k));
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+  }
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+};
+
+/// The Embree peer's run: the same particles, steps, sorting and audit as run().
+template <class S>
+RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+                        const StepOptions<S>& opt, double dt, int steps, bool audit, int sort_every, S offset) {
+  RunResult<S> r;
+  std::vector<std::uint32_t> id(ps.size());
+  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
+  std::vector<double> e0(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
+  std::vector<char> escaped(ps.size(), 0);
+  std::size_t hits = 0;
+  for (int s = 0; s < steps; ++s) {
+    if (sort_every > 0 && s % sort_every == 0) {
+      const double t0 = thread_seconds();
+      const auto order = spatial_order(ps);
+      std::vector<Particle<S>> sorted(ps.size());
+      std::vector<std::uint32_t> sorted_id(ps.size());
+      std::vector<char> sorted_esc(ps.size());
+      std::vector<double> sorted_e0(ps.size());
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        sorted[i] = ps[order[i]];
+        sorted_id[i] = id[order[i]];
+        sorted_esc[i] = escaped[order[i]];
+        sorted_e0[i] = e0[order[i]];
+      }
+      ps.swap(sorted);
+      id.swap(sorted_id);
+      escaped.swap(sorted_esc);
+      e0.swap(sorted_e0);
+      r.seconds += thread_seconds() - t0;
+    }
+    const double t0 = thread_seconds();
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      if (audit)
+        hits += e.step(ps[i], S(dt), opt.gravity, opt.max_iterations, offset, [&](const Vec3<S>& from, const Vec3<S>& to) {
+          if (crossings(audit_mesh, from, to) > 0) escaped[i] = 1;
+        });
+      else
+        hits += e.step(ps[i], S(dt), opt.gravity, opt.max_iterations, offset, [](const Vec3<S>&, const Vec3<S>&) {});
+    }
+    r.seconds += thread_seconds() - t0;
+    if (audit)
+      for (std::size_t i = 0; i < ps.size(); ++i)
+        if (!container.contains(ps[i].position)) escaped[i] = 1;
+  }
+  double err = 0;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    r.escaped += escaped[i];
+    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
+  }
+  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  r.impact_share = double(hits) / (double(ps.size()) * steps);
+  r.final.resize(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];
+  return r;
+}
+#endif
+
 double process_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -345,6 +513,28 @@ template <class S> int run_all(const Args& a) {
   };
   std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
                            row("reference", ref, n_ref, a.substeps)};
+#ifdef IMPACT_HAVE_EMBREE
+  {
+    // the peer: a user's loop on Embree (float casts), backed off 1e-5 of the diagonal at each hit
+    Aabb<double> cbox(container.min.template cast<double>(), container.max.template cast<double>());
+    TriangleMesh<double> md;
+    md.V = mesh.V.template cast<double>();
+    md.F = mesh.F;
+    const EmbreeParticles emb(md, cbox);
+    const S offset = S(1e-5 * diag);
+    const RunResult<S> timed = run_embree(ps, emb, bvh, container, opt, a.dt, a.steps, false, a.sort_every, offset);
+    RunResult<S> audited = run_embree(ps, emb, bvh, container, opt, a.dt, a.steps, true, a.sort_every, offset);
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      if (timed.final[i].position != audited.final[i].position) {
+        std::fprintf(stderr, "impact-particles-bench: the timed and the audited Embree runs differ (particle %zu)\n", i);
+        return 1;
+      }
+    audited.seconds = timed.seconds;
+    rows.push_back(row("embree-user", audited, a.particles, 1));
+  }
+#else
+  std::printf("built without Embree 3 (libembree-dev not found at configure time): no embree-user row\n");
+#endif
   // threads rows (wall clock): the escapes and errors are those of the audited one-thread rows
   // above, since the runs end in the same state (checked)
   const int threads = resolve_threads(a.threads);
@@ -378,6 +568,8 @@ template <class S> int run_all(const Args& a) {
   std::printf("share of particle-steps with an impact (backtrack): %.1f%%; reference: %d sub-steps\n", 100 * bt.impact_share,
               a.substeps);
   if (n_naive > 0) std::printf("backtrack / naive speed: %.0fx\n", rows[0].rate / std::max(rows[2].rate, 1e-300));
+  for (const auto& w : rows)
+    if (w.method == "embree-user") std::printf("backtrack / embree-user speed: %.2fx\n", rows[0].rate / std::max(w.rate, 1e-300));
   for (const auto& [name, x, y] : speedups)
     std::printf("%s, %d threads / 1 thread (same final state): %.2fx by the wall clock, %.2fx by the CPU times%s\n", name.c_str(),
                 threads, x, y, a.particles < 512 ? " (fewer than 512 particles: stepped serially)" : "");

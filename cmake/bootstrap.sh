@@ -17,7 +17,8 @@ packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-de
 # the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
 [ "$mode" = test ] && packages+=(assimp-testmodels)
 # the bench mode also installs matplotlib for benches/plot.py (charts from the benches' --json)
-[ "$mode" = bench ] && packages+=(python3-matplotlib)
+# and Intel Embree 3, the peer of impact-ray-bench (built without its Embree rows when absent)
+[ "$mode" = bench ] && packages+=(python3-matplotlib libembree-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

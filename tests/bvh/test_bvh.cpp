@@ -3,7 +3,8 @@
 // leaf sizes, each node's BV holds all its triangles' vertices), termination on degenerate input,
 // refit after deformation, and the traversals against brute force: pair traversal under random
 // rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere, AABB and
-// oriented box, float and double, every split rule (middle, median, SAH). The traversal stack keeps its order past its fixed slots.
+// oriented box, float and double, every split rule (middle, median, SAH) and construction (top-down,
+// bottom-up, incremental). The traversal stack keeps its order past its fixed slots.
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/traverse.hpp"
@@ -80,8 +81,9 @@ TYPED_TEST(BvhTest, BuildInvariants) {
   const auto mesh = random_soup<S>(500, 1);
   for (SplitRule rule : {SplitRule::SpatialMiddle, SplitRule::CentroidMedian, SplitRule::Sah}) {
     for (int leaf : {1, 2, 4, 8}) {
-      for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp}) {
-        if (method == BuildMethod::BottomUp && rule != SplitRule::SpatialMiddle) continue;  // the split rule is top-down's
+      for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp, BuildMethod::Incremental}) {
+        if (method != BuildMethod::TopDown && rule != SplitRule::SpatialMiddle) continue;  // the split rule is top-down's
+        if (method == BuildMethod::Incremental && (leaf == 2 || leaf == 8)) continue;       // (time under ASan)
         MeshBvhConfig cfg;
         cfg.build.split = rule;
         cfg.build.method = method;
@@ -118,6 +120,12 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   const MeshBvh<BV> bu(m, bottom_up);
   EXPECT_EQ(bvh_stats(bu.tree()).leaves, 64u);
   EXPECT_EQ(bvh_stats(bu.tree()).max_depth, 6u);
+  // incremental: ties go to the smaller subtree, balanced too
+  MeshBvhConfig incremental;
+  incremental.build.method = BuildMethod::Incremental;
+  const MeshBvh<BV> inc(m, incremental);
+  EXPECT_EQ(bvh_stats(inc.tree()).leaves, 64u);
+  EXPECT_EQ(bvh_stats(inc.tree()).max_depth, 6u);
   // zero-area triangles (all three vertices equal) are allowed
   TriangleMesh<S> z;
   z.V = Vertices<S>::Zero(1, 3);
@@ -139,6 +147,9 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
   MeshBvhConfig bottom_up;
   bottom_up.build.method = BuildMethod::BottomUp;
   MeshBvh<BV> a_bu(ma, bottom_up), b_bu(mb, bottom_up);
+  MeshBvhConfig incremental;
+  incremental.build.method = BuildMethod::Incremental;
+  MeshBvh<BV> a_inc(ma, incremental), b_inc(mb, incremental);
   Rng rng(99);
   int colliding = 0;
   for (int pose = 0; pose < 30; ++pose) {
@@ -151,6 +162,7 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
     ASSERT_EQ(sorted(got.pairs), expected) << "pose " << pose;
     ASSERT_EQ(sorted(collide(a_sah, pa, b_sah, pb, opt).pairs), expected) << "pose " << pose << " (SAH)";
     ASSERT_EQ(sorted(collide(a_bu, pa, b_bu, pb, opt).pairs), expected) << "pose " << pose << " (bottom-up)";
+    ASSERT_EQ(sorted(collide(a_inc, pa, b_inc, pb, opt).pairs), expected) << "pose " << pose << " (incremental)";
     EXPECT_EQ(got.colliding, !expected.empty());
     EXPECT_EQ(collides(a, pa, b, pb), !expected.empty());
     colliding += !expected.empty();

@@ -9,7 +9,8 @@
 //    with toi <= t*;
 //  - random small-integer queries (full of exact degeneracies) and near-touching perturbations of
 //    the contacts: whenever the test answers "no hit", the exact reference (support/exact_ccd.hpp)
-//    must prove that there is no contact. False positives proven by the reference are reported.
+//    must prove that there is no contact. False positives the reference proves are counted and
+//    bounded by the counts measured with these seeds (0 random, 2 perturbed; see random_queries).
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/vertex_face.hpp"
 #include "support/exact_ccd.hpp"
@@ -354,9 +355,12 @@ TEST(CcdExact, ConstructionIsExact) {
   }
 }
 
-/// Random queries (and perturbed contacts): every "no hit" must be proven by the reference.
+/// Random queries (and perturbed contacts): every "no hit" must be proven by the reference, and at
+/// most `max_proven_fp` hits may be false positives the reference proves contact-free (the counts
+/// measured with these seeds: 0 for random queries, 2 for perturbed contacts, whose gaps of one
+/// unit at 2^-50 are near misses the re-check's budget cannot always separate).
 template <class S>
-void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed, bool perturb_contacts) {
+void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed, bool perturb_contacts, int max_proven_fp) {
   Generator g(seed, range);
   count = std::max(2, count / kCountDivisor);
   int no_hit = 0, hits = 0, proven_fp = 0, proofs = 0;
@@ -402,12 +406,14 @@ void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed
   std::printf("[exact] %s: %d queries, %d no-hit (all proven), %d hits of which %d proven false positives, %d proved contacts\n",
               perturb_contacts ? "perturbed contacts" : "random", count, no_hit, hits, proven_fp, proofs);
   ::testing::Test::RecordProperty("proven_false_positives", proven_fp);
+  EXPECT_LE(proven_fp, max_proven_fp);
+  EXPECT_GT(hits, 0);
 }
 
-TEST(CcdExact, RandomSmallIntegersDouble) { random_queries<double>(3, 0, 4000, 11, false); }
-TEST(CcdExact, RandomSmallIntegersFloat) { random_queries<float>(3, 0, 4000, 12, false); }
-TEST(CcdExact, RandomWiderIntegersDouble) { random_queries<double>(1000, 8, 4000, 13, false); }
-TEST(CcdExact, PerturbedContactsDouble) { random_queries<double>(std::int64_t(1) << 45, 50, 1500, 14, true); }
-TEST(CcdExact, PerturbedContactsFloat) { random_queries<float>(std::int64_t(1) << 16, 20, 1500, 15, true); }
+TEST(CcdExact, RandomSmallIntegersDouble) { random_queries<double>(3, 0, 4000, 11, false, 0); }
+TEST(CcdExact, RandomSmallIntegersFloat) { random_queries<float>(3, 0, 4000, 12, false, 0); }
+TEST(CcdExact, RandomWiderIntegersDouble) { random_queries<double>(1000, 8, 4000, 13, false, 0); }
+TEST(CcdExact, PerturbedContactsDouble) { random_queries<double>(std::int64_t(1) << 45, 50, 1500, 14, true, 2); }
+TEST(CcdExact, PerturbedContactsFloat) { random_queries<float>(std::int64_t(1) << 16, 20, 1500, 15, true, 2); }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "narrow/int_oracle.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -88,6 +89,13 @@ template <class S> impact::TriangleMesh<S> to_mesh(const IntMesh& m) {
   return out;
 }
 
+/// A ray parameter to the last bit (%a), so that two values one ulp apart print differently.
+template <class S> std::string hex(S x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%a", double(x));
+  return buf;
+}
+
 std::string pairs_text(const Pairs& p) {
   std::string s;
   for (const auto& [a, b] : p) s += " (" + std::to_string(a) + "," + std::to_string(b) + ")";
@@ -155,8 +163,7 @@ template <class BV, class S> void check(const IntMesh& A, const IntMesh& B, cons
                               std::to_string(o[2]) + ") dir (" + std::to_string(d[0]) + "," + std::to_string(d[1]) + "," +
                               std::to_string(d[2]) + ")";
     if (first.has_value() != best.has_value() || (first && first->t != *best))
-      impact::fuzz::fail(where + ": first hit " + (first ? std::to_string(double(first->t)) : "none") + ", brute force " +
-                         (best ? std::to_string(double(*best)) : "none"));
+      impact::fuzz::fail(where + ": first hit " + (first ? hex(first->t) : "none") + ", brute force " + (best ? hex(*best) : "none"));
     if (impact::ray_mesh_any_hit(ta, ray, pose_a) != best.has_value())
       impact::fuzz::fail(where + ": any hit disagrees with brute force");
   }

@@ -105,5 +105,46 @@ TYPED_TEST(ClosestPointMesh, FeaturesOnABox) {
   EXPECT_NEAR(std::abs(c->normal.z()), S(1), S(1e-6));
 }
 
+// Small integer meshes under query points on a quarter-integer grid (closest points at shared
+// vertices and edges, coincident and zero-area triangles, queries on the surface): with a box
+// tree the answer's squared distance is exactly the smallest of the loop over every triangle
+// (issue 12: nodes at the best distance are pruned, so a node's key must never exceed a triangle's
+// computed value, which rounding of the closest point could take below the distance to the
+// triangle's box); sphere trees within rounding. Float and double.
+template <class S> void check_integer_grid(std::uint64_t seed) {
+  test::Rng rng(seed);
+  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+    TriangleMesh<S> m;
+    const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
+    m.V.resize(nv, 3);
+    m.F.resize(nf, 3);
+    for (int i = 0; i < nv; ++i)
+      for (int d = 0; d < 3; ++d) m.V(i, d) = S(int(rng.index(7)) - 3) * S(rng.index(2) ? 1 : 3);
+    for (int f = 0; f < nf; ++f)
+      for (int d = 0; d < 3; ++d) m.F(f, d) = int(rng.index(std::uint64_t(nv)));
+    const MeshBvh<Aabb<S>> ab(m);
+    const MeshBvh<Sphere<S>> sp(m);
+    for (int k = 0; k < 24; ++k) {
+      Vec3<S> q;
+      for (int i = 0; i < 3; ++i) q[i] = S(int(rng.index(41)) - 20) / S(4);
+      S best = std::numeric_limits<S>::infinity();
+      for (int t = 0; t < nf; ++t) {
+        const Triangle<S> tri = m.triangle(t);
+        const auto tp = detail::closest_on_triangle(q, tri);
+        best = std::min(best, detail::triangle_squared_distance(q, tri, tp));
+      }
+      const auto ca = closest_point_on_mesh(ab, q), cs = closest_point_on_mesh(sp, q);
+      ASSERT_TRUE(ca.has_value() && cs.has_value());
+      EXPECT_EQ(ca->distance, std::sqrt(best)) << mesh << "," << k;
+      EXPECT_NEAR(cs->distance, std::sqrt(best), S(64) * std::numeric_limits<S>::epsilon() * S(20)) << mesh << "," << k;
+    }
+  }
+}
+
+TEST(ClosestPointMeshExact, IntegerGridDistanceIsTheLoopMinimum) {
+  check_integer_grid<double>(21);
+  check_integer_grid<float>(22);
+}
+
 }  // namespace
 }  // namespace impact

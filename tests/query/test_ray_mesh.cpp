@@ -251,5 +251,87 @@ TYPED_TEST(RayMesh, CoincidentTrianglesArePruned) {
   }
 }
 
+// The first hit is exactly the smallest t of a loop over every triangle (issue 12, found by the
+// mesh_bvh fuzz target). The ray o + t d, o = (-3, -3, -4), d = (2, 1, 3), passes exactly through
+// the vertex (-1, -2, -1) at t = 1, a corner of both triangles' boxes. The narrow phase computes
+// t = 1 for the first triangle and 1 - 2^-53 for the second (its t is a rounded convex combination
+// of the vertices' depths); before the fix the tree returned 1 (it pruned the second triangle's
+// node, entered at t = 1 = the best found) while the loop found 1 - 2^-53. A hit's t is now never
+// below the entry into its triangle's box, so both give exactly 1, the exact answer.
+TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
+  TriangleMesh<double> m;
+  m.V.resize(5, 3);
+  m.V << -1, -2, -1, 2, -1, 1, 0, -2, -2, 2, 0, 1, 0, 1, -1;
+  m.F.resize(2, 3);
+  m.F << 0, 1, 2, 0, 3, 4;
+  const Ray<double> ray(Vec3<double>(-3, -3, -4), Vec3<double>(2, 1, 3));
+  const PreparedRay<double> pr(ray);
+  for (int t = 0; t < 2; ++t) {
+    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+    ASSERT_TRUE(h.has_value()) << t;
+    EXPECT_EQ(h->t, 1.0) << t;  // before: 1 - 2^-53 for triangle 1
+  }
+  for (int leaf : {1, 4}) {
+    MeshBvhConfig cfg;
+    cfg.build.leaf_size = leaf;
+    const MeshBvh<Aabb<double>> ab(m, cfg);
+    const MeshBvh<Sphere<double>> sp(m, cfg);
+    const CompactBvh fast(ab.tree(), 1);
+    for (const auto& h : {ray_mesh_first_hit(ab, ray), ray_mesh_first_hit(ab, fast, ray), ray_mesh_first_hit(sp, ray)}) {
+      ASSERT_TRUE(h.has_value());
+      EXPECT_EQ(h->t, 1.0);
+      EXPECT_EQ(h->point, Vec3<double>(-1, -2, -1));
+    }
+  }
+}
+
+// Small integer meshes (shared and coincident vertices, triangles edge-on to the rays, rays
+// through vertices and edges and in the triangles' planes: the cases where the narrow phase's t
+// rounds below the boxes' entries) under exact poses: the tree's first hit has exactly the
+// smallest t of the loop over every triangle, for box trees, CompactBvh and sphere trees, float
+// and double, and any hit agrees.
+template <class S> void check_integer_grid_rays(std::uint64_t seed) {
+  test::Rng rng(seed);
+  int hits = 0;
+  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+    TriangleMesh<S> m;
+    const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
+    m.V.resize(nv, 3);
+    m.F.resize(nf, 3);
+    for (int i = 0; i < nv; ++i)
+      for (int d = 0; d < 3; ++d) m.V(i, d) = S(int(rng.index(7)) - 3);
+    for (int f = 0; f < nf; ++f)
+      for (int d = 0; d < 3; ++d) m.F(f, d) = int(rng.index(std::uint64_t(nv)));
+    const MeshBvh<Aabb<S>> ab(m);
+    const MeshBvh<Sphere<S>> sp(m);
+    const CompactBvh fast(ab.tree(), 1);
+    for (int k = 0; k < 24; ++k) {
+      Vec3<S> o, d;
+      for (int i = 0; i < 3; ++i) o[i] = S(int(rng.index(13)) - 6), d[i] = S(int(rng.index(9)) - 4);
+      if (k % 2) d = m.vertex(int(rng.index(std::uint64_t(nv)))) - o;  // through a vertex, at t = 1
+      if (d == Vec3<S>::Zero()) continue;
+      const Ray<S> ray(o, d, k % 4 == 1 ? S(1) : std::numeric_limits<S>::infinity());
+      const auto b = brute_first_hit(m, ray);
+      hits += b.has_value();
+      const auto ha = ray_mesh_first_hit(ab, ray), hc = ray_mesh_first_hit(ab, fast, ray), hs = ray_mesh_first_hit(sp, ray);
+      ASSERT_EQ(ha.has_value(), b.has_value()) << mesh << "," << k;
+      ASSERT_EQ(hc.has_value(), b.has_value()) << mesh << "," << k;
+      ASSERT_EQ(hs.has_value(), b.has_value()) << mesh << "," << k;
+      EXPECT_EQ(ray_mesh_any_hit(ab, ray), b.has_value());
+      EXPECT_EQ(ray_mesh_any_hit(sp, ray), b.has_value());
+      if (!b) continue;
+      EXPECT_EQ(ha->t, b->first) << mesh << "," << k;
+      EXPECT_EQ(hc->t, b->first) << mesh << "," << k;
+      EXPECT_EQ(hs->t, b->first) << mesh << "," << k;
+    }
+  }
+  EXPECT_GT(hits, 100 / kSampleDivisor);
+}
+
+TEST(RayMeshExact, IntegerGridFirstHitIsTheLoopMinimum) {
+  check_integer_grid_rays<double>(11);
+  check_integer_grid_rays<float>(12);
+}
+
 }  // namespace
 }  // namespace impact

@@ -9,9 +9,10 @@
 ///   sphere – mesh, box – mesh           the mesh's tree walked with the other shape in the mesh's
 ///                                       frame; triangles tested by closest point
 ///                                       (narrow/closest_point.hpp) or separating axes (box, 13 axes)
-///   mesh – mesh                         pair traversal of both trees under the relative pose,
-///                                       exact triangles_intersect (narrow/triangle_triangle.hpp)
-///                                       at the leaves
+///   mesh – mesh                         pair traversal of both trees under the relative pose
+///                                       with the node test of query/mesh_collide.hpp (padded for
+///                                       the pose's rounding), exact triangles_intersect
+///                                       (narrow/triangle_triangle.hpp) at the leaves
 /// Meshes are surfaces (as in FCL): a shape entirely inside a closed mesh does not touch it.
 /// Every test counts touching as intersecting. A contact (point, unit normal from a towards b,
 /// depth) is computed only when the caller passes somewhere to put it; for mesh pairs the depth is
@@ -24,6 +25,7 @@
 #include "impact/geometry/obb.hpp"
 #include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/triangle_triangle.hpp"
+#include "impact/query/mesh_collide.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -285,8 +287,14 @@ bool mesh_mesh(const MeshBvh<Sphere<S>>& ma, const RigidTransform<S>& pa, const 
                const RigidTransform<S>& pb, ShapeContact<S>* out) {
   const RigidTransform<S> b_to_a = relative_transform(pa, pb);
   bool hit = false;
-  traverse_pair(
-      ma.tree(), mb.tree(), [&](const Sphere<S>& x, const Sphere<S>& y) { return BvTraits<Sphere<S>>::overlap(x, y, b_to_a); },
+  // The node test of the mesh queries (query/mesh_collide.hpp): spheres padded for the rounding of
+  // the relative pose and of B's moved vertices (PosePad), and the leaf-triangle cull, so that no
+  // pair the exact triangle test would report is culled (a plain sphere overlap under b_to_a
+  // missed touching pairs at large translations).
+  std::uint64_t node_tests = 0;
+  const MeshNodeOverlap<Sphere<S>> overlap(ma, mb, b_to_a, &node_tests);
+  traverse_pair_nodes(
+      ma.tree(), mb.tree(), overlap,
       [&](std::int32_t i, std::int32_t j) {
         const Triangle<S>& ta = ma.triangle(i);
         const Triangle<S>& tb0 = mb.triangle(j);

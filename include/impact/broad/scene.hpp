@@ -547,27 +547,53 @@ class Scene {
     }
   }
 
-  /// Tight-enough world box: exact for spheres, particles and boxes; for meshes the intersection
-  /// of the rotated vertex box and the cube around the vertices' bounding sphere (both contain the
-  /// mesh; the first is tighter for elongated meshes, the second for round ones).
+  /// Conservative world box: for spheres, particles and boxes their box, for meshes the
+  /// intersection of the rotated vertex box and the cube around the vertices' bounding sphere (both
+  /// contain the mesh; the first is tighter for elongated meshes, the second for round ones); then
+  /// padded so that the broad phase never drops a pair the narrow phase would report: by 32u
+  /// (|t|_inf + |R|_inf P), P the shape's extent in its own frame, for the rounding of this box and
+  /// of the relative pose the narrow phase moves one shape by (each pair's pads add up to about
+  /// twice the bound of that rounding), and by 2 g P, g >= |R^T R - I|_2, since the narrow phase
+  /// sees the other shape through R^T, which is not quite R's inverse for a pose rigid only
+  /// within rotation_tolerance (a point x of the other shape it finds on this one lies within
+  /// g |x - t| of where the world has it). Without the pads, shapes touching exactly at large
+  /// translations were missed (tests/broad/test_narrow_dispatch.cpp).
   static Aabb<S> world_box(const Shape<S>& shape, const Aabb<S>& local, S reach, const RigidTransform<S>& pose) {
+    constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+    Aabb<S> box;
+    S P = S(0), g = S(0);
     switch (shape.kind) {
       case ShapeKind::Sphere:
       case ShapeKind::Particle: {
         const Vec3<S> r = Vec3<S>::Constant(shape.radius);
-        return {pose.t - r, pose.t + r};
+        box = {pose.t - r, pose.t + r};
+        P = shape.radius;  // only the centre is moved: no rotation involved
+        break;
       }
       case ShapeKind::Box: {
         const Vec3<S> e = pose.R.cwiseAbs() * shape.half;
-        return {pose.t - e, pose.t + e};
+        box = {pose.t - e, pose.t + e};
+        P = shape.half.sum();
+        break;
       }
       case ShapeKind::Mesh:
       default: {
         const Vec3<S> c = pose.apply(local.center());
         const Vec3<S> e = (pose.R.cwiseAbs() * ((local.max - local.min) / S(2))).cwiseMin(Vec3<S>::Constant(reach));
-        return {c - e, c + e};
+        box = {c - e, c + e};
+        P = local.center().cwiseAbs().sum() + reach + (local.max - local.min).sum();
+        break;
       }
     }
+    if (!shape.is_round()) {
+      const Mat3<S> G = pose.R.transpose() * pose.R - Mat3<S>::Identity();
+      g = G.cwiseAbs().sum() * (S(1) + S(16) * u) + S(16) * u * (pose.R.squaredNorm() + S(3));
+    }
+    const S r_inf = shape.is_round() ? S(1) : pose.R.cwiseAbs().rowwise().sum().maxCoeff();
+    const S pad = (S(32) * u * (pose.t.cwiseAbs().maxCoeff() + r_inf * P) + S(2) * g * P) * (S(1) + S(8) * u);
+    box.min.array() -= pad;
+    box.max.array() += pad;
+    return box;
   }
 
   SceneOptions opt_;

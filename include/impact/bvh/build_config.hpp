@@ -21,10 +21,23 @@ enum class SplitRule {
   Sah,
 };
 
-/// How a tree is constructed (see bvh/build_top_down.hpp and bvh/build_bottom_up.hpp).
+/// How a tree is constructed (see bvh/build_top_down.hpp, bvh/build_bottom_up.hpp and
+/// bvh/build_incremental.hpp).
 enum class BuildMethod {
-  TopDown,   ///< divide and conquer by BuildConfig::split (the default)
-  BottomUp,  ///< agglomerative clustering of neighbours along a Morton curve (PLOC)
+  TopDown,      ///< divide and conquer by BuildConfig::split (the default)
+  BottomUp,     ///< agglomerative clustering of neighbours along a Morton curve (PLOC)
+  Incremental,  ///< one primitive at a time, each next to the sibling of least surface-area cost
+};
+
+/// How IncrementalBvh searches for the sibling of a new leaf.
+enum class SiblingSearch {
+  /// Exact minimum of the cost: branch and bound over a priority queue (Bittner et al. 2015).
+  /// Explores more nodes per insertion (a few hundred on scanned meshes).
+  BranchAndBound,
+  /// One path from the root (Catto's Box2D v3 descent): at each node, descend into the child
+  /// whose subtree's lower bound is smaller and stop when neither can beat the best found.
+  /// O(depth) per insertion; the cost it reaches is at most the root's and usually near the minimum.
+  Greedy,
 };
 
 struct BuildConfig {
@@ -35,6 +48,10 @@ struct BuildConfig {
   /// Neighbours on each side that a cluster of BuildMethod::BottomUp considers (>= 1): larger
   /// finds better pairs and builds slower (8: igea builds in 1.6x the top-down time).
   int cluster_window = 8;
+  /// BuildMethod::Incremental: how each new leaf's sibling is found, and whether the ancestors
+  /// are improved by tree rotations (bvh/build_incremental.hpp).
+  SiblingSearch sibling_search = SiblingSearch::Greedy;
+  bool rotations = true;
 };
 
 }  // namespace impact

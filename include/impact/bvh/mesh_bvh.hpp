@@ -2,7 +2,8 @@
 /// \file
 /// MeshBvh<BV>: a triangle mesh together with its hierarchy, the object every mesh query takes.
 /// Construction validates the arrays (throws InvalidInput on empty meshes, NaN/Inf coordinates,
-/// out-of-range indices), copies them, builds the tree top-down with each node's BV fitted around
+/// out-of-range indices), copies them, builds the tree (top-down by default; MeshBvhConfig::build
+/// chooses bottom-up or incremental construction) with each node's BV fitted around
 /// its triangles' vertices, and keeps only the leaf order of the triangles (their rows of F): a
 /// triangle's vertices are read from the copied mesh. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
@@ -14,6 +15,7 @@
 #pragma once
 
 #include "impact/bvh/build_bottom_up.hpp"
+#include "impact/bvh/build_incremental.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/refit.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
@@ -114,14 +116,17 @@ template <class BV> class MeshBvh {
     }
     // Build over mesh order, then renumber primitives to leaf positions.
     std::vector<Aabb<S>> boxes;  // the surface-area heuristic and the clustering weigh the triangles' boxes
-    if (cfg_.build.split == SplitRule::Sah || cfg_.build.method == BuildMethod::BottomUp) {
+    if (cfg_.build.split == SplitRule::Sah || cfg_.build.method != BuildMethod::TopDown) {
       boxes.resize(m);
       for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris[t].a.cwiseMin(tris[t].b).cwiseMin(tris[t].c), tris[t].a.cwiseMax(tris[t].b).cwiseMax(tris[t].c));
     }
     std::vector<Vec3<S>> scratch;
     auto get = [&tris](std::int32_t t) { return tris[static_cast<std::size_t>(t)]; };
-    tree_ = cfg_.build.method == BuildMethod::BottomUp ? build_bottom_up<BV>(centroids, boxes, fitter(scratch, get), cfg_.build)
-                                                        : build_top_down<BV>(centroids, fitter(scratch, get), cfg_.build, boxes);
+    switch (cfg_.build.method) {
+      case BuildMethod::BottomUp: tree_ = build_bottom_up<BV>(centroids, boxes, fitter(scratch, get), cfg_.build); break;
+      case BuildMethod::Incremental: tree_ = build_incremental<BV>(centroids, boxes, fitter(scratch, get), cfg_.build); break;
+      default: tree_ = build_top_down<BV>(centroids, fitter(scratch, get), cfg_.build, boxes);
+    }
     ids_ = tree_.primitives;
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
     tree_.nodes.shrink_to_fit();

@@ -40,12 +40,14 @@ bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::i
 /// `overlap(const BvhNode<BVA>& a, const BvhNode<BVB>& b) -> bool` sees whole nodes, so a query
 /// can test a leaf's primitives directly instead of its BV; it must be conservative (never false
 /// when the primitives below the two nodes can touch). `visit(std::int32_t id_a, std::int32_t id_b)
-/// -> bool` returns false to stop. Returns false when the visitor stopped the walk.
+/// -> bool` returns false to stop. Returns false when the visitor stopped the walk. `start_a`,
+/// `start_b` (the roots by default) restrict the walk to the pairs below those two nodes.
 template <class BVA, class BVB, class NodeOverlap, class Visit>
-bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& overlap, Visit&& visit) {
+bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& overlap, Visit&& visit, std::int32_t start_a = 0,
+                         std::int32_t start_b = 0) {
   if (a.empty() || b.empty()) return true;
   detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-  stack.push({0, 0});
+  stack.push({start_a, start_b});
   while (!stack.empty()) {
     const auto [i, j] = stack.pop();
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
@@ -59,21 +61,24 @@ bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& ove
 /// Visits every pair of primitives (id_a, id_b) whose leaves' BVs overlap.
 /// `overlap(const BVA& a, const BVB& b) -> bool` must be conservative (never false for volumes
 /// that touch). `visit(std::int32_t id_a, std::int32_t id_b) -> bool` returns false to stop.
-/// Returns false when the visitor stopped the walk.
+/// Returns false when the visitor stopped the walk. `start_a`, `start_b` as for traverse_pair_nodes.
 template <class BVA, class BVB, class Overlap, class Visit>
-bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visit&& visit) {
+bool traverse_pair(const Bvh<BVA>& a, const Bvh<BVB>& b, Overlap&& overlap, Visit&& visit, std::int32_t start_a = 0,
+                   std::int32_t start_b = 0) {
   return traverse_pair_nodes(
-      a, b, [&](const BvhNode<BVA>& na, const BvhNode<BVB>& nb) { return overlap(na.bv, nb.bv); }, visit);
+      a, b, [&](const BvhNode<BVA>& na, const BvhNode<BVB>& nb) { return overlap(na.bv, nb.bv); }, visit, start_a, start_b);
 }
 
 /// Visits every unordered pair {id_a, id_b}, id_a != id_b, of primitives of one tree whose
 /// leaves' BVs overlap (pairs within one leaf are always visited). Same callables as
-/// traverse_pair; each pair is visited once.
-template <class BV, class Overlap, class Visit> bool traverse_self(const Bvh<BV>& t, Overlap&& overlap, Visit&& visit) {
+/// traverse_pair; each pair is visited once. The walk starts at (start_i, start_j), the root
+/// (0, 0) by default: (i, i) stands for the pairs inside node i, (i, j), i != j, for the pairs
+/// across nodes i and j.
+template <class BV, class Overlap, class Visit>
+bool traverse_self(const Bvh<BV>& t, Overlap&& overlap, Visit&& visit, std::int32_t start_i = 0, std::int32_t start_j = 0) {
   if (t.empty()) return true;
-  // (i, i) means "pairs inside node i"; (i, j), i != j, means "pairs across nodes i and j".
   detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-  stack.push({0, 0});
+  stack.push({start_i, start_j});
   while (!stack.empty()) {
     const auto [i, j] = stack.pop();
     const auto& ni = t.nodes[static_cast<std::size_t>(i)];

@@ -9,8 +9,8 @@
 /// pairs they give. Self CCD skips adjacent primitives: a vertex against a face it belongs to and
 /// two edges sharing a vertex. Conservative like the primitive tests: no contact is missed.
 ///
-/// Threads: mesh_ccd and mesh_self_ccd run their primitive tests on a `threads` count (the
-/// answer does not depend on it); they only read the motions and trees, so concurrent calls on
+/// Threads: mesh_ccd and mesh_self_ccd gather their candidates (the pair traversal) and run their
+/// primitive tests on a `threads` count (the answer does not depend on it); they only read the motions and trees, so concurrent calls on
 /// shared trees are safe. SweptMeshBvh::refit and build edit: not concurrently with queries on
 /// the same tree.
 #pragma once
@@ -187,6 +187,83 @@ struct MeshCcdCandidates {
   }
 };
 
+/// The candidates of every overlapping triangle pair of ta and tb (self: of ta against itself,
+/// adjacent primitives skipped) on `threads` threads; returns the number of triangle pairs. On one
+/// thread, one traversal. On more, the node pairs near the roots are split breadth first, as the
+/// traversal splits them, until there are 16 per thread (or nothing is left to split); each is
+/// then walked into its own candidate lists, joined afterwards. finish() sorts and deduplicates
+/// them, so the candidates, hence every answer, are the same for every thread count.
+template <bool Self, class S>
+std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const Faces& fa, const Faces& fb,
+                              MeshCcdCandidates& c, int threads) {
+  const auto overlap_boxes = [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); };
+  const auto walk = [&](std::int32_t i, std::int32_t j, MeshCcdCandidates& out) {
+    std::size_t pairs = 0;
+    const auto visit = [&](std::int32_t p, std::int32_t q) {
+      ++pairs;
+      out.add_triangle_pair(fa, p, fb, q, Self);
+      return true;
+    };
+    if constexpr (Self)
+      traverse_self(ta, overlap_boxes, visit, i, j);
+    else
+      traverse_pair(ta, tb, overlap_boxes, visit, i, j);
+    return pairs;
+  };
+  const int t = resolve_threads(threads);
+  if (t <= 1 || ta.empty() || tb.empty()) return walk(0, 0, c);
+  std::vector<std::pair<std::int32_t, std::int32_t>> tasks{{0, 0}}, next;
+  const std::size_t want = 16 * static_cast<std::size_t>(t);
+  for (bool split = true; split && tasks.size() < want;) {
+    split = false;
+    next.clear();
+    for (const auto& [i, j] : tasks) {
+      const auto& ni = ta.nodes[static_cast<std::size_t>(i)];
+      const auto& nj = tb.nodes[static_cast<std::size_t>(j)];
+      if (Self && i == j) {
+        if (ni.is_leaf()) {
+          next.push_back({i, j});
+        } else {
+          next.push_back({ni.left(), ni.left()});
+          next.push_back({ni.right(), ni.right()});
+          next.push_back({ni.left(), ni.right()});
+          split = true;
+        }
+        continue;
+      }
+      if (!overlap(ni.bv, nj.bv)) continue;
+      if (ni.is_leaf() && nj.is_leaf()) {
+        next.push_back({i, j});
+      } else if (nj.is_leaf() || (!ni.is_leaf() && BvTraits<Aabb<S>>::size(ni.bv) >= BvTraits<Aabb<S>>::size(nj.bv))) {
+        next.push_back({ni.left(), j});
+        next.push_back({ni.right(), j});
+        split = true;
+      } else {
+        next.push_back({i, nj.left()});
+        next.push_back({i, nj.right()});
+        split = true;
+      }
+    }
+    tasks.swap(next);
+  }
+  std::vector<MeshCcdCandidates> parts(tasks.size());
+  std::vector<std::size_t> pairs(tasks.size(), 0);
+  parallel_for(tasks.size(), t, [&](std::size_t k) { pairs[k] = walk(tasks[k].first, tasks[k].second, parts[k]); });
+  std::size_t total = 0, nvf = c.vf.size(), nee = c.ee.size();
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    total += pairs[k];
+    nvf += parts[k].vf.size();
+    nee += parts[k].ee.size();
+  }
+  c.vf.reserve(nvf);
+  c.ee.reserve(nee);
+  for (const auto& p : parts) {
+    c.vf.insert(c.vf.end(), p.vf.begin(), p.vf.end());
+    c.ee.insert(c.ee.end(), p.ee.begin(), p.ee.end());
+  }
+  return total;
+}
+
 /// The primitive tests of the deduplicated candidates: vertex-face pairs in order, then edge-edge
 /// pairs, on `threads` threads (chunks of candidates, each with its own contact list, joined in
 /// candidate order): the contacts, their order and the counters do not depend on the thread count.
@@ -250,8 +327,8 @@ MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, cons
 /// both directions) and edge-edge pair that comes within opt.min_separation, with the earliest
 /// toi. No false negatives (see CcdResult); hits may include near misses within the tolerance.
 ///
-/// `threads`: threads of the primitive tests (<= 0 the hardware concurrency, 1 serial; fewer than
-/// 1,024 candidate pairs run serially). The contacts, their order, toi and the counters are the
+/// `threads`: threads of the traversal and of the primitive tests (<= 0 the hardware concurrency,
+/// 1 serial; fewer than 1,024 candidate pairs are tested serially). The contacts, their order, toi and the counters are the
 /// same for every thread count.
 /// Throws InvalidInput (before any work) on bad options (see CcdOptions), a tree built for another
 /// mesh, or a tree built for a smaller minimum separation than opt.min_separation.
@@ -261,14 +338,7 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
   detail::validate_mesh_ccd("mesh_ccd", opt, a, ta, "of mesh a");
   detail::validate_mesh_ccd("mesh_ccd", opt, b, tb, "of mesh b");
   detail::MeshCcdCandidates c;
-  std::size_t pairs = 0;
-  traverse_pair(
-      ta.tree, tb.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
-      [&](std::int32_t fa, std::int32_t fb) {
-        ++pairs;
-        c.add_triangle_pair(*a.faces, fa, *b.faces, fb, false);
-        return true;
-      });
+  const std::size_t pairs = detail::gather_candidates<false>(ta.tree, tb.tree, *a.faces, *b.faces, c, threads);
   auto r = detail::run_mesh_ccd(c, a, b, opt, threads);
   r.triangle_pairs = pairs;
   return r;
@@ -282,14 +352,7 @@ template <class S>
 MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_self_ccd", opt, m, t, "of the mesh");
   detail::MeshCcdCandidates c;
-  std::size_t pairs = 0;
-  traverse_self(
-      t.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
-      [&](std::int32_t fa, std::int32_t fb) {
-        ++pairs;
-        c.add_triangle_pair(*m.faces, fa, *m.faces, fb, true);
-        return true;
-      });
+  const std::size_t pairs = detail::gather_candidates<true>(t.tree, t.tree, *m.faces, *m.faces, c, threads);
   auto r = detail::run_mesh_ccd(c, m, m, opt, threads);
   r.triangle_pairs = pairs;
   return r;

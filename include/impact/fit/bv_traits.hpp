@@ -42,9 +42,16 @@ template <class S_> struct BvTraits<Sphere<S_>> {
   static S size(const Sphere<S>& a) { return a.radius; }
   static Vec3<S> center(const Sphere<S>& a) { return a.center; }
   static bool overlap(const Sphere<S>& a, const Sphere<S>& b) { return impact::overlap(a, b); }
+  /// b's centre is moved by xf with rounding at the scale of the coordinates, not of the radii:
+  /// each component of fl(M c + t) is within e = 8u (|M|_inf |c|_inf + |t|_inf) of M c + t
+  /// (Higham 3.1), so sqrt(3) e is added to the radii. xf is taken as rigid; the mesh queries pad
+  /// for a rounded, not quite orthonormal relative pose and for the moved vertices
+  /// (query/mesh_collide.hpp, PosePad).
   static bool overlap(const Sphere<S>& a, const Sphere<S>& b, const RigidTransform<S>& xf) {
-    const S r = a.radius + b.radius;
-    return (a.center - xf.apply(b.center)).squaredNorm() <= r * r * (S(1) + S(4) * std::numeric_limits<S>::epsilon());
+    constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+    const S e = S(8) * u * (xf.R.cwiseAbs().rowwise().sum().maxCoeff() * b.center.cwiseAbs().maxCoeff() + xf.t.cwiseAbs().maxCoeff());
+    const S r = (a.radius + b.radius + S(1.7320508075688774) * e) * (S(1) + S(4) * u);
+    return (a.center - xf.apply(b.center)).squaredNorm() <= r * r * (S(1) + S(16) * u);
   }
   static Sphere<S> transformed(const Sphere<S>& a, const RigidTransform<S>& xf) { return {xf.apply(a.center), a.radius}; }
   static Sphere<S> inflated(const Sphere<S>& a, S margin) { return {a.center, a.radius + margin}; }

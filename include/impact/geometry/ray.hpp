@@ -24,6 +24,11 @@ template <class S> struct Ray {
 /// least CoordinateRange::min_scale (so not zero), and t_max >= 0 (+infinity allowed; NaN
 /// rejected). Run once per public query.
 template <class S> void validate_ray(const Ray<S>& ray, const char* where, const char* name = "ray") {
+  // the common case without building a message (the ray casts call this once per ray)
+  if (IMPACT_LIKELY(all_finite(ray.origin) && all_finite(ray.direction) && ray.origin.cwiseAbs().maxCoeff() <= CoordinateRange<S>::max &&
+                    ray.direction.cwiseAbs().maxCoeff() <= CoordinateRange<S>::max &&
+                    ray.direction.cwiseAbs().maxCoeff() >= CoordinateRange<S>::min_scale && ray.t_max >= S(0)))
+    return;
   const std::string n(name);
   validate_coordinates(ray.origin, where, (n + ".origin").c_str());
   validate_coordinates(ray.direction, where, (n + ".direction").c_str());

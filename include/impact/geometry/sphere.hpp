@@ -6,6 +6,9 @@
 
 #include "impact/core/types.hpp"
 
+#include <algorithm>
+#include <limits>
+
 namespace impact {
 
 template <class S> struct Sphere {
@@ -26,19 +29,25 @@ template <class S> inline bool overlap(const Sphere<S>& a, const Sphere<S>& b) {
   return (a.center - b.center).squaredNorm() <= r * r;
 }
 
-/// The smallest sphere containing both spheres.
+/// The smallest sphere containing both spheres, padded for rounding so that both stay inside:
+/// the centre is rounded at the scale of its coordinates (which can be far above the radii), so
+/// the radius is measured again from the rounded centre to each input sphere, and each comparison
+/// and distance is taken with a relative margin for its own rounding (a difference of two floats
+/// is rounded relative to itself, a norm of three components within a few ulps).
 template <class S> inline Sphere<S> merge(const Sphere<S>& a, const Sphere<S>& b) {
   if (a.empty()) return b;
   if (b.empty()) return a;
+  constexpr S grow = S(1) + S(8) * std::numeric_limits<S>::epsilon();
   const Vec3<S> d = b.center - a.center;
   const S dist = d.norm();
-  if (dist + b.radius <= a.radius) return a;
-  if (dist + a.radius <= b.radius) return b;
+  if (dist == S(0)) return a.radius >= b.radius ? a : b;  // same centre, exactly
+  if ((dist + b.radius) * grow <= a.radius) return a;
+  if ((dist + a.radius) * grow <= b.radius) return b;
   const S r = (dist + a.radius + b.radius) / S(2);
   // centre moves from a.center towards b.center by (r - a.radius)
   const Vec3<S> c = a.center + d * ((r - a.radius) / dist);
-  // pad by a few ulps so both inputs stay inside after rounding
-  return {c, r * (S(1) + S(8) * std::numeric_limits<S>::epsilon())};
+  const S ra = (c - a.center).norm() + a.radius, rb = (c - b.center).norm() + b.radius;
+  return {c, std::max(ra, rb) * grow + std::numeric_limits<S>::denorm_min()};
 }
 
 }  // namespace impact

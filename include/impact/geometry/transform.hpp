@@ -59,6 +59,9 @@ template <class S> inline S rotation_tolerance() { return std::max(std::sqrt(std
 /// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
 /// culling wrong without any sign of it, hence the check at every public query (about 40 flops).
 template <class S> void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
+  // the common case without building a message (queries call this once per call)
+  if (IMPACT_LIKELY(pose.is_finite() && pose.t.cwiseAbs().maxCoeff() <= CoordinateRange<S>::max && pose.is_rigid(rotation_tolerance<S>())))
+    return;
   if (!pose.is_finite()) {
     std::ostringstream s;
     s << where << ": " << name << " must be finite (R and t have a NaN or infinite entry)";

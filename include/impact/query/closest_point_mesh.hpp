@@ -7,9 +7,13 @@
 ///
 /// Numerical contract: approximate to rounding. The closest point on each triangle is the narrow
 /// phase's (narrow/closest_point.hpp: Voronoi regions after Ericson, Real-Time Collision
-/// Detection, 5.1.5, robust on slivers); the feature reported is the region the query fell in. Node keys are exact lower bounds up to rounding, so the result
-/// is the nearest triangle up to ties (equal distances at shared edges and vertices return one of
-/// the triangles that share them).
+/// Detection, 5.1.5, robust on slivers); the feature reported is the region the query fell in. A
+/// triangle's squared distance is never taken below the squared distance to its bounding box, and
+/// node keys are computed the same way on boxes holding those boxes, so they are lower bounds of
+/// the computed values, not only up to rounding: with a box tree the result's distance is exactly
+/// the smallest of a loop over every triangle, and its triangle one of those at that distance
+/// (equal distances at shared edges and vertices return one of the triangles that share them).
+/// Sphere trees use the distance to each sphere, a lower bound up to its own rounding.
 #pragma once
 
 #include "impact/bvh/mesh_bvh.hpp"
@@ -21,6 +25,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <type_traits>
 
 namespace impact {
 
@@ -59,14 +64,30 @@ template <class S> inline TrianglePoint<S> closest_on_triangle(const Vec3<S>& p,
   return {c.point, c.barycentric, c.feature};
 }
 
-/// Squared distance from p to a BV (0 inside); a lower bound of the distance to what it holds.
+/// Squared distance from p to a box (0 inside), computed so that it is monotone in the box: for
+/// boxes A inside B, the computed value for B is <= the one for A (each coordinate difference, its
+/// square and their sum are rounded monotonically).
 template <class S> inline S squared_distance_to_bv(const Vec3<S>& p, const Aabb<S>& b) {
   const Vec3<S> q = p.cwiseMax(b.min).cwiseMin(b.max);
-  return (p - q).squaredNorm();
+  const Vec3<S> e = p - q;
+  return (e[0] * e[0] + e[1] * e[1]) + e[2] * e[2];
 }
+/// Squared distance from p to a sphere (0 inside), rounded: a lower bound of the distance to what
+/// it holds up to rounding.
 template <class S> inline S squared_distance_to_bv(const Vec3<S>& p, const Sphere<S>& s) {
   const S d = (p - s.center).norm() - s.radius;
   return d > S(0) ? d * d : S(0);
+}
+
+/// Squared distance from p to triangle t's closest point (tp), raised to the squared distance to
+/// the triangle's bounding box when rounding put it below that. The box's value is never above
+/// the key of any box node holding the triangle (squared_distance_to_bv is monotone), so a node
+/// whose key is >= the best squared distance found cannot hold a closer triangle: pruning it is
+/// exact, and the tree's answer is the brute-force loop's minimum.
+template <class S> inline S triangle_squared_distance(const Vec3<S>& p, const Triangle<S>& t, const TrianglePoint<S>& tp) {
+  const S d2 = (p - tp.point).squaredNorm();
+  const S box = squared_distance_to_bv(p, Aabb<S>(t.a.cwiseMin(t.b).cwiseMin(t.c), t.a.cwiseMax(t.b).cwiseMax(t.c)));
+  return d2 < box ? box : d2;
 }
 
 }  // namespace detail
@@ -109,8 +130,13 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
   TrianglePoint<S> best_tp;
   // Once a triangle is found only a strictly closer one replaces it, so nodes at the distance
   // found are pruned too (bound just below it): without that, a mesh whose triangles are all at
-  // the same distance (coincident vertices) had every node and triangle visited.
-  auto bound = [&]() { return best_leaf >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; };
+  // the same distance (coincident vertices) had every node and triangle visited. Exact, not up to
+  // rounding: a node's key never exceeds its triangles' values (triangle_squared_distance).
+  // Sphere trees: a sphere's distance is a lower bound up to its own rounding only (a triangle's
+  // vertex can lie on the sphere), and it is below its triangles' anyway: they prune only nodes
+  // strictly farther than best.
+  S limit = best;
+  auto bound = [&]() { return limit; };
   traverse_nearest(
       mesh.tree(),
       [&](const BV& bv) -> std::optional<S> {
@@ -120,12 +146,17 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
       },
       bound,
       [&](std::int32_t k) {
-        const TrianglePoint<S> tp = detail::closest_on_triangle(p, mesh.triangle(k));
-        const S d2 = (p - tp.point).squaredNorm();
+        const Triangle<S> tri = mesh.triangle(k);
+        const TrianglePoint<S> tp = detail::closest_on_triangle(p, tri);
+        const S d2 = detail::triangle_squared_distance(p, tri, tp);
         if (d2 < best || (best_leaf < 0 && d2 <= best)) {
           best = d2;
           best_leaf = k;
           best_tp = tp;
+          if constexpr (std::is_same_v<BV, Aabb<S>>)
+            limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+          else
+            limit = best;
         }
         return true;
       });

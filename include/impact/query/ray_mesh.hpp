@@ -8,9 +8,13 @@
 /// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013): the ray is prepared once, and a
 /// ray through a shared edge or vertex of a closed mesh hits at least one of the triangles around
 /// it (never none). A hit on the boundary of a triangle counts (closed triangles). Rays parallel
-/// to a triangle's plane miss it. The node
-/// tests are conservative (their exit parameter is padded, PBRT's robust slab test), so no hit is
-/// lost to rounding in the traversal. One tie rule keeps particles out of surfaces: a hit at
+/// to a triangle's plane miss it. A triangle counts as hit only when the ray also enters its
+/// bounding box by the node tests' slab test, and its t is never below that entry (see
+/// detail::ray_mesh_triangle_hit). The node tests are conservative (their exit parameter is
+/// padded, PBRT's robust slab test) and monotone (a box inside another is entered no earlier), so
+/// no hit is lost to rounding in the traversal of a box tree or a CompactBvh: their first hit's t
+/// is exactly the smallest t of a loop over every triangle. Sphere trees use the sphere's padded
+/// entry, a lower bound up to the rounding of the entry itself. One tie rule keeps particles out of surfaces: a hit at
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
 /// normal), so a point exactly on a surface is on its front side: moving into the surface it
 /// hits, moving away it does not.
@@ -56,17 +60,39 @@ struct RayMeshStats {
 
 namespace detail {
 
-/// The narrow-phase watertight test with the library's tie rule at t = 0: a hit exactly at the
-/// ray's origin counts only when the ray enters the triangle's front (see the file comment).
-/// `pr.ray.t_max` is the current bound.
-template <class S> inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Triangle<S>& tri) {
+/// Entry parameter of the ray into a box, padded so that rounding never loses a hit; nullopt when
+/// the ray misses the box or enters it after t_max. Monotone in the box: for boxes A inside B,
+/// the computed entry into B is <= the computed entry into A, and B is missed only when A is
+/// (every plane difference and product is rounded monotonically); the first hit relies on that.
+template <class S>
+inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, const Aabb<S>& box, S t_max);
+
+/// The narrow-phase watertight test with the library's rules. `pr.ray.t_max` is the current bound,
+/// `inv` the componentwise inverse of the ray's direction (safe_inverse).
+///  - The ray must enter the triangle's bounding box by the node tests' own slab test
+///    (ray_box_entry), and the hit's t is raised to that entry when it is below it. The narrow
+///    phase's t is a rounded convex combination of the vertices' depths along the ray, which can
+///    fall an ulp or more below the entry into the triangle's box (a ray through a vertex that is a
+///    corner of the box), or anywhere in the triangle's depth range for a ray in the triangle's
+///    plane (the edge functions are then rounding noise). Raised to the entry it is never below the
+///    computed entry into any box holding the triangle (ray_box_entry is monotone), so a node whose
+///    computed entry is >= the best t found cannot hold a smaller one: the traversal's pruning is
+///    exact, and the tree's first hit is the brute-force loop's minimum, bit for bit
+///    (tests/fuzz/fuzz_mesh_bvh.cpp).
+///  - A hit at exactly t = 0 counts only when the ray enters the triangle's front (see the file
+///    comment).
+template <class S>
+inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Vec3<S>& inv, const Triangle<S>& tri) {
   auto h = intersect_ray_triangle(pr, tri);
-  if (h && h->t == S(0) && !h->front) return std::nullopt;
+  if (!h) return h;
+  const Aabb<S> box(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c));
+  const std::optional<S> entry = ray_box_entry(pr.ray.origin, inv, box, pr.ray.t_max);
+  if (!entry) return std::nullopt;
+  if (h->t < *entry) h->t = *entry;
+  if (h->t == S(0) && !h->front) return std::nullopt;
   return h;
 }
 
-/// Entry parameter of the ray into a box, padded so that rounding never loses a hit; nullopt when
-/// the ray misses the box or enters it after t_max.
 template <class S>
 inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, const Aabb<S>& box, S t_max) {
   S t0 = S(0), t1 = t_max;
@@ -203,6 +229,11 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
 }
 
+/// ray_mesh_triangle_hit for one triangle, the inverse direction computed here (brute-force loops).
+template <class S> inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Triangle<S>& tri) {
+  return ray_mesh_triangle_hit(pr, safe_inverse(pr.ray.direction), tri);
+}
+
 }  // namespace detail
 
 namespace detail {
@@ -218,6 +249,7 @@ struct FirstHitCast {
   Vec3<S> o, d, inv;
   PreparedRay<S> pr;
   S best;
+  S limit;  ///< bound(), updated with best
   std::int32_t best_leaf = -1;
   Vec3<S> best_bary = Vec3<S>::Zero();
   bool finite = false;  ///< a finite ray whose own box `seg` was asked for (it rejects most nodes before the slab test)
@@ -228,7 +260,8 @@ struct FirstHitCast {
         stats(st),
         o(pose.R.transpose() * (ray.origin - pose.t)),
         d(pose.R.transpose() * ray.direction),
-        best(ray.t_max) {
+        best(ray.t_max),
+        limit(ray.t_max) {
     inv = detail::safe_inverse(d);
     pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
     finite = segment_box && ray.t_max < std::numeric_limits<S>::infinity();
@@ -240,19 +273,26 @@ struct FirstHitCast {
   }
   /// False when nothing can be hit (zero direction, negative t_max).
   bool valid() const { return d.squaredNorm() != S(0) && best >= S(0); }
-  /// The largest node entry still worth entering: best before a hit; once a hit is found only a
-  /// strictly earlier one replaces it, and a node's entry is a lower bound of its triangles' t,
-  /// so nodes entered at best itself are pruned too (else a mesh of coincident triangles, all hit
-  /// at the same t, had every node and triangle visited).
-  S bound() const { return best_leaf >= 0 ? std::nextafter(best, -std::numeric_limits<S>::infinity()) : best; }
+  /// The largest node entry still worth entering: best before a hit. Once a hit is found only a
+  /// strictly earlier one replaces it. In a box tree a node's computed entry is a lower bound of
+  /// its triangles' t (exact, not up to rounding: see ray_mesh_triangle_hit), so nodes entered at
+  /// best itself are pruned too (else a mesh of coincident triangles, all hit at the same t, had
+  /// every node and triangle visited). A sphere's computed entry is a lower bound up to its own
+  /// rounding only (a triangle's vertex can lie on the sphere), and the sphere is entered before
+  /// its triangles anyway: sphere trees prune only nodes entered strictly after best.
+  S bound() const { return limit; }
   bool visit(std::int32_t k) {
     if (stats) ++stats->triangle_tests;
     pr.ray.t_max = best;
-    const auto h = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k));
+    const auto h = detail::ray_mesh_triangle_hit(pr, inv, mesh.triangle(k));
     if (h && (best_leaf < 0 || h->t < best)) {
       best = h->t;
       best_leaf = k;
       best_bary = Vec3<S>(h->u, h->v, h->w);
+      if constexpr (std::is_same_v<BV, Aabb<S>>)
+        limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+      else
+        limit = best;
     }
     return true;
   }
@@ -391,7 +431,7 @@ bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::
   traverse(
       mesh.tree(), [&](const BV& bv) { return detail::ray_bv_entry(o, d, inv, bv, ray.t_max).has_value(); },
       [&](std::int32_t k) {
-        found = detail::ray_mesh_triangle_hit(pr, mesh.triangle(k)).has_value();
+        found = detail::ray_mesh_triangle_hit(pr, inv, mesh.triangle(k)).has_value();
         return !found;
       });
   return found;

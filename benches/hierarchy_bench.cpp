@@ -1,0 +1,427 @@
+// SPDX-License-Identifier: MIT
+// impact-hierarchy-bench: every hierarchy of the library on the same work, to choose one.
+//
+//   impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]
+//
+// A MESH given as A,B (two paths and a comma) runs the mesh–mesh queries of A against B; every
+// other query runs on A.
+// For each mesh (default: a generated torus) and each structure (bounding volume sphere, AABB or
+// oriented box, times builder: top-down middle, median or SAH split, bottom-up clustering,
+// incremental insertion; and the kd-tree over triangles): build time of one tree, its memory
+// beyond the mesh (bytes per triangle), refit time after a deformation, and per query the median
+// and mean time and the BV and primitive tests: boolean and all-pairs mesh–mesh (the mesh against
+// itself under N random poses, tests/support/poses.hpp), self-collision (all pairs), ray first
+// hit for short segments from near the surface and long rays from outside (N of each), closest
+// point from N points around the mesh. Structures that do not answer a query (collision on the
+// kd-tree, rays and closest points on oriented boxes, whose casts the library does not have)
+// get no row. Every answer is checked: the colliding poses, pair sets, hit parameters and
+// distances must be identical across structures (the first structure to answer is the
+// reference), and the first 32 rays and points are also checked against brute force over all
+// triangles; any mismatch is printed and the bench exits with status 3.
+// --json FILE writes one row per structure and query (structure, bv, builder, query, build_ms,
+// bytes_per_triangle, median_us, mean_us, tests, bv_tests, primitive_tests, refit_ms, mismatches).
+#include "bench_util.hpp"
+#include "impact/query/kd_tree.hpp"
+#include "impact/bvh/mesh_bvh.hpp"
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/closest_point_mesh.hpp"
+#include "impact/query/mesh_collide.hpp"
+#include "impact/query/ray_mesh.hpp"
+#include "support/poses.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <optional>
+
+using namespace impact;
+using impact::bench::Clock;
+using impact::bench::seconds_since;
+
+namespace {
+
+struct Args {
+  std::vector<std::string> meshes;
+  std::string json;
+  int poses = 100, rays = 1000;
+  std::uint64_t seed = 1;
+};
+
+[[noreturn]] void usage(const char* msg) {
+  std::fprintf(stderr, "%s\nusage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n", msg);
+  std::exit(2);
+}
+
+Args parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
+      return argv[++i];
+    };
+    if (s == "--poses") a.poses = std::atoi(next().c_str());
+    else if (s == "--rays") a.rays = std::atoi(next().c_str());
+    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    else if (s == "--json") a.json = next();
+    else if (s == "-h" || s == "--help") usage("");
+    else if (!s.empty() && s[0] == '-') usage(("unknown option " + s).c_str());
+    else a.meshes.push_back(s);
+  }
+  if (a.poses < 1) usage("--poses must be >= 1");
+  if (a.rays < 1) usage("--rays must be >= 1");
+  return a;
+}
+
+TriangleMesh<double> load(const std::string& path) {
+#ifdef IMPACT_HAVE_IO
+  return load_mesh<double>(path);
+#else
+  (void)path;
+  usage("this build has no mesh loader (assimp was not found); run without meshes");
+#endif
+}
+
+struct Row {
+  std::string mesh, structure, bv, builder, query;
+  double build_ms = 0, bytes_per_triangle = 0, refit_ms = -1;
+  bench::Summary us;
+  double bv_tests = -1, primitive_tests = -1;
+  int mismatches = 0;
+};
+
+/// The work of one mesh: poses, rays, points, and the reference answers.
+struct Work {
+  std::string mesh;
+  TriangleMesh<double> m;
+  TriangleMesh<double> other;  // B of the mesh-mesh queries (m itself unless given as A,B)
+  std::vector<RigidTransform<double>> poses;
+  std::vector<Ray<double>> short_rays, long_rays;
+  std::vector<Vec3<double>> points;
+  Vertices<double> deformed;  // for refit
+  // reference answers (empty until a structure answers)
+  std::vector<char> boolean;
+  std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> pairs;
+  std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs;
+  bool have_self = false;
+  std::map<std::string, std::vector<double>> ray_t;  // "ray_short" / "ray_long"
+  std::vector<double> distance;
+  std::string reference[7];
+};
+
+bool same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+/// Brute force over all triangles: the narrow phase's watertight test with the library's tie rule.
+double brute_ray(const TriangleMesh<double>& m, const Ray<double>& r) {
+  const PreparedRay<double> pr(r);
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (int t = 0; t < m.num_triangles(); ++t) {
+    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+    if (h && (std::isnan(best) || h->t < best)) best = h->t;
+  }
+  return best;
+}
+double brute_distance(const TriangleMesh<double>& m, const Vec3<double>& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int t = 0; t < m.num_triangles(); ++t) best = std::min(best, (closest_point_on_triangle(p, m.triangle(t)).point - p).squaredNorm());
+  return std::sqrt(best);
+}
+
+Work make_work(const std::string& name, TriangleMesh<double> m, std::optional<TriangleMesh<double>> other, const Args& args) {
+  Work w;
+  w.mesh = name;
+  w.m = std::move(m);
+  if (!other) w.other = w.m;
+  else w.other = std::move(*other);
+  w.poses = impact::test::random_poses_around(w.m, w.other, args.poses, args.seed);
+  const Aabb<double> box = impact::test::bounds(w.m);
+  const double diag = (box.max - box.min).norm();
+  impact::test::Rng rng(args.seed + 17);
+  for (int k = 0; k < args.rays; ++k) {
+    // short: from near a random point of a random triangle, 2 % of the diagonal long
+    const Triangle<double> t = w.m.triangle(static_cast<int>(rng.index(static_cast<std::uint64_t>(w.m.num_triangles()))));
+    double u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const Vec3<double> on = t.a + u * (t.b - t.a) + v * (t.c - t.a);
+    const Vec3<double> o = on + rng.vec(-0.005, 0.005) * diag;
+    Vec3<double> d = rng.vec(-1, 1);
+    if (d.norm() < 1e-3) d = Vec3<double>(1, 0, 0);
+    d.normalize();
+    w.short_rays.emplace_back(o, d, 0.02 * diag);
+    // long: from a sphere around the mesh towards a random point of its box, unbounded
+    Vec3<double> s = rng.vec(-1, 1);
+    if (s.norm() < 1e-3) s = Vec3<double>(0, 0, 1);
+    const Vec3<double> lo = box.center() + s.normalized() * diag;
+    const Vec3<double> target = rng.in_box(box.min, box.max);
+    w.long_rays.emplace_back(lo, (target - lo).normalized(), std::numeric_limits<double>::infinity());
+    w.points.push_back(rng.in_box(box.min.array() - 0.1 * diag, box.max.array() + 0.1 * diag));
+  }
+  // a deformation for refit: every vertex moved by up to 1 % of the diagonal
+  w.deformed = w.m.V;
+  for (Eigen::Index i = 0; i < w.deformed.rows(); ++i) w.deformed.row(i) += (rng.vec(-0.01, 0.01) * diag).transpose();
+  return w;
+}
+
+struct Checker {
+  int mismatches = 0;
+  void report(const Work& w, const std::string& structure, const std::string& query, std::size_t k, const std::string& what) {
+    if (++mismatches <= 20)
+      std::fprintf(stderr, "MISMATCH %s %s %s query %zu: %s\n", w.mesh.c_str(), structure.c_str(), query.c_str(), k, what.c_str());
+  }
+};
+
+template <class F> bench::Summary time_each(std::size_t n, F&& f, std::vector<double>* us_out = nullptr) {
+  std::vector<double> us(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto t0 = Clock::now();
+    f(k);
+    us[k] = seconds_since(t0) * 1e6;
+  }
+  if (us_out) *us_out = us;
+  return bench::summarize(us);
+}
+
+/// Checks per-query answers against the reference (brute force for the first ones, then the
+/// first structure's answers), extending the reference with answers it does not have yet.
+void check_values(Work& w, Checker& ck, Row& row, std::vector<double>& ref, const std::vector<double>& got) {
+  const std::size_t known = std::min(ref.size(), got.size());
+  if (ref.size() < got.size()) ref.insert(ref.end(), got.begin() + static_cast<std::ptrdiff_t>(ref.size()), got.end());
+  for (std::size_t k = 0; k < known; ++k)
+    if (!same(ref[k], got[k])) {
+      ++row.mismatches;
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "%.17g, reference %.17g", got[k], ref[k]);
+      ck.report(w, row.structure, row.query, k, buf);
+    }
+}
+
+template <class BV>
+void run_bvh(Work& w, const std::string& builder, const MeshBvhConfig& cfg, std::vector<Row>& rows, Checker& ck) {
+  const std::string bv = BvTraits<BV>::name;
+  const std::string structure = bv + "/" + builder;
+  auto t0 = Clock::now();
+  MeshBvh<BV> tree(w.m, cfg);
+  const double build_ms = seconds_since(t0) * 1e3;
+  const double bpt = double(tree.tree_bytes()) / double(tree.num_triangles());
+  const MeshBvh<BV> tree_b_own(w.other, cfg);  // B of the mesh-mesh queries (a copy of A's tree for one mesh)
+  const MeshBvh<BV>& tree_b = tree_b_own;
+  auto row = [&](const char* query) {
+    Row r;
+    r.mesh = w.mesh, r.structure = structure, r.bv = bv, r.builder = builder, r.query = query;
+    r.build_ms = build_ms, r.bytes_per_triangle = bpt;
+    return r;
+  };
+  const RigidTransform<double> id;
+  const std::size_t np = w.poses.size();
+
+  {  // boolean
+    Row r = row("boolean");
+    std::vector<char> ans(np);
+    QueryStats total;
+    r.us = time_each(np, [&](std::size_t k) {
+      QueryStats st;
+      ans[k] = collides(tree, id, tree_b, w.poses[k], &st);
+      total.bv_tests += st.bv_tests, total.primitive_tests += st.primitive_tests;
+    });
+    r.bv_tests = double(total.bv_tests) / double(np), r.primitive_tests = double(total.primitive_tests) / double(np);
+    if (w.boolean.empty()) w.boolean = ans;
+    for (std::size_t k = 0; k < np; ++k)
+      if (ans[k] != w.boolean[k]) ++r.mismatches, ck.report(w, structure, "boolean", k, ans[k] ? "colliding, reference not" : "apart, reference colliding");
+    rows.push_back(r);
+  }
+  {  // all pairs
+    Row r = row("all_pairs");
+    std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> ans(np);
+    QueryStats total;
+    CollideOptions opt;
+    opt.all_pairs = true;
+    r.us = time_each(np, [&](std::size_t k) {
+      auto res = collide(tree, id, tree_b, w.poses[k], opt);
+      total.bv_tests += res.stats.bv_tests, total.primitive_tests += res.stats.primitive_tests;
+      ans[k] = std::move(res.pairs);
+    });
+    for (auto& a : ans) std::sort(a.begin(), a.end());
+    r.bv_tests = double(total.bv_tests) / double(np), r.primitive_tests = double(total.primitive_tests) / double(np);
+    if (w.pairs.empty()) w.pairs = ans;
+    for (std::size_t k = 0; k < np; ++k)
+      if (ans[k] != w.pairs[k])
+        ++r.mismatches, ck.report(w, structure, "all_pairs", k, std::to_string(ans[k].size()) + " pairs, reference " + std::to_string(w.pairs[k].size()));
+    rows.push_back(r);
+  }
+  {  // self-collision
+    Row r = row("self");
+    CollideOptions opt;
+    opt.all_pairs = true;
+    const std::size_t repeat = std::size_t(std::clamp(200000 / std::max(1, w.m.num_triangles()), 1, 5));
+    std::vector<std::pair<std::int32_t, std::int32_t>> ans;
+    QueryStats st;
+    r.us = time_each(repeat, [&](std::size_t) {
+      auto res = self_collide(tree, opt);
+      st = res.stats;
+      ans = std::move(res.pairs);
+    });
+    std::sort(ans.begin(), ans.end());
+    r.bv_tests = double(st.bv_tests), r.primitive_tests = double(st.primitive_tests);
+    if (!w.have_self) w.self_pairs = ans, w.have_self = true;
+    if (ans != w.self_pairs)
+      ++r.mismatches, ck.report(w, structure, "self", 0, std::to_string(ans.size()) + " pairs, reference " + std::to_string(w.self_pairs.size()));
+    rows.push_back(r);
+  }
+  if constexpr (!std::is_same_v<BV, Obb<double>>) {  // the library casts rays and finds closest points in sphere and AABB trees
+    for (const char* q : {"ray_short", "ray_long"}) {
+      const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
+      Row r = row(q);
+      std::vector<double> t(rays.size());
+      RayMeshStats st;
+      r.us = time_each(rays.size(), [&](std::size_t k) {
+        const auto h = ray_mesh_first_hit(tree, rays[k], id, &st);
+        t[k] = h ? h->t : std::numeric_limits<double>::quiet_NaN();
+      });
+      r.bv_tests = double(st.node_tests) / double(rays.size()), r.primitive_tests = double(st.triangle_tests) / double(rays.size());
+      check_values(w, ck, r, w.ray_t[q], t);
+      rows.push_back(r);
+    }
+    Row r = row("closest_point");
+    std::vector<double> d(w.points.size());
+    r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = closest_point_on_mesh(tree, w.points[k])->distance; });
+    check_values(w, ck, r, w.distance, d);
+    rows.push_back(r);
+  }
+  // refit last (it changes the tree): median of three refits to the deformed and back
+  std::vector<double> ms;
+  for (int k = 0; k < 3; ++k) {
+    auto r0 = Clock::now();
+    tree.set_vertices(k % 2 == 0 ? w.deformed : w.m.V);
+    ms.push_back(seconds_since(r0) * 1e3);
+  }
+  const double refit = bench::summarize(ms).median;
+  for (auto& r : rows)
+    if (r.structure == structure && r.mesh == w.mesh) r.refit_ms = refit;
+}
+
+void run_kd(Work& w, std::vector<Row>& rows, Checker& ck) {
+  const std::string structure = "kd-tree/sah";
+  auto t0 = Clock::now();
+  KdTree<double> kd(w.m);
+  const double build_ms = seconds_since(t0) * 1e3;
+  const double bpt = double(kd.memory_bytes()) / double(w.m.num_triangles());
+  auto row = [&](const char* query) {
+    Row r;
+    r.mesh = w.mesh, r.structure = structure, r.bv = "none", r.builder = "kd-sah", r.query = query;
+    r.build_ms = build_ms, r.bytes_per_triangle = bpt;
+    return r;
+  };
+  for (const char* q : {"ray_short", "ray_long"}) {
+    const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
+    Row r = row(q);
+    std::vector<double> t(rays.size());
+    KdTreeStats st;
+    r.us = time_each(rays.size(), [&](std::size_t k) {
+      const auto h = kd.first_hit(rays[k], &st);
+      t[k] = h ? h->t : std::numeric_limits<double>::quiet_NaN();
+    });
+    r.bv_tests = double(st.node_visits) / double(rays.size()), r.primitive_tests = double(st.triangle_tests) / double(rays.size());
+    check_values(w, ck, r, w.ray_t[q], t);
+    rows.push_back(r);
+  }
+  Row r = row("closest_point");
+  std::vector<double> d(w.points.size());
+  KdTreeStats st;
+  r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = kd.closest_point(w.points[k], &st)->distance; });
+  r.bv_tests = double(st.node_visits) / double(w.points.size()), r.primitive_tests = double(st.triangle_tests) / double(w.points.size());
+  check_values(w, ck, r, w.distance, d);
+  rows.push_back(r);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  struct Input {
+    std::string name;
+    TriangleMesh<double> m;
+    std::optional<TriangleMesh<double>> other;
+  };
+  std::vector<Input> meshes;
+  try {
+    if (args.meshes.empty()) meshes.push_back({"generated:torus", make_torus<double>(1.0, 0.35, 48, 24), std::nullopt});
+    for (const auto& p : args.meshes) {
+      const auto comma = p.find(',');
+      if (comma == std::string::npos) {
+        meshes.push_back({p, load(p), std::nullopt});
+      } else {
+        meshes.push_back({p, load(p.substr(0, comma)), load(p.substr(comma + 1))});
+        validate_mesh(*meshes.back().other, p);
+      }
+    }
+    for (auto& mm : meshes) validate_mesh(mm.m, mm.name);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "impact-hierarchy-bench: %s\n", e.what());
+    return 1;
+  }
+  std::vector<Row> rows;
+  Checker ck;
+  for (auto& input : meshes) {
+    const std::string& name = input.name;
+    Work w = make_work(name, std::move(input.m), std::move(input.other), args);
+    std::printf("impact-hierarchy-bench: %s (%d triangles), %d poses, %d rays of each kind and points, seed %llu\n", name.c_str(),
+                w.m.num_triangles(), args.poses, args.rays, static_cast<unsigned long long>(args.seed));
+    // brute-force answers for the first rays and points become the reference
+    const std::size_t nb = std::min<std::size_t>(32, w.points.size());
+    for (const char* q : {"ray_short", "ray_long"}) {
+      const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
+      std::vector<double> t(nb);
+      for (std::size_t k = 0; k < nb; ++k) t[k] = brute_ray(w.m, rays[k]);
+      w.ray_t[q] = t;
+    }
+    w.distance.resize(nb);
+    for (std::size_t k = 0; k < nb; ++k) w.distance[k] = brute_distance(w.m, w.points[k]);
+    // (the rest of the reference comes from the first structure that answers: check_values)
+    const std::size_t first_row = rows.size();
+    const std::pair<const char*, MeshBvhConfig> builders[] = {
+        {"middle", [] { MeshBvhConfig c; return c; }()},
+        {"median", [] { MeshBvhConfig c; c.build.split = SplitRule::CentroidMedian; return c; }()},
+        {"sah", [] { MeshBvhConfig c; c.build.split = SplitRule::Sah; return c; }()},
+        {"bottom-up", [] { MeshBvhConfig c; c.build.method = BuildMethod::BottomUp; return c; }()},
+        {"incremental", [] { MeshBvhConfig c; c.build.method = BuildMethod::Incremental; return c; }()},
+    };
+    for (const auto& [builder, cfg] : builders) run_bvh<Sphere<double>>(w, builder, cfg, rows, ck);
+    for (const auto& [builder, cfg] : builders) run_bvh<Aabb<double>>(w, builder, cfg, rows, ck);
+    for (const auto& [builder, cfg] : builders) run_bvh<Obb<double>>(w, builder, cfg, rows, ck);
+    run_kd(w, rows, ck);
+
+    std::printf("%-20s %-14s %9s %7s %9s %11s %11s %10s %10s %5s\n", "structure", "query", "build_ms", "B/tri", "refit_ms", "median_us",
+                "mean_us", "bv_tests", "prim_tests", "mism");
+    for (std::size_t i = first_row; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      std::printf("%-20s %-14s %9.2f %7.1f %9.3f %11.3f %11.3f %10.1f %10.1f %5d\n", r.structure.c_str(), r.query.c_str(), r.build_ms,
+                  r.bytes_per_triangle, r.refit_ms, r.us.median, r.us.mean, r.bv_tests, r.primitive_tests, r.mismatches);
+    }
+  }
+  if (!args.json.empty()) {
+    std::vector<std::string> items;
+    for (const Row& r : rows) {
+      bench::JsonObject o;
+      o.add("mesh", r.mesh).add("structure", r.structure).add("bv", r.bv).add("builder", r.builder).add("query", r.query);
+      o.add("build_ms", r.build_ms).add("bytes_per_triangle", r.bytes_per_triangle).add("refit_ms", r.refit_ms);
+      o.add("median_us", r.us.median).add("mean_us", r.us.mean).add("p99_us", r.us.p99).add("max_us", r.us.max);
+      o.add("tests", r.bv_tests < 0 ? -1.0 : r.bv_tests + r.primitive_tests).add("bv_tests", r.bv_tests).add("primitive_tests", r.primitive_tests);
+      o.add("mismatches", r.mismatches);
+      items.push_back(o.str());
+    }
+    bench::JsonObject top;
+    top.add("bench", "impact-hierarchy-bench").add("poses", args.poses).add("rays", args.rays).add("seed", static_cast<long long>(args.seed));
+    top.raw("results", bench::JsonObject::array(items));
+    if (!bench::write_file(args.json, top.str())) {
+      std::fprintf(stderr, "impact-hierarchy-bench: cannot write %s\n", args.json.c_str());
+      return 1;
+    }
+  }
+  if (ck.mismatches > 0) {
+    std::fprintf(stderr, "impact-hierarchy-bench: %d mismatches\n", ck.mismatches);
+    return 3;
+  }
+  return 0;
+}

@@ -1,0 +1,355 @@
+// SPDX-License-Identifier: MIT
+// WideBvh and its first-hit casts: the structure (every triangle in exactly one leaf, the mesh's
+// own coordinates, every float box containing the triangles below it, leaves within leaf_size),
+// and the casts against brute force over all triangles written here (the narrow phase's
+// watertight test with the t = 0 tie rule on every triangle, the smallest t kept): the same hits
+// and the same t up to rounding among near ties, in float and double, for rays in every direction (axis-parallel ones included),
+// rays aimed at vertices and edge points of closed meshes (which must hit), degenerate meshes
+// (zero-area triangles, coincident triangles, a flat mesh, one triangle), scaled and translated
+// copies, and a rigid pose. The SIMD node test gives bit for bit the scalar one's answers.
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/ray_wide_bvh.hpp"
+#include "support/random.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <limits>
+#include <vector>
+
+#include "support/sanitizer.hpp"
+
+constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+
+namespace impact {
+namespace {
+
+/// The cast's t against brute force's smallest t: exactly equal (a node's entry is a lower bound of
+/// its triangles' t, not only up to rounding; see detail::ray_mesh_triangle_hit).
+template <class S> void expect_first_t(S ref, S got, int i) { EXPECT_EQ(ref, got) << i; }
+
+/// Brute force: every triangle of the mesh by the library's per-triangle rule (the watertight test,
+/// the t = 0 tie rule, t never below the entry into the triangle's box), the smallest t (nullopt
+/// when none is hit).
+template <class S> std::optional<S> brute_first_t(const TriangleMesh<S>& m, const Ray<S>& ray, std::vector<int>* at_t = nullptr) {
+  const PreparedRay<S> pr(ray);
+  std::optional<S> best;
+  for (int t = 0; t < m.num_triangles(); ++t) {
+    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+    if (!h) continue;
+    if (!best || h->t < *best) best = h->t;
+  }
+  if (at_t && best)
+    for (int t = 0; t < m.num_triangles(); ++t) {
+      const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+      if (h && h->t == *best) at_t->push_back(t);
+    }
+  return best;
+}
+
+template <class S> void check_structure(const TriangleMesh<S>& m, const WideBvh<S>& w, int leaf_size) {
+  ASSERT_EQ(w.num_triangles(), m.num_triangles());
+  std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
+  for (std::int32_t k = 0; k < w.num_triangles(); ++k) {
+    const int id = w.triangle_id(k);
+    ASSERT_GE(id, 0);
+    ASSERT_LT(id, m.num_triangles());
+    ++seen[static_cast<std::size_t>(id)];
+    const Triangle<S> t = m.triangle(id);
+    ASSERT_EQ(w.triangle(k).a, t.a);  // the mesh's own coordinates
+    ASSERT_EQ(w.triangle(k).b, t.b);
+    ASSERT_EQ(w.triangle(k).c, t.c);
+  }
+  for (int s : seen) ASSERT_EQ(s, 1);
+  // every leaf-order position lies in exactly one leaf; every box holds its subtree's vertices
+  std::vector<int> covered(static_cast<std::size_t>(w.num_triangles()), 0);
+  struct Item {
+    std::int32_t node;
+    float lo[3], hi[3];
+  };
+  std::vector<Item> stack{{0, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, {FLT_MAX, FLT_MAX, FLT_MAX}}};
+  auto inside = [](const Vec3<S>& p, const float (&lo)[3], const float (&hi)[3]) {
+    for (int k = 0; k < 3; ++k)
+      if (double(p[k]) < double(lo[k]) || double(p[k]) > double(hi[k])) return false;
+    return true;
+  };
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    const WideBvhNode& n = w.nodes()[static_cast<std::size_t>(it.node)];
+    int children = 0;
+    for (int c = 0; c < 4; ++c) {
+      if (n.count[c] < 0) continue;
+      ++children;
+      Item child{n.first[c], {}, {}};
+      for (int k = 0; k < 3; ++k) child.lo[k] = n.bounds[2 * k][c], child.hi[k] = n.bounds[2 * k + 1][c];
+      if (n.count[c] > 0) {
+        ASSERT_LE(n.count[c], leaf_size);
+        for (std::int32_t k = n.first[c]; k < n.first[c] + n.count[c]; ++k) {
+          ++covered[static_cast<std::size_t>(k)];
+          const Triangle<S>& t = w.triangle(k);
+          ASSERT_TRUE(inside(t.a, child.lo, child.hi) && inside(t.b, child.lo, child.hi) && inside(t.c, child.lo, child.hi));
+          ASSERT_TRUE(inside(t.a, it.lo, it.hi) && inside(t.b, it.lo, it.hi) && inside(t.c, it.lo, it.hi));
+        }
+      } else {
+        ASSERT_GT(n.first[c], it.node);  // children after parents: no cycles
+        stack.push_back(child);
+      }
+    }
+    ASSERT_GE(children, 1);
+  }
+  for (int c : covered) ASSERT_EQ(c, 1);
+}
+
+/// Random rays and segments near the mesh's triangles: the wide cast (SIMD and scalar node tests)
+/// against brute force. Returns the number of hits.
+template <class S> int check_casts(const TriangleMesh<S>& m, const WideBvh<S>& w, int n, double scale, std::uint64_t seed) {
+  test::Rng rng(seed);
+  int hits = 0;
+  for (int i = 0; i < n; ++i) {
+    const Triangle<S> t = m.triangle(static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles()))));
+    const Vec3<S> o = t.centroid() + (rng.vec(-1, 1) * scale).template cast<S>();
+    Vec3<S> d = (rng.vec(-1, 1) * (i % 7 == 0 ? 20 * scale : scale)).template cast<S>();
+    if (i % 13 == 0) d[i % 3] = S(0);        // in a coordinate plane (1 / d infinite on an axis)
+    if (i % 17 == 0) d[(i + 1) % 3] = S(0);  // along a coordinate axis, with the case above
+    if (d.squaredNorm() == S(0)) continue;
+    const Ray<S> ray(o, d, i % 11 == 0 ? std::numeric_limits<S>::infinity() : S(1));
+    const auto ref = brute_first_t(m, ray);
+    const auto fast = ray_mesh_first_hit(w, ray);
+    const auto scalar = detail::ray_wide_first_hit_unchecked(w, ray, static_cast<const RigidTransform<S>*>(nullptr), nullptr, false);
+    EXPECT_EQ(ref.has_value(), fast.has_value()) << i;
+    EXPECT_EQ(fast.has_value(), scalar.has_value()) << i;
+    if (!ref || !fast || !scalar) continue;
+    ++hits;
+    expect_first_t(*ref, fast->t, i);
+    EXPECT_EQ(fast->t, scalar->t) << i;
+    EXPECT_EQ(fast->triangle, scalar->triangle) << i;
+    // the reported triangle is hit at the reported t
+    const auto h = detail::ray_mesh_triangle_hit(PreparedRay<S>(ray), m.triangle(fast->triangle));
+    EXPECT_TRUE(h && h->t == fast->t) << i;
+  }
+  return hits;
+}
+
+template <class S> class WideBvhTest : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(WideBvhTest, Scalars);
+
+TYPED_TEST(WideBvhTest, TorusStructureAndFirstHits) {
+  using S = TypeParam;
+  const TriangleMesh<S> torus = make_torus<S>(S(1), S(0.4), 32, 16);
+  for (int leaf : {1, 4, 7}) {
+    WideBvhConfig cfg;
+    cfg.leaf_size = leaf;
+    const WideBvh<S> w(torus, cfg);
+    check_structure(torus, w, leaf);
+    const int n = 1500 / kSampleDivisor;
+    EXPECT_GT(check_casts(torus, w, n, 0.1, 7 + std::uint64_t(leaf)), n / 10);
+  }
+  // collapsing an existing tree (spatial middle split, leaves of 3) keeps the answers
+  MeshBvhConfig mcfg;
+  mcfg.build.leaf_size = 3;
+  const WideBvh<S> from_tree(MeshBvh<Aabb<S>>(torus, mcfg));
+  check_structure(torus, from_tree, 4);
+  EXPECT_GT(check_casts(torus, from_tree, 500 / kSampleDivisor, 0.1, 99), 50 / kSampleDivisor);
+}
+
+// A double mesh whose coordinates are all floats keeps its triangles as floats (exactly: the
+// structure check compares every coordinate), in fewer bytes, with the same casts.
+TEST(WideBvh, FloatCoordinatesArePackedExactly) {
+  const TriangleMesh<double> exact = make_torus<double>(1.0, 0.4, 24, 12);
+  TriangleMesh<double> rounded = exact;
+  for (int i = 0; i < rounded.num_vertices(); ++i)
+    for (int c = 0; c < 3; ++c) rounded.V(i, c) = double(float(rounded.V(i, c)));
+  const WideBvh<double> a(exact), b(rounded);
+  EXPECT_FALSE(a.packed());
+  EXPECT_TRUE(b.packed());
+  EXPECT_TRUE(WideBvh<float>(make_torus<float>(1.0f, 0.4f, 8, 4)).packed());
+  EXPECT_LT(b.memory_bytes(), a.memory_bytes());
+  check_structure(rounded, b, 4);
+  EXPECT_GT(check_casts(rounded, b, 600 / kSampleDivisor, 0.1, 3), 60 / kSampleDivisor);
+}
+
+// Rays aimed at vertices and edge points of closed meshes from outside and inside: a watertight
+// cast hits (the ray passes through the surface there), with brute force's t.
+TYPED_TEST(WideBvhTest, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
+  using S = TypeParam;
+  for (const bool sphere : {true, false}) {
+    const TriangleMesh<S> m = sphere ? make_icosphere<S>(S(1), 2) : make_torus<S>(S(1), S(0.4), 24, 12);
+    const WideBvh<S> w(m);
+    test::Rng rng(5);
+    int hits = 0;
+    const int n = 1200 / kSampleDivisor;
+    for (int i = 0; i < n; ++i) {
+      const int t = static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles())));
+      const Vec3<S> a = m.vertex(m.F(t, i % 3)), b = m.vertex(m.F(t, (i + 1) % 3));
+      const Vec3<S> p = i % 2 == 0 ? a : Vec3<S>((a + b) / S(2));  // a vertex, or an edge's midpoint
+      // from the centroid side of the surface (inside the sphere) or from far away
+      const Vec3<S> o = i % 4 < 2 ? Vec3<S>(p * S(0.5)) : Vec3<S>(p + (rng.vec(-1, 1) * 3.0).template cast<S>());
+      const Vec3<S> d = p - o;
+      if (d.squaredNorm() == S(0)) continue;
+      const Ray<S> ray(o, d, S(2));
+      const auto ref = brute_first_t(m, ray);
+      const auto fast = ray_mesh_first_hit(w, ray);
+      ASSERT_EQ(ref.has_value(), fast.has_value()) << i;
+      if (sphere && i % 4 < 2) {
+        ASSERT_TRUE(fast.has_value()) << i;  // from inside the sphere, out through p
+      }
+      if (!fast) continue;
+      ++hits;
+      expect_first_t(*ref, fast->t, i);
+    }
+    EXPECT_GT(hits, n / 2);
+  }
+}
+
+// Degenerate meshes: zero-area triangles (a repeated vertex, three collinear vertices), a stack
+// of coincident triangles (every one hit at the same t), a flat mesh (all boxes flat in z), one
+// triangle.
+TYPED_TEST(WideBvhTest, DegenerateMeshes) {
+  using S = TypeParam;
+  std::vector<TriangleMesh<S>> meshes;
+  {
+    TriangleMesh<S> grid = make_torus<S>(S(1), S(0.4), 12, 6);
+    const int nv = grid.num_vertices();
+    Vertices<S> V(nv + 2, 3);
+    V.topRows(nv) = grid.V;
+    V.row(nv) << S(0), S(0), S(0);
+    V.row(nv + 1) << S(2), S(0), S(0);
+    Faces F(grid.num_triangles() + 2, 3);
+    F.topRows(grid.num_triangles()) = grid.F;
+    F.row(grid.num_triangles()) << 0, 0, 1;                      // a repeated vertex
+    F.row(grid.num_triangles() + 1) << nv, nv + 1, nv + 1;       // a segment
+    meshes.emplace_back(V, F);
+  }
+  {
+    Vertices<S> V(3, 3);
+    V << S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1), S(0);
+    Faces F(40, 3);
+    for (int t = 0; t < 40; ++t) F.row(t) << 0, 1, 2;  // coincident
+    meshes.emplace_back(V, F);
+    meshes.emplace_back(V, Faces(F.topRows(1)));  // one triangle
+  }
+  {
+    test::Rng rng(3);
+    Vertices<S> V(60, 3);
+    for (int i = 0; i < 60; ++i) V.row(i) << S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(0);  // flat
+    Faces F(80, 3);
+    for (int t = 0; t < 80; ++t) F.row(t) << int(rng.index(60)), int(rng.index(60)), int(rng.index(60));
+    meshes.emplace_back(V, F);
+  }
+  for (std::size_t k = 0; k < meshes.size(); ++k) {
+    const WideBvh<S> w(meshes[k]);
+    check_structure(meshes[k], w, 4);
+    EXPECT_GT(check_casts(meshes[k], w, 600 / kSampleDivisor, 0.5, 11 + k), 0) << k;
+  }
+}
+
+// Scaled and translated copies of a torus (tiny, huge, far from the origin): the same agreement.
+TYPED_TEST(WideBvhTest, ScaledAndTranslated) {
+  using S = TypeParam;
+  const TriangleMesh<S> base = make_torus<S>(S(1), S(0.4), 24, 12);
+  for (const auto& [scale, shift] : {std::make_pair(1e-3, 0.0), std::make_pair(1e3, 0.0), std::make_pair(1.0, 1e3), std::make_pair(1e-2, -50.0)}) {
+    TriangleMesh<S> m = base;
+    for (int i = 0; i < m.num_vertices(); ++i)
+      for (int c = 0; c < 3; ++c) m.V(i, c) = S(double(base.V(i, c)) * scale + shift);
+    const WideBvh<S> w(m);
+    EXPECT_GT(check_casts(m, w, 500 / kSampleDivisor, 0.1 * scale, 17), 25 / kSampleDivisor) << scale << " " << shift;
+  }
+}
+
+// Under a rigid pose: the hit of the plain tree's cast (ray_mesh_first_hit on a MeshBvh).
+TYPED_TEST(WideBvhTest, PoseMatchesThePlainTree) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_torus<S>(S(1), S(0.4), 24, 12);
+  const WideBvh<S> w(m);
+  const MeshBvh<Aabb<S>> plain(m);
+  test::Rng rng(23);
+  int hits = 0;
+  for (int i = 0; i < 600 / kSampleDivisor; ++i) {
+    const RigidTransform<double> pd = test::random_pose(rng, Eigen::Vector3d::Constant(-2), Eigen::Vector3d::Constant(2));
+    const RigidTransform<S> pose(pd.R.template cast<S>(), pd.t.template cast<S>());
+    const Ray<S> ray((rng.vec(-3, 3)).template cast<S>(), (rng.vec(-1, 1) * 6.0).template cast<S>(), S(1));
+    const auto a = ray_mesh_first_hit(w, ray, pose), b = ray_mesh_first_hit(plain, ray, pose);
+    ASSERT_EQ(a.has_value(), b.has_value()) << i;
+    if (!a) continue;
+    ++hits;
+    EXPECT_EQ(a->t, b->t) << i;
+    EXPECT_LT((a->normal - b->normal).norm(), S(1e-3)) << i;  // the same surface (ties: a neighbour)
+  }
+  EXPECT_GT(hits, 20 / kSampleDivisor);
+}
+
+// The four-children slab test (SIMD when compiled with it) gives exactly the scalar loop's keys,
+// and the scalar keys are ray_box_entry's on each float box.
+TYPED_TEST(WideBvhTest, SimdSlabIsTheScalarSlab) {
+  using S = TypeParam;
+  test::Rng rng(41);
+  int hits = 0, misses = 0;
+  for (int i = 0; i < 8000 / kSampleDivisor; ++i) {
+    const Vec3<S> o = rng.vec(-1, 1).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    WideBvhNode n;
+    const int used = 1 + int(rng.index(4));
+    for (int c = 0; c < used; ++c) {
+      const Eigen::Vector3d m = rng.vec(-1.5, 1.5), h = rng.vec(0.0, 0.8);
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 2);
+    S simd[4], scalar[4];
+    const detail::WideSlab<S> slab(o, inv);
+    slab.keys(n, t_max, simd, true);
+    slab.keys(n, t_max, scalar, false);
+    for (int c = 0; c < 4; ++c) {
+      if (std::isnan(scalar[c]))
+        EXPECT_TRUE(std::isnan(simd[c])) << i << " " << c;
+      else
+        EXPECT_EQ(simd[c], scalar[c]) << i << " " << c;
+      if (c >= used) {  // NaN, or +inf for an infinite ray in float (the cast skips empty slots by their count)
+        EXPECT_TRUE(std::isnan(scalar[c]) || scalar[c] == std::numeric_limits<S>::infinity()) << "empty slot entered " << i;
+        continue;
+      }
+      const Aabb<S> box(Vec3<S>(S(n.bounds[0][c]), S(n.bounds[2][c]), S(n.bounds[4][c])), Vec3<S>(S(n.bounds[1][c]), S(n.bounds[3][c]), S(n.bounds[5][c])));
+      const auto t = detail::ray_box_entry(o, inv, box, t_max);
+      if (t) {
+        ++hits;
+        EXPECT_EQ(scalar[c], *t) << i << " " << c;
+      } else {
+        ++misses;
+        EXPECT_TRUE(std::isnan(scalar[c])) << i << " " << c;
+      }
+    }
+  }
+  EXPECT_GT(hits, 500 / kSampleDivisor);
+  EXPECT_GT(misses, 500 / kSampleDivisor);
+}
+
+TEST(WideBvh, InvalidInput) {
+  const TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 8, 4);
+  WideBvhConfig bad;
+  bad.leaf_size = 0;
+  EXPECT_THROW(WideBvh<double>(m, bad), InvalidInput);
+  bad = {};
+  bad.sah_bins = 1;
+  EXPECT_THROW(WideBvh<double>(m, bad), InvalidInput);
+  TriangleMesh<double> broken = m;
+  broken.F(0, 1) = broken.num_vertices();  // index out of range
+  EXPECT_THROW(WideBvh<double>{broken}, InvalidInput);
+  broken = m;
+  broken.V(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(WideBvh<double>{broken}, InvalidInput);
+  const WideBvh<double> w(m);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(ray_mesh_first_hit(w, Ray<double>(Vec3<double>(nan, 0, 0), Vec3<double>(1, 0, 0), 1.0)), InvalidInput);
+  EXPECT_THROW(ray_mesh_first_hit(w, Ray<double>(Vec3<double>(0, 0, 0), Vec3<double>(0, 0, 0), 1.0)), InvalidInput);
+  EXPECT_THROW(ray_mesh_first_hit(w, Ray<double>(Vec3<double>(0, 0, 0), Vec3<double>(1, 0, 0), -1.0)), InvalidInput);
+  RigidTransform<double> scaled;
+  scaled.R *= 2.0;
+  EXPECT_THROW(ray_mesh_first_hit(w, Ray<double>(Vec3<double>(0, 0, 0), Vec3<double>(1, 0, 0), 1.0), scaled), InvalidInput);
+}
+
+}  // namespace
+}  // namespace impact
