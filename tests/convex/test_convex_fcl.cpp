@@ -2,9 +2,10 @@
 // The convex queries against FCL 0.7 on the same shapes and poses (support/convex_fcl.hpp: FCL's
 // primitives with its default libccd-based solver): boolean answers must match wherever the
 // certified distance bracket of support/convex_oracle.hpp puts the pair more than 1e-6 of the
-// shape size from touching; distances must agree within FCL's own accuracy, 1e-4 of the shape size
-// (FCL's GJK distance is off by up to 3.5e-5 on capsule–box here, where ours lies inside the
-// oracle's certified bracket to 1e-9: tests/convex/test_convex_query.cpp).
+// shape size from touching; distances must never exceed FCL's (both are upper bounds) and agree
+// within FCL's accuracy, 1e-3 of the shape size (FCL's GJK distance is off by up to 1.4e-4 on
+// cylinder–cylinder here, where ours lies inside the oracle's certified bracket to 1e-9:
+// tests/convex/test_convex_query.cpp).
 #include "impact/convex/query.hpp"
 #include "support/convex_fcl.hpp"
 #include "support/convex_oracle.hpp"
@@ -46,7 +47,10 @@ void check_against_fcl(const char* name, const A& a, const B& b, std::uint64_t s
     if (compare_distance && br.lower > 1e-6 * scale) {
       const double d = convex_distance(a, pa, b, pb).distance;
       const double dfcl = fcl.distance(pa, pb);
-      EXPECT_NEAR(d, dfcl, 1e-4 * scale) << name;
+      // FCL's GJK returns an upper bound as ours does: ours must never be farther than FCL's, and the
+      // two agree within FCL's accuracy (up to 1.4e-4 of the size off on cylinder-cylinder here)
+      EXPECT_LE(d, dfcl + 1e-9 * scale) << name;
+      EXPECT_NEAR(d, dfcl, 1e-3 * scale) << name;
     }
   }
   EXPECT_GT(compared, n / 2) << name;
