@@ -1,0 +1,245 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Closed-form queries for the pairs that have one: sphere–sphere, sphere–capsule, capsule–capsule
+/// (point and segment distances), sphere–box (closest point of the box), box–box (separating axes:
+/// boolean and penetration). Eigen only; convex/query.hpp picks them before any iterative solver.
+///
+/// Numerical contract: APPROXIMATE, but without iteration: each answer is a few dozen floating
+/// point operations from the inputs, so distances, depths and normals carry only rounding error
+/// (a few ulps of the shapes' size). Touching counts as intersecting. The box–box separating-axis
+/// test skips edge–edge axes of nearly parallel edges (|e_a x e_b| < 1e-6 for unit edges), whose
+/// separation the face axes then decide within 1e-6 of the boxes' size (boolean: conservative, a
+/// pair that close may be reported intersecting).
+#pragma once
+
+#include "impact/convex/gjk_distance.hpp"
+#include "impact/convex/shapes.hpp"
+#include "impact/geometry/ray.hpp"
+#include "impact/narrow/closest_point.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace impact {
+
+/// A penetration (contact) between two convex shapes, in world coordinates.
+template <class S>
+struct ConvexContact {
+  bool intersecting = false;          ///< the shapes touch or overlap; the fields below are set only then
+  S depth = S(0);                     ///< >= 0: translating b by depth * normal makes them touch
+  Vec3<S> normal = Vec3<S>::UnitZ();  ///< unit, from a towards b
+  Vec3<S> point = Vec3<S>::Zero();    ///< midway between the deepest points of a and b
+  int iterations = 0;                 ///< support calls of the iterative solver used (0: closed form)
+  bool limit_reached = false;         ///< the iteration bound stopped the solver
+  /// Iterative solvers (EPA, MPR): depth minus a certified lower bound of the true depth (the
+  /// distance from the origin to the boundary of the solver's inner polytope of the Minkowski
+  /// difference). The true depth lies in [depth - depth_gap, depth]. 0 for closed forms.
+  S depth_gap = S(0);
+  /// The deepest point of a inside b (on a's surface): point + depth / 2 * normal.
+  Vec3<S> point_a() const { return point + depth / S(2) * normal; }
+  /// The deepest point of b inside a (on b's surface): point - depth / 2 * normal.
+  Vec3<S> point_b() const { return point - depth / S(2) * normal; }
+};
+
+namespace detail {
+
+/// A unit vector orthogonal to u (u unit).
+template <class S>
+inline Vec3<S> any_orthogonal(const Vec3<S>& u) {
+  const Vec3<S> t = std::abs(u.x()) < S(0.6) ? Vec3<S>::UnitX() : Vec3<S>::UnitY();
+  return u.cross(t).normalized();
+}
+
+/// Two balls (centres ca, cb; radii ra, rb): the base of every round closed form. `fallback` is the
+/// normal used when the centres coincide.
+template <class S>
+inline ConvexContact<S> balls_contact(const Vec3<S>& ca, S ra, const Vec3<S>& cb, S rb, const Vec3<S>& fallback) {
+  ConvexContact<S> c;
+  const Vec3<S> d = cb - ca;
+  const S r = ra + rb;
+  const S d2 = d.squaredNorm();
+  if (d2 > r * r) return c;
+  c.intersecting = true;
+  const S dist = std::sqrt(d2);
+  c.normal = dist > S(0) ? Vec3<S>(d / dist) : fallback;
+  c.depth = r - dist;
+  // deepest points: ca + ra n (of a) and cb - rb n (of b)
+  c.point = (ca + ra * c.normal + cb - rb * c.normal) / S(2);
+  return c;
+}
+
+template <class S>
+inline ConvexDistance<S> balls_distance(const Vec3<S>& ca, S ra, const Vec3<S>& cb, S rb, const Vec3<S>& fallback) {
+  ConvexDistance<S> out;
+  const Vec3<S> d = cb - ca;
+  const S dist = d.norm();
+  const Vec3<S> n = dist > S(0) ? Vec3<S>(d / dist) : fallback;
+  out.distance = std::max(dist - ra - rb, S(0));
+  out.intersecting = dist <= ra + rb;
+  out.point_a = ca + ra * n;
+  out.point_b = cb - rb * n;
+  return out;
+}
+
+/// The core segment of a capsule in world coordinates.
+template <class S>
+inline Segment<S> capsule_segment(const Capsule<S>& c, const RigidTransform<S>& p) {
+  const Vec3<S> axis = p.R.col(2) * c.half_length;
+  return {p.t - axis, p.t + axis};
+}
+
+/// The closest pair of points of the cores of two round shapes (sphere: its centre, capsule: its
+/// segment), world coordinates.
+template <class S>
+inline void core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
+                        Vec3<S>& qb) {
+  qa = pa.apply(a.center);
+  qb = pb.apply(b.center);
+}
+template <class S>
+inline void core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
+                        Vec3<S>& qb) {
+  qa = pa.apply(a.center);
+  qb = closest_point_on_segment(qa, capsule_segment(b, pb)).point;
+}
+template <class S>
+inline void core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
+                        Vec3<S>& qb) {
+  qb = pb.apply(b.center);
+  qa = closest_point_on_segment(qb, capsule_segment(a, pa)).point;
+}
+template <class S>
+inline void core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
+                        Vec3<S>& qb) {
+  const auto cp = closest_points_segment_segment(capsule_segment(a, pa), capsule_segment(b, pb));
+  qa = cp.point_a;
+  qb = cp.point_b;
+}
+
+/// The normal used when two cores meet (the direction is then not defined by the core points):
+/// the cross product of two capsule axes, else the line of the poses' origins, else +z.
+template <class S>
+inline Vec3<S> core_fallback_normal(const RigidTransform<S>& pa, const RigidTransform<S>& pb, bool both_segments) {
+  if (both_segments) {
+    Vec3<S> n = pa.R.col(2).cross(pb.R.col(2));
+    if (n.squaredNorm() > S(1e-12)) {
+      n.normalize();
+      return n.dot(pb.t - pa.t) >= S(0) ? n : Vec3<S>(-n);
+    }
+  }
+  const Vec3<S> d = pb.t - pa.t;
+  if (d.squaredNorm() > S(0)) return d.normalized();
+  return Vec3<S>::UnitZ();
+}
+
+template <class S>
+inline S round_radius(const Sphere<S>& s) {
+  return s.radius;
+}
+template <class S>
+inline S round_radius(const Capsule<S>& s) {
+  return s.radius;
+}
+
+/// Sphere (world centre c, radius r) against a box: closest point of the box, or (centre inside)
+/// the nearest face. Normal from the sphere towards the box.
+template <class S>
+inline ConvexContact<S> sphere_box_contact(const Vec3<S>& c, S r, const Box<S>& box, const RigidTransform<S>& pb) {
+  ConvexContact<S> out;
+  const Vec3<S> lc = pb.R.transpose() * (c - pb.t);
+  const Vec3<S> q = lc.cwiseMax(-box.half).cwiseMin(box.half);
+  const Vec3<S> d = lc - q;
+  const S d2 = d.squaredNorm();
+  if (d2 > r * r) return out;
+  out.intersecting = true;
+  if (d2 > S(0)) {
+    const S dist = std::sqrt(d2);
+    out.normal = pb.rotate(Vec3<S>(-d / dist));
+    out.depth = r - dist;
+    // deepest points: c + r n (sphere), the box's closest point q (box)
+    out.point = (c + r * out.normal + pb.apply(q)) / S(2);
+  } else {
+    const Vec3<S> gap = box.half - lc.cwiseAbs();
+    int k;
+    gap.minCoeff(&k);
+    Vec3<S> n = Vec3<S>::Zero();
+    n[k] = lc[k] >= S(0) ? S(-1) : S(1);
+    out.normal = pb.rotate(n);
+    out.depth = r + gap[k];
+    Vec3<S> face = lc;
+    face[k] = lc[k] >= S(0) ? box.half[k] : -box.half[k];
+    out.point = (c + r * out.normal + pb.apply(face)) / S(2);
+  }
+  return out;
+}
+
+template <class S>
+inline ConvexDistance<S> sphere_box_distance(const Vec3<S>& c, S r, const Box<S>& box, const RigidTransform<S>& pb) {
+  ConvexDistance<S> out;
+  const Vec3<S> lc = pb.R.transpose() * (c - pb.t);
+  const Vec3<S> q = lc.cwiseMax(-box.half).cwiseMin(box.half);
+  const S dist = (lc - q).norm();
+  out.intersecting = dist <= r;
+  out.distance = std::max(dist - r, S(0));
+  out.point_b = pb.apply(q);
+  out.point_a = dist > S(0) ? Vec3<S>(c + (out.point_b - c) * (r / dist)) : c;
+  return out;
+}
+
+/// Box–box by the 15 separating axes: not intersecting when one separates them, else the axis of
+/// least overlap gives the normal and depth (exact for polytopes: the least overlap over these axes
+/// is the penetration depth); the contact point is the midpoint of the deepest features' centres.
+template <class S>
+ConvexContact<S> box_box_contact(const Box<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
+                                 bool want_contact) {
+  ConvexContact<S> out;
+  const Vec3<S> t = pb.t - pa.t;
+  const Mat3<S> C = pa.R.transpose() * pb.R;  // b's axes in a's frame
+  const Mat3<S> absC = C.cwiseAbs();
+  const Vec3<S> ta = pa.R.transpose() * t;
+  const Vec3<S>& ha = a.half;
+  const Vec3<S>& hb = b.half;
+  S best = std::numeric_limits<S>::infinity();
+  Vec3<S> best_axis = Vec3<S>::UnitZ();  // in a's frame, unit, oriented a -> b
+  const auto consider = [&](const Vec3<S>& axis, S ra, S rb, S dist) {
+    const S overlap = ra + rb - std::abs(dist);
+    if (overlap < best) {
+      best = overlap;
+      best_axis = dist >= S(0) ? axis : Vec3<S>(-axis);
+    }
+    return overlap >= S(0);
+  };
+  for (int i = 0; i < 3; ++i)
+    if (!consider(Vec3<S>::Unit(i), ha[i], absC.row(i).dot(hb), ta[i])) return out;
+  for (int j = 0; j < 3; ++j)
+    if (!consider(Vec3<S>(C.col(j)), absC.col(j).dot(ha), hb[j], C.col(j).dot(ta))) return out;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Vec3<S> axis = Vec3<S>::Unit(i).cross(Vec3<S>(C.col(j)));
+      const S len = axis.norm();
+      if (len < S(1e-6)) continue;
+      axis /= len;
+      const S ra = axis.cwiseAbs().dot(ha);
+      const S rb = (C.transpose() * axis).cwiseAbs().dot(hb);
+      if (!consider(axis, ra, rb, axis.dot(ta))) return out;
+    }
+  out.intersecting = true;
+  if (!want_contact) return out;
+  out.depth = std::max(best, S(0));
+  out.normal = pa.rotate(best_axis);
+  // Deepest points along the normal: a's support towards b, b's support towards a, each taken as
+  // the centre of the supporting feature (vertex, edge or face) so that face contacts are centred.
+  const auto feature_centre = [](const Vec3<S>& h, const Vec3<S>& dir_local) {
+    Vec3<S> p;
+    for (int k = 0; k < 3; ++k) p[k] = std::abs(dir_local[k]) < S(1e-9) ? S(0) : (dir_local[k] > S(0) ? h[k] : -h[k]);
+    return p;
+  };
+  const Vec3<S> sa = pa.apply(feature_centre(ha, best_axis));
+  const Vec3<S> sb = pb.apply(feature_centre(hb, Vec3<S>(-(C.transpose() * best_axis))));
+  // Project both on the contact plane through their midpoint along the normal.
+  out.point = (sa + sb) / S(2);
+  return out;
+}
+
+}  // namespace detail
+}  // namespace impact

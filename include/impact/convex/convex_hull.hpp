@@ -1,0 +1,368 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// ConvexHull<S>: the convex hull of a point set (or of a mesh's vertices) as a convex shape of the
+/// convex layer: its vertices, outward triangles, and its faces merged into convex polygons (the
+/// flat faces contact manifolds clip against). Built by quickhull (Barber, Dobkin & Huhdanpaa,
+/// "The Quickhull algorithm for convex hulls", ACM TOMS 1996): a first tetrahedron of extreme
+/// points, then repeatedly the farthest point outside a face is added, the faces it sees removed
+/// and the horizon coned to it; points inside are dropped with their face's conflict list.
+///
+/// Numerical contract: APPROXIMATE within a tolerance. A point at most `eps` outside the current
+/// hull (eps = options.relative_tolerance times the extent of the point set) is treated as inside,
+/// so every input point is within eps of the returned hull, and the hull's vertices are input
+/// points. Faces whose normals differ by less than options.merge_angle are merged into one polygon.
+///
+/// Degenerate input throws impact::InvalidInput (never a silent flat hull): fewer than 4 points,
+/// NaN or infinite coordinates, coordinates outside CoordinateRange, all points coincident,
+/// collinear or coplanar within eps (the message says which). Expected cost O(n log n), worst
+/// O(n^2) (n = point count).
+#pragma once
+
+#include "impact/convex/shapes.hpp"
+#include "impact/core/types.hpp"
+#include "impact/core/validate.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace impact {
+
+struct ConvexHullOptions {
+  /// Points within relative_tolerance * extent of a face count as on it (extent: the largest
+  /// coordinate magnitude of the centred point set). <= 0 means the default, 1e3 machine epsilons.
+  double relative_tolerance = 0;
+  /// Adjacent triangles whose unit normals differ by less than this (radians) form one polygon.
+  double merge_angle = 1e-6;
+};
+
+/// A polygonal face of a hull: its vertex indices in counter-clockwise order seen from outside,
+/// its outward unit normal and offset (n . x = offset on the face).
+template <class S>
+struct HullFace {
+  std::vector<int> vertices;
+  Vec3<S> normal = Vec3<S>::UnitZ();
+  S offset = S(0);
+};
+
+/// A convex hull, in its own frame (a RigidTransform places it). Build with convex_hull().
+template <class S>
+struct ConvexHull {
+  Vertices<S> vertices;           ///< the hull's vertices (input points), one per row
+  Faces triangles;                ///< outward (counter-clockwise seen from outside) triangles
+  std::vector<HullFace<S>> faces; ///< the triangles merged into convex polygons
+  Vec3<S> centroid = Vec3<S>::Zero();  ///< mean of the vertices (an interior point)
+  S size = S(0);                  ///< largest distance from centroid to a vertex
+};
+
+template <class S>
+inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
+  int best = 0;
+  S best_dot = h.vertices.row(0).dot(d.transpose());
+  for (Eigen::Index i = 1; i < h.vertices.rows(); ++i) {
+    const S x = h.vertices.row(i).dot(d.transpose());
+    if (x > best_dot) {
+      best_dot = x;
+      best = static_cast<int>(i);
+    }
+  }
+  return h.vertices.row(best).transpose();
+}
+template <class S>
+inline Vec3<S> interior_point(const ConvexHull<S>& h) {
+  return h.centroid;
+}
+template <class S>
+inline S shape_size(const ConvexHull<S>& h) {
+  return h.size;
+}
+/// A hull is valid when built by convex_hull(); this checks only that it was built.
+template <class S>
+void validate_shape(const ConvexHull<S>& h, const char* where) {
+  if (h.vertices.rows() < 4 || h.triangles.rows() < 4) throw InvalidInput(std::string(where) + ": convex hull is empty (build it with convex_hull())");
+}
+
+namespace detail {
+
+template <class S>
+class QuickHull {
+ public:
+  QuickHull(const Vertices<S>& p, S eps) : p_(p), eps_(eps) {}
+
+  /// Runs quickhull from the tetrahedron (i0, i1, i2, i3); returns the triangles (point indices).
+  std::vector<std::array<int, 3>> run(int i0, int i1, int i2, int i3) {
+    // Orient the tetrahedron so that its faces point outwards.
+    const Vec3<S> a = pt(i0), b = pt(i1), c = pt(i2), d = pt(i3);
+    if ((b - a).cross(c - a).dot(d - a) > S(0)) std::swap(i1, i2);
+    add_face(i0, i1, i2);
+    add_face(i0, i3, i1);
+    add_face(i1, i3, i2);
+    add_face(i2, i3, i0);
+    // Initial conflict lists.
+    const int n = static_cast<int>(p_.rows());
+    for (int i = 0; i < n; ++i) {
+      if (i == i0 || i == i1 || i == i2 || i == i3) continue;
+      assign(i, 0, 4);
+    }
+    std::vector<int> visible, stack, orphans;
+    std::vector<std::array<int, 2>> horizon;
+    std::vector<char> seen;
+    for (std::size_t f = 0; f < faces_.size(); ++f) {
+      if (!faces_[f].alive || faces_[f].outside.empty()) continue;
+      // Farthest point of this face's conflict list.
+      int eye = -1;
+      S best = -1;
+      for (int q : faces_[f].outside) {
+        const S dist = distance(faces_[f], q);
+        if (dist > best) {
+          best = dist;
+          eye = q;
+        }
+      }
+      const Vec3<S> e = pt(eye);
+      // Visible faces: flood fill from f across edges.
+      visible.clear();
+      stack.assign(1, static_cast<int>(f));
+      seen.assign(faces_.size(), 0);
+      seen[f] = 1;
+      horizon.clear();
+      while (!stack.empty()) {
+        const int g = stack.back();
+        stack.pop_back();
+        visible.push_back(g);
+        for (int k = 0; k < 3; ++k) {
+          const int u = faces_[g].v[k], w = faces_[g].v[(k + 1) % 3];
+          const int h = edge_face(w, u);
+          if (h < 0) continue;  // cannot happen on a closed hull
+          if (seen[h] == 1) continue;
+          if (faces_[h].n.dot(e) - faces_[h].d > eps_) {
+            seen[h] = 1;
+            stack.push_back(h);
+          } else {
+            horizon.push_back({u, w});
+          }
+        }
+      }
+      orphans.clear();
+      for (int g : visible) {
+        Face& fg = faces_[g];
+        fg.alive = false;
+        for (int k = 0; k < 3; ++k) edges_.erase(key(fg.v[k], fg.v[(k + 1) % 3]));
+        for (int q : fg.outside)
+          if (q != eye) orphans.push_back(q);
+        fg.outside.clear();
+        fg.outside.shrink_to_fit();
+      }
+      const int first_new = static_cast<int>(faces_.size());
+      for (const auto& he : horizon) add_face(he[0], he[1], eye);
+      for (int q : orphans) assign(q, first_new, static_cast<int>(faces_.size()));
+    }
+    std::vector<std::array<int, 3>> out;
+    for (const Face& f : faces_)
+      if (f.alive) out.push_back({f.v[0], f.v[1], f.v[2]});
+    return out;
+  }
+
+ private:
+  struct Face {
+    int v[3];
+    Vec3<S> n;
+    S d;
+    bool alive = true;
+    std::vector<int> outside;
+  };
+  Vec3<S> pt(int i) const { return p_.row(i).transpose(); }
+  static std::uint64_t key(int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); }
+  int edge_face(int a, int b) const {
+    const auto it = edges_.find(key(a, b));
+    return it == edges_.end() ? -1 : it->second;
+  }
+  S distance(const Face& f, int q) const { return f.n.dot(pt(q)) - f.d; }
+  void add_face(int a, int b, int c) {
+    Face f;
+    f.v[0] = a;
+    f.v[1] = b;
+    f.v[2] = c;
+    const Vec3<S> n = (pt(b) - pt(a)).cross(pt(c) - pt(a));
+    const S len = n.norm();
+    f.n = len > S(0) ? Vec3<S>(n / len) : Vec3<S>::Zero();
+    f.d = f.n.dot(pt(a));
+    const int id = static_cast<int>(faces_.size());
+    for (int k = 0; k < 3; ++k) edges_[key(f.v[k], f.v[(k + 1) % 3])] = id;
+    faces_.push_back(std::move(f));
+  }
+  /// Puts point q in the conflict list of the face among [lo, hi) it is farthest outside of.
+  void assign(int q, int lo, int hi) {
+    int best = -1;
+    S best_d = eps_;
+    for (int g = lo; g < hi; ++g) {
+      if (!faces_[g].alive) continue;
+      const S dist = distance(faces_[g], q);
+      if (dist > best_d) {
+        best_d = dist;
+        best = g;
+      }
+    }
+    if (best >= 0) faces_[best].outside.push_back(q);
+  }
+
+  const Vertices<S>& p_;
+  S eps_;
+  std::vector<Face> faces_;
+  std::unordered_map<std::uint64_t, int> edges_;
+};
+
+}  // namespace detail
+
+/// The convex hull of the rows of `points` (n x 3). Throws InvalidInput on degenerate input (see
+/// the file comment); `points` is not modified.
+template <class S>
+ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& options = {}) {
+  static_assert(is_supported_scalar_v<S>, "convex_hull: S must be float or double");
+  const char* where = "convex_hull";
+  if (!(options.merge_angle >= 0) || !std::isfinite(options.merge_angle)) throw InvalidInput("convex_hull: options.merge_angle must be finite and >= 0");
+  if (!std::isfinite(options.relative_tolerance)) throw InvalidInput("convex_hull: options.relative_tolerance must be finite");
+  const Eigen::Index n = points.rows();
+  if (n < 4) throw InvalidInput("convex_hull: needs at least 4 points, has " + std::to_string(n));
+  if (n > Eigen::Index(std::numeric_limits<int>::max() / 2)) throw InvalidInput("convex_hull: too many points");
+  validate_coordinates(points, where, "points");
+
+  // Work on points centred on their bounding box: the tolerance is relative to their extent.
+  const Vec3<S> lo = points.colwise().minCoeff().transpose(), hi = points.colwise().maxCoeff().transpose();
+  const Vec3<S> mid = (lo + hi) / S(2);
+  Vertices<S> p = points.rowwise() - mid.transpose();
+  const S extent = (hi - lo).maxCoeff() / S(2);
+  const S rel = options.relative_tolerance > 0 ? S(options.relative_tolerance) : S(1000) * std::numeric_limits<S>::epsilon();
+  const S eps = rel * extent;
+  if (!(extent > S(0)) || !(extent > eps)) throw InvalidInput("convex_hull: all points are coincident");
+
+  // First tetrahedron: the two extreme points along the widest axis, the point farthest from
+  // their line, the point farthest from their plane.
+  int axis;
+  (hi - lo).maxCoeff(&axis);
+  Eigen::Index i0 = 0, i1 = 0;
+  p.col(axis).minCoeff(&i0);
+  p.col(axis).maxCoeff(&i1);
+  const Vec3<S> a = p.row(i0).transpose(), b = p.row(i1).transpose();
+  const Vec3<S> ab = (b - a).normalized();
+  Eigen::Index i2 = -1;
+  S best = -1;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3<S> x = p.row(i).transpose() - a;
+    const S dist = (x - ab * ab.dot(x)).norm();
+    if (dist > best) {
+      best = dist;
+      i2 = i;
+    }
+  }
+  if (!(best > eps)) throw InvalidInput("convex_hull: all points are collinear (within the tolerance)");
+  const Vec3<S> nrm = (b - a).cross(Vec3<S>(p.row(i2).transpose()) - a).normalized();
+  Eigen::Index i3 = -1;
+  best = -1;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const S dist = std::abs(nrm.dot(Vec3<S>(p.row(i).transpose()) - a));
+    if (dist > best) {
+      best = dist;
+      i3 = i;
+    }
+  }
+  if (!(best > eps)) throw InvalidInput("convex_hull: all points are coplanar (within the tolerance)");
+
+  detail::QuickHull<S> qh(p, eps);
+  const auto tris = qh.run(static_cast<int>(i0), static_cast<int>(i1), static_cast<int>(i2), static_cast<int>(i3));
+
+  // Keep only the vertices used, in input order.
+  std::vector<int> remap(static_cast<std::size_t>(n), -1);
+  for (const auto& t : tris)
+    for (int v : t) remap[static_cast<std::size_t>(v)] = 0;
+  ConvexHull<S> h;
+  int nv = 0;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (remap[static_cast<std::size_t>(i)] == 0) remap[static_cast<std::size_t>(i)] = nv++;
+  h.vertices.resize(nv, 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (remap[static_cast<std::size_t>(i)] >= 0) h.vertices.row(remap[static_cast<std::size_t>(i)]) = points.row(i);
+  h.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) h.triangles(static_cast<Eigen::Index>(t), k) = remap[static_cast<std::size_t>(tris[t][static_cast<std::size_t>(k)])];
+  h.centroid = h.vertices.colwise().mean().transpose();
+  h.size = (h.vertices.rowwise() - h.centroid.transpose()).rowwise().norm().maxCoeff();
+
+  // Merge adjacent triangles with (nearly) parallel normals into polygons (union–find over edges).
+  const Eigen::Index nt = h.triangles.rows();
+  std::vector<Vec3<S>> tn(static_cast<std::size_t>(nt));
+  for (Eigen::Index t = 0; t < nt; ++t) {
+    const Vec3<S> x = h.vertices.row(h.triangles(t, 0)).transpose(), y = h.vertices.row(h.triangles(t, 1)).transpose(),
+                  z = h.vertices.row(h.triangles(t, 2)).transpose();
+    tn[static_cast<std::size_t>(t)] = (y - x).cross(z - x).normalized();
+  }
+  std::vector<int> parent(static_cast<std::size_t>(nt));
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+    return x;
+  };
+  std::unordered_map<std::uint64_t, int> edge_tri;
+  const auto key = [](int u, int v) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(u)) << 32) | static_cast<std::uint32_t>(v); };
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) edge_tri[key(h.triangles(t, k), h.triangles(t, (k + 1) % 3))] = static_cast<int>(t);
+  const S cos_merge = S(std::cos(options.merge_angle));
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const auto it = edge_tri.find(key(h.triangles(t, (k + 1) % 3), h.triangles(t, k)));
+      if (it == edge_tri.end()) continue;
+      if (tn[static_cast<std::size_t>(t)].dot(tn[static_cast<std::size_t>(it->second)]) >= cos_merge)
+        parent[static_cast<std::size_t>(find(static_cast<int>(t)))] = find(it->second);
+    }
+  std::unordered_map<int, int> group_face;
+  std::vector<Vec3<S>> normal_sum;
+  for (Eigen::Index t = 0; t < nt; ++t) {
+    const int r = find(static_cast<int>(t));
+    auto [it, fresh] = group_face.emplace(r, static_cast<int>(h.faces.size()));
+    if (fresh) {
+      h.faces.emplace_back();
+      normal_sum.push_back(Vec3<S>::Zero());
+    }
+    HullFace<S>& f = h.faces[static_cast<std::size_t>(it->second)];
+    const Vec3<S> x = h.vertices.row(h.triangles(t, 0)).transpose(), y = h.vertices.row(h.triangles(t, 1)).transpose(),
+                  z = h.vertices.row(h.triangles(t, 2)).transpose();
+    normal_sum[static_cast<std::size_t>(it->second)] += (y - x).cross(z - x);
+    for (int k = 0; k < 3; ++k)
+      if (std::find(f.vertices.begin(), f.vertices.end(), h.triangles(t, k)) == f.vertices.end()) f.vertices.push_back(h.triangles(t, k));
+  }
+  for (std::size_t i = 0; i < h.faces.size(); ++i) {
+    HullFace<S>& f = h.faces[i];
+    f.normal = normal_sum[i].normalized();
+    Vec3<S> c = Vec3<S>::Zero();
+    for (int v : f.vertices) c += h.vertices.row(v).transpose();
+    c /= S(f.vertices.size());
+    // Counter-clockwise order about the normal.
+    const Vec3<S> u = (Vec3<S>(h.vertices.row(f.vertices[0]).transpose()) - c).normalized();
+    const Vec3<S> w = f.normal.cross(u);
+    std::vector<std::pair<S, int>> ang;
+    for (int v : f.vertices) {
+      const Vec3<S> x = h.vertices.row(v).transpose() - c;
+      ang.push_back({std::atan2(x.dot(w), x.dot(u)), v});
+    }
+    std::sort(ang.begin(), ang.end());
+    for (std::size_t k = 0; k < ang.size(); ++k) f.vertices[k] = ang[k].second;
+    S off = -std::numeric_limits<S>::infinity();
+    for (int v : f.vertices) off = std::max(off, f.normal.dot(h.vertices.row(v).transpose()));
+    f.offset = off;
+  }
+  return h;
+}
+
+/// The convex hull of a mesh's vertices (its faces are not used).
+template <class S>
+ConvexHull<S> convex_hull_of_mesh(const Vertices<S>& V, const Faces& /*F*/, const ConvexHullOptions& options = {}) {
+  return convex_hull(V, options);
+}
+
+}  // namespace impact

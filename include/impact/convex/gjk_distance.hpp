@@ -1,0 +1,227 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Separation distance and witness points of two convex sets given by their support functions:
+/// the GJK algorithm (Gilbert, Johnson & Keerthi 1988) in the form of van den Bergen ("Collision
+/// Detection in Interactive 3D Environments", 2003, section 4.3): the simplex's closest point to
+/// the origin by Voronoi regions (Ericson, Real-Time Collision Detection, 5.1), a relative stopping
+/// test on the duality gap, and a bound on the iterations. libccd has no distance query (its GJK
+/// answers only "intersecting or not"), so this one is the library's own; it needs Eigen only.
+///
+/// Numerical contract: APPROXIMATE. On return with converged = true the reported distance d and the
+/// true distance d* satisfy d - tolerance <= d* <= d (d is the length of a vector of the Minkowski
+/// difference, an upper bound; the stopping test bounds the gap), and the witness points are points
+/// of the two sets (convex combinations of support points) d apart. Sets closer than `tolerance`
+/// may be reported as intersecting (distance 0). When the iteration bound is hit, limit_reached is
+/// set and the best upper bound found so far is returned.
+#pragma once
+
+#include "impact/core/types.hpp"
+#include "impact/geometry/triangle.hpp"
+#include "impact/narrow/closest_point.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace impact {
+
+/// Result of a distance query between two convex shapes, in world coordinates.
+template <class S>
+struct ConvexDistance {
+  S distance = S(0);               ///< >= 0; 0 when the shapes intersect
+  Vec3<S> point_a = Vec3<S>::Zero();  ///< closest point of the first shape (unspecified when intersecting)
+  Vec3<S> point_b = Vec3<S>::Zero();  ///< closest point of the second shape (unspecified when intersecting)
+  bool intersecting = false;       ///< the shapes touch or overlap (within the tolerance)
+  int iterations = 0;              ///< support-point evaluations of each shape
+  bool limit_reached = false;      ///< the iteration bound stopped the solver before its tolerance
+};
+
+namespace detail {
+
+template <class S>
+struct SimplexPoint {
+  Vec3<S> w, a, b;  // w = a - b
+};
+
+/// Reduces the simplex to the smallest sub-simplex whose hull holds the point closest to the
+/// origin; sets lambda (weights of the kept points) and returns that point. Returns false when the
+/// origin is inside the tetrahedron (the sets intersect).
+template <class S>
+bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
+  if (n == 1) {
+    lambda[0] = S(1);
+    v = s[0].w;
+    return true;
+  }
+  if (n == 2) {
+    const Vec3<S> ab = s[1].w - s[0].w;
+    const S den = ab.squaredNorm();
+    const S t = den > S(0) ? std::clamp(-s[0].w.dot(ab) / den, S(0), S(1)) : S(0);
+    if (t <= S(0)) {
+      n = 1;
+    } else if (t >= S(1)) {
+      s[0] = s[1];
+      n = 1;
+    } else {
+      lambda[0] = S(1) - t;
+      lambda[1] = t;
+      v = s[0].w + t * ab;
+      return true;
+    }
+    lambda[0] = S(1);
+    v = s[0].w;
+    return true;
+  }
+  if (n == 3) {
+    const auto cp = closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(s[0].w, s[1].w, s[2].w));
+    SimplexPoint<S> kept[3];
+    int m = 0;
+    for (int i = 0; i < 3; ++i)
+      if (cp.barycentric[i] > S(0)) {
+        kept[m] = s[i];
+        lambda[m] = cp.barycentric[i];
+        ++m;
+      }
+    if (m == 0) {  // cannot happen (the weights sum to 1); keep the first point
+      kept[0] = s[0];
+      lambda[0] = S(1);
+      m = 1;
+    }
+    for (int i = 0; i < m; ++i) s[i] = kept[i];
+    n = m;
+    v = cp.point;
+    return true;
+  }
+  // Tetrahedron: is the origin inside? Otherwise the best of the faces it is outside of.
+  static constexpr int face[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+  S best = std::numeric_limits<S>::infinity();
+  int best_face = -1;
+  Vec3<S> best_bary = Vec3<S>::Zero(), best_point = Vec3<S>::Zero();
+  bool outside_any = false;
+  for (int f = 0; f < 4; ++f) {
+    const Vec3<S>& p0 = s[face[f][0]].w;
+    const Vec3<S>& p1 = s[face[f][1]].w;
+    const Vec3<S>& p2 = s[face[f][2]].w;
+    const Vec3<S>& opp = s[face[f][3]].w;
+    const Vec3<S> nrm = (p1 - p0).cross(p2 - p0);
+    const S side_origin = -nrm.dot(p0);
+    const S side_opp = nrm.dot(opp - p0);
+    if (side_origin * side_opp >= S(0)) continue;  // origin on the tetrahedron's side of this face
+    outside_any = true;
+    const auto cp = closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(p0, p1, p2));
+    if (cp.squared_distance < best) {
+      best = cp.squared_distance;
+      best_face = f;
+      best_bary = cp.barycentric;
+      best_point = cp.point;
+    }
+  }
+  if (!outside_any) return false;
+  SimplexPoint<S> kept[3];
+  int m = 0;
+  for (int i = 0; i < 3; ++i)
+    if (best_bary[i] > S(0)) {
+      kept[m] = s[face[best_face][i]];
+      lambda[m] = best_bary[i];
+      ++m;
+    }
+  if (m == 0) {
+    kept[0] = s[face[best_face][0]];
+    lambda[0] = S(1);
+    m = 1;
+  }
+  for (int i = 0; i < m; ++i) s[i] = kept[i];
+  n = m;
+  v = best_point;
+  return true;
+}
+
+/// GJK distance between A and B given world support functions support_a(d), support_b(d) (points
+/// maximising the dot product with d), a first direction (e.g. the difference of two interior
+/// points, a minus b), an absolute tolerance and an iteration bound. With `margin` >= 0 it answers
+/// only "distance <= margin?" and stops as soon as that is decided: intersecting is then set when
+/// an upper bound of the distance is <= margin, cleared when a lower bound exceeds it (the
+/// distance and points are then those bounds', not converged).
+template <class S, class SupportA, class SupportB>
+ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& support_b, Vec3<S> first, S tolerance,
+                               int max_iterations, S margin = S(-1)) {
+  ConvexDistance<S> out;
+  if (!(first.squaredNorm() > S(0))) first = Vec3<S>::UnitX();
+  SimplexPoint<S> s[4];
+  S lambda[4] = {S(1), S(0), S(0), S(0)};
+  int n = 1;
+  s[0].a = support_a(Vec3<S>(-first));
+  s[0].b = support_b(first);
+  s[0].w = s[0].a - s[0].b;
+  out.iterations = 1;
+  Vec3<S> v = s[0].w;
+  const S tol2 = tolerance * tolerance;
+  bool converged = false;
+  while (out.iterations < max_iterations) {
+    const S vv = v.squaredNorm();
+    if (vv <= tol2 || (margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
+      out.intersecting = true;
+      converged = true;
+      break;
+    }
+    SimplexPoint<S> p;
+    p.a = support_a(Vec3<S>(-v));
+    p.b = support_b(v);
+    p.w = p.a - p.b;
+    ++out.iterations;
+    // Duality gap: |v| - (v . w)/|v| bounds |v| - distance.
+    const S vw = v.dot(p.w);
+    if (margin >= S(0) && vw > S(0) && vw * vw > margin * margin * vv) {  // a separating plane beyond the margin
+      converged = true;
+      break;
+    }
+    const S gap = vv - vw;
+    if (gap <= tolerance * std::sqrt(vv)) {
+      converged = true;
+      break;
+    }
+    bool repeated = false;
+    for (int i = 0; i < n; ++i) repeated = repeated || s[i].w == p.w;
+    if (repeated) {  // no new support point: v is as close as the arithmetic allows
+      converged = true;
+      break;
+    }
+    SimplexPoint<S> saved[4];
+    S saved_lambda[4];
+    const int saved_n = n;
+    for (int i = 0; i < n; ++i) {
+      saved[i] = s[i];
+      saved_lambda[i] = lambda[i];
+    }
+    s[n++] = p;
+    Vec3<S> nv;
+    if (!closest_on_simplex(s, n, lambda, nv)) {
+      out.intersecting = true;
+      converged = true;
+      break;
+    }
+    if (!(nv.squaredNorm() < vv)) {  // no progress (rounding): keep the previous simplex
+      n = saved_n;
+      for (int i = 0; i < n; ++i) {
+        s[i] = saved[i];
+        lambda[i] = saved_lambda[i];
+      }
+      converged = true;
+      break;
+    }
+    v = nv;
+  }
+  out.limit_reached = !converged;
+  Vec3<S> pa = Vec3<S>::Zero(), pb = Vec3<S>::Zero();
+  for (int i = 0; i < n; ++i) {
+    pa += lambda[i] * s[i].a;
+    pb += lambda[i] * s[i].b;
+  }
+  out.point_a = pa;
+  out.point_b = pb;
+  out.distance = out.intersecting ? S(0) : v.norm();
+  return out;
+}
+
+}  // namespace detail
+}  // namespace impact

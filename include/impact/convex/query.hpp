@@ -1,0 +1,354 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The queries between two convex shapes, each placed by a rigid pose: convex_intersect (boolean),
+/// convex_distance (separation distance with witness points) and convex_penetration (depth, normal
+/// and contact point). Shapes: Sphere (geometry/sphere.hpp), Capsule, Cylinder, Cone, Box
+/// (convex/shapes.hpp), ConvexHull (convex/convex_hull.hpp), in any order. Needs the impact::convex
+/// target (libccd).
+///
+///   impact::Capsule<double> cap(0.5, 1.0);
+///   impact::Cylinder<double> cyl(0.3, 0.8);
+///   auto c = impact::convex_penetration(cap, pose_a, cyl, pose_b);
+///   if (c.intersecting) apply(c.normal, c.depth, c.point);
+///
+/// Which method answers, per pair (first match):
+///   sphere/capsule – sphere/capsule   closed form on the cores (centre, segment) and the radii
+///   sphere – box                      closed form (closest point of the box, or its nearest face)
+///   box – box                         separating axes (boolean, penetration); GJK for distance
+///   sphere/capsule – other            GJK distance between the core and the other shape, minus
+///                                     the radius (exact up to GJK's tolerance); EPA (libccd) when
+///                                     the core itself is inside the other shape
+///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
+///                                     (gjk_distance.hpp); penetration: libccd EPA (default) or MPR
+/// Definitions: the normal is a unit vector from a towards b; translating b by depth * normal
+/// makes the shapes touch (for EPA: the least such translation within the solver's tolerance; for
+/// MPR: the one along the portal direction, which can be larger); the contact point is midway
+/// between the deepest points of a and b (point_a(), point_b()). Touching counts as intersecting.
+///
+/// Validation: each call throws InvalidInput on an invalid shape (validate_shape), pose
+/// (validate_pose) or options, before computing anything. Iterative solvers are bounded by
+/// options.max_iterations; a result stopped by the bound says limit_reached.
+/// Thread safety: the functions are pure; shapes and poses may be shared between threads.
+#pragma once
+
+#include "impact/convex/closed_form.hpp"
+#include "impact/convex/convex_hull.hpp"
+#include "impact/convex/gjk_distance.hpp"
+#include "impact/convex/libccd_solver.hpp"
+#include "impact/convex/shapes.hpp"
+
+#include <type_traits>
+
+namespace impact {
+
+template <class S>
+struct ConvexQueryOptions {
+  /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000.
+  int max_iterations = 128;
+  /// Tolerance of the iterative solvers relative to the larger shape's size (shape_size()); in
+  /// (0, 0.1]. The default is 1e-10 for double, 1e-5 for float.
+  S relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-10);
+  /// Tolerance of EPA's expansion relative to the larger shape's size (libccd's epa_tolerance is
+  /// its square times the size squared); in (0, 0.1].
+  S epa_relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-8);
+  CcdAlgorithm boolean_algorithm = CcdAlgorithm::Mpr;     ///< libccd algorithm of general boolean tests
+  CcdAlgorithm penetration_algorithm = CcdAlgorithm::Gjk; ///< libccd algorithm of general penetrations (GJK+EPA)
+};
+
+namespace detail {
+
+/// The core of a round shape: a sphere's centre, a capsule's segment (a radius is added to it).
+template <class S>
+struct PointCore {
+  Vec3<S> c;
+};
+template <class S>
+struct SegmentCore {
+  S h;
+};
+template <class S>
+inline Vec3<S> support(const PointCore<S>& p, const Vec3<S>&) {
+  return p.c;
+}
+template <class S>
+inline Vec3<S> support(const SegmentCore<S>& s, const Vec3<S>& d) {
+  return {S(0), S(0), d.z() >= S(0) ? s.h : -s.h};
+}
+template <class S>
+inline PointCore<S> core_of(const Sphere<S>& s) {
+  return {s.center};
+}
+template <class S>
+inline SegmentCore<S> core_of(const Capsule<S>& c) {
+  return {c.half_length};
+}
+template <class S>
+inline Vec3<S> core_interior(const PointCore<S>& p) {
+  return p.c;
+}
+template <class S>
+inline Vec3<S> core_interior(const SegmentCore<S>&) {
+  return Vec3<S>::Zero();
+}
+
+template <class T, class S>
+inline constexpr bool is_round_v = std::is_same_v<T, Sphere<S>> || std::is_same_v<T, Capsule<S>>;
+
+template <class S>
+void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
+  validate_in_range(o.max_iterations, 1, 100000, where, "options.max_iterations");
+  if (!(o.relative_tolerance > S(0) && o.relative_tolerance <= S(0.1)))
+    throw InvalidInput(describe_rejected(where, "options.relative_tolerance", "be in (0, 0.1]", o.relative_tolerance));
+  if (!(o.epa_relative_tolerance > S(0) && o.epa_relative_tolerance <= S(0.1)))
+    throw InvalidInput(describe_rejected(where, "options.epa_relative_tolerance", "be in (0, 0.1]", o.epa_relative_tolerance));
+}
+
+template <class S, class A, class B>
+void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o,
+                    const char* where) {
+  static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
+  validate_shape(a, where);
+  validate_shape(b, where);
+  validate_pose(pa, where, "pose_a");
+  validate_pose(pb, where, "pose_b");
+  validate_query_options(o, where);
+}
+
+template <class S, class A, class B>
+S query_scale(const A& a, const B& b) {
+  return std::max(shape_size(a), shape_size(b));
+}
+
+/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
+template <class S, class A, class B>
+ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
+                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1)) {
+  const auto sa = [&](const Vec3<S>& d) { return support(a, pa, d); };
+  const auto sb = [&](const Vec3<S>& d) { return support(b, pb, d); };
+  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin);
+}
+
+template <class S>
+CcdSettings ccd_settings(const ConvexQueryOptions<S>& o, S scale) {
+  CcdSettings c;
+  c.max_iterations = o.max_iterations;
+  c.length_scale = double(scale);
+  c.epa_tolerance = double(o.epa_relative_tolerance) * double(o.epa_relative_tolerance);
+  c.mpr_tolerance = double(o.relative_tolerance);
+  return c;
+}
+
+/// Makes an iterative solver's contact exact along its normal: depth := h_a(n) + h_b(-n) (the
+/// overlap of the shapes along n, computed from the support functions, so that translating b by
+/// depth * n makes them touch, and depth >= the true penetration depth), and the point moved along
+/// n onto the plane midway between the two supporting planes (keeping its tangential position).
+template <class S, class A, class B>
+void settle_contact(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
+  if (!c.intersecting) return;
+  const S top_a = c.normal.dot(support(a, pa, c.normal));
+  const S low_b = c.normal.dot(support(b, pb, Vec3<S>(-c.normal)));
+  c.depth = std::max(top_a - low_b, S(0));
+  c.point += ((top_a + low_b) / S(2) - c.normal.dot(c.point)) * c.normal;
+}
+
+/// libccd's penetration, settled (settle_contact) and certified: EPA's own depth is the distance
+/// to its inner polytope, a lower bound of the true depth, and the overlap along its normal an
+/// upper bound. libccd 2.1's EPA sometimes stops early (on a polytope vertex or edge, or when a
+/// support point falls within its tolerance of a face that is not on the boundary); the gap then
+/// shows it, and the query is run again in two other normalised frames (scaled by 0.77 and 1.3)
+/// and by MPR, keeping the smallest upper bound and the largest lower bound.
+template <class S, class A, class B>
+ConvexContact<S> epa(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
+  const S scale = query_scale<S>(a, b);
+  CcdSettings settings = ccd_settings(o, scale);
+  ConvexContact<S> best;
+  S lower = S(0);
+  const double frames[3] = {1.0, 0.77, 1.3};
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    CcdSettings st = settings;
+    CcdAlgorithm algo = o.penetration_algorithm;
+    if (attempt < 3) {
+      st.length_scale = settings.length_scale * frames[attempt];
+    } else {
+      algo = o.penetration_algorithm == CcdAlgorithm::Gjk ? CcdAlgorithm::Mpr : CcdAlgorithm::Gjk;
+    }
+    const auto r = ccd_penetration(a, pa, b, pb, algo, st);
+    ConvexContact<S> c;
+    c.intersecting = r.intersecting;
+    c.normal = r.normal;
+    c.point = r.point;
+    c.iterations = r.iterations;
+    c.limit_reached = r.limit_reached;
+    if (attempt == 0) {
+      if (!r.intersecting) return c;
+      best = c;
+      best.depth = std::numeric_limits<S>::infinity();
+    } else {
+      best.iterations += r.iterations;
+      best.limit_reached = best.limit_reached || r.limit_reached;
+      if (!r.intersecting) continue;
+    }
+    settle_contact(a, pa, b, pb, c);
+    // EPA's depth is a certified lower bound; MPR's is not (its portal is not a supporting face).
+    if (algo == CcdAlgorithm::Gjk && !r.limit_reached) lower = std::max(lower, std::min(r.depth, c.depth));
+    if (c.depth < best.depth) {
+      const int its = best.iterations;
+      const bool lim = best.limit_reached;
+      best = c;
+      best.iterations = its;
+      best.limit_reached = lim;
+    }
+    best.depth_gap = std::max(best.depth - lower, S(0));
+    if (best.depth_gap <= o.relative_tolerance * scale * S(100)) break;
+  }
+  return best;
+}
+
+/// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
+/// core touches b. `flip` swaps the roles back for the caller (b was the round one).
+template <class S, class R, class B>
+ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                               const ConvexQueryOptions<S>& o, bool flip) {
+  const auto core = core_of(a);
+  const S scale = query_scale<S>(a, b);
+  const S tol = o.relative_tolerance * scale;
+  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
+  const S r = round_radius(a);
+  if (!d.intersecting && d.distance > tol) {
+    ConvexContact<S> c;
+    c.iterations = d.iterations;
+    c.limit_reached = d.limit_reached;
+    if (d.distance > r) return c;
+    c.intersecting = true;
+    c.normal = (d.point_b - d.point_a) / d.distance;
+    c.depth = r - d.distance;
+    c.point = (d.point_a + r * c.normal + d.point_b) / S(2);
+    settle_contact(a, pa, b, pb, c);
+    if (flip) c.normal = -c.normal;
+    return c;
+  }
+  return flip ? epa(b, pb, a, pa, o) : epa(a, pa, b, pb, o);
+}
+
+template <class S, class R, class B>
+ConvexDistance<S> round_distance(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                                 const ConvexQueryOptions<S>& o) {
+  const auto core = core_of(a);
+  const S tol = o.relative_tolerance * query_scale<S>(a, b);
+  ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
+  const S r = round_radius(a);
+  if (d.intersecting || d.distance <= r) {
+    d.intersecting = true;
+    d.distance = S(0);
+    return d;
+  }
+  const Vec3<S> n = (d.point_b - d.point_a) / d.distance;
+  d.point_a += r * n;
+  d.distance -= r;
+  return d;
+}
+
+template <class S>
+ConvexDistance<S> swapped(ConvexDistance<S> d) {
+  std::swap(d.point_a, d.point_b);
+  return d;
+}
+template <class S>
+ConvexContact<S> swapped(ConvexContact<S> c) {
+  c.normal = -c.normal;
+  return c;
+}
+
+}  // namespace detail
+
+/// Penetration of shapes a (at pose_a) and b (at pose_b): when they intersect, depth, normal (from
+/// a towards b) and contact point (see the file comment for the method per pair).
+template <class S, class A, class B>
+ConvexContact<S> convex_penetration(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                                    const ConvexQueryOptions<S>& options = {}) {
+  using namespace detail;
+  detail::validate_query(a, pose_a, b, pose_b, options, "convex_penetration");
+  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
+    Vec3<S> qa, qb;
+    core_points(a, pose_a, b, pose_b, qa, qb);
+    const bool segments = std::is_same_v<A, Capsule<S>> && std::is_same_v<B, Capsule<S>>;
+    return balls_contact(qa, round_radius(a), qb, round_radius(b), core_fallback_normal(pose_a, pose_b, segments));
+  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
+    return sphere_box_contact(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
+    return swapped(sphere_box_contact(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Box<S>>) {
+    return box_box_contact(a, pose_a, b, pose_b, true);
+  } else if constexpr (is_round_v<A, S>) {
+    return round_contact(a, pose_a, b, pose_b, options, false);
+  } else if constexpr (is_round_v<B, S>) {
+    return round_contact(b, pose_b, a, pose_a, options, true);
+  } else {
+    return epa(a, pose_a, b, pose_b, options);
+  }
+}
+
+/// Separation distance of shapes a and b with the closest points of each (0 when they intersect).
+template <class S, class A, class B>
+ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                                  const ConvexQueryOptions<S>& options = {}) {
+  using namespace detail;
+  detail::validate_query(a, pose_a, b, pose_b, options, "convex_distance");
+  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
+    Vec3<S> qa, qb;
+    core_points(a, pose_a, b, pose_b, qa, qb);
+    return balls_distance(qa, round_radius(a), qb, round_radius(b), Vec3<S>(Vec3<S>::UnitZ()));
+  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
+    return sphere_box_distance(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
+    return swapped(sphere_box_distance(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (is_round_v<A, S>) {
+    return round_distance(a, pose_a, b, pose_b, options);
+  } else if constexpr (is_round_v<B, S>) {
+    return swapped(round_distance(b, pose_b, a, pose_a, options));
+  } else {
+    const S tol = options.relative_tolerance * query_scale<S>(a, b);
+    return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
+  }
+}
+
+/// Boolean test: do shapes a and b touch or overlap? `limit_reached`, when not null, says whether
+/// an iteration bound decided the answer.
+template <class S, class A, class B>
+bool convex_intersect(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                      const ConvexQueryOptions<S>& options = {}, bool* limit_reached = nullptr) {
+  using namespace detail;
+  detail::validate_query(a, pose_a, b, pose_b, options, "convex_intersect");
+  if (limit_reached) *limit_reached = false;
+  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
+    Vec3<S> qa, qb;
+    core_points(a, pose_a, b, pose_b, qa, qb);
+    const S r = round_radius(a) + round_radius(b);
+    return (qb - qa).squaredNorm() <= r * r;
+  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
+    const Vec3<S> lc = pose_b.R.transpose() * (pose_a.apply(a.center) - pose_b.t);
+    return (lc - lc.cwiseMax(-b.half).cwiseMin(b.half)).squaredNorm() <= a.radius * a.radius;
+  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
+    const Vec3<S> lc = pose_a.R.transpose() * (pose_b.apply(b.center) - pose_a.t);
+    return (lc - lc.cwiseMax(-a.half).cwiseMin(a.half)).squaredNorm() <= b.radius * b.radius;
+  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Box<S>>) {
+    return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
+  } else if constexpr (is_round_v<A, S> || is_round_v<B, S>) {
+    // GJK on the core with the radius as margin: stops as soon as the answer is decided.
+    ConvexDistance<S> d;
+    const S tol = options.relative_tolerance * query_scale<S>(a, b);
+    if constexpr (is_round_v<A, S>) {
+      const auto core = core_of(a);
+      d = gjk(core, pose_a, core_interior(core), b, pose_b, interior_point(b), tol, options.max_iterations, round_radius(a));
+    } else {
+      const auto core = core_of(b);
+      d = gjk(a, pose_a, interior_point(a), core, pose_b, core_interior(core), tol, options.max_iterations, round_radius(b));
+    }
+    if (limit_reached) *limit_reached = d.limit_reached;
+    return d.intersecting;
+  } else {
+    return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
+  }
+}
+
+}  // namespace impact

@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The convex primitives of the convex layer (capsule, cylinder, cone, box; spheres are the
+/// geometry layer's Sphere, convex hulls are in convex/convex_hull.hpp), each in its own frame
+/// (a RigidTransform places it), with its support function, its size and its world bounding box.
+///
+/// Conventions (the same as FCL's, so that an impact shape and an FCL shape of the same numbers
+/// are the same set; FCL takes full lengths where impact takes halves):
+///   Sphere{c, r}          the closed ball of radius r about c
+///   Capsule{r, h}         the points within r of the segment from (0,0,-h) to (0,0,h)
+///   Cylinder{r, h}        the solid cylinder of radius r about the z axis for z in [-h, h]
+///   Cone{r, h}            base disc of radius r at z = -h, apex at (0,0,h)
+///   Box{half}             [-half.x, half.x] x [-half.y, half.y] x [-half.z, half.z]
+///
+/// Validity: the constructors throw impact::InvalidInput unless every radius and half extent is
+/// finite, > 0 (a capsule's half length may be 0: a sphere) and at most CoordinateRange<S>::max.
+/// Zero radii or heights are rejected rather than treated as segments or discs: a flat shape makes
+/// the penetration depth of two flat shapes undefined and the expanding polytope of EPA degenerate.
+/// The members are public for reading; a shape whose members are changed after construction must
+/// be re-validated with validate_shape().
+#pragma once
+
+#include "impact/core/validate.hpp"
+#include "impact/geometry/aabb.hpp"
+#include "impact/geometry/sphere.hpp"
+#include "impact/geometry/transform.hpp"
+
+#include <cmath>
+
+namespace impact {
+
+/// Points within `radius` of the segment (0,0,-half_length)–(0,0,half_length).
+template <class S>
+struct Capsule {
+  S radius = S(1);
+  S half_length = S(0);
+  Capsule(S r, S h) : radius(r), half_length(h) { validate_shape(*this, "Capsule"); }
+};
+
+/// The solid cylinder of radius `radius` about the z axis, z in [-half_length, half_length].
+template <class S>
+struct Cylinder {
+  S radius = S(1);
+  S half_length = S(1);
+  Cylinder(S r, S h) : radius(r), half_length(h) { validate_shape(*this, "Cylinder"); }
+};
+
+/// The solid cone with its base disc of radius `radius` at z = -half_length and its apex at
+/// (0, 0, half_length).
+template <class S>
+struct Cone {
+  S radius = S(1);
+  S half_length = S(1);
+  Cone(S r, S h) : radius(r), half_length(h) { validate_shape(*this, "Cone"); }
+};
+
+/// The box centred on the origin with half extents `half` along the frame's axes.
+template <class S>
+struct Box {
+  Vec3<S> half = Vec3<S>::Ones();
+  explicit Box(const Vec3<S>& h) : half(h) { validate_shape(*this, "Box"); }
+};
+
+/// Throws InvalidInput unless the sphere's centre is finite and in range and its radius finite,
+/// > 0 and in range.
+template <class S>
+void validate_shape(const Sphere<S>& s, const char* where) {
+  validate_coordinates(s.center, where, "sphere.center");
+  validate_length(s.radius, where, "sphere.radius");
+  validate_positive(s.radius, where, "sphere.radius");
+}
+template <class S>
+void validate_shape(const Capsule<S>& s, const char* where) {
+  validate_length(s.radius, where, "capsule.radius");
+  validate_positive(s.radius, where, "capsule.radius");
+  validate_length(s.half_length, where, "capsule.half_length");
+}
+template <class S>
+void validate_shape(const Cylinder<S>& s, const char* where) {
+  validate_length(s.radius, where, "cylinder.radius");
+  validate_positive(s.radius, where, "cylinder.radius");
+  validate_length(s.half_length, where, "cylinder.half_length");
+  validate_positive(s.half_length, where, "cylinder.half_length");
+}
+template <class S>
+void validate_shape(const Cone<S>& s, const char* where) {
+  validate_length(s.radius, where, "cone.radius");
+  validate_positive(s.radius, where, "cone.radius");
+  validate_length(s.half_length, where, "cone.half_length");
+  validate_positive(s.half_length, where, "cone.half_length");
+}
+template <class S>
+void validate_shape(const Box<S>& s, const char* where) {
+  validate_coordinates(s.half, where, "box.half");
+  if (!(s.half.minCoeff() > S(0))) throw InvalidInput(std::string(where) + ": box.half must be > 0 on every axis");
+}
+
+/// Support point: a point of the shape (in its own frame) maximising the dot product with `d`.
+/// `d` need not be unit; for d = 0 some point of the shape is returned.
+template <class S>
+inline Vec3<S> support(const Sphere<S>& s, const Vec3<S>& d) {
+  const S n = d.norm();
+  return n > S(0) ? Vec3<S>(s.center + d * (s.radius / n)) : Vec3<S>(s.center + Vec3<S>(S(0), S(0), s.radius));
+}
+template <class S>
+inline Vec3<S> support(const Capsule<S>& s, const Vec3<S>& d) {
+  const S n = d.norm();
+  Vec3<S> p = n > S(0) ? Vec3<S>(d * (s.radius / n)) : Vec3<S>(S(0), S(0), s.radius);
+  p.z() += d.z() >= S(0) ? s.half_length : -s.half_length;
+  return p;
+}
+template <class S>
+inline Vec3<S> support(const Cylinder<S>& s, const Vec3<S>& d) {
+  const S r = std::sqrt(d.x() * d.x() + d.y() * d.y());
+  const S z = d.z() >= S(0) ? s.half_length : -s.half_length;
+  if (r > S(0)) return {d.x() * (s.radius / r), d.y() * (s.radius / r), z};
+  return {s.radius, S(0), z};
+}
+template <class S>
+inline Vec3<S> support(const Cone<S>& s, const Vec3<S>& d) {
+  const S r = std::sqrt(d.x() * d.x() + d.y() * d.y());
+  // The apex (0,0,h) against the best point of the base rim, (r d_xy/|d_xy|, -h).
+  const S apex = s.half_length * d.z();
+  const S rim = s.radius * r - s.half_length * d.z();
+  if (apex >= rim) return {S(0), S(0), s.half_length};
+  if (r > S(0)) return {d.x() * (s.radius / r), d.y() * (s.radius / r), -s.half_length};
+  return {s.radius, S(0), -s.half_length};
+}
+template <class S>
+inline Vec3<S> support(const Box<S>& s, const Vec3<S>& d) {
+  return {d.x() >= S(0) ? s.half.x() : -s.half.x(), d.y() >= S(0) ? s.half.y() : -s.half.y(),
+          d.z() >= S(0) ? s.half.z() : -s.half.z()};
+}
+
+/// A point inside the shape (its own frame): the centre used to start GJK and MPR.
+template <class S>
+inline Vec3<S> interior_point(const Sphere<S>& s) {
+  return s.center;
+}
+template <class S>
+inline Vec3<S> interior_point(const Capsule<S>&) {
+  return Vec3<S>::Zero();
+}
+template <class S>
+inline Vec3<S> interior_point(const Cylinder<S>&) {
+  return Vec3<S>::Zero();
+}
+template <class S>
+inline Vec3<S> interior_point(const Cone<S>& s) {
+  return Vec3<S>(S(0), S(0), -s.half_length / S(2));  // the centroid of the solid cone
+}
+template <class S>
+inline Vec3<S> interior_point(const Box<S>&) {
+  return Vec3<S>::Zero();
+}
+
+/// The radius of a ball about interior_point() holding the shape: the length scale of the shape
+/// that relative tolerances are taken of.
+template <class S>
+inline S shape_size(const Sphere<S>& s) {
+  return s.radius;
+}
+template <class S>
+inline S shape_size(const Capsule<S>& s) {
+  return s.radius + s.half_length;
+}
+template <class S>
+inline S shape_size(const Cylinder<S>& s) {
+  return std::sqrt(s.radius * s.radius + s.half_length * s.half_length);
+}
+template <class S>
+inline S shape_size(const Cone<S>& s) {
+  const S h = s.half_length * S(1.5);  // apex to the centroid
+  return std::max(h, std::sqrt(s.radius * s.radius + s.half_length * s.half_length / S(4)));
+}
+template <class S>
+inline S shape_size(const Box<S>& s) {
+  return s.half.norm();
+}
+
+/// The world support point of `shape` placed by `pose`, for a world direction d.
+template <class Shape, class S>
+inline Vec3<S> support(const Shape& shape, const RigidTransform<S>& pose, const Vec3<S>& d) {
+  return pose.apply(support(shape, Vec3<S>(pose.R.transpose() * d)));
+}
+
+/// The tight world axis-aligned bounding box of `shape` placed by `pose` (six support queries).
+template <class Shape, class S>
+inline Aabb<S> bounding_box(const Shape& shape, const RigidTransform<S>& pose) {
+  Aabb<S> box;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<S> axis = pose.R.row(i).transpose();  // R^T e_i
+    box.max[i] = pose.t[i] + axis.dot(support(shape, axis));
+    box.min[i] = pose.t[i] + axis.dot(support(shape, Vec3<S>(-axis)));
+  }
+  return box;
+}
+
+}  // namespace impact

@@ -1,0 +1,318 @@
+// SPDX-License-Identifier: MIT
+// The convex queries (convex/query.hpp) against the direction-search oracle of
+// support/convex_oracle.hpp (signed distance = -min_n [h_A(n) + h_B(-n)], independent of GJK, EPA,
+// MPR and the closed forms) on random poses of every method's pairs, against formulas written
+// here for the round pairs, plus the validation of inputs and the iteration bound.
+//
+// Stated tolerances (double, shapes about 1 across, relative to the larger shape's size):
+//   boolean: no mismatch where the oracle's |signed distance| > 1e-6
+//   distance: 1e-9 (GJK stops at a duality gap of 1e-10); closed forms 1e-12
+//   depth: closed forms and round shapes whose core is outside the other shape 1e-9; EPA on
+//          polytopes (box, hull) 1e-9; EPA on curved shapes (cylinder, cone) 1e-6
+#include "impact/convex/query.hpp"
+#include "support/convex_oracle.hpp"
+#include "support/sanitizer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <limits>
+
+namespace {
+
+using namespace impact;
+using impact::test::convex_poses;
+using impact::test::overlap_along;
+using impact::test::signed_distance_oracle;
+using impact::test::ConvexZoo;
+using V3 = Eigen::Vector3d;
+
+const ConvexZoo& zoo() {
+  static const ConvexZoo z;
+  return z;
+}
+
+struct Tol {
+  double distance, depth;
+  bool may_hit_bound = false;
+};
+
+template <class T>
+constexpr bool is_polytope_v = std::is_same_v<T, Box<double>> || std::is_same_v<T, ConvexHull<double>>;
+
+// Per pair: the boolean against the oracle away from touching; the distance inside the ellipsoid
+// oracle's certified bracket (widened by the tolerance) with witness points that are supporting
+// points of each shape and points of it (checked along 64 directions); the depth against the exact
+// polytope depth (boxes, hulls) or, for curved shapes, one-sided against the grid oracle (the
+// depth must be the overlap along the reported normal, hence >= the true depth, and at most the
+// best overlap the oracle found, plus the tolerance).
+template <class A, class B>
+void check_pair(const char* name, const A& a, const B& b, Tol tol, std::uint64_t seed, int n = IMPACT_TEST_SANITIZED ? 8 : 60) {
+  const double scale = std::max(shape_size(a), shape_size(b));
+  const double reach = 1.0 * (shape_size(a) + shape_size(b));
+  double max_dist_err = 0, max_depth_err = 0;
+  int separated = 0, intersecting = 0, uncertified = 0;
+  test::Rng dirs_rng(seed + 1000);
+  std::vector<V3> dirs;
+  for (int i = 0; i < 64; ++i) dirs.push_back(dirs_rng.vec(-1, 1).normalized());
+  // half the poses near (many intersect, some deeply), half farther (many separate)
+  auto poses = convex_poses(n / 2, 0.6 * (shape_size(a) + shape_size(b)), seed);
+  const auto far = convex_poses(n - n / 2, reach, seed + 7);
+  poses.insert(poses.end(), far.begin(), far.end());
+  for (const auto& [pa, pb] : poses) {
+    const auto o = signed_distance_oracle(a, pa, b, pb);
+    const auto br = test::distance_bracket(a, pa, b, pb);
+    const bool hit = convex_intersect(a, pa, b, pb);
+    const auto d = convex_distance(a, pa, b, pb);
+    const auto c = convex_penetration(a, pa, b, pb);
+    // sign of the signed distance, certified: separated when the bracket's lower end is > 0
+    const bool oracle_separated = br.lower > 1e-6 * scale, oracle_intersecting = o.value < -1e-6 * scale;
+    if (oracle_separated || oracle_intersecting) {
+      EXPECT_EQ(hit, oracle_intersecting) << name << ": boolean, oracle bracket [" << br.lower << ", " << br.upper << "]";
+      EXPECT_EQ(c.intersecting, oracle_intersecting) << name;
+      EXPECT_EQ(d.intersecting, oracle_intersecting) << name;
+    }
+    if (oracle_separated) {
+      ++separated;
+      EXPECT_LE(br.upper - br.lower, 1e-11) << name << ": oracle bracket too wide";
+      const double err = std::max(br.lower - d.distance, d.distance - br.upper);
+      max_dist_err = std::max(max_dist_err, err);
+      EXPECT_LE(err, tol.distance * scale) << name << ": distance " << d.distance << " oracle [" << br.lower << ", " << br.upper << "]";
+      EXPECT_NEAR((d.point_b - d.point_a).norm(), d.distance, tol.distance * scale) << name;
+      const V3 nrm = (d.point_b - d.point_a).normalized();
+      EXPECT_NEAR(nrm.dot(d.point_a), nrm.dot(support(a, pa, nrm)), tol.distance * scale) << name;
+      EXPECT_NEAR(nrm.dot(d.point_b), nrm.dot(support(b, pb, V3(-nrm))), tol.distance * scale) << name;
+      for (const V3& m : dirs) {
+        EXPECT_LE(m.dot(d.point_a), m.dot(support(a, pa, m)) + 1e-12 * scale) << name << ": witness outside a";
+        EXPECT_LE(m.dot(d.point_b), m.dot(support(b, pb, m)) + 1e-12 * scale) << name << ": witness outside b";
+      }
+      EXPECT_FALSE(d.limit_reached) << name;
+    } else if (oracle_intersecting) {
+      ++intersecting;
+      EXPECT_EQ(d.distance, 0.0) << name;
+      EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12) << name;
+      // the depth is the overlap along the normal (hence >= the true depth) ...
+      EXPECT_NEAR(overlap_along(a, pa, b, pb, c.normal), c.depth, 1e-12 * scale) << name << ": depth is not the overlap along the normal";
+      // ... and no more than the least overlap the oracle found
+      double best = -o.value;
+      if constexpr (is_polytope_v<A> && is_polytope_v<B>) {
+        std::vector<V3> normals, ea, eb;
+        test::polytope_features(a, pa, normals, ea);
+        test::polytope_features(b, pb, normals, eb);
+        best = test::polytope_depth(normals, ea, eb, [&](const V3& m) { return overlap_along(a, pa, b, pb, m); });
+        EXPECT_GE(c.depth, best - tol.depth * scale) << name << ": depth below the exact polytope depth";
+      }
+      // The contract: the true depth lies in [depth - depth_gap, depth]. EPA's gap is asserted
+      // small below where the solver is expected to converge; where libccd's EPA stops early (deep
+      // curved pairs), only the certificate is asserted, and the misses are counted.
+      const double err = c.depth - best;
+      max_depth_err = std::max(max_depth_err, err);
+      EXPECT_LE(err, std::max(tol.depth * scale, c.depth_gap)) << name << ": depth " << c.depth << " oracle " << best
+                                                               << " gap " << c.depth_gap;
+      uncertified += c.depth_gap > tol.depth * scale;
+      // the deepest point of a lies on a's supporting plane along the normal
+      EXPECT_NEAR(c.normal.dot(c.point_a()), c.normal.dot(support(a, pa, c.normal)), 1e-9 * scale) << name;
+      if (!tol.may_hit_bound) {
+        EXPECT_FALSE(c.limit_reached) << name;
+      }
+    }
+  }
+  EXPECT_GE(separated, std::max(1, n / 30)) << name << ": too few separated poses to test anything";
+  EXPECT_GE(intersecting, std::max(1, n / 30)) << name << ": too few intersecting poses to test anything";
+  // at most a tenth of the penetrations may leave EPA's certificate open
+  EXPECT_LE(uncertified * 10, intersecting) << name << ": EPA did not converge on " << uncertified << " of " << intersecting;
+  std::printf("%-18s separated %3d  intersecting %3d  max distance error %.2e  max depth excess %.2e  gap open %d\n", name, separated,
+              intersecting, max_dist_err / scale, max_depth_err / scale, uncertified);
+}
+
+TEST(ConvexQuery, ClosedFormPairs) {
+  const auto& z = zoo();
+  check_pair("sphere-sphere", z.sphere, z.sphere, {1e-12, 1e-12}, 11);
+  check_pair("sphere-capsule", z.sphere, z.capsule, {1e-12, 1e-12}, 12);
+  check_pair("capsule-sphere", z.capsule, z.sphere, {1e-12, 1e-12}, 13);
+  check_pair("capsule-capsule", z.capsule, z.capsule, {1e-12, 1e-9}, 14);
+  check_pair("sphere-box", z.sphere, z.box, {1e-12, 1e-12}, 15);
+  check_pair("box-sphere", z.box, z.sphere, {1e-12, 1e-12}, 16);
+  check_pair("box-box", z.box, z.box, {1e-9, 1e-9}, 17);
+}
+
+TEST(ConvexQuery, RoundAgainstGeneral) {
+  const auto& z = zoo();
+  check_pair("sphere-cylinder", z.sphere, z.cylinder, {1e-9, 1e-9}, 21);
+  check_pair("cone-sphere", z.cone, z.sphere, {1e-9, 1e-9}, 22);
+  check_pair("capsule-box", z.capsule, z.box, {1e-9, 1e-6}, 23);
+  check_pair("capsule-cylinder", z.capsule, z.cylinder, {1e-9, 1e-6, true}, 24);
+  check_pair("hull-capsule", z.hull, z.capsule, {1e-9, 1e-6}, 25);
+  check_pair("sphere-hull", z.sphere, z.hull, {1e-9, 1e-9}, 26);
+}
+
+TEST(ConvexQuery, GeneralPairs) {
+  const auto& z = zoo();
+  check_pair("box-hull", z.box, z.hull, {1e-9, 1e-9}, 31);
+  check_pair("hull-hull", z.hull, z.hull, {1e-9, 1e-9}, 32);
+  check_pair("cylinder-cylinder", z.cylinder, z.cylinder, {1e-9, 1e-6, true}, 33);
+  check_pair("cylinder-cone", z.cylinder, z.cone, {1e-9, 1e-6, true}, 34);
+  check_pair("cone-box", z.cone, z.box, {1e-9, 1e-6, true}, 35);
+  check_pair("cone-cone", z.cone, z.cone, {1e-9, 1e-6, true}, 36);
+}
+
+// Round pairs against formulas written here: two capsules by a nested ternary search on the
+// segment parameters (convex in both), a sphere and a box by the distance to each face rectangle.
+TEST(ConvexQuery, CapsuleCapsuleAgainstNestedSearch) {
+  test::Rng rng(41);
+  const Capsule<double> a(0.2, 0.7), b(0.35, 0.4);
+  for (int k = 0; k < 60; ++k) {
+    const RigidTransform<double> pa{rng.rotation(), rng.vec(-1, 1)}, pb{rng.rotation(), rng.vec(-1, 1)};
+    const V3 a0 = pa.apply(V3(0, 0, -0.7)), a1 = pa.apply(V3(0, 0, 0.7)), b0 = pb.apply(V3(0, 0, -0.4)), b1 = pb.apply(V3(0, 0, 0.4));
+    const auto dist_t = [&](double s) {
+      double lo = 0, hi = 1;
+      const V3 p = a0 + s * (a1 - a0);
+      for (int i = 0; i < 100; ++i) {
+        const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+        if ((p - b0 - m1 * (b1 - b0)).norm() < (p - b0 - m2 * (b1 - b0)).norm()) hi = m2; else lo = m1;
+      }
+      return (p - b0 - lo * (b1 - b0)).norm();
+    };
+    double lo = 0, hi = 1;
+    for (int i = 0; i < 100; ++i) {
+      const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+      if (dist_t(m1) < dist_t(m2)) hi = m2; else lo = m1;
+    }
+    const double core = dist_t(lo), expected = core - 0.55;
+    const auto d = convex_distance(a, pa, b, pb);
+    const auto c = convex_penetration(a, pa, b, pb);
+    if (expected > 0) {
+      EXPECT_NEAR(d.distance, expected, 1e-9);
+      EXPECT_FALSE(c.intersecting);
+    } else if (core > 1e-6) {
+      EXPECT_TRUE(c.intersecting);
+      EXPECT_NEAR(c.depth, -expected, 1e-9);
+    }
+  }
+}
+
+TEST(ConvexQuery, SphereInsideBoxPushesThroughTheNearestFace) {
+  const Box<double> box(V3(1, 2, 3));
+  const Sphere<double> s(V3::Zero(), 0.25);
+  const RigidTransform<double> pb{Eigen::AngleAxisd(0.3, V3(1, 2, 3).normalized()).toRotationMatrix(), V3(5, -1, 2)};
+  // centre at local (0.2, 1.5, -1): nearest face +y at gap 0.5 -> depth 0.75, normal (from the
+  // sphere towards the box) = -(+y axis of the box)
+  const RigidTransform<double> pa{Eigen::Matrix3d::Identity(), pb.apply(V3(0.2, 1.5, -1))};
+  const auto c = convex_penetration(s, pa, box, pb);
+  ASSERT_TRUE(c.intersecting);
+  EXPECT_NEAR(c.depth, 0.75, 1e-14);
+  EXPECT_LE((c.normal + pb.R.col(1)).norm(), 1e-14);
+  const auto c2 = convex_penetration(box, pb, s, pa);
+  EXPECT_NEAR(c2.depth, 0.75, 1e-14);
+  EXPECT_LE((c2.normal - pb.R.col(1)).norm(), 1e-14);
+}
+
+TEST(ConvexQuery, ScaleAndTranslationInvariance) {
+  // the same configuration scaled by 2^-20 and moved by 1e3: the same answers, scaled
+  const auto& z = zoo();
+  const auto poses = convex_poses(20, 1.2, 51);
+  const double s = 0x1p-20;
+  const Cylinder<double> cs(z.cylinder.radius * s, z.cylinder.half_length * s);
+  const Capsule<double> ks(z.capsule.radius * s, z.capsule.half_length * s);
+  const V3 shift(1e3 * s * 1024, -2e3 * s * 1024, 0.5);
+  for (const auto& [pa, pb] : poses) {
+    const RigidTransform<double> qa{pa.R, pa.t * s + shift}, qb{pb.R, pb.t * s + shift};
+    const auto d1 = convex_distance(z.capsule, pa, z.cylinder, pb), d2 = convex_distance(ks, qa, cs, qb);
+    EXPECT_NEAR(d2.distance / s, d1.distance, 1e-8);
+    const auto c1 = convex_penetration(z.capsule, pa, z.cylinder, pb), c2 = convex_penetration(ks, qa, cs, qb);
+    EXPECT_EQ(c1.intersecting, c2.intersecting);
+    if (c1.intersecting && c2.intersecting) { EXPECT_NEAR(c2.depth / s, c1.depth, 1e-6); }
+  }
+}
+
+TEST(ConvexQuery, FloatAgreesWithDouble) {
+  const auto poses = convex_poses(60, 1.1, 61);
+  const Capsule<double> kd(0.3, 0.6);
+  const Capsule<float> kf(0.3f, 0.6f);
+  const Box<double> bd(V3(0.4, 0.3, 0.5));
+  const Box<float> bf(Eigen::Vector3f(0.4f, 0.3f, 0.5f));
+  const Cylinder<double> yd(0.4, 0.5);
+  const Cylinder<float> yf(0.4f, 0.5f);
+  for (const auto& [pa, pb] : poses) {
+    const auto fa = pa.cast<float>(), fb = pb.cast<float>();
+    const auto dd = convex_distance(kd, pa, bd, pb);
+    const auto df = convex_distance(kf, fa, bf, fb);
+    if (dd.distance > 1e-3) { EXPECT_NEAR(df.distance, dd.distance, 1e-5); }
+    const auto cd = convex_penetration(yd, pa, bd, pb);
+    const auto cf = convex_penetration(yf, fa, bf, fb);
+    const auto o = signed_distance_oracle(yd, pa, bd, pb);
+    if (o.value < -1e-3) {
+      EXPECT_TRUE(cf.intersecting);
+      EXPECT_NEAR(cf.depth, cd.depth, 1e-4);
+    }
+    if (std::abs(o.value) > 1e-3) { EXPECT_EQ(convex_intersect(yf, fa, bf, fb), o.value < 0); }
+  }
+}
+
+TEST(ConvexQuery, InvalidInputThrowsBeforeAnyWork) {
+  const auto& z = zoo();
+  RigidTransform<double> ok, nan_pose, scaled;
+  nan_pose.t.x() = std::numeric_limits<double>::quiet_NaN();
+  scaled.R *= 2;
+  EXPECT_THROW(convex_intersect(z.capsule, nan_pose, z.box, ok), InvalidInput);
+  EXPECT_THROW(convex_distance(z.capsule, ok, z.box, scaled), InvalidInput);
+  EXPECT_THROW(convex_penetration(z.cone, ok, z.hull, nan_pose), InvalidInput);
+  ConvexQueryOptions<double> bad;
+  bad.max_iterations = 0;
+  EXPECT_THROW(convex_distance(z.cone, ok, z.cylinder, ok, bad), InvalidInput);
+  bad = {};
+  bad.relative_tolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(convex_penetration(z.cone, ok, z.cylinder, ok, bad), InvalidInput);
+  Capsule<double> broken = z.capsule;
+  broken.radius = -1;  // changed after construction: caught by the query
+  EXPECT_THROW(convex_intersect(broken, ok, z.box, ok), InvalidInput);
+  const ConvexHull<double> empty;
+  EXPECT_THROW(convex_distance(empty, ok, z.box, ok), InvalidInput);
+}
+
+TEST(ConvexQuery, IterationBoundIsReportedNeverHangs) {
+  const auto& z = zoo();
+  ConvexQueryOptions<double> o;
+  o.max_iterations = 2;
+  const RigidTransform<double> pa{Eigen::AngleAxisd(0.7, V3(1, 1, 0).normalized()).toRotationMatrix(), V3::Zero()};
+  const RigidTransform<double> deep{Eigen::AngleAxisd(0.4, V3(0, 1, 1).normalized()).toRotationMatrix(), V3(0.1, 0.05, 0.2)};
+  const RigidTransform<double> far{Eigen::AngleAxisd(0.4, V3(0, 1, 1).normalized()).toRotationMatrix(), V3(1.3, 0.4, 0.3)};
+  // EPA on two cylinders needs far more than 2 support calls
+  const auto c = convex_penetration(z.cylinder, pa, z.cylinder, deep, o);
+  EXPECT_TRUE(c.limit_reached);
+  EXPECT_LE(c.iterations, 4 * 2);  // at most 4 attempts (convex_penetration's EPA retries) of 2
+  const auto c_full = convex_penetration(z.cylinder, pa, z.cylinder, deep);
+  EXPECT_TRUE(c_full.intersecting);
+  EXPECT_FALSE(c_full.limit_reached);
+  // GJK distance between two cylinders does not converge in 2 iterations either
+  const auto d = convex_distance(z.cylinder, pa, z.cylinder, far, o);
+  EXPECT_TRUE(d.limit_reached);
+  EXPECT_GE(d.distance, convex_distance(z.cylinder, pa, z.cylinder, far).distance - 1e-12);  // an upper bound
+  // MPR and GJK booleans with the bound
+  bool limit = false;
+  o.max_iterations = 1;
+  convex_intersect(z.cone, pa, z.hull, deep, o, &limit);
+  EXPECT_TRUE(limit);
+  o.boolean_algorithm = CcdAlgorithm::Gjk;
+  limit = false;
+  convex_intersect(z.cone, pa, z.hull, deep, o, &limit);
+  EXPECT_TRUE(limit);
+  EXPECT_TRUE(convex_intersect(z.cone, pa, z.hull, deep));
+}
+
+TEST(ConvexQuery, MprAndGjkBooleansAgree) {
+  const auto& z = zoo();
+  ConvexQueryOptions<double> gjk;
+  gjk.boolean_algorithm = CcdAlgorithm::Gjk;
+  int hits = 0;
+  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 200, 1.0, 71)) {
+    const auto o = signed_distance_oracle(z.cone, pa, z.hull, pb, 1000, 1);
+    if (std::abs(o.value) < 1e-6) continue;
+    EXPECT_EQ(convex_intersect(z.cone, pa, z.hull, pb), o.value < 0);
+    EXPECT_EQ(convex_intersect(z.cone, pa, z.hull, pb, gjk), o.value < 0);
+    hits += o.value < 0;
+  }
+  EXPECT_GT(hits, 10);
+}
+
+}  // namespace

@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: MIT
+// Oracles and fixtures for the convex layer's tests and impact-convex-bench: the shapes of each
+// tested pair, random poses, and the signed distance of two convex sets by a search over
+// directions, independent of GJK, EPA, MPR and the closed forms:
+//   f(n) = h_A(n) + h_B(-n)  (h: support value, n unit, from a towards b)
+//   signed distance = -min_n f(n)  (the distance when > 0, minus the penetration depth when < 0),
+// minimised over a Fibonacci sphere of directions, then refined by a shrinking random search. It
+// reads the shapes only through their support functions (checked on their own against sampled
+// points in test_shapes.cpp).
+#pragma once
+
+#include "impact/convex/convex_hull.hpp"
+#include "impact/convex/shapes.hpp"
+#include "support/random.hpp"
+#include "support/sanitizer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace impact::test {
+
+/// f(n) for unit n (see the file comment).
+template <class A, class B>
+double overlap_along(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb, const Eigen::Vector3d& n) {
+  return n.dot(support(a, pa, n)) + (-n).dot(support(b, pb, Eigen::Vector3d(-n)));
+}
+
+struct SignedDistance {
+  double value = 0;             ///< > 0 distance, < 0 minus the penetration depth
+  Eigen::Vector3d normal;       ///< the minimising direction, from a towards b
+};
+
+/// The signed distance by direction search: the best `starts` of `samples` Fibonacci directions,
+/// each refined by nested grids on the sphere (21 x 21 directions over a cap of angular radius rho
+/// about the best so far, rho shrinking threefold per level down to 1e-11). A grid is used rather
+/// than a descent method because f has ridges (the supports jump between features) on which local
+/// descent stalls; the grid's error at the last level is about the slope of f times 1e-12.
+template <class A, class B>
+SignedDistance signed_distance_oracle(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb,
+                                      int samples = IMPACT_TEST_SANITIZED ? 1000 : 3000, int starts = IMPACT_TEST_SANITIZED ? 1 : 2) {
+  std::vector<std::pair<double, Eigen::Vector3d>> coarse;
+  coarse.reserve(static_cast<std::size_t>(samples));
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < samples; ++i) {
+    const double z = 1 - (2 * i + 1.0) / samples;
+    const double r = std::sqrt(1 - z * z);
+    const Eigen::Vector3d n(r * std::cos(golden * i), r * std::sin(golden * i), z);
+    coarse.emplace_back(overlap_along(a, pa, b, pb, n), n);
+  }
+  std::partial_sort(coarse.begin(), coarse.begin() + starts, coarse.end(),
+                    [](const auto& x, const auto& y) { return x.first < y.first; });
+  SignedDistance best;
+  double fbest = std::numeric_limits<double>::infinity();
+  for (int s = 0; s < starts; ++s) {
+    Eigen::Vector3d n = coarse[static_cast<std::size_t>(s)].second;
+    double fn = coarse[static_cast<std::size_t>(s)].first;
+    for (double rho = 4.0 / std::sqrt(double(samples)); rho > 1e-11; rho /= (IMPACT_TEST_SANITIZED ? 2.5 : 3)) {
+      const Eigen::Vector3d u = (std::abs(n.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(n).normalized();
+      const Eigen::Vector3d w = n.cross(u);
+      Eigen::Vector3d bn = n;
+      constexpr int g = IMPACT_TEST_SANITIZED ? 5 : 10;  // grid half width (fewer under sanitizers)
+      for (int i = -g; i <= g; ++i)
+        for (int j = -g; j <= g; ++j) {
+          const Eigen::Vector3d c = (n + rho * (double(i) / g) * u + rho * (double(j) / g) * w).normalized();
+          const double f = overlap_along(a, pa, b, pb, c);
+          if (f < fn) {
+            fn = f;
+            bn = c;
+          }
+        }
+      n = bn;
+    }
+    if (fn < fbest) {
+      fbest = fn;
+      best.normal = n;
+    }
+  }
+  best.value = -fbest;
+  return best;
+}
+
+/// Certified bracket of the distance of two separated convex sets by the ellipsoid method on the
+/// convex function g(x) = h_A(x) + h_B(-x) over the unit ball (distance = -min g; a subgradient of
+/// g at x is s_A(x) - s_B(-x), the difference of support points). `lower` and `upper` bound the
+/// true distance (lower: -g at the best feasible centre, a separating direction; upper: the
+/// ellipsoid's cut bound); for intersecting sets upper <= 0 within the width.
+struct DistanceBracket {
+  double lower = 0, upper = 0;
+};
+template <class A, class B>
+DistanceBracket distance_bracket(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb,
+                                 int iterations = 1200) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d P = Eigen::Matrix3d::Identity() * 1.0001;
+  double gbest = std::numeric_limits<double>::infinity(), lb = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < iterations; ++k) {
+    Eigen::Vector3d sub;
+    if (c.norm() > 1) {
+      sub = c / c.norm();  // feasibility cut
+    } else {
+      const Eigen::Vector3d sa = support(a, pa, c), sb = support(b, pb, Eigen::Vector3d(-c));
+      const double g = c.dot(sa) - c.dot(sb);
+      sub = sa - sb;
+      gbest = std::min(gbest, g);
+      const double w = std::sqrt(std::max(sub.dot(P * sub), 0.0));
+      lb = std::max(lb, g - w);
+      if (w < 1e-14) break;
+    }
+    const double den = std::sqrt(std::max(sub.dot(P * sub), 0.0));
+    if (!(den > 0)) break;
+    const Eigen::Vector3d Pa = P * sub / den;
+    c -= Pa / 4.0;
+    P = (9.0 / 8.0) * (P - 0.5 * Pa * Pa.transpose());
+    P = (P + P.transpose()).eval() / 2.0;
+  }
+  return {-gbest, -lb};
+}
+
+/// The penetration depth of two intersecting convex polytopes (boxes, hulls) exactly: the least
+/// overlap f(n) over the candidate axes of their Minkowski difference (face normals of each, cross
+/// products of edge directions). `normals` and `edges` are in world coordinates.
+inline double polytope_depth(const std::vector<Eigen::Vector3d>& normals, const std::vector<Eigen::Vector3d>& edges_a,
+                             const std::vector<Eigen::Vector3d>& edges_b, const std::function<double(const Eigen::Vector3d&)>& f) {
+  double best = std::numeric_limits<double>::infinity();
+  const auto consider = [&](Eigen::Vector3d n) {
+    if (n.norm() < 1e-9) return;
+    n.normalize();
+    best = std::min({best, f(n), f(Eigen::Vector3d(-n))});
+  };
+  for (const auto& n : normals) consider(n);
+  for (const auto& ea : edges_a)
+    for (const auto& eb : edges_b) consider(ea.cross(eb));
+  return best;
+}
+inline void polytope_features(const Box<double>& b, const RigidTransform<double>& p, std::vector<Eigen::Vector3d>& normals,
+                              std::vector<Eigen::Vector3d>& edges) {
+  (void)b;
+  for (int i = 0; i < 3; ++i) {
+    normals.push_back(p.R.col(i));
+    edges.push_back(p.R.col(i));
+  }
+}
+inline void polytope_features(const ConvexHull<double>& h, const RigidTransform<double>& p, std::vector<Eigen::Vector3d>& normals,
+                              std::vector<Eigen::Vector3d>& edges) {
+  for (Eigen::Index t = 0; t < h.triangles.rows(); ++t) {
+    const Eigen::Vector3d x = h.vertices.row(h.triangles(t, 0)).transpose(), y = h.vertices.row(h.triangles(t, 1)).transpose(),
+                          z = h.vertices.row(h.triangles(t, 2)).transpose();
+    normals.push_back(p.R * (y - x).cross(z - x));
+    for (int k = 0; k < 3; ++k) {  // each edge once (from the triangle where it runs upwards in index)
+      const int u = h.triangles(t, k), v = h.triangles(t, (k + 1) % 3);
+      if (u < v) edges.push_back(p.R * (h.vertices.row(v) - h.vertices.row(u)).transpose());
+    }
+  }
+}
+
+/// The tested shapes, one size each (about 1 across), and a hull of 40 points of an ellipsoid.
+struct ConvexZoo {
+  Sphere<double> sphere{Eigen::Vector3d::Zero(), 0.5};
+  Capsule<double> capsule{0.3, 0.6};
+  Cylinder<double> cylinder{0.4, 0.5};
+  Cone<double> cone{0.5, 0.6};
+  Box<double> box{Eigen::Vector3d(0.4, 0.3, 0.5)};
+  ConvexHull<double> hull;
+  ConvexZoo() {
+    Rng rng(77);
+    Vertices<double> p(40, 3);
+    for (int i = 0; i < 40; ++i) {
+      Eigen::Vector3d d = rng.vec(-1, 1);
+      while (d.norm() < 0.1) d = rng.vec(-1, 1);
+      d.normalize();
+      p.row(i) = Eigen::Vector3d(0.5 * d.x(), 0.35 * d.y(), 0.45 * d.z()).transpose();
+    }
+    hull = convex_hull(p);
+  }
+};
+
+/// Poses of b about a at the origin: random rotations, b's translation uniform in the cube of
+/// half side `reach` (a good share intersect, the rest are near).
+inline std::vector<std::pair<RigidTransform<double>, RigidTransform<double>>> convex_poses(int n, double reach, std::uint64_t seed) {
+  Rng rng(seed);
+  std::vector<std::pair<RigidTransform<double>, RigidTransform<double>>> out;
+  for (int i = 0; i < n; ++i) {
+    RigidTransform<double> pa{rng.rotation(), Eigen::Vector3d::Zero()};
+    RigidTransform<double> pb = random_pose(rng, Eigen::Vector3d::Constant(-reach), Eigen::Vector3d::Constant(reach));
+    out.emplace_back(pa, pb);
+  }
+  return out;
+}
+
+}  // namespace impact::test
