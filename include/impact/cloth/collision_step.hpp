@@ -27,12 +27,16 @@
 ///     vertices of the colliding pairs are put back at x0 (they stay where they were, which was
 ///     collision-free). This ends in at most as many rounds as there are vertices.
 ///
-/// Guarantee: on return, ClothStepStats::collision_free says that the final all-pairs CCD (with
-/// minimum separation h, conservative: no false negatives) found no pair of x0 -> x1' that comes
-/// within h, excluding only pairs whose every vertex has infinite mass (obstacle against
-/// obstacle is never tested; pinned-only cloth pairs are counted in `unresolved`, since nothing
-/// can move them). It is false only when a scripted motion (pinned vertices, obstacles) itself
-/// drives into the cloth where the cloth cannot move out of the way; the pairs are then listed.
+/// Guarantee: on return, ClothStepStats::collision_free says that no pair of x0 -> x1' comes
+/// within h: every pair that could (its primitives' envelopes overlap; the envelopes hold every
+/// position of the step, and a vertex leaving its envelope makes the step gather again) was either
+/// proved safe by the distance bound (its distance at x0 minus the largest difference of its
+/// vertices' displacements stays above h, with a rounding margin) or cleared by the final
+/// conservative CCD (minimum separation h, no false negatives), excluding only pairs whose every
+/// vertex has infinite mass (obstacle against obstacle is never tested; pinned-only cloth pairs
+/// are counted in `unresolved`, since nothing can move them). It is false only when a scripted
+/// motion (pinned vertices, obstacles) itself drives into the cloth where the cloth cannot move
+/// out of the way; the pairs are then listed.
 ///
 /// Threads: stateless apart from the optional workspace; distinct calls with distinct outputs
 /// and workspaces may run concurrently.

@@ -138,7 +138,7 @@ struct ClothStepStats {
   double zone_momentum_error = 0, zone_angular_momentum_error = 0;
   bool failsafe_used = false;
   std::size_t frozen_vertices = 0;  ///< cloth vertices put back at x0 by the fail-safe
-  /// The final CCD found no pair within h (see the file comment); `unresolved` lists the pairs of
+  /// No pair comes within h over the step (see collision_step.hpp); `unresolved` lists the pairs of
   /// scripted (infinite-mass) motion it could not fix when false.
   bool collision_free = true;
   std::vector<ClothPair> unresolved;
