@@ -12,7 +12,7 @@
 #include "support/sanitizer.hpp"
 
 // Fewer samples under the sanitizers (CI), the full count in Release.
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+constexpr int kClosestSamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 namespace impact {
 namespace {
@@ -25,7 +25,7 @@ template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV> bvh(m);
   test::Rng rng(seed);
-  n /= kSampleDivisor;
+  n /= kClosestSamples;
   Aabb<S> box;
   for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
   const double diag = 2 * double(box.half_diagonal());
@@ -113,7 +113,7 @@ TYPED_TEST(ClosestPointMesh, FeaturesOnABox) {
 // triangle's box); sphere trees within rounding. Float and double.
 template <class S> void check_integer_grid(std::uint64_t seed) {
   test::Rng rng(seed);
-  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+  for (int mesh = 0; mesh < 150 / kClosestSamples; ++mesh) {
     TriangleMesh<S> m;
     const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
     m.V.resize(nv, 3);

@@ -16,7 +16,7 @@
 
 #include "support/sanitizer.hpp"
 
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 8 : 1;
+constexpr int kGridSamples = IMPACT_TEST_SANITIZED ? 8 : 1;
 
 namespace impact {
 namespace {
@@ -98,8 +98,8 @@ void check_start_nodes(const MeshBvh<BV>& bvh, const DistanceGrid<typename BvTra
 
 template <class BV>
 class DistanceGridTest : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<double>>;
-TYPED_TEST_SUITE(DistanceGridTest, BVs);
+using GridBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<double>>;
+TYPED_TEST_SUITE(DistanceGridTest, GridBVs);
 
 TYPED_TEST(DistanceGridTest, TorusBoundsAndStartNodes) {
   using S = typename BvTraits<TypeParam>::Scalar;
@@ -107,8 +107,8 @@ TYPED_TEST(DistanceGridTest, TorusBoundsAndStartNodes) {
   DistanceGridConfig<S> cfg;
   cfg.resolution = 24;
   const DistanceGrid<S> grid(bvh, cfg);
-  check_bounds(bvh, grid, 4000 / kSampleDivisor, 11);
-  check_start_nodes(bvh, grid, 4000 / kSampleDivisor, 12);
+  check_bounds(bvh, grid, 4000 / kGridSamples, 11);
+  check_start_nodes(bvh, grid, 4000 / kGridSamples, 12);
 }
 
 TEST(DistanceGrid, CappedBuildStaysConservative) {
@@ -118,7 +118,7 @@ TEST(DistanceGrid, CappedBuildStaysConservative) {
   cfg.max_distance = 0.1;
   cfg.start_node_reach = 0;
   const DistanceGrid<double> grid(bvh, cfg);
-  check_bounds(bvh, grid, 2000 / kSampleDivisor, 13, 0.1);
+  check_bounds(bvh, grid, 2000 / kGridSamples, 13, 0.1);
   EXPECT_EQ(grid.start_node(Vec3<double>(0, 0, 0), Vec3<double>(0.01, 0, 0)), 0);  // off: the root
 }
 
@@ -159,8 +159,8 @@ TEST(DistanceGrid, BunnyBoundsAndStartNodes) {
   DistanceGridConfig<double> cfg;
   cfg.resolution = IMPACT_TEST_SANITIZED ? 12 : 32;
   const DistanceGrid<double> grid(bvh, cfg);
-  check_bounds(bvh, grid, 4000 / kSampleDivisor, 14);
-  check_start_nodes(bvh, grid, 20000 / kSampleDivisor, 15);
+  check_bounds(bvh, grid, 4000 / kGridSamples, 14);
+  check_start_nodes(bvh, grid, 20000 / kGridSamples, 15);
 }
 
 }  // namespace

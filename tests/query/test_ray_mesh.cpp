@@ -16,7 +16,7 @@
 #include "support/sanitizer.hpp"
 
 // Fewer samples under the sanitizers (CI), the full count in Release.
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+constexpr int kRaySamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 namespace impact {
 namespace {
@@ -47,7 +47,7 @@ template <class BV> void check_against_brute_force(const TriangleMesh<typename B
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV> bvh(m);
   test::Rng rng(seed);
-  n_rays /= kSampleDivisor;
+  n_rays /= kRaySamples;
   Aabb<S> box;
   for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
   const S diag = S(2) * box.half_diagonal();
@@ -153,7 +153,7 @@ TYPED_TEST(RayMesh, SweptSphereMatchesBruteForceAndTouches) {
   const S tol = std::is_same_v<S, float> ? S(2e-3) : S(1e-9);
   int hits = 0;
   std::array<int, 3> by_kind{0, 0, 0};
-  for (int k = 0; k < 400 / kSampleDivisor; ++k) {
+  for (int k = 0; k < 400 / kRaySamples; ++k) {
     const S r = S(rng.uniform(0.01, 0.2));
     const Vec3<S> o = (rng.vec(-2, 2)).cast<S>();
     const Vec3<S> d = (rng.vec(-1, 1) * 3.0).cast<S>();
@@ -186,7 +186,7 @@ TYPED_TEST(RayMesh, SweptSphereMatchesBruteForceAndTouches) {
     EXPECT_NEAR(h->normal.norm(), S(1), S(1e-4));
     EXPECT_LT(h->normal.dot(d), S(0));
   }
-  EXPECT_GT(hits, 20 / kSampleDivisor);
+  EXPECT_GT(hits, 20 / kRaySamples);
   EXPECT_GT(by_kind[0], 0);  // faces
 }
 
@@ -293,7 +293,7 @@ TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
 template <class S> void check_integer_grid_rays(std::uint64_t seed) {
   test::Rng rng(seed);
   int hits = 0;
-  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+  for (int mesh = 0; mesh < 150 / kRaySamples; ++mesh) {
     TriangleMesh<S> m;
     const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
     m.V.resize(nv, 3);
@@ -325,7 +325,7 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
       EXPECT_EQ(hs->t, b->first) << mesh << "," << k;
     }
   }
-  EXPECT_GT(hits, 100 / kSampleDivisor);
+  EXPECT_GT(hits, 100 / kRaySamples);
 }
 
 TEST(RayMeshExact, IntegerGridFirstHitIsTheLoopMinimum) {
