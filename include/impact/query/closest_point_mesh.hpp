@@ -14,6 +14,8 @@
 /// the smallest of a loop over every triangle, and its triangle one of those at that distance
 /// (equal distances at shared edges and vertices return one of the triangles that share them).
 /// Sphere trees use the distance to each sphere, a lower bound up to its own rounding.
+/// Cost limit: k coincident copies of a triangle near the query cost O(k) unless their box's
+/// distance equals the triangle's (box trees): no node test can tell that a node adds nothing.
 #pragma once
 
 #include "impact/bvh/mesh_bvh.hpp"
