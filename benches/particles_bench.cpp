@@ -127,6 +127,27 @@ template <class S> struct RunResult {
   double impact_share = 0;
 };
 
+/// Reorders the particles along a Morton curve (spatial_order) and their initial indices, escape
+/// flags and start energies with them: the bench's --sort-every step, the same for every runner.
+template <class S>
+void sort_spatially(std::vector<Particle<S>>& ps, std::vector<std::uint32_t>& id, std::vector<char>& escaped, std::vector<double>& e0) {
+  const auto order = spatial_order(ps);
+  std::vector<Particle<S>> sorted(ps.size());
+  std::vector<std::uint32_t> sorted_id(ps.size());
+  std::vector<char> sorted_esc(ps.size());
+  std::vector<double> sorted_e0(ps.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    sorted[i] = ps[order[i]];
+    sorted_id[i] = id[order[i]];
+    sorted_esc[i] = escaped[order[i]];
+    sorted_e0[i] = e0[order[i]];
+  }
+  ps.swap(sorted);
+  id.swap(sorted_id);
+  escaped.swap(sorted_esc);
+  e0.swap(sorted_e0);
+}
+
 /// Wall-clock seconds (the threads rows: a parallel run spends CPU time on several threads).
 double wall_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
@@ -148,21 +169,7 @@ RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs,
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      const auto order = spatial_order(ps);
-      std::vector<Particle<S>> sorted(ps.size());
-      std::vector<std::uint32_t> sorted_id(ps.size());
-      std::vector<char> sorted_esc(ps.size());
-      std::vector<double> sorted_e0(ps.size());
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        sorted[i] = ps[order[i]];
-        sorted_id[i] = id[order[i]];
-        sorted_esc[i] = escaped[order[i]];
-        sorted_e0[i] = e0[order[i]];
-      }
-      ps.swap(sorted);
-      id.swap(sorted_id);
-      escaped.swap(sorted_esc);
-      e0.swap(sorted_e0);
+      sort_spatially(ps, id, escaped, e0);
       r.seconds += thread_seconds() - t0;
     }
     for (std::size_t i = 0; i < ps.size(); ++i) before[i] = ps[i].position;
@@ -327,21 +334,7 @@ RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, c
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      const auto order = spatial_order(ps);
-      std::vector<Particle<S>> sorted(ps.size());
-      std::vector<std::uint32_t> sorted_id(ps.size());
-      std::vector<char> sorted_esc(ps.size());
-      std::vector<double> sorted_e0(ps.size());
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        sorted[i] = ps[order[i]];
-        sorted_id[i] = id[order[i]];
-        sorted_esc[i] = escaped[order[i]];
-        sorted_e0[i] = e0[order[i]];
-      }
-      ps.swap(sorted);
-      id.swap(sorted_id);
-      escaped.swap(sorted_esc);
-      e0.swap(sorted_e0);
+      sort_spatially(ps, id, escaped, e0);
       r.seconds += thread_seconds() - t0;
     }
     const double t0 = thread_seconds();
