@@ -49,25 +49,20 @@ struct Args {
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage(const char* msg) {
-  std::fprintf(stderr, "%s\nusage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n", msg);
-  std::exit(2);
-}
+constexpr const char* kUsage = "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n";
+
+[[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
 Args parse(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
-      return argv[++i];
-    };
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
     if (s == "--poses") a.poses = std::atoi(next().c_str());
     else if (s == "--rays") a.rays = std::atoi(next().c_str());
     else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--json") a.json = next();
-    else if (s == "-h" || s == "--help") usage("");
-    else if (!s.empty() && s[0] == '-') usage(("unknown option " + s).c_str());
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else a.meshes.push_back(s);
   }
   if (a.poses < 1) usage("--poses must be >= 1");
@@ -75,14 +70,7 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-TriangleMesh<double> load(const std::string& path) {
-#ifdef IMPACT_HAVE_IO
-  return load_mesh<double>(path);
-#else
-  (void)path;
-  usage("this build has no mesh loader (assimp was not found); run without meshes");
-#endif
-}
+TriangleMesh<double> load(const std::string& path) { return bench::load_mesh_or_exit(path, kUsage); }
 
 struct Row {
   std::string mesh, structure, bv, builder, query;
