@@ -117,48 +117,77 @@ template <class S> struct RunResult {
   double impact_share = 0;
 };
 
-/// Reorders the particles along a Morton curve (spatial_order) and their initial indices, escape
-/// flags and start energies with them: the bench's --sort-every step, the same for every runner.
-template <class S>
-void sort_spatially(std::vector<Particle<S>>& ps, std::vector<std::uint32_t>& id, std::vector<char>& escaped, std::vector<double>& e0) {
-  const auto order = spatial_order(ps);
-  std::vector<Particle<S>> sorted(ps.size());
-  std::vector<std::uint32_t> sorted_id(ps.size());
-  std::vector<char> sorted_esc(ps.size());
-  std::vector<double> sorted_e0(ps.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    sorted[i] = ps[order[i]];
-    sorted_id[i] = id[order[i]];
-    sorted_esc[i] = escaped[order[i]];
-    sorted_e0[i] = e0[order[i]];
+/// The particles of one run and what the bench tracks for each (its initial index, whether it
+/// escaped, its start energy), kept in step when the particles are re-sorted: the bookkeeping that
+/// run() and run_embree() share.
+template <class S> struct TrackedParticles {
+  std::vector<Particle<S>> ps;
+  std::vector<std::uint32_t> id;  // id[i]: the initial index of the particle now at i
+  std::vector<char> escaped;
+  std::vector<double> e0;  // start energies
+  Vec3<S> g, origin;       // gravity and the zero of the potential energy
+
+  TrackedParticles(std::vector<Particle<S>> initial, const Vec3<S>& gravity, const Vec3<S>& energy_origin)
+      : ps(std::move(initial)), id(ps.size()), escaped(ps.size(), 0), e0(ps.size()), g(gravity), origin(energy_origin) {
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      id[i] = static_cast<std::uint32_t>(i);
+      e0[i] = energy(ps[i], g, origin);
+    }
   }
-  ps.swap(sorted);
-  id.swap(sorted_id);
-  escaped.swap(sorted_esc);
-  e0.swap(sorted_e0);
-}
+
+  /// Reorders the particles along a Morton curve (spatial_order), their initial indices, escape
+  /// flags and start energies with them: the bench's --sort-every step.
+  void sort_spatially() {
+    const auto order = spatial_order(ps);
+    std::vector<Particle<S>> sorted(ps.size());
+    std::vector<std::uint32_t> sorted_id(ps.size());
+    std::vector<char> sorted_esc(ps.size());
+    std::vector<double> sorted_e0(ps.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      sorted[i] = ps[order[i]];
+      sorted_id[i] = id[order[i]];
+      sorted_esc[i] = escaped[order[i]];
+      sorted_e0[i] = e0[order[i]];
+    }
+    ps.swap(sorted);
+    id.swap(sorted_id);
+    escaped.swap(sorted_esc);
+    e0.swap(sorted_e0);
+  }
+
+  /// Sets r's escape count, mean relative energy error and final states (back in the initial
+  /// order).
+  void finish(RunResult<S>& r) const {
+    double err = 0;
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      r.escaped += escaped[i];
+      err += std::abs(energy(ps[i], g, origin) - e0[i]) / std::max(e0[i], 1e-300);
+    }
+    r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+    r.final.resize(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];
+  }
+};
 
 template <class S>
-RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+RunResult<S> run(std::vector<Particle<S>> initial, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
                  const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every, bool wall = false) {
   // thread CPU time (the machine may be shared, the method rows step on one thread), or the wall
   // clock (the threads rows: a parallel run spends CPU time on several threads)
   const auto thread_seconds = [wall] { return wall ? bench::wall_seconds() : bench::thread_seconds(); };
   RunResult<S> r;
-  std::vector<std::uint32_t> id(ps.size());  // id[i]: the initial index of the particle now at i
-  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
-  std::vector<double> e0(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
+  TrackedParticles<S> t(std::move(initial), opt.gravity, container.min);
+  std::vector<Particle<S>>& ps = t.ps;
+  std::vector<char>& escaped = t.escaped;
   // backtracking moves particles along legs, which are audited; projection by jumps: its sides
   const bool audit_legs = cs.meshes.empty() || cs.meshes[0].strategy != Strategy::Project;
-  std::vector<char> escaped(ps.size(), 0);
   std::vector<Vec3<S>> before(ps.size());
   StepStats st;
   const S h = S(dt / substeps);
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      sort_spatially(ps, id, escaped, e0);
+      t.sort_spatially();
       r.seconds += thread_seconds() - t0;
     }
     for (std::size_t i = 0; i < ps.size(); ++i) before[i] = ps[i].position;
@@ -180,15 +209,8 @@ RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs,
         escaped[i] = 1;
     }
   }
-  double err = 0;
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    r.escaped += escaped[i];
-    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
-  }
-  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  t.finish(r);
   r.impact_share = double(st.particles_hit) / (double(ps.size()) * steps * substeps);
-  r.final.resize(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];  // back in the initial order
   return r;
 }
 
@@ -275,19 +297,17 @@ class EmbreeParticles {
 
 /// The Embree peer's run: the same particles, steps, sorting and audit as run().
 template <class S>
-RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+RunResult<S> run_embree(std::vector<Particle<S>> initial, const EmbreeParticles& e, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
                         const StepOptions<S>& opt, double dt, int steps, bool audit, int sort_every, S offset) {
   RunResult<S> r;
-  std::vector<std::uint32_t> id(ps.size());
-  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
-  std::vector<double> e0(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
-  std::vector<char> escaped(ps.size(), 0);
+  TrackedParticles<S> t(std::move(initial), opt.gravity, container.min);
+  std::vector<Particle<S>>& ps = t.ps;
+  std::vector<char>& escaped = t.escaped;
   std::size_t hits = 0;
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      sort_spatially(ps, id, escaped, e0);
+      t.sort_spatially();
       r.seconds += thread_seconds() - t0;
     }
     const double t0 = thread_seconds();
@@ -304,15 +324,8 @@ RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, c
       for (std::size_t i = 0; i < ps.size(); ++i)
         if (!container.contains(ps[i].position)) escaped[i] = 1;
   }
-  double err = 0;
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    r.escaped += escaped[i];
-    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
-  }
-  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  t.finish(r);
   r.impact_share = double(hits) / (double(ps.size()) * steps);
-  r.final.resize(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];
   return r;
 }
 #endif
