@@ -22,6 +22,7 @@
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/bvh.hpp"
 #include "impact/core/error.hpp"
+#include "impact/detail/morton.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -33,17 +34,6 @@
 namespace impact {
 
 namespace detail {
-
-/// Spreads the low 21 bits of x to every third bit of a 64-bit word.
-inline std::uint64_t spread_bits_3(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
 
 /// 63-bit Morton code of p quantised to 21 bits per axis over the box [lo, lo + 1 / inv_extent].
 template <class S> std::uint64_t morton_code_63(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& inv_extent) {
