@@ -8,9 +8,9 @@
 /// cluster is left. The decisions use the primitives' axis-aligned boxes; the tree's BVs (any BV
 /// type) are then fitted by the caller's `fit` around each node's primitives, as in the top-down
 /// build (axis-aligned boxes: leaves fitted, inner nodes merged from their children, which gives
-/// the same boxes bit for bit in O(n)), and the tree is laid out depth-first in the flat form of bvh.hpp (children adjacent and
-/// after their parent, so refit works unchanged). Subtrees of at most leaf_size primitives become
-/// leaves.
+/// the same boxes bit for bit in O(n)), and the tree is laid out depth-first in the flat form of
+/// bvh.hpp (children adjacent and after their parent, so refit works unchanged). Subtrees of at
+/// most leaf_size primitives become leaves.
 ///
 /// Termination: ties are broken by a symmetric order on pairs, so the pair of neighbours that is
 /// smallest in that order chooses itself from both ends and every round merges at least one pair
@@ -23,6 +23,7 @@
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/bvh.hpp"
 #include "impact/core/error.hpp"
+#include "impact/detail/morton.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -35,17 +36,6 @@
 namespace impact {
 
 namespace detail {
-
-/// Spreads the low 21 bits of x to every third bit of a 64-bit word.
-inline std::uint64_t spread_bits_3(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
 
 /// 63-bit Morton code of p quantised to 21 bits per axis over the box [lo, lo + 1 / inv_extent].
 template <class S> std::uint64_t morton_code_63(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& inv_extent) {
