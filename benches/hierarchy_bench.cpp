@@ -12,9 +12,8 @@
 // and mean time and the BV and primitive tests: boolean and all-pairs mesh–mesh (the mesh against
 // itself under N random poses, tests/support/poses.hpp), self-collision (all pairs), ray first
 // hit for short segments from near the surface and long rays from outside (N of each), closest
-// point from N points around the mesh. Structures that do not answer a query (collision on the
-// kd-tree, rays and closest points on oriented boxes, whose casts the library does not have)
-// get no row. Every answer is checked: the colliding poses, pair sets, hit parameters and
+// point from N points around the mesh. The kd-tree answers no collision query and gets no row
+// for them. Every answer is checked: the colliding poses, pair sets, hit parameters and
 // distances must be identical across structures (the first structure to answer is the
 // reference), and the first 32 rays and points are also checked against brute force over all
 // triangles; any mismatch is printed and the bench exits with status 3.
@@ -118,7 +117,10 @@ double brute_ray(const TriangleMesh<double>& m, const Ray<double>& r) {
 }
 double brute_distance(const TriangleMesh<double>& m, const Vec3<double>& p) {
   double best = std::numeric_limits<double>::infinity();
-  for (int t = 0; t < m.num_triangles(); ++t) best = std::min(best, (closest_point_on_triangle(p, m.triangle(t)).point - p).squaredNorm());
+  for (int t = 0; t < m.num_triangles(); ++t) {  // the library's per-triangle rule (query/closest_point_mesh.hpp)
+    const Triangle<double> tri = m.triangle(t);
+    best = std::min(best, detail::triangle_squared_distance(p, tri, detail::closest_on_triangle(p, tri)));
+  }
   return std::sqrt(best);
 }
 
@@ -282,13 +284,15 @@ void run_bvh(Work& w, const std::string& builder, const MeshBvhConfig& cfg, std:
       ++r.mismatches, ck.report(w, structure, "self", 0, std::to_string(ans.size()) + " pairs, reference " + std::to_string(w.self_pairs.size()));
     rows.push_back(r);
   }
-  if constexpr (!std::is_same_v<BV, Obb<double>>) {  // the library casts rays and finds closest points in sphere and AABB trees
+  {
     ray_rows<RayMeshStats>(
         w, ck, rows, row, [&](const Ray<double>& ray, RayMeshStats* st) { return ray_mesh_first_hit(tree, ray, id, st); },
         [](const RayMeshStats& st) { return std::make_pair(st.node_tests, st.triangle_tests); });
     Row r = row("closest_point");
     std::vector<double> d(w.points.size());
-    r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = closest_point_on_mesh(tree, w.points[k])->distance; });
+    ClosestPointStats st;
+    r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = closest_point_on_mesh(tree, w.points[k], id, {}, &st)->distance; });
+    r.bv_tests = double(st.node_tests) / double(w.points.size()), r.primitive_tests = double(st.triangle_tests) / double(w.points.size());
     check_values(w, ck, r, w.distance, d);
     rows.push_back(r);
   }
