@@ -1,13 +1,17 @@
 // SPDX-License-Identifier: MIT
-// Small shared pieces of the bench programs: timing, summary statistics, a minimal JSON writer,
-// and loading a mesh from a path (through impact::io when built with it).
+// Small shared pieces of the bench programs: timing (wall clock, thread and process CPU time),
+// summary statistics, a minimal JSON writer, command-line helpers, and loading a mesh from a path
+// (through impact::io when built with it).
 #pragma once
 
 #include "impact/geometry/triangle_mesh.hpp"
+#include "support/obj_reader.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -23,6 +27,38 @@ namespace impact::bench {
 using Clock = std::chrono::steady_clock;
 
 inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Wall-clock seconds since an arbitrary origin (steady clock).
+inline double wall_seconds() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
+
+/// CPU seconds of the calling thread: the benchmark machine may be shared, and the wall clock then
+/// measures the neighbours as much as the method. Falls back to the wall clock off POSIX.
+inline double thread_seconds() {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+#else
+  return wall_seconds();
+#endif
+}
+
+/// CPU seconds of the whole process (every thread).
+inline double process_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// The speed-up of a T-thread run over a one-thread run that an otherwise idle machine would show,
+/// from CPU times: the calling thread runs the serial parts and its share of the parallel ones,
+/// the T - 1 workers share the rest, so the run takes at least max(caller, (process - caller) /
+/// (T - 1)). `one_thread`: the CPU time of the one-thread run; `caller`, `process`: the calling
+/// thread's and the process's CPU time over the T-thread run.
+inline double cpu_speedup(double one_thread, double caller, double process, int threads) {
+  const double workers = threads > 1 ? (process - caller) / (threads - 1) : 0;
+  return one_thread / std::max({caller, workers, 1e-12});
+}
 
 struct Summary {
   double median = 0, mean = 0, p99 = 0, max = 0;
@@ -80,6 +116,49 @@ inline bool write_file(const std::string& path, const std::string& text) {
   std::ofstream f(path);
   f << text << "\n";
   return bool(f);
+}
+
+/// Prints `msg` and a bench's usage text (which starts with "usage:" and ends with a newline) to
+/// stderr and exits with status 2.
+[[noreturn]] inline void exit_usage(const std::string& msg, const char* usage) {
+  std::fprintf(stderr, "%s\n%s", msg.c_str(), usage);
+  std::exit(2);
+}
+
+/// The value of the option argv[i]: argv[i + 1], with i moved onto it; exits through
+/// exit_usage("missing value after <option>") when there is none.
+inline std::string option_value(int argc, char** argv, int& i, const char* usage) {
+  if (i + 1 >= argc) exit_usage("missing value after " + std::string(argv[i]), usage);
+  return argv[++i];
+}
+
+/// A word of the command line that is no option the bench knows: "-h" and "--help" print the
+/// usage, any other word starting with '-' is an unknown option; exits either way.
+[[noreturn]] inline void reject_option(const std::string& word, const char* usage) {
+  exit_usage(word == "-h" || word == "--help" ? "" : "unknown option " + word, usage);
+}
+
+/// The mesh at `path`: through impact::io when the bench is built with it, else through the tests'
+/// OBJ reader (OBJ files only). Throws on a file it cannot read.
+template <class S>
+TriangleMesh<S> read_mesh(const std::string& path) {
+#ifdef IMPACT_HAVE_IO
+  return load_mesh<S>(path);
+#else
+  return impact::test::read_obj<S>(path);
+#endif
+}
+
+/// The mesh at `path` in double, through impact::io; in a build without it (assimp not found),
+/// exits through exit_usage.
+inline TriangleMesh<double> load_mesh_or_exit(const std::string& path, const char* usage) {
+#ifdef IMPACT_HAVE_IO
+  (void)usage;
+  return load_mesh<double>(path);
+#else
+  (void)path;
+  exit_usage("this build has no mesh loader (assimp was not found); run without meshes", usage);
+#endif
 }
 
 }  // namespace impact::bench

@@ -36,31 +36,25 @@ struct Args {
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage(const char* msg) {
-  std::fprintf(stderr,
-               "%s\nusage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
-               "                            [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--json FILE]\n",
-               msg);
-  std::exit(2);
-}
+constexpr const char* kUsage =
+    "usage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
+    "                            [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--json FILE]\n";
+
+[[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
 Args parse(int argc, char** argv) {
   Args a;
   std::vector<std::string> pos;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
-      return argv[++i];
-    };
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
     if (s == "--poses") a.poses = std::atoi(next().c_str());
     else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--bv") a.bv = next();
     else if (s == "--json") a.json = next();
     else if (s == "--split") a.split = next();
     else if (s == "--leaf") a.leaf = std::atoi(next().c_str());
-    else if (s == "-h" || s == "--help") usage("");
-    else if (!s.empty() && s[0] == '-') usage(("unknown option " + s).c_str());
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else pos.push_back(s);
   }
   if (pos.size() > 2) usage("at most two meshes");
@@ -74,14 +68,7 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-TriangleMesh<double> load(const std::string& path) {
-#ifdef IMPACT_HAVE_IO
-  return load_mesh<double>(path);
-#else
-  (void)path;
-  usage("this build has no mesh loader (assimp was not found); run without meshes");
-#endif
-}
+TriangleMesh<double> load(const std::string& path) { return bench::load_mesh_or_exit(path, kUsage); }
 
 struct Row {
   std::string library, bv, query;

@@ -12,9 +12,8 @@
 // and mean time and the BV and primitive tests: boolean and all-pairs mesh–mesh (the mesh against
 // itself under N random poses, tests/support/poses.hpp), self-collision (all pairs), ray first
 // hit for short segments from near the surface and long rays from outside (N of each), closest
-// point from N points around the mesh. Structures that do not answer a query (collision on the
-// kd-tree, rays and closest points on oriented boxes, whose casts the library does not have)
-// get no row. Every answer is checked: the colliding poses, pair sets, hit parameters and
+// point from N points around the mesh. The kd-tree answers no collision query and gets no row
+// for them. Every answer is checked: the colliding poses, pair sets, hit parameters and
 // distances must be identical across structures (the first structure to answer is the
 // reference), and the first 32 rays and points are also checked against brute force over all
 // triangles; any mismatch is printed and the bench exits with status 3.
@@ -49,25 +48,20 @@ struct Args {
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage(const char* msg) {
-  std::fprintf(stderr, "%s\nusage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n", msg);
-  std::exit(2);
-}
+constexpr const char* kUsage = "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n";
+
+[[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
 Args parse(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
-      return argv[++i];
-    };
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
     if (s == "--poses") a.poses = std::atoi(next().c_str());
     else if (s == "--rays") a.rays = std::atoi(next().c_str());
     else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--json") a.json = next();
-    else if (s == "-h" || s == "--help") usage("");
-    else if (!s.empty() && s[0] == '-') usage(("unknown option " + s).c_str());
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else a.meshes.push_back(s);
   }
   if (a.poses < 1) usage("--poses must be >= 1");
@@ -75,14 +69,7 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-TriangleMesh<double> load(const std::string& path) {
-#ifdef IMPACT_HAVE_IO
-  return load_mesh<double>(path);
-#else
-  (void)path;
-  usage("this build has no mesh loader (assimp was not found); run without meshes");
-#endif
-}
+TriangleMesh<double> load(const std::string& path) { return bench::load_mesh_or_exit(path, kUsage); }
 
 struct Row {
   std::string mesh, structure, bv, builder, query;
@@ -109,6 +96,11 @@ struct Work {
   std::map<std::string, std::vector<double>> ray_t;  // "ray_short" / "ray_long"
   std::vector<double> distance;
   std::string reference[7];
+
+  /// The rays of query "ray_short" or "ray_long".
+  const std::vector<Ray<double>>& rays(const char* query) const {
+    return std::strcmp(query, "ray_short") == 0 ? short_rays : long_rays;
+  }
 };
 
 bool same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
@@ -125,7 +117,10 @@ double brute_ray(const TriangleMesh<double>& m, const Ray<double>& r) {
 }
 double brute_distance(const TriangleMesh<double>& m, const Vec3<double>& p) {
   double best = std::numeric_limits<double>::infinity();
-  for (int t = 0; t < m.num_triangles(); ++t) best = std::min(best, (closest_point_on_triangle(p, m.triangle(t)).point - p).squaredNorm());
+  for (int t = 0; t < m.num_triangles(); ++t) {  // the library's per-triangle rule (query/closest_point_mesh.hpp)
+    const Triangle<double> tri = m.triangle(t);
+    best = std::min(best, detail::triangle_squared_distance(p, tri, detail::closest_on_triangle(p, tri)));
+  }
   return std::sqrt(best);
 }
 
@@ -195,6 +190,26 @@ void check_values(Work& w, Checker& ck, Row& row, std::vector<double>& ref, cons
       std::snprintf(buf, sizeof buf, "%.17g, reference %.17g", got[k], ref[k]);
       ck.report(w, row.structure, row.query, k, buf);
     }
+}
+
+/// The ray_short and ray_long rows of one structure: `cast(ray, Stats*)` returns its first hit (an
+/// optional with `t`), `counts(stats)` the node and triangle tests it counted.
+template <class Stats, class MakeRow, class Cast, class Counts>
+void ray_rows(Work& w, Checker& ck, std::vector<Row>& rows, MakeRow&& row, Cast&& cast, Counts&& counts) {
+  for (const char* q : {"ray_short", "ray_long"}) {
+    const auto& rays = w.rays(q);
+    Row r = row(q);
+    std::vector<double> t(rays.size());
+    Stats st;
+    r.us = time_each(rays.size(), [&](std::size_t k) {
+      const auto h = cast(rays[k], &st);
+      t[k] = h ? h->t : std::numeric_limits<double>::quiet_NaN();
+    });
+    const auto [bv_tests, triangle_tests] = counts(st);
+    r.bv_tests = double(bv_tests) / double(rays.size()), r.primitive_tests = double(triangle_tests) / double(rays.size());
+    check_values(w, ck, r, w.ray_t[q], t);
+    rows.push_back(r);
+  }
 }
 
 template <class BV>
@@ -269,23 +284,15 @@ void run_bvh(Work& w, const std::string& builder, const MeshBvhConfig& cfg, std:
       ++r.mismatches, ck.report(w, structure, "self", 0, std::to_string(ans.size()) + " pairs, reference " + std::to_string(w.self_pairs.size()));
     rows.push_back(r);
   }
-  if constexpr (!std::is_same_v<BV, Obb<double>>) {  // the library casts rays and finds closest points in sphere and AABB trees
-    for (const char* q : {"ray_short", "ray_long"}) {
-      const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
-      Row r = row(q);
-      std::vector<double> t(rays.size());
-      RayMeshStats st;
-      r.us = time_each(rays.size(), [&](std::size_t k) {
-        const auto h = ray_mesh_first_hit(tree, rays[k], id, &st);
-        t[k] = h ? h->t : std::numeric_limits<double>::quiet_NaN();
-      });
-      r.bv_tests = double(st.node_tests) / double(rays.size()), r.primitive_tests = double(st.triangle_tests) / double(rays.size());
-      check_values(w, ck, r, w.ray_t[q], t);
-      rows.push_back(r);
-    }
+  {
+    ray_rows<RayMeshStats>(
+        w, ck, rows, row, [&](const Ray<double>& ray, RayMeshStats* st) { return ray_mesh_first_hit(tree, ray, id, st); },
+        [](const RayMeshStats& st) { return std::make_pair(st.node_tests, st.triangle_tests); });
     Row r = row("closest_point");
     std::vector<double> d(w.points.size());
-    r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = closest_point_on_mesh(tree, w.points[k])->distance; });
+    ClosestPointStats st;
+    r.us = time_each(w.points.size(), [&](std::size_t k) { d[k] = closest_point_on_mesh(tree, w.points[k], id, {}, &st)->distance; });
+    r.bv_tests = double(st.node_tests) / double(w.points.size()), r.primitive_tests = double(st.triangle_tests) / double(w.points.size());
     check_values(w, ck, r, w.distance, d);
     rows.push_back(r);
   }
@@ -313,19 +320,9 @@ void run_kd(Work& w, std::vector<Row>& rows, Checker& ck) {
     r.build_ms = build_ms, r.bytes_per_triangle = bpt;
     return r;
   };
-  for (const char* q : {"ray_short", "ray_long"}) {
-    const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
-    Row r = row(q);
-    std::vector<double> t(rays.size());
-    KdTreeStats st;
-    r.us = time_each(rays.size(), [&](std::size_t k) {
-      const auto h = kd.first_hit(rays[k], &st);
-      t[k] = h ? h->t : std::numeric_limits<double>::quiet_NaN();
-    });
-    r.bv_tests = double(st.node_visits) / double(rays.size()), r.primitive_tests = double(st.triangle_tests) / double(rays.size());
-    check_values(w, ck, r, w.ray_t[q], t);
-    rows.push_back(r);
-  }
+  ray_rows<KdTreeStats>(
+      w, ck, rows, row, [&](const Ray<double>& ray, KdTreeStats* st) { return kd.first_hit(ray, st); },
+      [](const KdTreeStats& st) { return std::make_pair(st.node_visits, st.triangle_tests); });
   Row r = row("closest_point");
   std::vector<double> d(w.points.size());
   KdTreeStats st;
@@ -371,7 +368,7 @@ int main(int argc, char** argv) {
     // brute-force answers for the first rays and points become the reference
     const std::size_t nb = std::min<std::size_t>(32, w.points.size());
     for (const char* q : {"ray_short", "ray_long"}) {
-      const auto& rays = std::strcmp(q, "ray_short") == 0 ? w.short_rays : w.long_rays;
+      const auto& rays = w.rays(q);
       std::vector<double> t(nb);
       for (std::size_t k = 0; k < nb; ++k) t[k] = brute_ray(w.m, rays[k]);
       w.ray_t[q] = t;

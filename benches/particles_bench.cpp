@@ -49,24 +49,21 @@
 #include "bench_util.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/response/particle_step.hpp"
-#include "support/obj_reader.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <tuple>
-#include <ctime>
 #include <random>
 #include <string>
+#include <tuple>
 
 #ifdef IMPACT_HAVE_EMBREE
-#include <embree3/rtcore.h>
+#include "embree_peer.hpp"
 #endif
 
 using namespace impact;
-using impact::bench::Clock;
-using impact::bench::seconds_since;
+using impact::bench::process_seconds;
+using impact::bench::thread_seconds;
 
 namespace {
 
@@ -108,13 +105,6 @@ template <class S> int crossings(const MeshBvh<Aabb<S>>& m, const Vec3<S>& a, co
   return n;
 }
 
-/// CPU time of this thread: the machine may be shared, and the stepping is single-threaded.
-double thread_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
 template <class S> double energy(const Particle<S>& p, const Vec3<S>& g, const Vec3<S>& origin) {
   return 0.5 * double(p.velocity.squaredNorm()) - double(g.dot(p.position - origin));
 }
@@ -127,42 +117,77 @@ template <class S> struct RunResult {
   double impact_share = 0;
 };
 
-/// Wall-clock seconds (the threads rows: a parallel run spends CPU time on several threads).
-double wall_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+/// The particles of one run and what the bench tracks for each (its initial index, whether it
+/// escaped, its start energy), kept in step when the particles are re-sorted: the bookkeeping that
+/// run() and run_embree() share.
+template <class S> struct TrackedParticles {
+  std::vector<Particle<S>> ps;
+  std::vector<std::uint32_t> id;  // id[i]: the initial index of the particle now at i
+  std::vector<char> escaped;
+  std::vector<double> e0;  // start energies
+  Vec3<S> g, origin;       // gravity and the zero of the potential energy
+
+  TrackedParticles(std::vector<Particle<S>> initial, const Vec3<S>& gravity, const Vec3<S>& energy_origin)
+      : ps(std::move(initial)), id(ps.size()), escaped(ps.size(), 0), e0(ps.size()), g(gravity), origin(energy_origin) {
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      id[i] = static_cast<std::uint32_t>(i);
+      e0[i] = energy(ps[i], g, origin);
+    }
+  }
+
+  /// Reorders the particles along a Morton curve (spatial_order), their initial indices, escape
+  /// flags and start energies with them: the bench's --sort-every step.
+  void sort_spatially() {
+    const auto order = spatial_order(ps);
+    std::vector<Particle<S>> sorted(ps.size());
+    std::vector<std::uint32_t> sorted_id(ps.size());
+    std::vector<char> sorted_esc(ps.size());
+    std::vector<double> sorted_e0(ps.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      sorted[i] = ps[order[i]];
+      sorted_id[i] = id[order[i]];
+      sorted_esc[i] = escaped[order[i]];
+      sorted_e0[i] = e0[order[i]];
+    }
+    ps.swap(sorted);
+    id.swap(sorted_id);
+    escaped.swap(sorted_esc);
+    e0.swap(sorted_e0);
+  }
+
+  /// Sets r's escape count, mean relative energy error and final states (back in the initial
+  /// order).
+  void finish(RunResult<S>& r) const {
+    double err = 0;
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      r.escaped += escaped[i];
+      err += std::abs(energy(ps[i], g, origin) - e0[i]) / std::max(e0[i], 1e-300);
+    }
+    r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+    r.final.resize(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];
+  }
+};
 
 template <class S>
-RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+RunResult<S> run(std::vector<Particle<S>> initial, const ColliderSet<S, Aabb<S>>& cs, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
                  const StepOptions<S>& opt, double dt, int steps, int substeps, bool audit, int sort_every, bool wall = false) {
-  const auto thread_seconds = [wall] { return wall ? wall_seconds() : ::thread_seconds(); };
+  // thread CPU time (the machine may be shared, the method rows step on one thread), or the wall
+  // clock (the threads rows: a parallel run spends CPU time on several threads)
+  const auto thread_seconds = [wall] { return wall ? bench::wall_seconds() : bench::thread_seconds(); };
   RunResult<S> r;
-  std::vector<std::uint32_t> id(ps.size());  // id[i]: the initial index of the particle now at i
-  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
-  std::vector<double> e0(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
+  TrackedParticles<S> t(std::move(initial), opt.gravity, container.min);
+  std::vector<Particle<S>>& ps = t.ps;
+  std::vector<char>& escaped = t.escaped;
   // backtracking moves particles along legs, which are audited; projection by jumps: its sides
   const bool audit_legs = cs.meshes.empty() || cs.meshes[0].strategy != Strategy::Project;
-  std::vector<char> escaped(ps.size(), 0);
   std::vector<Vec3<S>> before(ps.size());
   StepStats st;
   const S h = S(dt / substeps);
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      const auto order = spatial_order(ps);
-      std::vector<Particle<S>> sorted(ps.size());
-      std::vector<std::uint32_t> sorted_id(ps.size());
-      std::vector<char> sorted_esc(ps.size());
-      std::vector<double> sorted_e0(ps.size());
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        sorted[i] = ps[order[i]];
-        sorted_id[i] = id[order[i]];
-        sorted_esc[i] = escaped[order[i]];
-        sorted_e0[i] = e0[order[i]];
-      }
-      ps.swap(sorted);
-      id.swap(sorted_id);
-      escaped.swap(sorted_esc);
-      e0.swap(sorted_e0);
+      t.sort_spatially();
       r.seconds += thread_seconds() - t0;
     }
     for (std::size_t i = 0; i < ps.size(); ++i) before[i] = ps[i].position;
@@ -184,15 +209,8 @@ RunResult<S> run(std::vector<Particle<S>> ps, const ColliderSet<S, Aabb<S>>& cs,
         escaped[i] = 1;
     }
   }
-  double err = 0;
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    r.escaped += escaped[i];
-    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
-  }
-  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  t.finish(r);
   r.impact_share = double(st.particles_hit) / (double(ps.size()) * steps * substeps);
-  r.final.resize(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];  // back in the initial order
   return r;
 }
 
@@ -225,11 +243,7 @@ RunResult<S> measure(const std::vector<Particle<S>>& ps, const ColliderSet<S, Aa
 class EmbreeParticles {
  public:
   EmbreeParticles(const TriangleMesh<double>& m, const Aabb<double>& container) {
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw std::runtime_error("rtcNewDevice failed");
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    add(m.V, m.F);
+    scene_.add(m.V, m.F);
     // the container: 12 triangles
     Vertices<double> V(8, 3);
     for (int i = 0; i < 8; ++i)
@@ -237,15 +251,9 @@ class EmbreeParticles {
           (i & 4 ? container.max.z() : container.min.z());
     Faces F(12, 3);
     F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
-    add(V, F);
-    rtcCommitScene(scene_);
+    scene_.add(V, F);
+    scene_.commit();
   }
-  ~EmbreeParticles() {
-    rtcReleaseScene(scene_);
-    rtcReleaseDevice(device_);
-  }
-  EmbreeParticles(const EmbreeParticles&) = delete;
-  EmbreeParticles& operator=(const EmbreeParticles&) = delete;
 
   /// One particle's step of length dt (see the class comment); on_leg(from, to) sees every move.
   template <class S, class OnLeg>
@@ -255,19 +263,7 @@ class EmbreeParticles {
     bool hit_any = false;
     for (int it = 0; it < max_iterations && left > S(0); ++it) {
       const Vec3<S> c = v * left + S(0.5) * left * left * g;  // the chord of the free flight
-      RTCIntersectContext ctx;
-      rtcInitIntersectContext(&ctx);
-      RTCRayHit rh;
-      rh.ray.org_x = float(x.x()), rh.ray.org_y = float(x.y()), rh.ray.org_z = float(x.z());
-      rh.ray.dir_x = float(c.x()), rh.ray.dir_y = float(c.y()), rh.ray.dir_z = float(c.z());
-      rh.ray.tnear = 0.0f;
-      rh.ray.tfar = 1.0f;
-      rh.ray.mask = 0xFFFFFFFFu;
-      rh.ray.time = 0.0f;
-      rh.ray.flags = 0;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene_, &ctx, &rh);
+      const RTCRayHit rh = scene_.first_hit(x, c, 1.0f);
       if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         on_leg(x, Vec3<S>(x + c));
         x += c;
@@ -296,52 +292,22 @@ class EmbreeParticles {
   }
 
  private:
-  void add(const Vertices<double>& V, const Faces& F) {
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), std::size_t(V.rows())));
-    auto* f = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), std::size_t(F.rows())));
-    for (Eigen::Index i = 0; i < V.rows(); ++i)
-      for (int k = 0; k < 3; ++k) v[3 * i + k] = float(V(i, k));
-    for (Eigen::Index t = 0; t < F.rows(); ++t)
-      for (int k = 0; k < 3; ++k) f[3 * t + k] = unsigned(F(t, k));
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene_, geom);
-    rtcReleaseGeometry(geom);
-  }
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
+  bench::EmbreeScene scene_;
 };
 
 /// The Embree peer's run: the same particles, steps, sorting and audit as run().
 template <class S>
-RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
+RunResult<S> run_embree(std::vector<Particle<S>> initial, const EmbreeParticles& e, const MeshBvh<Aabb<S>>& audit_mesh, const Aabb<S>& container,
                         const StepOptions<S>& opt, double dt, int steps, bool audit, int sort_every, S offset) {
   RunResult<S> r;
-  std::vector<std::uint32_t> id(ps.size());
-  for (std::size_t i = 0; i < id.size(); ++i) id[i] = static_cast<std::uint32_t>(i);
-  std::vector<double> e0(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) e0[i] = energy(ps[i], opt.gravity, container.min);
-  std::vector<char> escaped(ps.size(), 0);
+  TrackedParticles<S> t(std::move(initial), opt.gravity, container.min);
+  std::vector<Particle<S>>& ps = t.ps;
+  std::vector<char>& escaped = t.escaped;
   std::size_t hits = 0;
   for (int s = 0; s < steps; ++s) {
     if (sort_every > 0 && s % sort_every == 0) {
       const double t0 = thread_seconds();
-      const auto order = spatial_order(ps);
-      std::vector<Particle<S>> sorted(ps.size());
-      std::vector<std::uint32_t> sorted_id(ps.size());
-      std::vector<char> sorted_esc(ps.size());
-      std::vector<double> sorted_e0(ps.size());
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        sorted[i] = ps[order[i]];
-        sorted_id[i] = id[order[i]];
-        sorted_esc[i] = escaped[order[i]];
-        sorted_e0[i] = e0[order[i]];
-      }
-      ps.swap(sorted);
-      id.swap(sorted_id);
-      escaped.swap(sorted_esc);
-      e0.swap(sorted_e0);
+      t.sort_spatially();
       r.seconds += thread_seconds() - t0;
     }
     const double t0 = thread_seconds();
@@ -358,24 +324,11 @@ RunResult<S> run_embree(std::vector<Particle<S>> ps, const EmbreeParticles& e, c
       for (std::size_t i = 0; i < ps.size(); ++i)
         if (!container.contains(ps[i].position)) escaped[i] = 1;
   }
-  double err = 0;
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    r.escaped += escaped[i];
-    err += std::abs(energy(ps[i], opt.gravity, container.min) - e0[i]) / std::max(e0[i], 1e-300);
-  }
-  r.energy_rel_err = ps.empty() ? 0 : err / double(ps.size());
+  t.finish(r);
   r.impact_share = double(hits) / (double(ps.size()) * steps);
-  r.final.resize(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) r.final[id[i]] = ps[i];
   return r;
 }
 #endif
-
-double process_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
 
 /// A threads row: the run (wall clock, as RunResult::seconds) and the CPU time of the calling
 /// thread and of the process over the whole run.
@@ -412,15 +365,7 @@ template <class S> int run_all(const Args& a) {
   using BV = Aabb<S>;
   TriangleMesh<S> mesh;
   try {
-    if (a.mesh.empty()) {
-      mesh = make_torus<S>(1.0, 0.4, 192, 96);
-    } else {
-#ifdef IMPACT_HAVE_IO
-      mesh = load_mesh<S>(a.mesh);
-#else
-      mesh = impact::test::read_obj<S>(a.mesh);
-#endif
-    }
+    mesh = a.mesh.empty() ? make_torus<S>(1.0, 0.4, 192, 96) : bench::read_mesh<S>(a.mesh);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-particles-bench: %s\n", e.what());
     return 1;
@@ -549,9 +494,8 @@ template <class S> int run_all(const Args& a) {
       w.rate = double(a.particles) * a.steps / std::max(r->r.seconds, 1e-12);
       rows.push_back(w);
     }
-    // on an idle machine the T-thread run takes at least max(caller CPU, the workers' CPU / (T - 1))
-    const double workers = threads > 1 ? (many.process - many.caller) / (threads - 1) : 0;
-    speedups.emplace_back(name, one.r.seconds / std::max(many.r.seconds, 1e-12), one.caller / std::max({many.caller, workers, 1e-12}));
+    speedups.emplace_back(name, one.r.seconds / std::max(many.r.seconds, 1e-12),
+                          bench::cpu_speedup(one.caller, many.caller, many.process, threads));
   }
   std::printf("%-14s %7s %9s %6s %16s %8s %12s %12s %14s %12s\n", "method", "threads", "particles", "steps", "particle_steps/s", "escaped",
               "pos_err_mean", "pos_err_max", "energy_rel_err", "impact_share");

@@ -52,6 +52,36 @@ def save(fig, path):
     print(f"wrote {path} ({os.path.getsize(path) // 1024} KB)")
 
 
+def error_bars(stats, scale=1):
+    """The bar heights and the (low, high) error bars of spread() results, divided by scale."""
+    return [st[0] / scale for st in stats], [[st[1] / scale for st in stats], [st[2] / scale for st in stats]]
+
+
+def plot_series(ax, series, labels):
+    """One line with error bars per name of series ({name: {x: [values]}}), x sorted."""
+    for name, pts in series.items():
+        xs = sorted(pts)
+        ys, yerr = error_bars([spread(pts[x]) for x in xs])
+        ax.errorbar(xs, ys, yerr=yerr, marker="o", ms=3, capsize=2, label=labels.get(name, name))
+
+
+def grouped_bars(ax, per, groups, members, label=str, scale=1):
+    """Bars of per[(group, member)] (spread of the values, divided by scale; 0 where missing): one
+    cluster per group, with its x tick in the middle, one bar per member (legend: label(member))."""
+    width = 0.8 / max(len(members), 1)
+    for mi, member in enumerate(members):
+        ys, yerr = error_bars([spread(per[(g, member)]) if (g, member) in per else (0, 0, 0) for g in groups], scale)
+        ax.bar([i + mi * width for i in range(len(groups))], ys, width, yerr=yerr, capsize=2, label=label(member))
+    ax.set_xticks([i + width * (len(members) - 1) / 2 for i in range(len(groups))])
+
+
+def finish(fig, out, stem, suffix):
+    """Saves the chart as <out>/<stem>-<suffix>.png and returns its path."""
+    path = os.path.join(out, f"{stem}-{suffix}.png")
+    save(fig, path)
+    return path
+
+
 def rows_of(doc):
     for key in ("rows", "results"):
         if isinstance(doc.get(key), list):
@@ -100,11 +130,7 @@ def plot_scene(docs, out, stem):
                 series[r["method"]][r["objects"]].append(r["ms_per_step"])
     if series:
         fig, ax = plt.subplots(figsize=FIGSIZE)
-        for method, pts in series.items():
-            ns = sorted(pts)
-            med = [spread(pts[n]) for n in ns]
-            ax.errorbar(ns, [m[0] for m in med], yerr=[[m[1] for m in med], [m[2] for m in med]], marker="o", ms=3,
-                        capsize=2, label=SCENE_LABELS.get(method, method))
+        plot_series(ax, series, SCENE_LABELS)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("objects (10 % dynamic)")
@@ -112,8 +138,7 @@ def plot_scene(docs, out, stem):
         ax.set_title("Broad phase: time per step against scene size")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-        written.append(os.path.join(out, f"{stem}-scene-scaling.png"))
-        save(fig, written[-1])
+        written.append(finish(fig, out, stem, "scene-scaling"))
     # main scene, per method
     per = defaultdict(list)
     for d in docs:
@@ -126,7 +151,8 @@ def plot_scene(docs, out, stem):
         methods = list(per)
         stats = [spread(per[m]) for m in methods]
         y = range(len(methods))
-        ax.barh(y, [s[0] for s in stats], xerr=[[s[1] for s in stats], [s[2] for s in stats]], capsize=3,
+        xs, xerr = error_bars(stats)
+        ax.barh(y, xs, xerr=xerr, capsize=3,
                 color=["#1f77b4" if m.startswith("impact") else "#999999" for m in methods])
         ax.set_yticks(list(y))
         ax.set_yticklabels([SCENE_LABELS.get(m, m) for m in methods], fontsize=8)
@@ -138,8 +164,7 @@ def plot_scene(docs, out, stem):
         for i, s in enumerate(stats):
             ax.text(s[0] + s[2], i, f" {s[0]:.1f}", va="center", fontsize=7)
         ax.grid(True, axis="x", alpha=0.3)
-        written.append(os.path.join(out, f"{stem}-scene-methods.png"))
-        save(fig, written[-1])
+        written.append(finish(fig, out, stem, "scene-methods"))
     written += plot_threads(docs, out, stem + "-scene", "ms_per_step", "ms per step")
     return written
 
@@ -164,19 +189,13 @@ def plot_threads(docs, out, stem, key=None, label=None):
     if not any(len(v) > 1 for v in series.values()):
         return []
     fig, ax = plt.subplots(figsize=FIGSIZE)
-    for name, pts in series.items():
-        ts = sorted(pts)
-        med = [spread(pts[t]) for t in ts]
-        ax.errorbar(ts, [m[0] for m in med], yerr=[[m[1] for m in med], [m[2] for m in med]], marker="o", ms=3, capsize=2,
-                    label=SCENE_LABELS.get(name, name))
+    plot_series(ax, series, SCENE_LABELS)
     ax.set_xlabel("threads")
     ax.set_ylabel(label)
     ax.set_title("Scaling with threads")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
-    path = os.path.join(out, f"{stem}-threads.png")
-    save(fig, path)
-    return [path]
+    return [finish(fig, out, stem, "threads")]
 
 
 # --- impact-collide-bench ------------------------------------------------------------------------
@@ -184,19 +203,13 @@ def plot_collide(docs, out, stem):
     per = defaultdict(list)
     for d in docs:
         for r in rows_of(d):
-            per[(r["library"], r["bv"], r["query"])].append(r["median_us"])
+            per[((r["library"], r["bv"]), r["query"])].append(r["median_us"])
     if not per:
         return []
-    methods = sorted({(lib, bv) for lib, bv, _ in per}, key=lambda m: (m[0] != "fcl", m))
-    queries = [q for q in ("boolean", "all_pairs") if any(k[2] == q for k in per)]
+    methods = sorted({m for m, _ in per}, key=lambda m: (m[0] != "fcl", m))
+    queries = [q for q in ("boolean", "all_pairs") if any(k[1] == q for k in per)]
     fig, ax = plt.subplots(figsize=FIGSIZE)
-    width = 0.8 / max(len(queries), 1)
-    for qi, q in enumerate(queries):
-        stats = [spread(per[(lib, bv, q)]) if (lib, bv, q) in per else (0, 0, 0) for lib, bv in methods]
-        xs = [i + qi * width for i in range(len(methods))]
-        ax.bar(xs, [s[0] for s in stats], width, yerr=[[s[1] for s in stats], [s[2] for s in stats]], capsize=2,
-               label=q.replace("_", "-"))
-    ax.set_xticks([i + width * (len(queries) - 1) / 2 for i in range(len(methods))])
+    grouped_bars(ax, per, methods, queries, label=lambda q: q.replace("_", "-"))
     ax.set_xticklabels([f"{lib} {bv}" for lib, bv in methods], fontsize=8)
     ax.set_ylabel("median µs per query (lower is better)")
     d0 = docs[0]
@@ -205,9 +218,7 @@ def plot_collide(docs, out, stem):
     ax.set_title(f"Mesh–mesh collision: {a} / {b}, {d0.get('poses', '?')} poses ({len(docs)} runs)")
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=8)
-    path = os.path.join(out, f"{stem}-collide.png")
-    save(fig, path)
-    return [path]
+    return [finish(fig, out, stem, "collide")]
 
 
 # --- time against error --------------------------------------------------------------------------
@@ -242,9 +253,7 @@ def plot_ccd(docs, out, stem):
     ax_e.set_ylim(bottom=0)
     ax_t.set_title("CCD: time against tolerance", fontsize=10)
     ax_e.set_title("CCD: false positives against tolerance", fontsize=10)
-    path = os.path.join(out, f"{stem}-ccd-sweep.png")
-    save(fig, path)
-    return [path]
+    return [finish(fig, out, stem, "ccd-sweep")]
 
 
 def plot_fit(docs, out, stem):
@@ -264,9 +273,7 @@ def plot_fit(docs, out, stem):
     ax.set_ylabel("summed radius excess over exact, %")
     ax.set_title("Sphere fitting: build time against tightness")
     ax.grid(True, alpha=0.3)
-    path = os.path.join(out, f"{stem}-fit.png")
-    save(fig, path)
-    return [path]
+    return [finish(fig, out, stem, "fit")]
 
 
 def plot_particles(docs, out, stem):
@@ -288,9 +295,7 @@ def plot_particles(docs, out, stem):
     ax.set_title("Particles: speed against error")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    path = os.path.join(out, f"{stem}-particles.png")
-    save(fig, path)
-    return [path] + plot_threads(docs, out, stem + "-particles")
+    return [finish(fig, out, stem, "particles")] + plot_threads(docs, out, stem + "-particles")
 
 
 def plot_rays(docs, out, stem):
@@ -300,27 +305,19 @@ def plot_rays(docs, out, stem):
             if "threads" in r and r["threads"] != 1:
                 continue
             name = f"{r.get('library', '?')} {r.get('method', '')}".strip()
-            per[(name, r.get("set", "?"))].append(r["rays_per_s"])
+            per[(r.get("set", "?"), name)].append(r["rays_per_s"])
     if not per:
         return []
-    names = sorted({k[0] for k in per})
-    sets = sorted({k[1] for k in per})
+    sets = sorted({k[0] for k in per})
+    names = sorted({k[1] for k in per})
     fig, ax = plt.subplots(figsize=FIGSIZE)
-    width = 0.8 / len(names)
-    for ni, name in enumerate(names):
-        stats = [spread(per[(name, s)]) if (name, s) in per else (0, 0, 0) for s in sets]
-        xs = [i + ni * width for i in range(len(sets))]
-        ax.bar(xs, [st[0] / 1e6 for st in stats], width, yerr=[[st[1] / 1e6 for st in stats], [st[2] / 1e6 for st in stats]],
-               capsize=2, label=name)
-    ax.set_xticks([i + width * (len(names) - 1) / 2 for i in range(len(sets))])
+    grouped_bars(ax, per, sets, names, scale=1e6)
     ax.set_xticklabels(sets)
     ax.set_ylabel("million rays per second (one thread)")
     ax.set_title("Ray casts per set and library")
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=7)
-    path = os.path.join(out, f"{stem}-rays.png")
-    save(fig, path)
-    return [path] + plot_threads(docs, out, stem + "-rays")
+    return [finish(fig, out, stem, "rays")] + plot_threads(docs, out, stem + "-rays")
 
 
 PLOTTERS = {

@@ -53,19 +53,17 @@
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
 #include "ray_referee.hpp"
-#include "support/obj_reader.hpp"
 
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <functional>
 #include <random>
 #include <string>
 
 #ifdef IMPACT_HAVE_EMBREE
-#include <embree3/rtcore.h>
+#include "embree_peer.hpp"
 #endif
 
 using namespace impact;
@@ -73,6 +71,7 @@ using impact::bench::Clock;
 using impact::bench::IPoint;
 using impact::bench::RayReferee;
 using impact::bench::seconds_since;
+using impact::bench::thread_seconds;
 
 namespace {
 
@@ -83,12 +82,6 @@ struct Args {
   std::uint64_t seed = 1;
   bool verbose = false;
 };
-
-double thread_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
 
 /// One set of segments: origin o, direction d, parameters [0, t_max].
 struct RaySet {
@@ -121,60 +114,25 @@ bool embree_monitor(void*, ssize_t bytes, bool) {
   return true;
 }
 
-/// Embree 3 as its users set it up (see the file comment). Owns its device and scene.
-struct EmbreeScene {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
+/// Embree 3 as its users set it up (see the file comment and embree_peer.hpp), with its build
+/// time (device, buffers and rtcCommitScene) and the bytes its memory monitor counts. The first
+/// two members are read before the scene is made (members initialise in declaration order).
+struct EmbreeMethod {
+  const long long bytes_before = embree_bytes.load();
+  const Clock::time_point t0 = Clock::now();
+  bench::EmbreeScene scene;
   double build_ms = 0;
   std::size_t bytes = 0;
 
-  EmbreeScene(const TriangleMesh<double>& m, bool robust) {
-    const long long before = embree_bytes.load();
-    const auto t0 = Clock::now();
-    device = rtcNewDevice(nullptr);
-    if (!device) throw std::runtime_error("rtcNewDevice failed");
-    rtcSetDeviceMemoryMonitorFunction(device, embree_monitor, nullptr);
-    scene = rtcNewScene(device);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-    if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
-    auto* v = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), std::size_t(m.num_vertices())));
-    auto* f = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), std::size_t(m.num_triangles())));
-    for (int i = 0; i < m.num_vertices(); ++i)
-      for (int k = 0; k < 3; ++k) v[3 * i + k] = static_cast<float>(m.V(i, k));  // exact: the bench's mesh is in float
-    for (int t = 0; t < m.num_triangles(); ++t)
-      for (int k = 0; k < 3; ++k) f[3 * t + k] = static_cast<unsigned>(m.F(t, k));
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene, geom);
-    rtcReleaseGeometry(geom);
-    rtcCommitScene(scene);
+  EmbreeMethod(const TriangleMesh<double>& m, bool robust) : scene(robust, embree_monitor) {
+    scene.add(m.V, m.F);  // exact: the bench's mesh is in float
+    scene.commit();
     build_ms = 1e3 * seconds_since(t0);
-    bytes = static_cast<std::size_t>(embree_bytes.load() - before);
+    bytes = static_cast<std::size_t>(embree_bytes.load() - bytes_before);
   }
-  ~EmbreeScene() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-  EmbreeScene(const EmbreeScene&) = delete;
-  EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   std::int32_t cast(const Vec3<double>& o, const Vec3<double>& d, double t_max) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = float(o.x()), rh.ray.org_y = float(o.y()), rh.ray.org_z = float(o.z());
-    rh.ray.dir_x = float(d.x()), rh.ray.dir_y = float(d.y()), rh.ray.dir_z = float(d.z());
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = float(t_max);
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.time = 0.0f;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene, &ctx, &rh);
+    const RTCRayHit rh = scene.first_hit(o, d, float(t_max));
     return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : static_cast<std::int32_t>(rh.hit.primID);
   }
 };
@@ -331,15 +289,7 @@ int main(int argc, char** argv) {
 
   TriangleMesh<double> source;
   try {
-    if (a.mesh.empty()) {
-      source = make_torus<double>(1.0, 0.4, 192, 96);
-    } else {
-#ifdef IMPACT_HAVE_IO
-      source = load_mesh<double>(a.mesh);
-#else
-      source = impact::test::read_obj<double>(a.mesh);
-#endif
-    }
+    source = a.mesh.empty() ? make_torus<double>(1.0, 0.4, 192, 96) : bench::read_mesh<double>(a.mesh);
     if (source.num_triangles() == 0) throw InvalidInput("the mesh has no triangles");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-ray-bench: %s\n", e.what());
@@ -388,7 +338,7 @@ int main(int argc, char** argv) {
                      }});
   const std::size_t impact_methods = methods.size();
 #ifdef IMPACT_HAVE_EMBREE
-  EmbreeScene embree_fast(mesh, false), embree_robust(mesh, true);
+  const EmbreeMethod embree_fast(mesh, false), embree_robust(mesh, true);
   methods.push_back({"embree", "HIGH", embree_fast.build_ms, embree_fast.bytes,
                      [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) { return embree_fast.cast(o, d, t_max); }});
   methods.push_back({"embree", "HIGH robust", embree_robust.build_ms, embree_robust.bytes,

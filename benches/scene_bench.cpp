@@ -48,31 +48,21 @@
 #include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
 #endif
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <algorithm>
 #include <cstdlib>
-#include <ctime>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 using namespace impact;
-namespace {
+using impact::bench::process_seconds;
+using impact::bench::thread_seconds;
+using impact::bench::wall_seconds;
 
-/// CPU time of the calling thread in seconds: the benchmark machine may be shared, and wall time
-/// then measures the neighbours as much as the method. Falls back to wall time off POSIX.
-double cpu_seconds() {
-#if defined(CLOCK_THREAD_CPUTIME_ID)
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-#else
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-#endif
-}
+namespace {
 
 struct Args {
   long objects = 100000;
@@ -89,23 +79,18 @@ struct Args {
   std::string json;
 };
 
-[[noreturn]] void usage(const char* msg) {
-  std::fprintf(stderr,
-               "%s\nusage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]\n"
-               "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]\n"
-               "                          [--bullet-deferred 0|1] [--only NAME] [--threads T] [--json FILE]\n",
-               msg);
-  std::exit(2);
-}
+constexpr const char* kUsage =
+    "usage: impact-scene-bench [--objects N] [--dynamic F] [--steps S] [--warmup W] [--seed K]\n"
+    "                          [--allpairs-max M] [--scaling-max N] [--bullet-prediction P]\n"
+    "                          [--bullet-deferred 0|1] [--only NAME] [--threads T] [--json FILE]\n";
+
+[[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
 Args parse(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usage(("missing value after " + s).c_str());
-      return argv[++i];
-    };
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
     if (s == "--objects")
       a.objects = std::atol(next().c_str());
     else if (s == "--dynamic")
@@ -130,10 +115,8 @@ Args parse(int argc, char** argv) {
       a.threads = std::atoi(next().c_str());
     else if (s == "--json")
       a.json = next();
-    else if (s == "-h" || s == "--help")
-      usage("");
     else
-      usage(("unknown option " + s).c_str());
+      bench::reject_option(s, kUsage);
   }
   if (a.objects < 2) usage("--objects must be >= 2");
   if (!(a.dynamic >= 0 && a.dynamic <= 1)) usage("--dynamic must be in [0, 1]");
@@ -504,9 +487,9 @@ std::vector<Row> run(long n, double frac, int steps, const Args& args, const Mes
     rows[m].method = methods[m].name;
     rows[m].objects = n;
     rows[m].fraction = frac;
-    const double t0 = cpu_seconds();
+    const double t0 = thread_seconds();
     methods[m].setup();
-    rows[m].build_ms = 1e3 * (cpu_seconds() - t0);
+    rows[m].build_ms = 1e3 * (thread_seconds() - t0);
   }
   // The first --warmup steps are not timed (each method reaches its steady state); every step is
   // checked.
@@ -515,10 +498,10 @@ std::vector<Row> run(long n, double frac, int steps, const Args& args, const Mes
     const bool timed = s >= args.warmup;
     if (s == args.warmup) all.total = sd.total = hi.total = {};
     for (std::size_t m = 0; m < methods.size(); ++m) {
-      const double t0 = cpu_seconds();
+      const double t0 = thread_seconds();
       methods[m].step(k[m]);
       if (!timed) continue;
-      total[m] += cpu_seconds() - t0;
+      total[m] += thread_seconds() - t0;
       rows[m].pairs += double(k[m].size());
     }
     for (std::size_t m = 0; m < methods.size(); ++m)
@@ -562,31 +545,19 @@ std::string json_row(const Row& r) {
   return o.str();
 }
 
-double wall_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-double process_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
 /// Time of one query: wall clock, CPU time of the calling thread and of the whole process.
 struct Times {
   double wall = 0, caller = 0, process = 0;
   template <class F>
   void add(F&& f) {
-    const double w = wall_seconds(), c = cpu_seconds(), p = process_seconds();
+    const double w = wall_seconds(), c = thread_seconds(), p = process_seconds();
     f();
     wall += wall_seconds() - w;
-    caller += cpu_seconds() - c;
+    caller += thread_seconds() - c;
     process += process_seconds() - p;
   }
-  /// The speed-up over `one` (a one-thread run) on an otherwise idle machine, from CPU times: the
-  /// caller runs the serial parts and its share of the parallel ones, the workers share the rest,
-  /// so the run takes at least max(caller, (process - caller) / (threads - 1)).
-  double cpu_speedup(const Times& one, int threads) const {
-    const double workers = threads > 1 ? (process - caller) / (threads - 1) : 0;
-    return one.caller / std::max({caller, workers, 1e-12});
-  }
+  /// The speed-up over `one` (a one-thread run) on an otherwise idle machine (bench::cpu_speedup).
+  double cpu_speedup(const Times& one, int threads) const { return bench::cpu_speedup(one.caller, caller, process, threads); }
 };
 
 /// The threads table: find_pairs and collide on 1 and on `threads` threads, same scene and

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The hierarchy: structural invariants of the top-down build (every triangle in exactly one leaf,
-// leaf sizes, each node's BV holds all its triangles' vertices), termination on degenerate input,
+// leaf sizes, each node's BV holds all its triangles' vertices, an AABB node's box is exactly
+// theirs), termination on degenerate input,
 // refit after deformation, and the traversals against brute force: pair traversal under random
 // rigid poses and self traversal report exactly the brute-force triangle pairs. Sphere, AABB and
 // oriented box, float and double, every split rule (middle, median, SAH) and construction (top-down,
@@ -43,6 +44,13 @@ template <class BV> std::int32_t check_node(const MeshBvh<BV>& m, std::int32_t i
     }
   }
   const S slack = S(1e-5) * (std::is_same_v<S, float> ? S(10) : S(1e-6));
+  Aabb<S> tight;  // the box of the triangles below: an AABB node's box is exactly this (every builder)
+  for (auto p : prims)
+    for (int v = 0; v < 3; ++v) tight.extend(m.triangle(p)[v]);
+  if constexpr (std::is_same_v<BV, Aabb<S>>) {
+    EXPECT_EQ(node.bv.min, tight.min) << "node " << i;
+    EXPECT_EQ(node.bv.max, tight.max) << "node " << i;
+  }
   for (auto p : prims) {
     const Triangle<S>& t = m.triangle(p);
     for (int v = 0; v < 3; ++v) {

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 // Closest point on a mesh through the BVH against brute force over all triangles, float and
-// double, AABB and sphere trees, under random poses; features, normals and the distance bound.
+// double, AABB, sphere and oriented-box trees, under random poses; features, normals and the
+// distance bound; exact equality with the loop on integer and degenerate meshes; the work
+// counters.
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "support/data.hpp"
+#include "support/meshes.hpp"
 #include "support/obj_reader.hpp"
 #include "support/random.hpp"
 
@@ -18,7 +21,7 @@ namespace impact {
 namespace {
 
 template <class T> class ClosestPointMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
 TYPED_TEST_SUITE(ClosestPointMesh, BVs);
 
 template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n) {
@@ -107,7 +110,7 @@ TYPED_TEST(ClosestPointMesh, FeaturesOnABox) {
 
 // Small integer meshes under query points on a quarter-integer grid (closest points at shared
 // vertices and edges, coincident and zero-area triangles, queries on the surface): with a box
-// tree the answer's squared distance is exactly the smallest of the loop over every triangle
+// or oriented-box tree the answer's squared distance is exactly the smallest of the loop over every triangle
 // (issue 12: nodes at the best distance are pruned, so a node's key must never exceed a triangle's
 // computed value, which rounding of the closest point could take below the distance to the
 // triangle's box); sphere trees within rounding. Float and double.
@@ -124,6 +127,7 @@ template <class S> void check_integer_grid(std::uint64_t seed) {
       for (int d = 0; d < 3; ++d) m.F(f, d) = int(rng.index(std::uint64_t(nv)));
     const MeshBvh<Aabb<S>> ab(m);
     const MeshBvh<Sphere<S>> sp(m);
+    const MeshBvh<Obb<S>> ob(m);
     for (int k = 0; k < 24; ++k) {
       Vec3<S> q;
       for (int i = 0; i < 3; ++i) q[i] = S(int(rng.index(41)) - 20) / S(4);
@@ -133,9 +137,10 @@ template <class S> void check_integer_grid(std::uint64_t seed) {
         const auto tp = detail::closest_on_triangle(q, tri);
         best = std::min(best, detail::triangle_squared_distance(q, tri, tp));
       }
-      const auto ca = closest_point_on_mesh(ab, q), cs = closest_point_on_mesh(sp, q);
-      ASSERT_TRUE(ca.has_value() && cs.has_value());
+      const auto ca = closest_point_on_mesh(ab, q), cs = closest_point_on_mesh(sp, q), co = closest_point_on_mesh(ob, q);
+      ASSERT_TRUE(ca.has_value() && cs.has_value() && co.has_value());
       EXPECT_EQ(ca->distance, std::sqrt(best)) << mesh << "," << k;
+      EXPECT_EQ(co->distance, std::sqrt(best)) << mesh << "," << k;
       EXPECT_NEAR(cs->distance, std::sqrt(best), S(64) * std::numeric_limits<S>::epsilon() * S(20)) << mesh << "," << k;
     }
   }
@@ -144,6 +149,102 @@ template <class S> void check_integer_grid(std::uint64_t seed) {
 TEST(ClosestPointMeshExact, IntegerGridDistanceIsTheLoopMinimum) {
   check_integer_grid<double>(21);
   check_integer_grid<float>(22);
+}
+
+// Degenerate soups (test::degenerate_soup: slivers, sizes from 1e-4 to 1, coincident centroids,
+// exact copies), every builder: box and oriented-box trees give exactly the loop's smallest
+// squared distance, sphere trees to rounding; points around and inside the soup.
+template <class S> void check_degenerate_soup(std::uint64_t seed) {
+  const TriangleMesh<S> m = test::degenerate_soup<S>(200, seed);
+  test::Rng rng(seed + 1);
+  for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp, BuildMethod::Incremental}) {
+    MeshBvhConfig cfg;
+    cfg.build.method = method;
+    const MeshBvh<Aabb<S>> ab(m, cfg);
+    const MeshBvh<Sphere<S>> sp(m, cfg);
+    const MeshBvh<Obb<S>> ob(m, cfg);
+    for (int k = 0; k < 100 / kSampleDivisor; ++k) {
+      const Vec3<S> q = k % 4 == 0 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1.5, 1.5).cast<S>());
+      S best = std::numeric_limits<S>::infinity();
+      for (int t = 0; t < m.num_triangles(); ++t) {
+        const Triangle<S> tri = m.triangle(t);
+        best = std::min(best, detail::triangle_squared_distance(q, tri, detail::closest_on_triangle(q, tri)));
+      }
+      const auto ca = closest_point_on_mesh(ab, q), cs = closest_point_on_mesh(sp, q), co = closest_point_on_mesh(ob, q);
+      ASSERT_TRUE(ca.has_value() && cs.has_value() && co.has_value());
+      EXPECT_EQ(ca->distance, std::sqrt(best)) << k;
+      EXPECT_EQ(co->distance, std::sqrt(best)) << k;
+      EXPECT_NEAR(cs->distance, std::sqrt(best), S(256) * std::numeric_limits<S>::epsilon() * S(4)) << k;
+    }
+  }
+}
+
+TEST(ClosestPointMeshExact, DegenerateSoupDistanceIsTheLoopMinimum) {
+  check_degenerate_soup<double>(41);
+  check_degenerate_soup<float>(42);
+}
+
+// The work counters count every node key and every triangle tested: one triangle is one node and
+// one triangle; two far apart triangles need the root, both children and the nearer triangle only
+// (the farther child's key exceeds the distance found). 4,096 copies of one triangle: in a box
+// tree, nodes at the distance found are pruned (before issue 12, every copy was tested).
+TYPED_TEST(ClosestPointMesh, WorkCounters) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  TriangleMesh<S> one;
+  one.V.resize(3, 3);
+  one.V << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  one.F.resize(1, 3);
+  one.F << 0, 1, 2;
+  ClosestPointStats st;
+  ASSERT_TRUE(closest_point_on_mesh(MeshBvh<BV>(one), Vec3<S>(0.2, 0.2, 1), {}, {}, &st).has_value());
+  EXPECT_EQ(st.node_tests, 1u);
+  EXPECT_EQ(st.triangle_tests, 1u);
+
+  TriangleMesh<S> two;
+  two.V.resize(6, 3);
+  two.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 10, 0, 0, 11, 0, 0, 10, 1, 0;
+  two.F.resize(2, 3);
+  two.F << 0, 1, 2, 3, 4, 5;
+  MeshBvhConfig leaf1;
+  leaf1.build.leaf_size = 1;
+  const MeshBvh<BV> t2(two, leaf1);
+  ASSERT_EQ(t2.tree().nodes.size(), 3u);
+  st = {};
+  const auto c = closest_point_on_mesh(t2, Vec3<S>(0.2, 0.2, 1), {}, {}, &st);
+  ASSERT_TRUE(c.has_value());
+  EXPECT_EQ(c->triangle, 0);
+  EXPECT_EQ(st.node_tests, 3u);
+  EXPECT_EQ(st.triangle_tests, 1u);
+  // the counters add up over queries
+  closest_point_on_mesh(t2, Vec3<S>(10.2, 0.2, 1), {}, {}, &st);
+  EXPECT_EQ(st.node_tests, 6u);
+  EXPECT_EQ(st.triangle_tests, 2u);
+
+  const int n = 4096;
+  TriangleMesh<S> same;
+  same.V.resize(3 * n, 3);
+  same.F.resize(n, 3);
+  for (int k = 0; k < n; ++k) {
+    same.V.row(3 * k) << 0, 0, 0;
+    same.V.row(3 * k + 1) << 1, 0, 0;
+    same.V.row(3 * k + 2) << 0, 1, 0;
+    same.F.row(k) << 3 * k, 3 * k + 1, 3 * k + 2;
+  }
+  const MeshBvh<BV> ts(same);
+  st = {};
+  const auto cs = closest_point_on_mesh(ts, Vec3<S>(0.25, 0.25, 1), {}, {}, &st);
+  ASSERT_TRUE(cs.has_value());
+  EXPECT_EQ(cs->distance, S(1));
+  EXPECT_GE(st.triangle_tests, 1u);
+  // Boxes only: sphere and oriented-box keys are below the copies' distance (their volumes are
+  // grown by rounding bounds), so those trees test every copy.
+  if constexpr (std::is_same_v<BV, Aabb<S>>) {
+    EXPECT_LE(st.triangle_tests, 8u);
+    EXPECT_LE(st.node_tests, 200u);
+  } else {
+    EXPECT_EQ(st.triangle_tests, std::size_t(n));
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 // depth and references; bad input throws.
 #include "impact/query/kd_tree.hpp"
 #include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "support/meshes.hpp"
 
@@ -30,9 +31,14 @@ template <class S> S brute_first_hit(const TriangleMesh<S>& m, const Ray<S>& r) 
   }
   return best;
 }
+/// Smallest distance over all triangles by the library's per-triangle rule (the narrow phase's
+/// closest point, its squared distance raised to the triangle box's: query/closest_point_mesh.hpp).
 template <class S> S brute_distance(const TriangleMesh<S>& m, const Vec3<S>& p) {
   S best = std::numeric_limits<S>::infinity();
-  for (int t = 0; t < m.num_triangles(); ++t) best = std::min(best, (closest_point_on_triangle(p, m.triangle(t)).point - p).squaredNorm());
+  for (int t = 0; t < m.num_triangles(); ++t) {
+    const Triangle<S> tri = m.triangle(t);
+    best = std::min(best, detail::triangle_squared_distance(p, tri, detail::closest_on_triangle(p, tri)));
+  }
   return std::sqrt(best);
 }
 

@@ -1,13 +1,16 @@
 // SPDX-License-Identifier: MIT
 // Ray-mesh first/any hit and swept-sphere-mesh first hit against brute force over all triangles,
-// in float and double, for AABB and sphere trees, under random rigid poses; watertightness at
-// shared edges and vertices; rays parallel to faces; the t = 0 front-side rule.
+// in float and double, for AABB, sphere and oriented-box trees, under random rigid poses;
+// watertightness at shared edges and vertices; rays parallel to faces; the t = 0 front-side rule;
+// exact equality with the loop on integer and degenerate meshes (slivers, very unequal sizes,
+// coincident centroids and triangles).
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/swept_sphere_mesh.hpp"
 #include "support/data.hpp"
+#include "support/meshes.hpp"
 #include "support/obj_reader.hpp"
 #include "support/random.hpp"
 
@@ -40,7 +43,7 @@ template <class S> std::optional<std::pair<S, int>> brute_first_hit(const Triang
 }
 
 template <class T> class RayMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
 TYPED_TEST_SUITE(RayMesh, BVs);
 
 template <class BV> void check_against_brute_force(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n_rays) {
@@ -238,7 +241,8 @@ TYPED_TEST(RayMesh, CoincidentTrianglesArePruned) {
   ASSERT_TRUE(h.has_value());
   EXPECT_EQ(h->t, S(1));
   // Boxes only: a node's box is entered at t = 1 itself. A node's sphere is entered earlier (it
-  // could hold an earlier hit as far as it tells), so sphere trees still visit every copy.
+  // could hold an earlier hit as far as it tells), so sphere trees still visit every copy; so do
+  // oriented-box trees, whose keys are entries into hulls grown by their rounding.
   if constexpr (std::is_same_v<BV, Aabb<S>>) {
     EXPECT_LE(st.triangle_tests, 8u);  // the first leaf's triangles
     EXPECT_LE(st.node_tests, 200u);    // about two per level on the path to it
@@ -288,8 +292,8 @@ TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
 // Small integer meshes (shared and coincident vertices, triangles edge-on to the rays, rays
 // through vertices and edges and in the triangles' planes: the cases where the narrow phase's t
 // rounds below the boxes' entries) under exact poses: the tree's first hit has exactly the
-// smallest t of the loop over every triangle, for box trees, CompactBvh and sphere trees, float
-// and double, and any hit agrees.
+// smallest t of the loop over every triangle, for box trees, CompactBvh, sphere and oriented-box
+// trees, float and double, and any hit agrees.
 template <class S> void check_integer_grid_rays(std::uint64_t seed) {
   test::Rng rng(seed);
   int hits = 0;
@@ -304,6 +308,7 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
       for (int d = 0; d < 3; ++d) m.F(f, d) = int(rng.index(std::uint64_t(nv)));
     const MeshBvh<Aabb<S>> ab(m);
     const MeshBvh<Sphere<S>> sp(m);
+    const MeshBvh<Obb<S>> ob(m);
     const CompactBvh fast(ab.tree(), 1);
     for (int k = 0; k < 24; ++k) {
       Vec3<S> o, d;
@@ -314,15 +319,19 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
       const auto b = brute_first_hit(m, ray);
       hits += b.has_value();
       const auto ha = ray_mesh_first_hit(ab, ray), hc = ray_mesh_first_hit(ab, fast, ray), hs = ray_mesh_first_hit(sp, ray);
+      const auto ho = ray_mesh_first_hit(ob, ray);
       ASSERT_EQ(ha.has_value(), b.has_value()) << mesh << "," << k;
       ASSERT_EQ(hc.has_value(), b.has_value()) << mesh << "," << k;
       ASSERT_EQ(hs.has_value(), b.has_value()) << mesh << "," << k;
+      ASSERT_EQ(ho.has_value(), b.has_value()) << mesh << "," << k;
       EXPECT_EQ(ray_mesh_any_hit(ab, ray), b.has_value());
       EXPECT_EQ(ray_mesh_any_hit(sp, ray), b.has_value());
+      EXPECT_EQ(ray_mesh_any_hit(ob, ray), b.has_value());
       if (!b) continue;
       EXPECT_EQ(ha->t, b->first) << mesh << "," << k;
       EXPECT_EQ(hc->t, b->first) << mesh << "," << k;
       EXPECT_EQ(hs->t, b->first) << mesh << "," << k;
+      EXPECT_EQ(ho->t, b->first) << mesh << "," << k;
     }
   }
   EXPECT_GT(hits, 100 / kRaySamples);
@@ -331,6 +340,51 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
 TEST(RayMeshExact, IntegerGridFirstHitIsTheLoopMinimum) {
   check_integer_grid_rays<double>(11);
   check_integer_grid_rays<float>(12);
+}
+
+// Degenerate soups (test::degenerate_soup: slivers across the box, sizes from 1e-4 to 1,
+// coincident centroids, exact copies), every builder: box and oriented-box trees give exactly the
+// loop's smallest t (sphere trees to rounding), any hit agrees, and the reported triangle is hit
+// at that t. Rays from around the box through random points, and rays through vertices (the cases
+// whose t rounds below a box's entry). In the mesh's frame, so that the loop sees the same ray
+// bit for bit (poses are covered above).
+template <class S> void check_degenerate_soup(std::uint64_t seed) {
+  const TriangleMesh<S> m = test::degenerate_soup<S>(200, seed);
+  test::Rng rng(seed + 1);
+  int hits = 0;
+  for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp, BuildMethod::Incremental}) {
+    MeshBvhConfig cfg;
+    cfg.build.method = method;
+    const MeshBvh<Aabb<S>> ab(m, cfg);
+    const MeshBvh<Sphere<S>> sp(m, cfg);
+    const MeshBvh<Obb<S>> ob(m, cfg);
+    for (int k = 0; k < 200 / kSampleDivisor; ++k) {
+      const Vec3<S> o = rng.vec(-1.5, 1.5).cast<S>();
+      const Vec3<S> target = k % 2 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1, 1).cast<S>());
+      if (target == o) continue;
+      const Ray<S> ray(o, target - o, k % 3 == 0 ? S(1) : std::numeric_limits<S>::infinity());
+      const auto b = brute_first_hit(m, ray);
+      const auto ha = ray_mesh_first_hit(ab, ray), hs = ray_mesh_first_hit(sp, ray), ho = ray_mesh_first_hit(ob, ray);
+      ASSERT_EQ(ha.has_value(), b.has_value()) << k;
+      ASSERT_EQ(ho.has_value(), b.has_value()) << k;
+      ASSERT_EQ(hs.has_value(), b.has_value()) << k << " method " << int(method) << " float " << std::is_same_v<S, float> << " tmax " << ray.t_max << " t " << b->first << " tri " << b->second;
+      EXPECT_EQ(ray_mesh_any_hit(ob, ray), b.has_value()) << k;
+      EXPECT_EQ(ray_mesh_any_hit(ab, ray), b.has_value()) << k;
+      if (!b) continue;
+      ++hits;
+      EXPECT_EQ(ha->t, b->first) << k;
+      EXPECT_EQ(ho->t, b->first) << k;
+      EXPECT_NEAR(hs->t, b->first, S(1e-4) * (S(1) + b->first)) << k;
+      const auto th = detail::ray_mesh_triangle_hit(PreparedRay<S>(ray), m.triangle(ho->triangle));
+      EXPECT_TRUE(th && th->t == ho->t) << k;
+    }
+  }
+  EXPECT_GT(hits, 150 / kSampleDivisor);
+}
+
+TEST(RayMeshExact, DegenerateSoupFirstHitIsTheLoopMinimum) {
+  check_degenerate_soup<double>(31);
+  check_degenerate_soup<float>(32);
 }
 
 }  // namespace

@@ -25,4 +25,41 @@ template <class S> TriangleMesh<S> random_soup(int n, std::uint64_t seed, double
   return m;
 }
 
+/// n triangles of the kinds that trouble hierarchies, in [-1, 1]^3, vertices not shared, mixed in
+/// the order of their index: long slivers (t % 4 == 0: a needle across the box, 1e-6 wide), very
+/// unequal sizes (t % 4 == 1: edges 1e-4 to 1 long), coincident centroids (t % 4 == 2: a triangle
+/// and its copy turned about their common centroid, two at the same centre), and exact copies
+/// of the previous triangle (t % 4 == 3).
+template <class S> TriangleMesh<S> degenerate_soup(int n, std::uint64_t seed) {
+  Rng rng(seed);
+  TriangleMesh<S> m;
+  m.V.resize(3 * n, 3);
+  m.F.resize(n, 3);
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (int t = 0; t < n; ++t) {
+    Eigen::Vector3d v[3];
+    const Eigen::Vector3d c = rng.vec(-0.8, 0.8);
+    if (t % 4 == 0) {
+      const Eigen::Vector3d e = rng.vec(-1.6, 1.6);
+      v[0] = c - 0.5 * e, v[1] = c + 0.5 * e, v[2] = c + Eigen::Vector3d(0, 1e-6, 0);
+    } else if (t % 4 == 1) {
+      const double size = std::pow(10.0, rng.uniform(-4, 0));
+      v[0] = c, v[1] = c + rng.vec(-size, size), v[2] = c + rng.vec(-size, size);
+    } else if (t % 4 == 2 && t % 8 == 6) {  // the copy of triangle t - 4 turned about its centroid
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(rng.uniform(0.1, 3.0), rng.vec(-1, 1).normalized()).toRotationMatrix();
+      for (int k = 0; k < 3; ++k) v[k] = centre + R * (m.V.row(3 * (t - 4) + k).transpose().template cast<double>() - centre);
+    } else if (t % 4 == 2) {
+      for (auto& x : v) x = c + rng.vec(-0.2, 0.2);
+      centre = (v[0] + v[1] + v[2]) / 3.0;
+    } else {
+      for (int k = 0; k < 3; ++k) v[k] = m.V.row(3 * (t - 1) + k).transpose().template cast<double>();
+    }
+    for (int k = 0; k < 3; ++k) {
+      m.V.row(3 * t + k) = v[k].cast<S>().transpose();
+      m.F(t, k) = 3 * t + k;
+    }
+  }
+  return m;
+}
+
 }  // namespace impact::test

@@ -89,31 +89,33 @@ inline Segment<S> capsule_segment(const Capsule<S>& c, const RigidTransform<S>& 
 }
 
 /// The closest pair of points of the cores of two round shapes (sphere: its centre, capsule: its
-/// segment), world coordinates.
+/// segment), world coordinates: `a` on a's core, `b` on b's.
 template <class S>
-inline void core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
-                        Vec3<S>& qb) {
-  qa = pa.apply(a.center);
-  qb = pb.apply(b.center);
+struct CorePoints {
+  Vec3<S> a, b;
+};
+template <class S>
+inline CorePoints<S> core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b,
+                                 const RigidTransform<S>& pb) {
+  return {pa.apply(a.center), pb.apply(b.center)};
 }
 template <class S>
-inline void core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
-                        Vec3<S>& qb) {
-  qa = pa.apply(a.center);
-  qb = closest_point_on_segment(qa, capsule_segment(b, pb)).point;
+inline CorePoints<S> core_points(const Sphere<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b,
+                                 const RigidTransform<S>& pb) {
+  const Vec3<S> qa = pa.apply(a.center);
+  return {qa, closest_point_on_segment(qa, capsule_segment(b, pb)).point};
 }
 template <class S>
-inline void core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
-                        Vec3<S>& qb) {
-  qb = pb.apply(b.center);
-  qa = closest_point_on_segment(qb, capsule_segment(a, pa)).point;
+inline CorePoints<S> core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Sphere<S>& b,
+                                 const RigidTransform<S>& pb) {
+  const Vec3<S> qb = pb.apply(b.center);
+  return {closest_point_on_segment(qb, capsule_segment(a, pa)).point, qb};
 }
 template <class S>
-inline void core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b, const RigidTransform<S>& pb, Vec3<S>& qa,
-                        Vec3<S>& qb) {
+inline CorePoints<S> core_points(const Capsule<S>& a, const RigidTransform<S>& pa, const Capsule<S>& b,
+                                 const RigidTransform<S>& pb) {
   const auto cp = closest_points_segment_segment(capsule_segment(a, pa), capsule_segment(b, pb));
-  qa = cp.point_a;
-  qb = cp.point_b;
+  return {cp.point_a, cp.point_b};
 }
 
 /// The normal used when two cores meet (the direction is then not defined by the core points):
@@ -139,6 +141,14 @@ inline S round_radius(const Sphere<S>& s) {
 template <class S>
 inline S round_radius(const Capsule<S>& s) {
   return s.radius;
+}
+
+/// Does the sphere (world centre c, radius r) touch or overlap the box? (The boolean of
+/// sphere_box_contact, without its contact.)
+template <class S>
+inline bool sphere_box_overlap(const Vec3<S>& c, S r, const Box<S>& box, const RigidTransform<S>& pb) {
+  const Vec3<S> lc = pb.R.transpose() * (c - pb.t);
+  return (lc - lc.cwiseMax(-box.half).cwiseMin(box.half)).squaredNorm() <= r * r;
 }
 
 /// Sphere (world centre c, radius r) against a box: closest point of the box, or (centre inside)

@@ -127,6 +127,27 @@ ccd_t make_ccd(const CcdSettings& settings) {
   return ccd;
 }
 
+/// The set-up of one libccd query: both shapes in the normalised frame (CcdSettings) sharing one
+/// support-call counter, and libccd's ccd_t for them. The shapes point at the counter: a query is
+/// neither copied nor moved, and not const (the support functions count through the pointer).
+template <class S, class A, class B>
+struct LibccdQuery {
+  CcdCounter counter;
+  Vec3<double> origin;
+  CcdShape<S, A> a;
+  CcdShape<S, B> b;
+  ccd_t ccd;
+
+  LibccdQuery(const A& sa, const RigidTransform<S>& pa, const B& sb, const RigidTransform<S>& pb, const CcdSettings& settings)
+      : counter{0, settings.max_iterations, false},
+        origin(ccd_origin(sa, pa, sb, pb)),
+        a(make_ccd_shape(sa, pa, origin, settings.length_scale, counter, true)),
+        b(make_ccd_shape(sb, pb, origin, settings.length_scale, counter, false)),
+        ccd(make_ccd<CcdShape<S, A>, CcdShape<S, B>>(settings)) {}
+  LibccdQuery(const LibccdQuery&) = delete;
+  LibccdQuery& operator=(const LibccdQuery&) = delete;
+};
+
 }  // namespace detail
 
 /// libccd's boolean test of shape a at pose pa against shape b at pose pb. `limit_reached`, when
@@ -135,15 +156,11 @@ ccd_t make_ccd(const CcdSettings& settings) {
 template <class S, class A, class B>
 bool ccd_intersect(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, CcdAlgorithm algorithm,
                    const CcdSettings& settings, bool* limit_reached = nullptr) {
-  detail::CcdCounter counter;
-  counter.limit = settings.max_iterations;
-  const Vec3<double> origin = detail::ccd_origin(a, pa, b, pb);
-  const auto oa = detail::make_ccd_shape(a, pa, origin, settings.length_scale, counter, true);
-  const auto ob = detail::make_ccd_shape(b, pb, origin, settings.length_scale, counter, false);
-  const ccd_t ccd = detail::make_ccd<std::decay_t<decltype(oa)>, std::decay_t<decltype(ob)>>(settings);
-  const int hit = algorithm == CcdAlgorithm::Mpr ? ccdMPRIntersect(&oa, &ob, &ccd) : ccdGJKIntersect(&oa, &ob, &ccd);
+  detail::LibccdQuery<S, A, B> q(a, pa, b, pb, settings);
+  const int hit = algorithm == CcdAlgorithm::Mpr ? ccdMPRIntersect(&q.a, &q.b, &q.ccd) : ccdGJKIntersect(&q.a, &q.b, &q.ccd);
   // GJK runs at most max_iterations + 1 support calls: reaching that many means the bound decided.
-  const bool exhausted = counter.exhausted || (algorithm == CcdAlgorithm::Gjk && !hit && counter.calls >= settings.max_iterations + 1);
+  const bool exhausted =
+      q.counter.exhausted || (algorithm == CcdAlgorithm::Gjk && !hit && q.counter.calls >= settings.max_iterations + 1);
   if (limit_reached) *limit_reached = exhausted;
   return hit != 0;
 }
@@ -153,28 +170,23 @@ bool ccd_intersect(const A& a, const RigidTransform<S>& pa, const B& b, const Ri
 template <class S, class A, class B>
 CcdPenetration<S> ccd_penetration(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                   CcdAlgorithm algorithm, const CcdSettings& settings) {
-  detail::CcdCounter counter;
-  counter.limit = settings.max_iterations;
-  const Vec3<double> origin = detail::ccd_origin(a, pa, b, pb);
-  const auto oa = detail::make_ccd_shape(a, pa, origin, settings.length_scale, counter, true);
-  const auto ob = detail::make_ccd_shape(b, pb, origin, settings.length_scale, counter, false);
-  const ccd_t ccd = detail::make_ccd<std::decay_t<decltype(oa)>, std::decay_t<decltype(ob)>>(settings);
+  detail::LibccdQuery<S, A, B> q(a, pa, b, pb, settings);
   ccd_real_t depth = 0;
   ccd_vec3_t dir, pos;
   dir.v[0] = dir.v[1] = dir.v[2] = 0;
   pos.v[0] = pos.v[1] = pos.v[2] = 0;
-  const int rc = algorithm == CcdAlgorithm::Mpr ? ccdMPRPenetration(&oa, &ob, &ccd, &depth, &dir, &pos)
-                                                : ccdGJKPenetration(&oa, &ob, &ccd, &depth, &dir, &pos);
+  const int rc = algorithm == CcdAlgorithm::Mpr ? ccdMPRPenetration(&q.a, &q.b, &q.ccd, &depth, &dir, &pos)
+                                                : ccdGJKPenetration(&q.a, &q.b, &q.ccd, &depth, &dir, &pos);
   CcdPenetration<S> out;
-  out.iterations = static_cast<int>(std::min<long>(counter.calls, settings.max_iterations));
-  out.limit_reached = counter.exhausted;
+  out.iterations = static_cast<int>(std::min<long>(q.counter.calls, settings.max_iterations));
+  out.limit_reached = q.counter.exhausted;
   if (rc != 0) return out;
   out.intersecting = true;
   out.depth = S(depth * settings.length_scale);
   const Vec3<double> n(dir.v[0], dir.v[1], dir.v[2]);
   const double len = n.norm();
   out.normal = len > 0 ? Vec3<S>((n / len).template cast<S>()) : Vec3<S>::UnitZ();
-  out.point = (Vec3<double>(pos.v[0], pos.v[1], pos.v[2]) * settings.length_scale + origin).template cast<S>();
+  out.point = (Vec3<double>(pos.v[0], pos.v[1], pos.v[2]) * settings.length_scale + q.origin).template cast<S>();
   return out;
 }
 

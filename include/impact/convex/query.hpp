@@ -94,6 +94,32 @@ inline Vec3<S> core_interior(const SegmentCore<S>&) {
 template <class T, class S>
 inline constexpr bool is_round_v = std::is_same_v<T, Sphere<S>> || std::is_same_v<T, Capsule<S>>;
 
+/// The method that answers a pair of shape types (the table of the file comment): the first entry
+/// that matches, in this order. Decided at compile time: each query branches on it with
+/// if constexpr, so nothing is dispatched at run time.
+enum class PairMethod {
+  RoundRound,  ///< both spheres or capsules: closed form on the cores and the radii
+  SphereBox,   ///< closed form (closest point of the box, or its nearest face)
+  BoxSphere,   ///< the same with the roles swapped (the result swapped back)
+  BoxBox,      ///< separating axes (boolean, penetration); GJK for distance
+  RoundOther,  ///< a sphere or capsule against any other shape: GJK on its core, EPA when the core touches
+  OtherRound,  ///< the same with b the sphere or capsule
+  General      ///< libccd (boolean, penetration), GJK (distance)
+};
+
+template <class S, class A, class B>
+constexpr PairMethod pair_method() {
+  constexpr bool sphere_a = std::is_same_v<A, Sphere<S>>, sphere_b = std::is_same_v<B, Sphere<S>>;
+  constexpr bool box_a = std::is_same_v<A, Box<S>>, box_b = std::is_same_v<B, Box<S>>;
+  if (is_round_v<A, S> && is_round_v<B, S>) return PairMethod::RoundRound;
+  if (sphere_a && box_b) return PairMethod::SphereBox;
+  if (box_a && sphere_b) return PairMethod::BoxSphere;
+  if (box_a && box_b) return PairMethod::BoxBox;
+  if (is_round_v<A, S>) return PairMethod::RoundOther;
+  if (is_round_v<B, S>) return PairMethod::OtherRound;
+  return PairMethod::General;
+}
+
 template <class S>
 void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
   validate_in_range(o.max_iterations, 1, 100000, where, "options.max_iterations");
@@ -268,20 +294,20 @@ ConvexContact<S> convex_penetration(const A& a, const RigidTransform<S>& pose_a,
                                     const ConvexQueryOptions<S>& options = {}) {
   using namespace detail;
   detail::validate_query(a, pose_a, b, pose_b, options, "convex_penetration");
-  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
-    Vec3<S> qa, qb;
-    core_points(a, pose_a, b, pose_b, qa, qb);
+  constexpr PairMethod method = pair_method<S, A, B>();
+  if constexpr (method == PairMethod::RoundRound) {
+    const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
     const bool segments = std::is_same_v<A, Capsule<S>> && std::is_same_v<B, Capsule<S>>;
-    return balls_contact(qa, round_radius(a), qb, round_radius(b), core_fallback_normal(pose_a, pose_b, segments));
-  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
+    return balls_contact(q.a, round_radius(a), q.b, round_radius(b), core_fallback_normal(pose_a, pose_b, segments));
+  } else if constexpr (method == PairMethod::SphereBox) {
     return sphere_box_contact(pose_a.apply(a.center), a.radius, b, pose_b);
-  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
+  } else if constexpr (method == PairMethod::BoxSphere) {
     return swapped(sphere_box_contact(pose_b.apply(b.center), b.radius, a, pose_a));
-  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Box<S>>) {
+  } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, true);
-  } else if constexpr (is_round_v<A, S>) {
+  } else if constexpr (method == PairMethod::RoundOther) {
     return round_contact(a, pose_a, b, pose_b, options, false);
-  } else if constexpr (is_round_v<B, S>) {
+  } else if constexpr (method == PairMethod::OtherRound) {
     return round_contact(b, pose_b, a, pose_a, options, true);
   } else {
     return epa(a, pose_a, b, pose_b, options);
@@ -294,19 +320,19 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
                                   const ConvexQueryOptions<S>& options = {}) {
   using namespace detail;
   detail::validate_query(a, pose_a, b, pose_b, options, "convex_distance");
-  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
-    Vec3<S> qa, qb;
-    core_points(a, pose_a, b, pose_b, qa, qb);
-    return balls_distance(qa, round_radius(a), qb, round_radius(b), Vec3<S>(Vec3<S>::UnitZ()));
-  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
+  constexpr PairMethod method = pair_method<S, A, B>();
+  if constexpr (method == PairMethod::RoundRound) {
+    const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
+    return balls_distance(q.a, round_radius(a), q.b, round_radius(b), Vec3<S>(Vec3<S>::UnitZ()));
+  } else if constexpr (method == PairMethod::SphereBox) {
     return sphere_box_distance(pose_a.apply(a.center), a.radius, b, pose_b);
-  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
+  } else if constexpr (method == PairMethod::BoxSphere) {
     return swapped(sphere_box_distance(pose_b.apply(b.center), b.radius, a, pose_a));
-  } else if constexpr (is_round_v<A, S>) {
+  } else if constexpr (method == PairMethod::RoundOther) {
     return round_distance(a, pose_a, b, pose_b, options);
-  } else if constexpr (is_round_v<B, S>) {
+  } else if constexpr (method == PairMethod::OtherRound) {
     return swapped(round_distance(b, pose_b, a, pose_a, options));
-  } else {
+  } else {  // BoxBox and General: GJK
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
     return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
   }
@@ -320,24 +346,22 @@ bool convex_intersect(const A& a, const RigidTransform<S>& pose_a, const B& b, c
   using namespace detail;
   detail::validate_query(a, pose_a, b, pose_b, options, "convex_intersect");
   if (limit_reached) *limit_reached = false;
-  if constexpr (is_round_v<A, S> && is_round_v<B, S>) {
-    Vec3<S> qa, qb;
-    core_points(a, pose_a, b, pose_b, qa, qb);
+  constexpr PairMethod method = pair_method<S, A, B>();
+  if constexpr (method == PairMethod::RoundRound) {
+    const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
     const S r = round_radius(a) + round_radius(b);
-    return (qb - qa).squaredNorm() <= r * r;
-  } else if constexpr (std::is_same_v<A, Sphere<S>> && std::is_same_v<B, Box<S>>) {
-    const Vec3<S> lc = pose_b.R.transpose() * (pose_a.apply(a.center) - pose_b.t);
-    return (lc - lc.cwiseMax(-b.half).cwiseMin(b.half)).squaredNorm() <= a.radius * a.radius;
-  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Sphere<S>>) {
-    const Vec3<S> lc = pose_a.R.transpose() * (pose_b.apply(b.center) - pose_a.t);
-    return (lc - lc.cwiseMax(-a.half).cwiseMin(a.half)).squaredNorm() <= b.radius * b.radius;
-  } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Box<S>>) {
+    return (q.b - q.a).squaredNorm() <= r * r;
+  } else if constexpr (method == PairMethod::SphereBox) {
+    return sphere_box_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::BoxSphere) {
+    return sphere_box_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
+  } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
-  } else if constexpr (is_round_v<A, S> || is_round_v<B, S>) {
+  } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
     // GJK on the core with the radius as margin: stops as soon as the answer is decided.
     ConvexDistance<S> d;
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
-    if constexpr (is_round_v<A, S>) {
+    if constexpr (method == PairMethod::RoundOther) {
       const auto core = core_of(a);
       d = gjk(core, pose_a, core_interior(core), b, pose_b, interior_point(b), tol, options.max_iterations, round_radius(a));
     } else {

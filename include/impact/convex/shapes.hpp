@@ -18,6 +18,10 @@
 /// the penetration depth of two flat shapes undefined and the expanding polytope of EPA degenerate.
 /// The members are public for reading; a shape whose members are changed after construction must
 /// be re-validated with validate_shape().
+///
+/// Thread safety: shapes are plain values and every function here is const or free, so a shape
+/// may be read from any number of threads at once; changing its members is not concurrent with
+/// anything else on it.
 #pragma once
 
 #include "impact/core/validate.hpp"
@@ -69,31 +73,48 @@ void validate_shape(const Sphere<S>& s, const char* where) {
   validate_length(s.radius, where, "sphere.radius");
   validate_positive(s.radius, where, "sphere.radius");
 }
+
+namespace detail {
+/// The radius and half length of a capsule, cylinder or cone, named radius_name and length_name in
+/// the messages: both finite and in range, the radius > 0, the half length > 0 too unless
+/// `zero_length_ok`.
+template <class S>
+void validate_radius_and_half_length(S radius, S half_length, bool zero_length_ok, const char* where, const char* radius_name,
+                                     const char* length_name) {
+  validate_length(radius, where, radius_name);
+  validate_positive(radius, where, radius_name);
+  validate_length(half_length, where, length_name);
+  if (!zero_length_ok) validate_positive(half_length, where, length_name);
+}
+}  // namespace detail
+
 template <class S>
 void validate_shape(const Capsule<S>& s, const char* where) {
-  validate_length(s.radius, where, "capsule.radius");
-  validate_positive(s.radius, where, "capsule.radius");
-  validate_length(s.half_length, where, "capsule.half_length");
+  detail::validate_radius_and_half_length(s.radius, s.half_length, true, where, "capsule.radius", "capsule.half_length");
 }
 template <class S>
 void validate_shape(const Cylinder<S>& s, const char* where) {
-  validate_length(s.radius, where, "cylinder.radius");
-  validate_positive(s.radius, where, "cylinder.radius");
-  validate_length(s.half_length, where, "cylinder.half_length");
-  validate_positive(s.half_length, where, "cylinder.half_length");
+  detail::validate_radius_and_half_length(s.radius, s.half_length, false, where, "cylinder.radius", "cylinder.half_length");
 }
 template <class S>
 void validate_shape(const Cone<S>& s, const char* where) {
-  validate_length(s.radius, where, "cone.radius");
-  validate_positive(s.radius, where, "cone.radius");
-  validate_length(s.half_length, where, "cone.half_length");
-  validate_positive(s.half_length, where, "cone.half_length");
+  detail::validate_radius_and_half_length(s.radius, s.half_length, false, where, "cone.radius", "cone.half_length");
 }
 template <class S>
 void validate_shape(const Box<S>& s, const char* where) {
   validate_coordinates(s.half, where, "box.half");
   if (!(s.half.minCoeff() > S(0))) throw InvalidInput(std::string(where) + ": box.half must be > 0 on every axis");
 }
+
+namespace detail {
+/// The support point in direction d of the circle of radius `radius` about the z axis at height z:
+/// radius d_xy / |d_xy| (`d_xy_norm` = |d_xy|), or (radius, 0) when d is parallel to the axis.
+template <class S>
+inline Vec3<S> rim_support(S radius, S z, const Vec3<S>& d, S d_xy_norm) {
+  if (d_xy_norm > S(0)) return {d.x() * (radius / d_xy_norm), d.y() * (radius / d_xy_norm), z};
+  return {radius, S(0), z};
+}
+}  // namespace detail
 
 /// Support point: a point of the shape (in its own frame) maximising the dot product with `d`.
 /// `d` need not be unit; for d = 0 some point of the shape is returned.
@@ -112,9 +133,7 @@ inline Vec3<S> support(const Capsule<S>& s, const Vec3<S>& d) {
 template <class S>
 inline Vec3<S> support(const Cylinder<S>& s, const Vec3<S>& d) {
   const S r = std::sqrt(d.x() * d.x() + d.y() * d.y());
-  const S z = d.z() >= S(0) ? s.half_length : -s.half_length;
-  if (r > S(0)) return {d.x() * (s.radius / r), d.y() * (s.radius / r), z};
-  return {s.radius, S(0), z};
+  return detail::rim_support(s.radius, d.z() >= S(0) ? s.half_length : -s.half_length, d, r);
 }
 template <class S>
 inline Vec3<S> support(const Cone<S>& s, const Vec3<S>& d) {
@@ -123,8 +142,7 @@ inline Vec3<S> support(const Cone<S>& s, const Vec3<S>& d) {
   const S apex = s.half_length * d.z();
   const S rim = s.radius * r - s.half_length * d.z();
   if (apex >= rim) return {S(0), S(0), s.half_length};
-  if (r > S(0)) return {d.x() * (s.radius / r), d.y() * (s.radius / r), -s.half_length};
-  return {s.radius, S(0), -s.half_length};
+  return detail::rim_support(s.radius, -s.half_length, d, r);
 }
 template <class S>
 inline Vec3<S> support(const Box<S>& s, const Vec3<S>& d) {

@@ -133,4 +133,16 @@ template <class S_> struct BvTraits<Obb<S_>> {
   static Obb<S> inflated(const Obb<S>& a, S margin) { return {a.center, a.axes, (a.half.array() + margin).matrix()}; }
 };
 
+namespace detail {
+
+/// True for the BVs whose ray and closest-point keys are lower bounds of every triangle's computed
+/// value, not only up to rounding (boxes, and oriented boxes through their axis-aligned hulls;
+/// query/ray_mesh.hpp, query/closest_point_mesh.hpp): those queries prune nodes at the best value
+/// found, and equal the brute-force loops bit for bit.
+template <class BV> inline constexpr bool exact_query_keys = false;
+template <class S> inline constexpr bool exact_query_keys<Aabb<S>> = true;
+template <class S> inline constexpr bool exact_query_keys<Obb<S>> = true;
+
+}  // namespace detail
+
 }  // namespace impact

@@ -6,8 +6,11 @@
 #pragma once
 
 #include "impact/core/types.hpp"
+#include "impact/geometry/aabb.hpp"
 
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace impact {
 
@@ -45,6 +48,51 @@ inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, 
       const S d = tb[i2] * R(i1, j) - tb[i1] * R(i2, j);
       if (std::abs(d) > ra + rb + slack) return false;
     }
+  }
+  return true;
+}
+
+/// The axis-aligned box around an oriented box, rounded outwards: it holds every point centre +
+/// axes h, |h_i| <= half_i, of the stored box exactly (the radii |axes| half are grown by a bound of
+/// their rounding, each corner moved one float further out). The ray and closest-point queries of
+/// OBB trees key their pruning on it (query/ray_mesh.hpp, query/closest_point_mesh.hpp). An empty
+/// box (a negative extent) gives an empty Aabb.
+template <class S> inline Aabb<S> bounding_aabb(const Obb<S>& b) {
+  if ((b.half.array() < S(0)).any()) return Aabb<S>();
+  constexpr S inf = std::numeric_limits<S>::infinity();
+  // three non-negative products and two sums: within 3 ulps of the exact radius, below it at worst
+  const Vec3<S> r = (b.axes.cwiseAbs() * b.half) * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
+  Aabb<S> box;
+  for (int i = 0; i < 3; ++i) {
+    // fl(c - r) is the float nearest c - r: the next float below it is below c - r (likewise above)
+    box.min[i] = std::nextafter(b.center[i] - r[i], -inf);
+    box.max[i] = std::nextafter(b.center[i] + r[i], inf);
+  }
+  return box;
+}
+
+/// True when the line o + t d (t any real) meets the box grown by `margin` + a bound of the
+/// rounding of the test, which works in the box's frame: it never returns false for a line that
+/// passes within `margin` of the box, or within rounding of it (up to 32 ulps of the sizes
+/// involved: the offset |o - centre|, the extents, the centre's coordinates). A zero direction
+/// gives the point test. Conservative, not exact: callers use it to reject, never to order.
+template <class S> inline bool line_meets_obb(const Vec3<S>& o, const Vec3<S>& d, const Obb<S>& b, S margin = S(0)) {
+  const Vec3<S> oc = o - b.center;
+  const Vec3<S> lo = b.axes.transpose() * oc, ld = b.axes.transpose() * d;
+  const S scale = oc.cwiseAbs().sum() + b.half.sum() + b.center.cwiseAbs().sum() + margin;
+  const S pad = margin + S(32) * std::numeric_limits<S>::epsilon() * scale + std::numeric_limits<S>::denorm_min();
+  S t0 = -std::numeric_limits<S>::infinity(), t1 = std::numeric_limits<S>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    const S h = b.half[i] + pad;
+    if (ld[i] == S(0)) {
+      if (std::abs(lo[i]) > h) return false;
+      continue;
+    }
+    S a = (-h - lo[i]) / ld[i], c = (h - lo[i]) / ld[i];
+    if (a > c) std::swap(a, c);
+    t0 = a > t0 ? a : t0;
+    t1 = c < t1 ? c : t1;
+    if (t0 > t1) return false;
   }
   return true;
 }

@@ -13,11 +13,18 @@
 /// the computed values, not only up to rounding: with a box tree the result's distance is exactly
 /// the smallest of a loop over every triangle, and its triangle one of those at that distance
 /// (equal distances at shared edges and vertices return one of the triangles that share them).
-/// Sphere trees use the distance to each sphere, a lower bound up to its own rounding.
+/// Oriented-box trees key each node on the larger of the distance to the box's axis-aligned hull
+/// (computed as for boxes: exact) and the distance to the box itself lowered by a bound of its
+/// rounding and of the narrow phase's (its closest point lies on the closed triangle up to a few
+/// ulps of the coordinates): the same exact answer as box trees. Sphere trees use the distance to
+/// each sphere, a lower bound up to its own rounding.
+/// Cost limit: k coincident copies of a triangle near the query cost O(k) unless their box's
+/// distance equals the triangle's (box trees): no node test can tell that a node adds nothing.
 #pragma once
 
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
+#include "impact/geometry/obb.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/closest_point.hpp"
 
@@ -79,6 +86,28 @@ template <class S> inline S squared_distance_to_bv(const Vec3<S>& p, const Spher
   return d > S(0) ? d * d : S(0);
 }
 
+/// Squared distance from p to an oriented box, a lower bound of the computed value of every
+/// triangle inside it (triangle_squared_distance): the larger of the monotone distance to its hull
+/// (bounding_aabb holds the triangles' boxes) and the distance to the box itself, measured in the
+/// box's frame with each axis's excess shrunk by 64 ulps of the sizes involved (|p|, the centre,
+/// the extents: the rounding of the local coordinates and of the narrow phase's closest point,
+/// which lies on its closed triangle up to a few ulps of the coordinates) and the sum lowered by
+/// 16 ulps (the rounding of the squares and of the triangle's own squared distance).
+template <class S> inline S squared_distance_to_bv(const Vec3<S>& p, const Obb<S>& b) {
+  const S hull = squared_distance_to_bv(p, bounding_aabb(b));
+  const Vec3<S> oc = p - b.center;
+  const Vec3<S> l = b.axes.transpose() * oc;
+  const S scale = oc.cwiseAbs().sum() + p.cwiseAbs().sum() + b.center.cwiseAbs().sum() + b.half.sum();
+  const S pad = S(64) * std::numeric_limits<S>::epsilon() * scale;
+  S d2 = S(0);
+  for (int i = 0; i < 3; ++i) {
+    const S e = std::abs(l[i]) - b.half[i] - pad;
+    if (e > S(0)) d2 += e * e;
+  }
+  d2 *= S(1) - S(16) * std::numeric_limits<S>::epsilon();
+  return d2 > hull ? d2 : hull;
+}
+
 /// Squared distance from p to triangle t's closest point (tp), raised to the squared distance to
 /// the triangle's bounding box when rounding put it below that. The box's value is never above
 /// the key of any box node holding the triangle (squared_distance_to_bv is monotone), so a node
@@ -98,6 +127,11 @@ template <class S> struct ClosestPointOptions {
   /// search makes the query cheap for points far from the surface. >= 0 or +infinity (NaN and
   /// negative values throw InvalidInput).
   S max_distance = std::numeric_limits<S>::infinity();
+};
+
+/// Counters of one closest-point query, for benchmarks: node (BV distance) and triangle tests.
+struct ClosestPointStats {
+  std::size_t node_tests = 0, triangle_tests = 0;
 };
 
 /// Closest point on a mesh, in the world frame.
@@ -121,7 +155,7 @@ namespace detail {
 template <class BV>
 std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_point_on_mesh_unchecked(
     const MeshBvh<BV>& mesh, const Vec3<typename BvTraits<BV>::Scalar>& query, const RigidTransform<typename BvTraits<BV>::Scalar>& pose,
-    const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options) {
+    const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options, ClosestPointStats* stats = nullptr) {
   using S = typename BvTraits<BV>::Scalar;
   const Vec3<S> p = pose.R.transpose() * (query - pose.t);
   S best = options.max_distance < std::numeric_limits<S>::infinity() ? options.max_distance * options.max_distance
@@ -131,7 +165,8 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
   // Once a triangle is found only a strictly closer one replaces it, so nodes at the distance
   // found are pruned too (bound just below it): without that, a mesh whose triangles are all at
   // the same distance (coincident vertices) had every node and triangle visited. Exact, not up to
-  // rounding: a node's key never exceeds its triangles' values (triangle_squared_distance).
+  // rounding: a node's key never exceeds its triangles' values (triangle_squared_distance; for
+  // oriented boxes, see squared_distance_to_bv).
   // Sphere trees: a sphere's distance is a lower bound up to its own rounding only (a triangle's
   // vertex can lie on the sphere), and it is below its triangles' anyway: they prune only nodes
   // strictly farther than best.
@@ -140,12 +175,14 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
   traverse_nearest(
       mesh.tree(),
       [&](const BV& bv) -> std::optional<S> {
+        if (stats) ++stats->node_tests;
         const S d2 = detail::squared_distance_to_bv(p, bv);
         if (d2 > bound()) return std::nullopt;
         return d2;
       },
       bound,
       [&](std::int32_t k) {
+        if (stats) ++stats->triangle_tests;
         const Triangle<S> tri = mesh.triangle(k);
         const TrianglePoint<S> tp = detail::closest_on_triangle(p, tri);
         const S d2 = detail::triangle_squared_distance(p, tri, tp);
@@ -153,7 +190,7 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
           best = d2;
           best_leaf = k;
           best_tp = tp;
-          if constexpr (std::is_same_v<BV, Aabb<S>>)
+          if constexpr (detail::exact_query_keys<BV>)
             limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
           else
             limit = best;
@@ -181,15 +218,17 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
 /// Closest point on the mesh (placed by `pose`) to `query`, or nothing when the mesh is farther
 /// than options.max_distance. Cost O(log n) typical. Throws InvalidInput for a query not finite
 /// or beyond CoordinateRange (core/validate.hpp), a pose that is not rigid (validate_pose) or options.max_distance NaN or negative.
+/// `stats`, when given, is incremented by the query's node and triangle tests.
 template <class BV>
 std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_point_on_mesh(
     const MeshBvh<BV>& mesh, const Vec3<typename BvTraits<BV>::Scalar>& query,
-    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}, const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options = {}) {
+    const RigidTransform<typename BvTraits<BV>::Scalar>& pose = {}, const ClosestPointOptions<typename BvTraits<BV>::Scalar>& options = {},
+    ClosestPointStats* stats = nullptr) {
   constexpr const char* where = "closest_point_on_mesh";
   validate_coordinates(query, where, "query");
   validate_pose(pose, where);
   validate_nonnegative_or_inf(options.max_distance, where, "options.max_distance");
-  return detail::closest_point_on_mesh_unchecked(mesh, query, pose, options);
+  return detail::closest_point_on_mesh_unchecked(mesh, query, pose, options, stats);
 }
 
 }  // namespace impact

@@ -19,10 +19,11 @@
 /// test, t raised to the triangle's box entry, the tie rule at t = 0), the same t the BVH casts
 /// return; each cell's parameter interval is widened by a bound of its rounding, so a hit on a
 /// splitting plane is never lost. It lives in query/ beside the casts whose rule it shares (as
-/// DistanceGrid does). Closest point: the nearest triangle's point by the
-/// narrow phase's closest_point_on_triangle; cells are skipped only when their (rounded) squared
-/// distance exceeds the best by more than a bound of that rounding, so the result is the minimum
-/// over all triangles, as a brute force computes it.
+/// DistanceGrid does). Closest point: the nearest triangle's point by the narrow phase's
+/// closest_point_on_triangle, its squared distance by the BVH queries' rule (raised to the
+/// distance to the triangle's box when rounding put it below); cells are skipped only when their
+/// (rounded) squared distance exceeds the best by more than a bound of that rounding, so the
+/// result is the minimum over all triangles, as a brute force computes it, and the BVH's.
 ///
 /// Thread safety: construction writes; every const member (first_hit, closest_point, stats) only
 /// reads: any number of threads may query one tree at once.
@@ -35,6 +36,7 @@
 #include "impact/geometry/triangle_mesh.hpp"
 #include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/ray_triangle.hpp"
+#include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
 
 #include <algorithm>
@@ -58,7 +60,8 @@ struct KdTreeConfig {
   int leaf_size = 1;                   ///< cells of at most this many triangles are leaves (>= 1)
 };
 
-/// Counters of one query, for benchmarks.
+/// Counters of one query, for benchmarks: cells visited, and triangles tested (for the closest
+/// point, those whose box was near enough to need the narrow phase's closest point).
 struct KdTreeStats {
   std::size_t node_visits = 0, triangle_tests = 0;
 };
@@ -209,6 +212,13 @@ template <class S> class KdTree {
 
   /// Closest point of the mesh to p (nothing only when max_distance is exceeded). Throws
   /// InvalidInput for a point that is not finite or beyond CoordinateRange.
+  ///
+  /// A triangle's squared distance is the BVH queries' (detail::triangle_squared_distance of
+  /// query/closest_point_mesh.hpp: the narrow phase's, raised to the distance to the triangle's
+  /// box when rounding put it below), so the answer equals closest_point_on_mesh's distance. Each
+  /// referenced triangle is first culled by the distance to its box (exact: its value is never
+  /// below that), and a triangle met again in another cell is skipped (a 32-entry cache of the ids
+  /// tested by this query); the traversal stack lives on the call stack (no allocation).
   std::optional<KdClosestPoint<S>> closest_point(const Vec3<S>& p, KdTreeStats* stats = nullptr,
                                                  S max_distance = std::numeric_limits<S>::infinity()) const {
     validate_coordinates(p, "KdTree::closest_point", "p");
@@ -221,23 +231,30 @@ template <class S> class KdTree {
       S d2;
       Aabb<S> box;
     };
-    std::vector<Item> stack;
-    stack.reserve(2 * static_cast<std::size_t>(depth_) + 2);
-    stack.push_back({0, box_distance2(p, root_box_), root_box_});
+    Item stack[2 * 64 + 4];  // depth <= 64: at most one pending sibling per level
+    int top = 0;
+    stack[top++] = {0, box_distance2(p, root_box_), root_box_};
+    std::int32_t seen[32];
+    std::fill(std::begin(seen), std::end(seen), -1);
     const S slack = S(1) + S(64) * std::numeric_limits<S>::epsilon();
-    while (!stack.empty()) {
-      const Item it = stack.back();
-      stack.pop_back();
+    while (top > 0) {
+      const Item it = stack[--top];
       if (it.d2 > best * slack) continue;
       const Node& n = nodes_[static_cast<std::size_t>(it.node)];
       if (stats) ++stats->node_visits;
       if (n.is_leaf()) {
         for (std::int32_t k = n.child_or_first; k < n.child_or_first + n.count; ++k) {
           const std::int32_t t = refs_[static_cast<std::size_t>(k)];
+          std::int32_t& slot = seen[static_cast<std::uint32_t>(t) & 31u];
+          if (slot == t) continue;
+          slot = t;
+          const Triangle<S> tri = mesh_.triangle(t);
+          const S box = detail::squared_distance_to_bv(p, Aabb<S>(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c)));
+          if (box > best || (best_tri >= 0 && box == best)) continue;  // its value is >= box: it cannot win
           if (stats) ++stats->triangle_tests;
-          const Vec3<S> q = closest_point_on_triangle(p, mesh_.triangle(t)).point;
-          const S d2 = (q - p).squaredNorm();
-          if (d2 < best || (best_tri < 0 && d2 <= best)) best = d2, best_tri = t, best_point = q;
+          const TrianglePoint<S> tp = detail::closest_on_triangle(p, tri);
+          const S d2 = detail::triangle_squared_distance(p, tri, tp);
+          if (d2 < best || (best_tri < 0 && d2 <= best)) best = d2, best_tri = t, best_point = tp.point;
         }
         continue;
       }
@@ -246,8 +263,8 @@ template <class S> class KdTree {
       hi.min[n.axis] = n.split;
       Item a{n.child_or_first, box_distance2(p, lo), lo}, b{n.child_or_first + 1, box_distance2(p, hi), hi};
       if (a.d2 < b.d2) std::swap(a, b);  // nearer on top
-      stack.push_back(a);
-      stack.push_back(b);
+      if (a.d2 <= best * slack) stack[top++] = a;
+      if (b.d2 <= best * slack) stack[top++] = b;
     }
     if (best_tri < 0) return std::nullopt;
     return KdClosestPoint<S>{best_point, best_tri, std::sqrt(best)};

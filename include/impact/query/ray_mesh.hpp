@@ -13,16 +13,25 @@
 /// detail::ray_mesh_triangle_hit). The node tests are conservative (their exit parameter is
 /// padded, PBRT's robust slab test) and monotone (a box inside another is entered no earlier), so
 /// no hit is lost to rounding in the traversal of a box tree or a CompactBvh: their first hit's t
-/// is exactly the smallest t of a loop over every triangle. Sphere trees use the sphere's padded
+/// is exactly the smallest t of a loop over every triangle. Oriented-box trees key on the same
+/// slab entry into each box's axis-aligned hull and reject nodes whose box the ray's line misses
+/// (detail::ray_bv_entry for Obb): the same exact answer, provided the watertight test hits only
+/// triangles its ray passes within rounding of (32 ulps of the coordinates; it does unless an edge
+/// function's sign is lost on a sliver seen from afar). Sphere trees use the sphere's padded
 /// entry, a lower bound up to the rounding of the entry itself. One tie rule keeps particles out of surfaces: a hit at
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
 /// normal), so a point exactly on a surface is on its front side: moving into the surface it
 /// hits, moving away it does not.
+///
+/// Cost limit: k coincident copies of a triangle cost O(k) triangle tests a cast unless their
+/// box is entered exactly at the hit (copies flat across the ray's axis, box trees): every node
+/// holding a copy is entered before the hit and no node test can tell its copies add nothing.
 #pragma once
 
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
+#include "impact/geometry/obb.hpp"
 #include "impact/geometry/ray.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/ray_triangle.hpp"
@@ -187,16 +196,26 @@ class PairSlab {
 };
 
 /// Entry parameter of the ray into a sphere (padded), nullopt on a miss or entry after t_max.
+/// The padding is at the scale of the coordinates, not only of the radius: the offset o - centre
+/// is rounded at the scale of |o| and |centre|, so a tiny sphere far from the origin (a leaf
+/// around a 1e-4 triangle seen from 2 units away) was missed by a ray through its triangle's
+/// vertex (the entry rounded past t_max = the vertex's t, or the discriminant b^2 - a c lost to
+/// cancellation in float). The discriminant is a (r^2 - |l|^2), l the offset of the centre from
+/// the line (Haines et al., Ray Tracing Gems ch. 7), and the entry c / (-b + sqrt(disc)) (no
+/// cancellation), lowered by the padding over |d|.
 template <class S> inline std::optional<S> ray_sphere_entry(const Vec3<S>& o, const Vec3<S>& d, const Sphere<S>& s, S t_max) {
+  constexpr S eps = std::numeric_limits<S>::epsilon();
   const Vec3<S> m = o - s.center;
-  const S r = s.radius * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
+  const S pad = S(16) * eps * (o.cwiseAbs().sum() + s.center.cwiseAbs().sum());
+  const S r = s.radius * (S(1) + S(8) * eps) + pad;
   const S c = m.squaredNorm() - r * r;
   if (c <= S(0)) return S(0);  // origin inside
   const S a = d.squaredNorm(), b = m.dot(d);
   if (b >= S(0) || a == S(0)) return std::nullopt;
-  const S disc = b * b - a * c;
-  if (disc < S(0)) return std::nullopt;
-  const S t = (-b - std::sqrt(disc)) / a;
+  const Vec3<S> l = m - (b / a) * d;
+  const S h2 = r * r - l.squaredNorm();
+  if (h2 < S(0)) return std::nullopt;
+  const S t = c / (std::sqrt(a * h2) - b) * (S(1) - S(8) * eps) - pad / std::sqrt(a);
   if (t > t_max) return std::nullopt;
   return t > S(0) ? t : S(0);
 }
@@ -216,6 +235,22 @@ inline std::optional<S> ray_bv_entry(const Vec3<S>& o, const Vec3<S>& d, const V
   return ray_sphere_entry(o, d, Sphere<S>(s.center, s.radius + margin), t_max);
 }
 
+/// Entry of a ray into an oriented box (inflated by `margin`), for OBB trees. The key is the entry
+/// into the box's axis-aligned hull (geometry/obb.hpp, bounding_aabb), by ray_box_entry: the hull
+/// holds every triangle's box, so the key is never above the entry into any of them, and the
+/// pruning is exact as in box trees (ray_mesh_triangle_hit). The oriented box itself only rejects:
+/// the node is skipped when the ray's line misses it (line_meets_obb, conservative). Not the
+/// segment: a triangle hit by a ray lying in its plane to rounding gets a t anywhere in the
+/// triangle's depth range, maybe before the ray enters the box, while the line, which the
+/// watertight test found crossing the triangle up to rounding, still meets the box.
+template <class S>
+inline std::optional<S> ray_bv_entry(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv_d, const Obb<S>& b, S t_max,
+                                     S margin = S(0)) {
+  const std::optional<S> t = ray_bv_entry(o, d, inv_d, bounding_aabb(b), t_max, margin);
+  if (!t || !line_meets_obb(o, d, b, margin)) return std::nullopt;
+  return t;
+}
+
 /// Conservative box-versus-BV prefilter (false only when they are certainly disjoint).
 template <class S> inline bool may_overlap(const Aabb<S>& seg, const Aabb<S>& b) {
   return (seg.min.array() <= b.max.array()).all() && (b.min.array() <= seg.max.array()).all();
@@ -224,6 +259,7 @@ template <class S> inline bool may_overlap(const Aabb<S>& seg, const Sphere<S>& 
   const Vec3<S> q = s.center.cwiseMax(seg.min).cwiseMin(seg.max);
   return (q - s.center).squaredNorm() <= s.radius * s.radius * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
 }
+template <class S> inline bool may_overlap(const Aabb<S>& seg, const Obb<S>& b) { return may_overlap(seg, bounding_aabb(b)); }
 
 template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
@@ -277,7 +313,7 @@ struct FirstHitCast {
   /// strictly earlier one replaces it. In a box tree a node's computed entry is a lower bound of
   /// its triangles' t (exact, not up to rounding: see ray_mesh_triangle_hit), so nodes entered at
   /// best itself are pruned too (else a mesh of coincident triangles, all hit at the same t, had
-  /// every node and triangle visited). A sphere's computed entry is a lower bound up to its own
+  /// every node and triangle visited). Likewise in an OBB tree, whose keys are its hulls' entries. A sphere's computed entry is a lower bound up to its own
   /// rounding only (a triangle's vertex can lie on the sphere), and the sphere is entered before
   /// its triangles anyway: sphere trees prune only nodes entered strictly after best.
   S bound() const { return limit; }
@@ -289,7 +325,7 @@ struct FirstHitCast {
       best = h->t;
       best_leaf = k;
       best_bary = Vec3<S>(h->u, h->v, h->w);
-      if constexpr (std::is_same_v<BV, Aabb<S>>)
+      if constexpr (exact_query_keys<BV>)
         limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
       else
         limit = best;

@@ -46,6 +46,7 @@
 
 #include "impact/bvh/traverse.hpp"
 #include "impact/core/parallel.hpp"
+#include "impact/detail/morton.hpp"
 #include "impact/response/collider.hpp"
 #include "impact/response/particle.hpp"
 #include "impact/response/response.hpp"
@@ -595,15 +596,6 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
     box.extend(particles[i].position);
   }
   const Vec3<S> ext = box.extent().cwiseMax(Vec3<S>::Constant(std::numeric_limits<S>::min()));
-  auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(particles.size());
   for (std::size_t i = 0; i < particles.size(); ++i) {
     std::uint64_t code = 0;
@@ -612,7 +604,7 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
       // in [0, 1] for finite positions; a box wider than the largest double gives t = NaN, sent
       // to 0 (the cast of a NaN would be undefined)
       const auto q = static_cast<std::uint64_t>((t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0) * 2097151.0);
-      code |= spread(q) << k;
+      code |= detail::spread_bits_3(q) << k;
     }
     keys[i] = {code, static_cast<std::uint32_t>(i)};
   }
