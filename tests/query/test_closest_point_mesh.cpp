@@ -21,8 +21,8 @@ namespace impact {
 namespace {
 
 template <class T> class ClosestPointMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
-TYPED_TEST_SUITE(ClosestPointMesh, BVs);
+using ClosestBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
+TYPED_TEST_SUITE(ClosestPointMesh, ClosestBVs);
 
 template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n) {
   using S = typename BvTraits<BV>::Scalar;
@@ -163,7 +163,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
     const MeshBvh<Aabb<S>> ab(m, cfg);
     const MeshBvh<Sphere<S>> sp(m, cfg);
     const MeshBvh<Obb<S>> ob(m, cfg);
-    for (int k = 0; k < 100 / kSampleDivisor; ++k) {
+    for (int k = 0; k < 100 / kClosestSamples; ++k) {
       const Vec3<S> q = k % 4 == 0 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1.5, 1.5).cast<S>());
       S best = std::numeric_limits<S>::infinity();
       for (int t = 0; t < m.num_triangles(); ++t) {

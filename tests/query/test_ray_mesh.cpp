@@ -43,8 +43,8 @@ template <class S> std::optional<std::pair<S, int>> brute_first_hit(const Triang
 }
 
 template <class T> class RayMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
-TYPED_TEST_SUITE(RayMesh, BVs);
+using RayBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
+TYPED_TEST_SUITE(RayMesh, RayBVs);
 
 template <class BV> void check_against_brute_force(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n_rays) {
   using S = typename BvTraits<BV>::Scalar;
@@ -358,7 +358,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
     const MeshBvh<Aabb<S>> ab(m, cfg);
     const MeshBvh<Sphere<S>> sp(m, cfg);
     const MeshBvh<Obb<S>> ob(m, cfg);
-    for (int k = 0; k < 200 / kSampleDivisor; ++k) {
+    for (int k = 0; k < 200 / kRaySamples; ++k) {
       const Vec3<S> o = rng.vec(-1.5, 1.5).cast<S>();
       const Vec3<S> target = k % 2 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1, 1).cast<S>());
       if (target == o) continue;
@@ -379,7 +379,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
       EXPECT_TRUE(th && th->t == ho->t) << k;
     }
   }
-  EXPECT_GT(hits, 150 / kSampleDivisor);
+  EXPECT_GT(hits, 150 / kRaySamples);
 }
 
 TEST(RayMeshExact, DegenerateSoupFirstHitIsTheLoopMinimum) {
