@@ -4,6 +4,7 @@
 // zero-size and scene-spanning objects); the work counters show that skipped work is skipped; bad
 // input throws and leaves the scene unchanged; narrow-phase dispatch per pair of kinds.
 #include "impact/broad/scene.hpp"
+#include "scene_fixtures.hpp"
 #include "support/random.hpp"
 
 #include <gtest/gtest.h>
@@ -15,30 +16,11 @@
 
 using namespace impact;
 using impact::test::Rng;
+using impact::test::octahedron;
+using impact::test::pose_at;
+using impact::test::sorted_pairs;
 
 namespace {
-
-template <class S>
-std::unique_ptr<MeshBvh<Sphere<S>>> octahedron(S r) {
-  Vertices<S> V(6, 3);
-  V << r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r;
-  Faces F(8, 3);
-  F << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
-  return std::make_unique<MeshBvh<Sphere<S>>>(V, F);
-}
-
-template <class S>
-RigidTransform<S> pose_at(const Eigen::Vector3d& t, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
-  // Orthonormalise after the cast so float poses pass the rotation check.
-  Eigen::Quaternion<S> q(R.cast<S>());
-  q.normalize();
-  return {q.toRotationMatrix(), t.cast<S>()};
-}
-
-std::vector<ObjectPair> sorted(std::vector<ObjectPair> v) {
-  std::sort(v.begin(), v.end());
-  return v;
-}
 
 /// The same edits applied to one scene per broad phase.
 template <class S>
@@ -144,13 +126,13 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
           sc.each([&](Scene<S>& s) { s.set_filter(id, f); });
         }
       }
-      const auto ref = sorted(sc.s[0].find_pairs().pairs);
+      const auto ref = sorted_pairs(sc.s[0].find_pairs().pairs);
       EXPECT_GT(ref.size(), 0u);
       EXPECT_TRUE(std::adjacent_find(ref.begin(), ref.end()) == ref.end()) << "duplicate pair in the reference";
       for (std::size_t k = 1; k < sc.s.size(); ++k) {
         const PairResult r = sc.s[k].find_pairs();
         EXPECT_EQ(r.stats.inactive_pairs_tested, 0u);
-        ASSERT_EQ(sorted(r.pairs), ref) << "broad phase " << k << " seed " << seed << " step " << step;
+        ASSERT_EQ(sorted_pairs(r.pairs), ref) << "broad phase " << k << " seed " << seed << " step " << step;
       }
       const auto* sd = sc.s[1].template broad_phase_as<StaticDynamicBroadPhase<S>>();
       const auto* hi = sc.s[2].template broad_phase_as<HierarchicalBroadPhase<S>>();
@@ -159,8 +141,8 @@ TYPED_TEST(BroadTyped, RandomScenesMatchReference) {
       EXPECT_TRUE(hi->static_tree().valid());
       EXPECT_TRUE(hi->dynamic_tree().valid());
       // Narrow phase: same colliding pairs from every broad phase.
-      const auto c0 = sorted(sc.s[0].collide().pairs);
-      for (std::size_t k = 1; k < sc.s.size(); ++k) EXPECT_EQ(sorted(sc.s[k].collide().pairs), c0);
+      const auto c0 = sorted_pairs(sc.s[0].collide().pairs);
+      for (std::size_t k = 1; k < sc.s.size(); ++k) EXPECT_EQ(sorted_pairs(sc.s[k].collide().pairs), c0);
     }
   }
 }
@@ -174,10 +156,10 @@ TYPED_TEST(BroadTyped, CoincidentAndZeroSize) {
       s.add(i, i % 2 ? Shape<S>::particle() : Shape<S>::box(Vec3<S>::Zero()), pose_at<S>(Eigen::Vector3d(1, 2, 3)),
             {i % 3 == 0 ? BodyType::Static : BodyType::Dynamic});
     });
-  const auto ref = sorted(sc.s[0].find_pairs().pairs);
+  const auto ref = sorted_pairs(sc.s[0].find_pairs().pairs);
   // 20 objects, 7 static: all pairs but the static–static ones.
   EXPECT_EQ(ref.size(), std::size_t(20 * 19 / 2 - 7 * 6 / 2));
-  for (auto& s : sc.s) EXPECT_EQ(sorted(s.find_pairs().pairs), ref);
+  for (auto& s : sc.s) EXPECT_EQ(sorted_pairs(s.find_pairs().pairs), ref);
   for (auto& s : sc.s) EXPECT_EQ(s.collide().pairs.size(), ref.size());
 }
 
@@ -328,7 +310,7 @@ TYPED_TEST(BroadTyped, BadInputThrowsAndLeavesSceneUnchanged) {
     s.add(1, Shape<S>::sphere(S(1)), pose_at<S>(Eigen::Vector3d::Zero()));
     s.add(2, Shape<S>::mesh_of(*mesh), pose_at<S>(Eigen::Vector3d(1, 0, 0)), {BodyType::Static});
     s.add(3, Shape<S>::box(Vec3<S>::Ones()), pose_at<S>(Eigen::Vector3d(0, 1, 0)));
-    const auto before = sorted(s.find_pairs().pairs);
+    const auto before = sorted_pairs(s.find_pairs().pairs);
     const auto pose1 = s.pose(1);
     RigidTransform<S> nan_pose = pose_at<S>(Eigen::Vector3d::Zero());
     nan_pose.t.x() = std::numeric_limits<S>::quiet_NaN();
@@ -364,7 +346,7 @@ TYPED_TEST(BroadTyped, BadInputThrowsAndLeavesSceneUnchanged) {
     EXPECT_EQ(s.size(), 3u);
     EXPECT_FALSE(s.contains(4));
     EXPECT_EQ(s.pose(1).t, pose1.t);
-    EXPECT_EQ(sorted(s.find_pairs().pairs), before);
+    EXPECT_EQ(sorted_pairs(s.find_pairs().pairs), before);
     // A rotation rounded to float is still a rotation for a double scene.
     const Eigen::Matrix3f rf = Eigen::AngleAxisf(0.3f, Eigen::Vector3f(1, 2, 3).normalized()).toRotationMatrix();
     EXPECT_NO_THROW(s.set_pose(3, RigidTransform<S>(rf.cast<S>(), Vec3<S>(0, 1, 0))));
@@ -372,7 +354,7 @@ TYPED_TEST(BroadTyped, BadInputThrowsAndLeavesSceneUnchanged) {
     s.remove(3);
     EXPECT_THROW(s.remove(3), InvalidInput);
     EXPECT_EQ(s.size(), 2u);
-    EXPECT_EQ(sorted(s.find_pairs().pairs), (std::vector<ObjectPair>{{1, 2}}));
+    EXPECT_EQ(sorted_pairs(s.find_pairs().pairs), (std::vector<ObjectPair>{{1, 2}}));
   }
 }
 

@@ -11,6 +11,7 @@
 //    contacts in the same order, bit for bit, and the same work counters, over random edit steps
 //    (moves, sleeping, filters, ignored pairs, adds and removes), for every broad phase.
 #include "impact/broad/scene.hpp"
+#include "scene_fixtures.hpp"
 #include "support/random.hpp"
 
 #include <gtest/gtest.h>
@@ -24,29 +25,11 @@
 
 using namespace impact;
 using impact::test::Rng;
+using impact::test::octahedron;
+using impact::test::pose_at;
+using impact::test::sorted_pairs;
 
 namespace {
-
-template <class S>
-std::unique_ptr<MeshBvh<Sphere<S>>> octahedron(S r) {
-  Vertices<S> V(6, 3);
-  V << r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r, 0, 0, 0, r, 0, 0, -r;
-  Faces F(8, 3);
-  F << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
-  return std::make_unique<MeshBvh<Sphere<S>>>(V, F);
-}
-
-template <class S>
-RigidTransform<S> pose_at(const Eigen::Vector3d& t, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
-  Eigen::Quaternion<S> q(R.cast<S>());
-  q.normalize();
-  return {q.toRotationMatrix(), t.cast<S>()};
-}
-
-std::vector<ObjectPair> sorted(std::vector<ObjectPair> v) {
-  std::sort(v.begin(), v.end());
-  return v;
-}
 
 constexpr BroadPhaseKind kinds[] = {BroadPhaseKind::AllPairs, BroadPhaseKind::StaticDynamic, BroadPhaseKind::Hierarchical};
 
@@ -132,7 +115,7 @@ TEST(SceneConcurrency, QueriesFromManyThreadsMatchBruteForce) {
         const int wrong = run_concurrently(8, [&] {
           bool ok = true;
           for (int rep = 0; rep < 2; ++rep) {
-            ok = ok && sorted(scene.find_pairs().pairs) == expect;
+            ok = ok && sorted_pairs(scene.find_pairs().pairs) == expect;
             std::vector<ObjectPair> seen;
             BroadPhaseStats st;
             scene.for_each_pair(
@@ -141,19 +124,19 @@ TEST(SceneConcurrency, QueriesFromManyThreadsMatchBruteForce) {
                   return true;
                 },
                 st);
-            ok = ok && sorted(seen) == expect;
+            ok = ok && sorted_pairs(seen) == expect;
           }
           return ok;
         });
         EXPECT_EQ(wrong, 0) << "broad phase " << int(kind) << " round " << round << " pass " << pass;
       }
-      colliding = sorted(scene.collide().pairs);
+      colliding = sorted_pairs(scene.collide().pairs);
       ASSERT_FALSE(colliding.empty());
       const int wrong = run_concurrently(8, [&] {
         SceneCollideOptions c;
         c.contacts = true;
         const auto r = scene.collide(c);
-        return sorted(r.pairs) == colliding && r.contacts.size() == r.pairs.size() && scene.any_collision();
+        return sorted_pairs(r.pairs) == colliding && r.contacts.size() == r.pairs.size() && scene.any_collision();
       });
       EXPECT_EQ(wrong, 0) << "collide, broad phase " << int(kind) << " round " << round;
     }

@@ -123,10 +123,10 @@ TEST(CcdValidation, BadCoordinatesThrow) {
 }
 
 // A 3 x 3 grid sheet in z = z0 moving by dz.
-struct Sheet {
+struct MovingSheet {
   impact::Vertices<double> V0, V1;
   impact::Faces F;
-  Sheet(double z0, double dz) {
+  MovingSheet(double z0, double dz) {
     V0.resize(9, 3);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) V0.row(3 * i + j) << 0.5 * i, 0.5 * j, z0;
@@ -145,7 +145,7 @@ struct Sheet {
 
 TEST(CcdValidation, MeshEntryPointsThrow) {
   // Two parallel sheets 0.1 apart, still: within d = 0.2, not within 0.05.
-  const Sheet A(0.0, 0.0), B(0.1, 0.0);
+  const MovingSheet A(0.0, 0.0), B(0.1, 0.0);
   const auto ma = impact::make_mesh_motion(A.V0, A.V1, A.F), mb = impact::make_mesh_motion(B.V0, B.V1, B.F);
   for (double d : {kNaN, -1.0, kInf, 1e101})
     expect_invalid([&] { impact::SweptMeshBvh<double>::build(ma, d); }, "SweptMeshBvh::build: min_separation");
@@ -170,7 +170,7 @@ TEST(CcdValidation, MeshEntryPointsThrow) {
   o.max_iterations = 0;
   expect_invalid([&] { impact::mesh_ccd(ma, ta, mb, tb, o); }, "mesh_ccd: CcdOptions::max_iterations");
   // a tree of another mesh
-  const Sheet C(0.0, 0.0);
+  const MovingSheet C(0.0, 0.0);
   impact::Faces F2 = C.F.topRows(4);
   const auto mc = impact::make_mesh_motion(C.V0, C.V1, F2);
   expect_invalid([&] { impact::mesh_ccd(mc, ta, mb, tb, {}); }, "mesh_ccd: the tree of mesh a has 8 triangles, the mesh 4");

@@ -5,6 +5,7 @@
 // checked against a brute-force loop over every primitive pair on a smaller case in
 // test_mesh_ccd.cpp. Also: concurrent calls on shared trees.
 #include "impact/ccd/mesh_ccd.hpp"
+#include "sheets.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,40 +15,9 @@
 
 namespace {
 
-template <class S>
-struct Sheet {
-  impact::Vertices<S> V;
-  impact::Faces F;
-};
-
-/// An n x n grid sheet in the plane z = z0, side 1.
-template <class S>
-Sheet<S> sheet(int n, S z0) {
-  Sheet<S> m;
-  m.V.resize(n * n, 3);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) m.V.row(i * n + j) << S(i) / S(n - 1), S(j) / S(n - 1), z0;
-  m.F.resize(2 * (n - 1) * (n - 1), 3);
-  int f = 0;
-  for (int i = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j, b = a + 1, c = a + n, d = c + 1;
-      m.F.row(f++) << a, c, b;
-      m.F.row(f++) << b, c, d;
-    }
-  return m;
-}
-
-template <class S>
-impact::Vertices<S> jitter(const impact::Vertices<S>& V, std::mt19937& rng, double amount, double dz) {
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  impact::Vertices<S> W = V;
-  for (Eigen::Index i = 0; i < W.rows(); ++i) {
-    for (int k = 0; k < 3; ++k) W(i, k) += S(amount * U(rng));
-    W(i, 2) += S(dz);
-  }
-  return W;
-}
+using impact::test::jitter;
+using impact::test::Sheet;
+using impact::test::sheet;
 
 template <class S>
 void expect_same(const impact::MeshCcdResult<S>& a, const impact::MeshCcdResult<S>& b, int threads) {
