@@ -7,8 +7,11 @@
 ///   sphere – box                        closest point of the box (exact)
 ///   box – box                           separating axes (impact::overlap on Obb, conservative)
 ///   sphere – mesh, box – mesh           the mesh's tree walked with the other shape in the mesh's
-///                                       frame; triangles tested by closest point
-///                                       (narrow/closest_point.hpp) or separating axes (box, 13 axes)
+///                                       frame, node tests padded for the rounding of that move
+///                                       and of their comparisons; triangles tested by separating
+///                                       axes with a bound of their rounding (sphere: normal, edge
+///                                       and vertex directions, query/mesh_collide.hpp; box: 13
+///                                       axes): conservative, never false for a touching triangle
 ///   mesh – mesh                         pair traversal of both trees under the relative pose
 ///                                       with the node test of query/mesh_collide.hpp (padded for
 ///                                       the pose's rounding), exact triangles_intersect
@@ -27,8 +30,10 @@
 #include "impact/narrow/triangle_triangle.hpp"
 #include "impact/query/mesh_collide.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace impact {
 
@@ -133,10 +138,12 @@ bool triangle_box_overlap(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c, 
 }
 
 /// Does a sphere (centre c, radius r) meet the closed box centred at the origin with half extents h?
+/// Conservative: c - q is exact or rounded once (relative u), so the squared distance and r^2 are
+/// each within a relative 4u, which the comparison allows for.
 template <class S>
 inline bool sphere_box_local(const Vec3<S>& c, S r, const Vec3<S>& h) {
   const Vec3<S> q = c.cwiseMax(-h).cwiseMin(h);
-  return (c - q).squaredNorm() <= r * r;
+  return (c - q).squaredNorm() <= r * r * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
 }
 
 template <class S>
@@ -230,24 +237,40 @@ bool box_box(const Vec3<S>& ha, const RigidTransform<S>& pa, const Vec3<S>& hb, 
 template <class S>
 bool sphere_mesh(const Vec3<S>& c, S r, const MeshBvh<Sphere<S>>& m, const RigidTransform<S>& pm, bool flip,
                  ShapeContact<S>* out) {
+  constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+  // The centre is moved into the mesh's frame once; node and leaf tests both use this lc, so its
+  // rounding does not matter to them. The node test is padded for its own rounding (each of the
+  // squared distance and squared radius sum within a relative 4u): a plain comparison culled a
+  // ball touching a small triangle exactly when the ball was much larger than the node's sphere
+  // (whose padding is ulps of its own radius). The leaf test rejects a triangle only when the
+  // separating-axis test of the mesh queries, with its complete set of axes, proves it apart: a
+  // rounded closest-point distance alone missed exact contacts.
   const Vec3<S> lc = pm.R.transpose() * (c - pm.t);
-  const Sphere<S> query(lc, r);
   bool hit = false;
   traverse(
-      m.tree(), [&](const Sphere<S>& bv) { return overlap(bv, query); },
+      m.tree(),
+      [&](const Sphere<S>& bv) {
+        const S rs = bv.radius + r;
+        return (bv.center - lc).squaredNorm() <= rs * rs * (S(1) + S(16) * u);
+      },
       [&](std::int32_t k) {
         const Triangle<S>& t = m.triangle(k);
+        // a rounded closest point within r is accepted (conservative: it is within rounding of
+        // touching); beyond it, only a proven separation rejects, tried first along the direction
+        // from that closest point
         const auto cp = closest_point_on_triangle(lc, t);
-        const Vec3<S>& q = cp.point;
-        const S d2 = cp.squared_distance;
-        if (d2 > r * r) return true;
+        if (!(cp.squared_distance <= r * r)) {
+          const Vec3<S> axis = lc - cp.point;
+          if (!sphere_may_touch_triangle(lc, r, t, true, &axis)) return true;
+        }
         hit = true;
         if (out) {
-          const S dist = std::sqrt(d2);
+          const Vec3<S>& q = cp.point;
+          const S dist = std::sqrt(cp.squared_distance);
           Vec3<S> n = dist > S(0) ? Vec3<S>((q - lc) / dist) : t.normal();  // sphere towards mesh
           if (n.squaredNorm() == S(0)) n = Vec3<S>::UnitZ();
           out->normal = pm.rotate(flip ? Vec3<S>(-n) : n);
-          out->depth = r - dist;
+          out->depth = std::max(r - dist, S(0));
           out->point = pm.apply(q);
         }
         return false;
@@ -261,9 +284,20 @@ bool box_mesh(const Vec3<S>& h, const RigidTransform<S>& pb, const MeshBvh<Spher
               ShapeContact<S>* out) {
   // Work in the box's frame: the mesh's nodes and triangles are moved by mesh -> box.
   const RigidTransform<S> m_to_b = relative_transform(pb, pm);
+  // The node test is padded as the mesh queries pad B's spheres (query/mesh_collide.hpp, PosePad):
+  // a node's centre and its triangles' vertices are each moved with rounding at the scale of the
+  // mesh's coordinates and the relative translation, not of the node's radius, and the
+  // comparison's own rounding (a relative 4u on each side) is covered too. Unpadded, touching
+  // pairs were missed when the mesh's coordinates near the box were large.
+  constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+  const PosePad<S> pad(m_to_b, S(0), m.coordinate_bound());
   bool hit = false;
   traverse(
-      m.tree(), [&](const Sphere<S>& bv) { return sphere_box_local(m_to_b.apply(bv.center), bv.radius, h); },
+      m.tree(),
+      [&](const Sphere<S>& bv) {
+        if (pad.identity) return sphere_box_local(bv.center, bv.radius, h);
+        return sphere_box_local(m_to_b.apply(bv.center), (pad.stretch * bv.radius + pad.b_abs) * (S(1) + S(8) * u), h);
+      },
       [&](std::int32_t k) {
         const Triangle<S>& t = m.triangle(k);
         const Vec3<S> a = m_to_b.apply(t.a), b = m_to_b.apply(t.b), c = m_to_b.apply(t.c);

@@ -30,6 +30,10 @@
 ///
 /// Candidate end positions x1 go through the collision step, which returns x1'; the velocity of
 /// the next step is (x1' - x0) / dt, exactly backward Euler's v1 when nothing collided.
+///
+/// Thread safety: a MassSpringCloth is a plain value; the step functions read it (const) and
+/// return their results, so steps of different cloths, or reads of one cloth, may run at once;
+/// changing a cloth is not concurrent with anything else on it.
 #pragma once
 
 #include "impact/core/error.hpp"

@@ -18,6 +18,10 @@
 /// the penetration depth of two flat shapes undefined and the expanding polytope of EPA degenerate.
 /// The members are public for reading; a shape whose members are changed after construction must
 /// be re-validated with validate_shape().
+///
+/// Thread safety: shapes are plain values and every function here is const or free, so a shape
+/// may be read from any number of threads at once; changing its members is not concurrent with
+/// anything else on it.
 #pragma once
 
 #include "impact/core/validate.hpp"

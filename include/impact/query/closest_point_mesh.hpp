@@ -18,6 +18,8 @@
 /// rounding and of the narrow phase's (its closest point lies on the closed triangle up to a few
 /// ulps of the coordinates): the same exact answer as box trees. Sphere trees use the distance to
 /// each sphere, a lower bound up to its own rounding.
+/// Cost limit: k coincident copies of a triangle near the query cost O(k) unless their box's
+/// distance equals the triangle's (box trees): no node test can tell that a node adds nothing.
 #pragma once
 
 #include "impact/bvh/mesh_bvh.hpp"

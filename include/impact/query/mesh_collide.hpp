@@ -84,7 +84,15 @@ namespace detail {
 /// alone: a small sphere at a vertex of a large triangle is culled only when it is apart by more
 /// than about 8u times its distance to the far vertices, as it must be when the axis itself is
 /// rounded at the scale of the triangle.
-template <class S> inline bool sphere_may_touch_triangle(const Vec3<S>& c, S r, const Triangle<S>& t) {
+/// With `complete`, the axes also include the directions from each vertex to c and from each edge
+/// to c (e x ((c - a) x e)): with the normal, these hold the direction from the triangle's closest
+/// point to c whatever its feature (face, edge, vertex; also for segments and points), so a ball
+/// apart by more than the rounding bound is always separated: a test of the ball against the
+/// triangle that never misses a touching pair, and reports a non-touching one only within about
+/// 8u times the distances from c to the vertices (the scene's sphere–mesh leaf test). `hint`, when
+/// given, is tried first (for example c minus a rounded closest point: usually the one axis needed).
+template <class S>
+inline bool sphere_may_touch_triangle(const Vec3<S>& c, S r, const Triangle<S>& t, bool complete = false, const Vec3<S>* hint = nullptr) {
   using T = std::conditional_t<(sizeof(S) < sizeof(double)), double, S>;
   constexpr T u = std::numeric_limits<T>::epsilon() / T(2);
   constexpr T mu = std::numeric_limits<T>::min();
@@ -110,6 +118,7 @@ template <class S> inline bool sphere_may_touch_triangle(const Vec3<S>& c, S r, 
     const T lo = s0 > T(0) ? std::min(s0, std::min(s1, s2)) - beta : -std::max(s0, std::max(s1, s2)) - beta;
     return lo > T(0) && lo * lo > reach2;
   };
+  if (hint && separates(hint->template cast<T>(), false)) return false;
   const Vec3<T> e0 = v1 - v0, e2 = v0 - v2;
   const Vec3<T> n = e0.cross(-e2);
   if (separates(n, true)) return false;
@@ -117,6 +126,19 @@ template <class S> inline bool sphere_may_touch_triangle(const Vec3<S>& c, S r, 
   if (separates(e0.cross(n), false)) return false;
   if (separates((v2 - v1).cross(n), false)) return false;
   if (separates(e2.cross(n), false)) return false;
+  if (!complete) return true;
+  const Vec3<T> q1 = p - v1, q2 = p - v2;
+  if (separates(q0, false) || separates(q1, false) || separates(q2, false)) return false;
+  // e x (q x e) is of the third power of the lengths: scaled to a largest component of 1 (any
+  // scaling is allowed) so that its squared norm neither over- nor underflows
+  const auto scaled = [&](const Vec3<T>& w) {
+    const T m = w.cwiseAbs().maxCoeff();
+    return m > T(0) && m < inf ? Vec3<T>(w / m) : w;
+  };
+  const Vec3<T> e1 = v2 - v1;
+  if (separates(scaled(e0.cross(q0.cross(e0))), false) || separates(scaled(e1.cross(q1.cross(e1))), false) ||
+      separates(scaled(e2.cross(q2.cross(e2))), false))
+    return false;
   return true;
 }
 

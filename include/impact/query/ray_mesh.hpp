@@ -22,6 +22,10 @@
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
 /// normal), so a point exactly on a surface is on its front side: moving into the surface it
 /// hits, moving away it does not.
+///
+/// Cost limit: k coincident copies of a triangle cost O(k) triangle tests a cast unless their
+/// box is entered exactly at the hit (copies flat across the ray's axis, box trees): every node
+/// holding a copy is entered before the hit and no node test can tell its copies add nothing.
 #pragma once
 
 #include "impact/bvh/compact_bvh.hpp"
