@@ -17,19 +17,19 @@
 
 namespace {
 
-using V = impact::Vec3<double>;
+using Vd = impact::Vec3<double>;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
 // A point falling through the middle of a static triangle at t = 1/2 (a real contact), and two
 // edges crossing at t = 1/4.
 impact::CcdResult<double> crossing_vf(const impact::CcdOptions& o, int bad_point = -1, double bad = 0.0) {
-  V p[8] = {V(0.25, 0.25, 1), V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0.25, 0.25, -1), V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  Vd p[8] = {Vd(0.25, 0.25, 1), Vd(0, 0, 0), Vd(1, 0, 0), Vd(0, 1, 0), Vd(0.25, 0.25, -1), Vd(0, 0, 0), Vd(1, 0, 0), Vd(0, 1, 0)};
   if (bad_point >= 0) p[bad_point][bad_point % 3] = bad;
   return impact::vertex_face_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
 }
 impact::CcdResult<double> crossing_ee(const impact::CcdOptions& o, int bad_point = -1, double bad = 0.0) {
-  V p[8] = {V(-1, 0, 0), V(1, 0, 0), V(0.5, -1, 0.25), V(0.5, 1, 0.25), V(-1, 0, 0), V(1, 0, 0), V(0.5, -1, -0.75), V(0.5, 1, -0.75)};
+  Vd p[8] = {Vd(-1, 0, 0), Vd(1, 0, 0), Vd(0.5, -1, 0.25), Vd(0.5, 1, 0.25), Vd(-1, 0, 0), Vd(1, 0, 0), Vd(0.5, -1, -0.75), Vd(0.5, 1, -0.75)};
   if (bad_point >= 0) p[bad_point][(bad_point + 1) % 3] = bad;
   return impact::edge_edge_ccd(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], o);
 }

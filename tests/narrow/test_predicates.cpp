@@ -15,8 +15,6 @@ using namespace impact::test;
 
 namespace {
 
-std::int64_t rand_int(Rng& rng, std::int64_t r) { return std::int64_t(rng.index(std::uint64_t(2 * r + 1))) - r; }
-
 template <class S> int naive3(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c, const Vec3<S>& d) {
   const S v = (d - a).dot((b - a).cross(c - a));
   return v > 0 ? 1 : (v < 0 ? -1 : 0);
@@ -29,9 +27,9 @@ template <class S> void run_orient3d(std::int64_t r, std::uint64_t seed) {
   const double scale = std::is_same_v<S, float> ? 1.0 : 0x1p-30;
   for (int it = 0; it < 100000; ++it) {
     IPoint a, b, c, d;
-    for (int k = 0; k < 3; ++k) a[k] = rand_int(rng, r), b[k] = rand_int(rng, r), c[k] = rand_int(rng, r);
-    const std::int64_t i = rand_int(rng, 1), j = rand_int(rng, 1);
-    for (int k = 0; k < 3; ++k) d[k] = a[k] + i * (b[k] - a[k]) + j * (c[k] - a[k]) + rand_int(rng, it % 3);
+    for (int k = 0; k < 3; ++k) a[k] = rng.integer(r), b[k] = rng.integer(r), c[k] = rng.integer(r);
+    const std::int64_t i = rng.integer(1), j = rng.integer(1);
+    for (int k = 0; k < 3; ++k) d[k] = a[k] + i * (b[k] - a[k]) + j * (c[k] - a[k]) + rng.integer(it % 3);
     const int expect = orient3d_int(a, b, c, d);
     auto v = [&](const IPoint& p) { return Vec3<S>(S(double(p[0]) * scale), S(double(p[1]) * scale), S(double(p[2]) * scale)); };
     const int got = orient3d(v(a), v(b), v(c), v(d));
@@ -52,11 +50,11 @@ template <class S> void run_orient2d(std::int64_t r, std::uint64_t seed) {
   Rng rng(seed);
   int naive_wrong = 0, wrong = 0;
   for (int it = 0; it < 100000; ++it) {
-    const std::int64_t ax = rand_int(rng, r), ay = rand_int(rng, r), bx = rand_int(rng, r), by = rand_int(rng, r);
+    const std::int64_t ax = rng.integer(r), ay = rng.integer(r), bx = rng.integer(r), by = rng.integer(r);
     // c near the line ab: a + t (b - a) with t = 1/2^k style rational rounded, perturbed
-    const std::int64_t num = rand_int(rng, 64), sh = 6;
+    const std::int64_t num = rng.integer(64), sh = 6;
     std::int64_t cx = ax + ((bx - ax) >> sh) * num, cy = ay + ((by - ay) >> sh) * num;
-    cx += rand_int(rng, it % 2), cy += rand_int(rng, it % 2);
+    cx += rng.integer(it % 2), cy += rng.integer(it % 2);
     if (std::llabs(cx) > 4 * r || std::llabs(cy) > 4 * r) continue;
     const int expect = orient2d_int(ax, ay, bx, by, cx, cy);
     const Vec2<S> a{static_cast<S>(ax), static_cast<S>(ay)}, b{static_cast<S>(bx), static_cast<S>(by)}, c{static_cast<S>(cx), static_cast<S>(cy)};

@@ -27,14 +27,12 @@ namespace {
 // Fewer configurations under the sanitizers (the big-integer stage is slow there).
 constexpr int kDivisor = IMPACT_TEST_SANITIZED ? 6 : 1;
 
-std::int64_t rand_int(Rng& rng, std::int64_t r) { return std::int64_t(rng.index(std::uint64_t(2 * r + 1))) - r; }
-
 /// Near-coplanar integer quadruple with coordinates in [-4r, 4r]: d = a + i (b - a) + j (c - a) + e.
 std::array<IPoint, 4> near_coplanar(Rng& rng, std::int64_t r, int it) {
   std::array<IPoint, 4> q;
-  for (int k = 0; k < 3; ++k) q[0][k] = rand_int(rng, r), q[1][k] = rand_int(rng, r), q[2][k] = rand_int(rng, r);
-  const std::int64_t i = rand_int(rng, 1), j = rand_int(rng, 1);
-  for (int k = 0; k < 3; ++k) q[3][k] = q[0][k] + i * (q[1][k] - q[0][k]) + j * (q[2][k] - q[0][k]) + rand_int(rng, it % 3);
+  for (int k = 0; k < 3; ++k) q[0][k] = rng.integer(r), q[1][k] = rng.integer(r), q[2][k] = rng.integer(r);
+  const std::int64_t i = rng.integer(1), j = rng.integer(1);
+  for (int k = 0; k < 3; ++k) q[3][k] = q[0][k] + i * (q[1][k] - q[0][k]) + j * (q[2][k] - q[0][k]) + rng.integer(it % 3);
   return q;
 }
 
@@ -59,7 +57,7 @@ template <class S> void run_orient3d_scaled(std::uint64_t seed) {
     const int expect = orient3d_int(q[0], q[1], q[2], q[3]);
     zero += expect == 0;
     IPoint t{0, 0, 0};
-    if (it % 2) t = {rand_int(rng, r), rand_int(rng, r), rand_int(rng, r)};
+    if (it % 2) t = {rng.integer(r), rng.integer(r), rng.integer(r)};
     for (int k = lo; k <= hi; k += 3 + (it % 13)) {
       int ks[3] = {k, k, k};
       if (it % 3 == 2) ks[1] = lo + (hi - k), ks[2] = lo + int(rng.index(std::uint64_t(hi - lo + 1)));  // mixed magnitudes
@@ -84,9 +82,9 @@ template <class S> void run_orient2d_scaled(std::uint64_t seed) {
   const int lo = k_min<S>(), hi = k_max<S>(23);
   int wrong = 0, cases = 0, zero = 0;
   for (int it = 0; it < 300 / kDivisor; ++it) {
-    const std::int64_t ax = rand_int(rng, r), ay = rand_int(rng, r), bx = rand_int(rng, r), by = rand_int(rng, r);
-    const std::int64_t num = rand_int(rng, 4);
-    const std::int64_t cx = ax + num * (bx - ax) / 4 + rand_int(rng, it % 2), cy = ay + num * (by - ay) / 4 + rand_int(rng, it % 2);
+    const std::int64_t ax = rng.integer(r), ay = rng.integer(r), bx = rng.integer(r), by = rng.integer(r);
+    const std::int64_t num = rng.integer(4);
+    const std::int64_t cx = ax + num * (bx - ax) / 4 + rng.integer(it % 2), cy = ay + num * (by - ay) / 4 + rng.integer(it % 2);
     if (std::llabs(cx) >= (std::int64_t(1) << 23) || std::llabs(cy) >= (std::int64_t(1) << 23)) continue;
     const int expect = orient2d_int(ax, ay, bx, by, cx, cy);
     zero += expect == 0;
@@ -148,11 +146,11 @@ template <class S> void run_triangles_scaled(std::uint64_t seed) {
   for (int it = 0; it < 100 / kDivisor; ++it) {
     std::array<IPoint, 3> P, Q;
     for (auto& p : P)
-      for (auto& x : p) x = rand_int(rng, r);
+      for (auto& x : p) x = rng.integer(r);
     // Q: a vertex on P's plane (touching, or one unit off it), or a random triangle near P
     const int mode = it % 3;
     for (auto& p : Q)
-      for (auto& x : p) x = rand_int(rng, r);
+      for (auto& x : p) x = rng.integer(r);
     if (mode < 2) {
       // Q's first vertex on a vertex of P (touching), or one unit off it (usually apart)
       Q[0] = P[it % 3];

@@ -15,20 +15,20 @@
 #include "support/sanitizer.hpp"
 
 // Fewer samples under the sanitizers (CI), the full count in Release.
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+constexpr int kClosestSamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 namespace impact {
 namespace {
 
 template <class T> class ClosestPointMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
-TYPED_TEST_SUITE(ClosestPointMesh, BVs);
+using ClosestBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
+TYPED_TEST_SUITE(ClosestPointMesh, ClosestBVs);
 
 template <class BV> void check(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n) {
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV> bvh(m);
   test::Rng rng(seed);
-  n /= kSampleDivisor;
+  n /= kClosestSamples;
   Aabb<S> box;
   for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
   const double diag = 2 * double(box.half_diagonal());
@@ -116,7 +116,7 @@ TYPED_TEST(ClosestPointMesh, FeaturesOnABox) {
 // triangle's box); sphere trees within rounding. Float and double.
 template <class S> void check_integer_grid(std::uint64_t seed) {
   test::Rng rng(seed);
-  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+  for (int mesh = 0; mesh < 150 / kClosestSamples; ++mesh) {
     TriangleMesh<S> m;
     const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
     m.V.resize(nv, 3);
@@ -163,7 +163,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
     const MeshBvh<Aabb<S>> ab(m, cfg);
     const MeshBvh<Sphere<S>> sp(m, cfg);
     const MeshBvh<Obb<S>> ob(m, cfg);
-    for (int k = 0; k < 100 / kSampleDivisor; ++k) {
+    for (int k = 0; k < 100 / kClosestSamples; ++k) {
       const Vec3<S> q = k % 4 == 0 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1.5, 1.5).cast<S>());
       S best = std::numeric_limits<S>::infinity();
       for (int t = 0; t < m.num_triangles(); ++t) {

@@ -16,7 +16,7 @@
 
 #include "support/sanitizer.hpp"
 
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 8 : 1;
+constexpr int kGridSamples = IMPACT_TEST_SANITIZED ? 8 : 1;
 
 namespace impact {
 namespace {
@@ -98,8 +98,8 @@ void check_start_nodes(const MeshBvh<BV>& bvh, const DistanceGrid<typename BvTra
 
 template <class BV>
 class DistanceGridTest : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<double>>;
-TYPED_TEST_SUITE(DistanceGridTest, BVs);
+using GridBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<double>>;
+TYPED_TEST_SUITE(DistanceGridTest, GridBVs);
 
 TYPED_TEST(DistanceGridTest, TorusBoundsAndStartNodes) {
   using S = typename BvTraits<TypeParam>::Scalar;
@@ -108,8 +108,8 @@ TYPED_TEST(DistanceGridTest, TorusBoundsAndStartNodes) {
   cfg.resolution = 24;
   const DistanceGrid<S> grid(bvh, cfg);
   EXPECT_EQ(grid.sampled_triangles(), bvh.num_triangles());  // no copies: the mesh itself
-  check_bounds(bvh, grid, 4000 / kSampleDivisor, 11);
-  check_start_nodes(bvh, grid, 4000 / kSampleDivisor, 12);
+  check_bounds(bvh, grid, 4000 / kGridSamples, 11);
+  check_start_nodes(bvh, grid, 4000 / kGridSamples, 12);
 }
 
 // Coincident triangles (issue 12): every triangle of a small torus 48 times, a third of the copies
@@ -138,8 +138,8 @@ TYPED_TEST(DistanceGridTest, CoincidentCopiesAreSampledOnce) {
   cfg.resolution = 16;
   const DistanceGrid<S> grid(bvh, cfg);
   EXPECT_EQ(grid.sampled_triangles(), m);
-  check_bounds(bvh, grid, 2000 / kSampleDivisor, 13);
-  check_start_nodes(bvh, grid, 2000 / kSampleDivisor, 14);
+  check_bounds(bvh, grid, 2000 / kGridSamples, 13);
+  check_start_nodes(bvh, grid, 2000 / kGridSamples, 14);
 }
 
 TEST(DistanceGrid, CappedBuildStaysConservative) {
@@ -149,7 +149,7 @@ TEST(DistanceGrid, CappedBuildStaysConservative) {
   cfg.max_distance = 0.1;
   cfg.start_node_reach = 0;
   const DistanceGrid<double> grid(bvh, cfg);
-  check_bounds(bvh, grid, 2000 / kSampleDivisor, 13, 0.1);
+  check_bounds(bvh, grid, 2000 / kGridSamples, 13, 0.1);
   EXPECT_EQ(grid.start_node(Vec3<double>(0, 0, 0), Vec3<double>(0.01, 0, 0)), 0);  // off: the root
 }
 
@@ -190,8 +190,8 @@ TEST(DistanceGrid, BunnyBoundsAndStartNodes) {
   DistanceGridConfig<double> cfg;
   cfg.resolution = IMPACT_TEST_SANITIZED ? 12 : 32;
   const DistanceGrid<double> grid(bvh, cfg);
-  check_bounds(bvh, grid, 4000 / kSampleDivisor, 14);
-  check_start_nodes(bvh, grid, 20000 / kSampleDivisor, 15);
+  check_bounds(bvh, grid, 4000 / kGridSamples, 14);
+  check_start_nodes(bvh, grid, 20000 / kGridSamples, 15);
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ using namespace impact;
 using namespace impact::test;
 
 namespace {
-constexpr int kPoses = IMPACT_TEST_SANITIZED ? 300 : 2000;
+constexpr int kObbPoses = IMPACT_TEST_SANITIZED ? 300 : 2000;
 }
 
 template <class S> class ObbTreeTest : public ::testing::Test {};
@@ -119,33 +119,31 @@ TYPED_TEST(ObbTreeTest, SelfCollisionAndRefitMatchBruteForce) {
 }
 
 namespace {
-TriangleMesh<double> load_data(const std::string& path) { return load_mesh<double>(path); }
-
 /// Boolean answers of the OBB tree against FCL's OBB tree on random poses: zero mismatches.
 void check_against_fcl(const TriangleMesh<double>& A, const TriangleMesh<double>& B, std::uint64_t seed) {
   const auto fa = make_fcl_model<fcl::OBBd>(A), fb = make_fcl_model<fcl::OBBd>(B);
   const MeshBvh<Obb<double>> a(A), b(B);
   int colliding = 0, mismatches = 0;
-  for (const auto& p : random_poses_around(A, B, kPoses, seed)) {
+  for (const auto& p : random_poses_around(A, B, kObbPoses, seed)) {
     const bool expected = fcl_collides<fcl::OBBd>(fa, RigidTransform<double>{}, fb, p);
     colliding += expected;
     if (collides(a, RigidTransform<double>{}, b, p) != expected && ++mismatches <= 5) ADD_FAILURE() << "mismatch with FCL";
   }
   EXPECT_EQ(mismatches, 0);
-  EXPECT_GT(colliding, kPoses / 20);
-  EXPECT_LT(colliding, kPoses - kPoses / 20);
+  EXPECT_GT(colliding, kObbPoses / 20);
+  EXPECT_LT(colliding, kObbPoses - kObbPoses / 20);
 }
 }  // namespace
 
 TEST(ObbTreeFcl, EnvRob) {
   IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
   IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
-  check_against_fcl(load_data(env), load_data(rob), 201);
+  check_against_fcl(load_mesh<double>(env), load_mesh<double>(rob), 201);
 }
 
 TEST(ObbTreeFcl, BunnyBunny) {
   IMPACT_REQUIRE_DATA(bunny, "meshes/stanford-bunny.obj");
-  const auto m = load_data(bunny);
+  const auto m = load_mesh<double>(bunny);
   check_against_fcl(m, m, 202);
 }
 
@@ -154,7 +152,7 @@ TEST(ObbTreeFcl, GeneratedPair) { check_against_fcl(make_torus<double>(1.0, 0.35
 TEST(ObbTreeFcl, AllPairsMatchFclPairSets) {
   IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
   IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
-  const auto A = load_data(env), B = load_data(rob);
+  const auto A = load_mesh<double>(env), B = load_mesh<double>(rob);
   const auto fa = make_fcl_model<fcl::OBBRSSd>(A), fb = make_fcl_model<fcl::OBBRSSd>(B);
   const MeshBvh<Obb<double>> a(A), b(B);
   CollideOptions all;

@@ -35,8 +35,8 @@ template <class F> void expect_invalid(F&& f, std::initializer_list<const char*>
 }
 
 template <class T> class QueryValidation : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
-TYPED_TEST_SUITE(QueryValidation, BVs);
+using ValidationBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+TYPED_TEST_SUITE(QueryValidation, ValidationBVs);
 
 template <class S> RigidTransform<S> nan_pose() {
   RigidTransform<S> p;

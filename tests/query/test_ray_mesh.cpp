@@ -19,7 +19,7 @@
 #include "support/sanitizer.hpp"
 
 // Fewer samples under the sanitizers (CI), the full count in Release.
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+constexpr int kRaySamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 namespace impact {
 namespace {
@@ -43,14 +43,14 @@ template <class S> std::optional<std::pair<S, int>> brute_first_hit(const Triang
 }
 
 template <class T> class RayMesh : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
-TYPED_TEST_SUITE(RayMesh, BVs);
+using RayBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
+TYPED_TEST_SUITE(RayMesh, RayBVs);
 
 template <class BV> void check_against_brute_force(const TriangleMesh<typename BvTraits<BV>::Scalar>& m, std::uint64_t seed, int n_rays) {
   using S = typename BvTraits<BV>::Scalar;
   const MeshBvh<BV> bvh(m);
   test::Rng rng(seed);
-  n_rays /= kSampleDivisor;
+  n_rays /= kRaySamples;
   Aabb<S> box;
   for (int i = 0; i < m.num_vertices(); ++i) box.extend(m.vertex(i));
   const S diag = S(2) * box.half_diagonal();
@@ -156,7 +156,7 @@ TYPED_TEST(RayMesh, SweptSphereMatchesBruteForceAndTouches) {
   const S tol = std::is_same_v<S, float> ? S(2e-3) : S(1e-9);
   int hits = 0;
   std::array<int, 3> by_kind{0, 0, 0};
-  for (int k = 0; k < 400 / kSampleDivisor; ++k) {
+  for (int k = 0; k < 400 / kRaySamples; ++k) {
     const S r = S(rng.uniform(0.01, 0.2));
     const Vec3<S> o = (rng.vec(-2, 2)).cast<S>();
     const Vec3<S> d = (rng.vec(-1, 1) * 3.0).cast<S>();
@@ -189,7 +189,7 @@ TYPED_TEST(RayMesh, SweptSphereMatchesBruteForceAndTouches) {
     EXPECT_NEAR(h->normal.norm(), S(1), S(1e-4));
     EXPECT_LT(h->normal.dot(d), S(0));
   }
-  EXPECT_GT(hits, 20 / kSampleDivisor);
+  EXPECT_GT(hits, 20 / kRaySamples);
   EXPECT_GT(by_kind[0], 0);  // faces
 }
 
@@ -297,7 +297,7 @@ TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
 template <class S> void check_integer_grid_rays(std::uint64_t seed) {
   test::Rng rng(seed);
   int hits = 0;
-  for (int mesh = 0; mesh < 150 / kSampleDivisor; ++mesh) {
+  for (int mesh = 0; mesh < 150 / kRaySamples; ++mesh) {
     TriangleMesh<S> m;
     const int nv = 4 + int(rng.index(8)), nf = 1 + int(rng.index(16));
     m.V.resize(nv, 3);
@@ -334,7 +334,7 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
       EXPECT_EQ(ho->t, b->first) << mesh << "," << k;
     }
   }
-  EXPECT_GT(hits, 100 / kSampleDivisor);
+  EXPECT_GT(hits, 100 / kRaySamples);
 }
 
 TEST(RayMeshExact, IntegerGridFirstHitIsTheLoopMinimum) {
@@ -358,7 +358,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
     const MeshBvh<Aabb<S>> ab(m, cfg);
     const MeshBvh<Sphere<S>> sp(m, cfg);
     const MeshBvh<Obb<S>> ob(m, cfg);
-    for (int k = 0; k < 200 / kSampleDivisor; ++k) {
+    for (int k = 0; k < 200 / kRaySamples; ++k) {
       const Vec3<S> o = rng.vec(-1.5, 1.5).cast<S>();
       const Vec3<S> target = k % 2 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1, 1).cast<S>());
       if (target == o) continue;
@@ -379,7 +379,7 @@ template <class S> void check_degenerate_soup(std::uint64_t seed) {
       EXPECT_TRUE(th && th->t == ho->t) << k;
     }
   }
-  EXPECT_GT(hits, 150 / kSampleDivisor);
+  EXPECT_GT(hits, 150 / kRaySamples);
 }
 
 TEST(RayMeshExact, DegenerateSoupFirstHitIsTheLoopMinimum) {

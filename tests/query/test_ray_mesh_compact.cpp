@@ -17,7 +17,7 @@
 
 #include "support/sanitizer.hpp"
 
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 8 : 1;
+constexpr int kCompactSamples = IMPACT_TEST_SANITIZED ? 8 : 1;
 
 namespace impact {
 namespace {
@@ -86,7 +86,7 @@ TYPED_TEST(CompactBvhTest, TorusSameFirstHits) {
     for (int leaf : {1, 4, 16}) {
       const CompactBvh c(bvh.tree(), leaf);
       check_structure(bvh.tree(), c, leaf);
-      check_hits(bvh, c, &grid, 3000 / kSampleDivisor, 0.05, 21 + std::uint64_t(leaf));
+      check_hits(bvh, c, &grid, 3000 / kCompactSamples, 0.05, 21 + std::uint64_t(leaf));
     }
   }
 }
@@ -98,7 +98,7 @@ TYPED_TEST(CompactBvhTest, PairSlabIsTheSlabTest) {
   using S = TypeParam;
   test::Rng rng(41);
   int hits = 0, misses = 0;
-  for (int i = 0; i < 20000 / kSampleDivisor; ++i) {
+  for (int i = 0; i < 20000 / kCompactSamples; ++i) {
     const Vec3<S> o = rng.vec(-1, 1).template cast<S>();
     const Vec3<S> d = (rng.vec(-1, 1) * 3.0).template cast<S>();
     const Vec3<S> inv = detail::safe_inverse(d);
@@ -123,8 +123,8 @@ TYPED_TEST(CompactBvhTest, PairSlabIsTheSlabTest) {
       }
     }
   }
-  EXPECT_GT(hits, 1000 / kSampleDivisor);
-  EXPECT_GT(misses, 1000 / kSampleDivisor);
+  EXPECT_GT(hits, 1000 / kCompactSamples);
+  EXPECT_GT(misses, 1000 / kCompactSamples);
 }
 
 TEST(CompactBvh, BunnySameFirstHits) {
@@ -136,7 +136,7 @@ TEST(CompactBvh, BunnySameFirstHits) {
   const CompactBvh c(bvh.tree(), 4);
   check_structure(bvh.tree(), c, 4);
   EXPECT_LT(c.memory_bytes(), 2u << 20);  // the point: it fits in a core's L2 cache
-  check_hits(bvh, c, &grid, 20000 / kSampleDivisor, 0.003, 31);
+  check_hits(bvh, c, &grid, 20000 / kCompactSamples, 0.003, 31);
 }
 
 }  // namespace

@@ -20,7 +20,7 @@
 
 #include "support/sanitizer.hpp"
 
-constexpr int kSampleDivisor = IMPACT_TEST_SANITIZED ? 4 : 1;
+constexpr int kWideSamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 
 namespace impact {
 namespace {
@@ -144,7 +144,7 @@ TYPED_TEST(WideBvhTest, TorusStructureAndFirstHits) {
     cfg.leaf_size = leaf;
     const WideBvh<S> w(torus, cfg);
     check_structure(torus, w, leaf);
-    const int n = 1500 / kSampleDivisor;
+    const int n = 1500 / kWideSamples;
     EXPECT_GT(check_casts(torus, w, n, 0.1, 7 + std::uint64_t(leaf)), n / 10);
   }
   // collapsing an existing tree (spatial middle split, leaves of 3) keeps the answers
@@ -152,7 +152,7 @@ TYPED_TEST(WideBvhTest, TorusStructureAndFirstHits) {
   mcfg.build.leaf_size = 3;
   const WideBvh<S> from_tree(MeshBvh<Aabb<S>>(torus, mcfg));
   check_structure(torus, from_tree, 4);
-  EXPECT_GT(check_casts(torus, from_tree, 500 / kSampleDivisor, 0.1, 99), 50 / kSampleDivisor);
+  EXPECT_GT(check_casts(torus, from_tree, 500 / kWideSamples, 0.1, 99), 50 / kWideSamples);
 }
 
 // A double mesh whose coordinates are all floats keeps its triangles as floats (exactly: the
@@ -168,7 +168,7 @@ TEST(WideBvh, FloatCoordinatesArePackedExactly) {
   EXPECT_TRUE(WideBvh<float>(make_torus<float>(1.0f, 0.4f, 8, 4)).packed());
   EXPECT_LT(b.memory_bytes(), a.memory_bytes());
   check_structure(rounded, b, 4);
-  EXPECT_GT(check_casts(rounded, b, 600 / kSampleDivisor, 0.1, 3), 60 / kSampleDivisor);
+  EXPECT_GT(check_casts(rounded, b, 600 / kWideSamples, 0.1, 3), 60 / kWideSamples);
 }
 
 // Rays aimed at vertices and edge points of closed meshes from outside and inside: a watertight
@@ -180,7 +180,7 @@ TYPED_TEST(WideBvhTest, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
     const WideBvh<S> w(m);
     test::Rng rng(5);
     int hits = 0;
-    const int n = 1200 / kSampleDivisor;
+    const int n = 1200 / kWideSamples;
     for (int i = 0; i < n; ++i) {
       const int t = static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles())));
       const Vec3<S> a = m.vertex(m.F(t, i % 3)), b = m.vertex(m.F(t, (i + 1) % 3));
@@ -242,7 +242,7 @@ TYPED_TEST(WideBvhTest, DegenerateMeshes) {
   for (std::size_t k = 0; k < meshes.size(); ++k) {
     const WideBvh<S> w(meshes[k]);
     check_structure(meshes[k], w, 4);
-    EXPECT_GT(check_casts(meshes[k], w, 600 / kSampleDivisor, 0.5, 11 + k), 0) << k;
+    EXPECT_GT(check_casts(meshes[k], w, 600 / kWideSamples, 0.5, 11 + k), 0) << k;
   }
 }
 
@@ -255,7 +255,7 @@ TYPED_TEST(WideBvhTest, ScaledAndTranslated) {
     for (int i = 0; i < m.num_vertices(); ++i)
       for (int c = 0; c < 3; ++c) m.V(i, c) = S(double(base.V(i, c)) * scale + shift);
     const WideBvh<S> w(m);
-    EXPECT_GT(check_casts(m, w, 500 / kSampleDivisor, 0.1 * scale, 17), 25 / kSampleDivisor) << scale << " " << shift;
+    EXPECT_GT(check_casts(m, w, 500 / kWideSamples, 0.1 * scale, 17), 25 / kWideSamples) << scale << " " << shift;
   }
 }
 
@@ -267,7 +267,7 @@ TYPED_TEST(WideBvhTest, PoseMatchesThePlainTree) {
   const MeshBvh<Aabb<S>> plain(m);
   test::Rng rng(23);
   int hits = 0;
-  for (int i = 0; i < 600 / kSampleDivisor; ++i) {
+  for (int i = 0; i < 600 / kWideSamples; ++i) {
     const RigidTransform<double> pd = test::random_pose(rng, Eigen::Vector3d::Constant(-2), Eigen::Vector3d::Constant(2));
     const RigidTransform<S> pose(pd.R.template cast<S>(), pd.t.template cast<S>());
     const Ray<S> ray((rng.vec(-3, 3)).template cast<S>(), (rng.vec(-1, 1) * 6.0).template cast<S>(), S(1));
@@ -278,7 +278,7 @@ TYPED_TEST(WideBvhTest, PoseMatchesThePlainTree) {
     EXPECT_EQ(a->t, b->t) << i;
     EXPECT_LT((a->normal - b->normal).norm(), S(1e-3)) << i;  // the same surface (ties: a neighbour)
   }
-  EXPECT_GT(hits, 20 / kSampleDivisor);
+  EXPECT_GT(hits, 20 / kWideSamples);
 }
 
 // The four-children slab test (SIMD when compiled with it) gives exactly the scalar loop's keys,
@@ -287,7 +287,7 @@ TYPED_TEST(WideBvhTest, SimdSlabIsTheScalarSlab) {
   using S = TypeParam;
   test::Rng rng(41);
   int hits = 0, misses = 0;
-  for (int i = 0; i < 8000 / kSampleDivisor; ++i) {
+  for (int i = 0; i < 8000 / kWideSamples; ++i) {
     const Vec3<S> o = rng.vec(-1, 1).template cast<S>();
     const Vec3<S> d = (rng.vec(-1, 1) * 3.0).template cast<S>();
     const Vec3<S> inv = detail::safe_inverse(d);
@@ -323,8 +323,8 @@ TYPED_TEST(WideBvhTest, SimdSlabIsTheScalarSlab) {
       }
     }
   }
-  EXPECT_GT(hits, 500 / kSampleDivisor);
-  EXPECT_GT(misses, 500 / kSampleDivisor);
+  EXPECT_GT(hits, 500 / kWideSamples);
+  EXPECT_GT(misses, 500 / kWideSamples);
 }
 
 TEST(WideBvh, InvalidInput) {

@@ -91,8 +91,8 @@ template <class S> int k_lowest(int lo_bits) { return std::ilogb(CoordinateRange
 template <class S> int k_highest(int hi_bits) { return std::ilogb(CoordinateRange<S>::max) - hi_bits; }
 
 template <class T> class ScaleRange : public ::testing::Test {};
-using BVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
-TYPED_TEST_SUITE(ScaleRange, BVs);
+using ScaleBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>>;
+TYPED_TEST_SUITE(ScaleRange, ScaleBVs);
 
 TYPED_TEST(ScaleRange, CollideMatchesIntegerOracleAtEveryScale) {
   using BV = TypeParam;

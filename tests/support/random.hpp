@@ -19,6 +19,8 @@ class Rng {
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
   /// Uniform integer in [0, n).
   std::uint64_t index(std::uint64_t n) { return gen_() % n; }
+  /// Uniform integer in [-r, r].
+  std::int64_t integer(std::int64_t r) { return std::int64_t(index(std::uint64_t(2 * r + 1))) - r; }
   Eigen::Vector3d vec(double lo, double hi) { return {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)}; }
   Eigen::Vector3d in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
     return {uniform(lo.x(), hi.x()), uniform(lo.y(), hi.y()), uniform(lo.z(), hi.z())};
