@@ -154,7 +154,7 @@ TEST(ClosestPointMeshExact, IntegerGridDistanceIsTheLoopMinimum) {
 // Degenerate soups (test::degenerate_soup: slivers, sizes from 1e-4 to 1, coincident centroids,
 // exact copies), every builder: box and oriented-box trees give exactly the loop's smallest
 // squared distance, sphere trees to rounding; points around and inside the soup.
-template <class S> void check_closest_on_degenerate_soup(std::uint64_t seed) {
+template <class S> void check_degenerate_soup_closest(std::uint64_t seed) {
   const TriangleMesh<S> m = test::degenerate_soup<S>(200, seed);
   test::Rng rng(seed + 1);
   for (BuildMethod method : {BuildMethod::TopDown, BuildMethod::BottomUp, BuildMethod::Incremental}) {
@@ -180,8 +180,8 @@ template <class S> void check_closest_on_degenerate_soup(std::uint64_t seed) {
 }
 
 TEST(ClosestPointMeshExact, DegenerateSoupDistanceIsTheLoopMinimum) {
-  check_closest_on_degenerate_soup<double>(41);
-  check_closest_on_degenerate_soup<float>(42);
+  check_degenerate_soup_closest<double>(41);
+  check_degenerate_soup_closest<float>(42);
 }
 
 // The work counters count every node key and every triangle tested: one triangle is one node and

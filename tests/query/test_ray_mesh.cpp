@@ -348,7 +348,7 @@ TEST(RayMeshExact, IntegerGridFirstHitIsTheLoopMinimum) {
 // at that t. Rays from around the box through random points, and rays through vertices (the cases
 // whose t rounds below a box's entry). In the mesh's frame, so that the loop sees the same ray
 // bit for bit (poses are covered above).
-template <class S> void check_rays_on_degenerate_soup(std::uint64_t seed) {
+template <class S> void check_degenerate_soup_rays(std::uint64_t seed) {
   const TriangleMesh<S> m = test::degenerate_soup<S>(200, seed);
   test::Rng rng(seed + 1);
   int hits = 0;
@@ -383,8 +383,8 @@ template <class S> void check_rays_on_degenerate_soup(std::uint64_t seed) {
 }
 
 TEST(RayMeshExact, DegenerateSoupFirstHitIsTheLoopMinimum) {
-  check_rays_on_degenerate_soup<double>(31);
-  check_rays_on_degenerate_soup<float>(32);
+  check_degenerate_soup_rays<double>(31);
+  check_degenerate_soup_rays<float>(32);
 }
 
 }  // namespace

@@ -91,6 +91,7 @@ Bvh<BV> build_bottom_up(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& 
   std::vector<std::int32_t> nearest;
   std::vector<S> best;
   std::vector<std::int32_t> next;
+  std::vector<Aabb<S>> round_box;
   while (clusters.size() > 1) {
     const auto m = static_cast<std::int32_t>(clusters.size());
     nearest.assign(static_cast<std::size_t>(m), -1);
@@ -105,10 +106,18 @@ Bvh<BV> build_bottom_up(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& 
       const auto key = [i](std::int32_t k) { return std::make_tuple(std::abs(k - i), std::min(i, k) % 2, std::min(i, k)); };
       if (d < b || (d == b && pick >= 0 && key(j) < key(pick))) b = d, pick = j;
     };
+    // this round's boxes in list order: the window reads them in sequence (the boxes of merged
+    // clusters are appended far from their neighbours' in `box`)
+    round_box.resize(static_cast<std::size_t>(m));
+    for (std::int32_t i = 0; i < m; ++i) round_box[static_cast<std::size_t>(i)] = box[static_cast<std::size_t>(clusters[static_cast<std::size_t>(i)])];
     for (std::int32_t i = 0; i < m; ++i) {  // each pair once: the area is symmetric
-      const Aabb<S>& bi = box[static_cast<std::size_t>(clusters[static_cast<std::size_t>(i)])];
+      const Aabb<S>& bi = round_box[static_cast<std::size_t>(i)];
       for (std::int32_t j = i + 1; j <= std::min(m - 1, i + window); ++j) {
-        const S d = detail::half_area(merge(bi, box[static_cast<std::size_t>(clusters[static_cast<std::size_t>(j)])]));
+        const Aabb<S>& bj = round_box[static_cast<std::size_t>(j)];
+        // detail::half_area(merge(bi, bj)), the same operations, without its empty-box test
+        // (boxes of finite triangles are never empty)
+        const Vec3<S> e = bi.max.cwiseMax(bj.max) - bi.min.cwiseMin(bj.min);
+        const S d = e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
         offer(i, j, d);
         offer(j, i, d);
       }
