@@ -16,13 +16,8 @@
 namespace {
 
 using namespace impact;
-using impact::test::ConvexZoo;
+using impact::test::zoo;
 using impact::test::FclShapePair;
-
-const ConvexZoo& zoo() {
-  static const ConvexZoo z;
-  return z;
-}
 
 template <class A, class B>
 void check_against_fcl(const char* name, const A& a, const B& b, std::uint64_t seed, bool compare_distance = true) {

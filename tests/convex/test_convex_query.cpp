@@ -24,13 +24,8 @@ using namespace impact;
 using impact::test::convex_poses;
 using impact::test::overlap_along;
 using impact::test::signed_distance_oracle;
-using impact::test::ConvexZoo;
+using impact::test::zoo;
 using V3 = Eigen::Vector3d;
-
-const ConvexZoo& zoo() {
-  static const ConvexZoo z;
-  return z;
-}
 
 struct Tol {
   double distance, depth;

@@ -178,6 +178,12 @@ struct ConvexZoo {
   }
 };
 
+/// One zoo for the whole test program (its hulls are built once).
+inline const ConvexZoo& zoo() {
+  static const ConvexZoo z;
+  return z;
+}
+
 /// Poses of b about a at the origin: random rotations, b's translation uniform in the cube of
 /// half side `reach` (a good share intersect, the rest are near).
 inline std::vector<std::pair<RigidTransform<double>, RigidTransform<double>>> convex_poses(int n, double reach, std::uint64_t seed) {
