@@ -224,7 +224,7 @@ TEST(ZoneProjection, SparseMatchesDenseOnRandomZones) {
   EXPECT_GT(compared, 140);
 }
 
-// Exact duplicates, near duplicates (normal turned by 1e-10) and implied constraints (a copy with
+// Exact duplicates, near duplicates (normal turned by 1e-10) and implied constraints (copies with
 // a smaller b) leave the feasible set as it was: same optimum, both solvers, no breakdown.
 TEST(ZoneProjection, DuplicateAndRedundantConstraints) {
   std::mt19937 rng(31);
@@ -239,7 +239,9 @@ TEST(ZoneProjection, DuplicateAndRedundantConstraints) {
       ZoneConstraint weaker = k;
       weaker.b -= 0.01;
       d.cons.push_back(weaker);
-    }
+      weaker.b -= 0.01;
+      d.cons.push_back(weaker);
+    }  // 33 constraints on at most 30 unknowns: the sparse solver's primal path
     ZoneConstraint near = z.cons[0];
     near.n = (near.n + Vec3<double>(1e-10, -1e-10, 0)).normalized();
     d.cons.push_back(near);
@@ -364,6 +366,43 @@ TEST(ZoneProjection, LargePressedStackConverges) {
   EXPECT_LE(k.stationarity, 1e-12);
   // the floor and ceiling never move
   for (Eigen::Index v = x.rows() - 6; v < x.rows(); ++v) EXPECT_TRUE(x.row(v) == z.xhat.row(v));
+}
+
+// Many redundant constraints on few vertices (as dense self-contact accumulates them over the
+// zone stage's rounds): every constraint of a stacked zone four times, the copies weaker by up to
+// a tenth of the gap. m > 3n, so the sparse solver takes its primal path; the optimum is the one
+// of the original constraints alone (m < 3n: its dual path), and the KKT conditions hold.
+TEST(ZoneProjection, RedundantLargeZoneMatchesItsCore) {
+  std::mt19937 rng(59);
+  const auto z = pressed_stack(10, 3, true, 0, rng);
+  ZoneStack many = z;
+  std::uniform_real_distribution<double> U(0, 1e-4);
+  for (int copy = 0; copy < 3; ++copy)
+    for (const auto& k : z.cons) {
+      ZoneConstraint weaker = k;
+      weaker.b -= U(rng) * (copy > 0);
+      many.cons.push_back(weaker);
+    }
+  ASSERT_GT(many.cons.size(), 3 * 363u);
+  ASSERT_LT(z.cons.size(), 3 * 363u);
+  Mat x1 = z.xhat, x2 = z.xhat;
+  const auto r1 = project_zone(z.cons, z.w, z.xhat, x1, zone_solver_options(ZoneSolver::Sparse));
+  const auto r2 = project_zone(many.cons, many.w, many.xhat, x2, zone_solver_options(ZoneSolver::Sparse));
+  ASSERT_TRUE(r1.converged);
+  ASSERT_TRUE(r2.converged);
+  const auto k = zone_kkt(many.cons, many.w, many.xhat, x2, r2.multipliers);
+  EXPECT_LE(k.violation, 1e-9);
+  EXPECT_GE(k.min_lambda, 0.0);
+  EXPECT_LE(k.complementarity, 1e-9);
+  EXPECT_LE(k.stationarity, 1e-12);
+  auto objective = [&](const Mat& x) {
+    double f = 0;
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+      if (z.w[i] > 0) f += (x.row(i) - z.xhat.row(i)).squaredNorm() / z.w[i];
+    return f;
+  };
+  EXPECT_NEAR(objective(x2), objective(x1), 1e-6 * objective(x1));
+  EXPECT_LT((x2 - x1).cwiseAbs().maxCoeff(), 1e-6);
 }
 
 TEST(ZoneProjection, LargeFreeStackKeepsMomentum) {

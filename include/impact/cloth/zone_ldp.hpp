@@ -6,15 +6,16 @@
 /// with y = M^(1/2) (x - xhat) over the zone's movable vertices (3 unknowns each): each row g_i
 /// has at most four non-zero 3-blocks, one per vertex of its collision. The solution is
 /// y = sum_i lambda_i g_i with lambda >= 0 (KKT: g_i . y >= c_i, lambda_i (g_i . y - c_i) = 0).
-/// Two solvers return that lambda:
+/// Three solvers return that lambda:
 ///  - solve_ldp_dense (here): LDP through non-negative least squares (Lawson and Hanson,
 ///    "Solving Least Squares Problems", 1974, chapter 23) with the Lawson-Hanson active-set
 ///    algorithm: finitely many active-set changes, redundant and degenerate rows handled, an
 ///    infeasible problem detected by the NNLS residual. Cost: a dense m x m Gram matrix, then a
 ///    dense LDLT of the active block per active-set change (one row added or dropped at a time):
 ///    O(m^2) memory and up to O(m^4) time, the better tool for small zones;
-///  - solve_ldp_sparse (cloth/zone_ldp_sparse.hpp): block principal pivoting on the dual with
-///    a sparse LDLT per iteration, for large zones.
+///  - solve_ldp_sparse (cloth/zone_ldp_sparse.hpp, projected Newton on the dual) and
+///    solve_ldp_primal (cloth/zone_ldp_primal.hpp, semismooth Newton on an augmented
+///    Lagrangian of the primal): a sparse LDLT per iteration, for large zones.
 /// Internals of the cloth layer (namespace impact::detail).
 #pragma once
 

@@ -34,8 +34,8 @@
 /// with G and G^T; for cloth zones (a constraint meets a bounded number of others) close to
 /// linear in the zone. The number of iterations is not bounded by a small constant: on zones
 /// with many more constraints than unknowns (most of them redundant) it can exceed the dense
-/// solver's count of active-set changes, which is why project_zone keeps the dense solver
-/// below ZoneProjectionOptions::dense_limit constraints.
+/// solver's count of active-set changes; project_zone gives such zones (m > 3n) to the primal
+/// solver (cloth/zone_ldp_primal.hpp), whose system is 3n x 3n.
 #pragma once
 
 #include "impact/cloth/zone_ldp.hpp"

@@ -11,20 +11,25 @@
 ///    was linearised (the contact points' difference at the time of impact). Tangential motion is
 ///    changed only as far as the normals reach, so sliding survives.
 ///    Method: the problem is a least-distance programme (min |y|^2, G y >= c after the change of
-///    variable y = M^(1/2) (x - xhat); cloth/zone_ldp.hpp), solved to convergence by one of two
-///    solvers of its multipliers (ZoneSolver; Auto picks by the zone's constraint count m):
-///     - dense (m <= dense_limit = 2000): LDP through non-negative least squares with the
+///    variable y = M^(1/2) (x - xhat); cloth/zone_ldp.hpp), solved to convergence by one of
+///    three solvers of its multipliers (ZoneSolver; Auto picks by the zone's constraint count m
+///    and unknown count 3n, n movable vertices):
+///     - dense (Auto: m <= dense_limit = 600): LDP through non-negative least squares with the
 ///       Lawson-Hanson active-set algorithm (Lawson and Hanson 1974, chapter 23): finitely many
 ///       active-set changes, redundant and degenerate constraints handled, infeasibility from the
 ///       NNLS residual. A dense m x m Gram matrix and a dense LDLT per active-set change: O(m^2)
-///       memory, up to O(m^4) time;
-///     - sparse (above): projected Newton on the dual with a proximal term, one sparse LDLT of
-///       the free rows' block of A W A^T per iteration, many active-set changes per iteration,
-///       KKT checked row by row, infeasibility by a weak-duality certificate
-///       (cloth/zone_ldp_sparse.hpp). A sparse run without a verdict goes to the dense solver up
-///       to dense_fallback_limit constraints.
-///    Whichever solver ran, the new positions are rebuilt here from its multipliers (so the
-///    momentum argument above holds to rounding) and every constraint is checked on them.
+///       memory, up to O(m^4) time (cloth/zone_ldp.hpp);
+///     - sparse, m <= 3n: projected Newton on the dual with a proximal term, one sparse LDLT of
+///       the free rows' block of A W A^T (m x m at most) per iteration (cloth/zone_ldp_sparse.hpp);
+///     - sparse, m > 3n (dense self-contact: many redundant constraints on few vertices): an
+///       augmented Lagrangian with semismooth Newton on the primal, one sparse LDLT of a
+///       3n x 3n system per iteration (cloth/zone_ldp_primal.hpp); without a verdict it hands
+///       over to the dual one.
+///    The sparse solvers change many active constraints per iteration, check the KKT conditions
+///    row by row and certify infeasibility by weak duality; a sparse run without a verdict goes
+///    to the dense solver up to dense_fallback_limit constraints. Whichever solver ran, the new
+///    positions are rebuilt here from its multipliers (so the momentum argument above holds to
+///    rounding) and every constraint is checked on them.
 ///  - rigid_zone_motion (Provot 1997, "Collision and self-collision handling in cloth model
 ///    dedicated to design garments"; Bridson et al. 2002, section 7.4): the zone moves as one rigid
 ///    body with the linear and angular momentum of its vertices' step velocities.
@@ -32,6 +37,7 @@
 #pragma once
 
 #include "impact/cloth/zone_ldp.hpp"
+#include "impact/cloth/zone_ldp_primal.hpp"
 #include "impact/cloth/zone_ldp_sparse.hpp"
 #include "impact/core/types.hpp"
 
@@ -67,16 +73,16 @@ enum class ZoneSolver {
   /// without a verdict (budget, breakdown) is repeated densely up to `dense_fallback_limit`.
   Auto,
   Dense,   ///< Lawson-Hanson NNLS (cloth/zone_ldp.hpp): O(m^2) memory, up to O(m^4) time
-  Sparse,  ///< block principal pivoting with sparse LDLT (cloth/zone_ldp_sparse.hpp)
+  Sparse,  ///< sparse LDLT per iteration: dual (m <= 3n) or primal (m > 3n) Newton-type method
 };
 
 struct ZoneProjectionOptions {
   /// Iteration budget: active-set changes of the dense solver (each adds or drops one
-  /// constraint); sparse LDLT factorisations of the sparse one (each may change many).
+  /// constraint); Newton steps of the sparse ones (each may change many).
   int max_iterations = 500;
   double tolerance = 1e-9;     ///< a constraint counts as met when violated by at most this (length)
   ZoneSolver solver = ZoneSolver::Auto;
-  int dense_limit = 2000;           ///< Auto: the dense solver up to this many constraints
+  int dense_limit = 600;            ///< Auto: the dense solver up to this many constraints
   int dense_fallback_limit = 3000;  ///< Auto: a failed sparse run goes dense up to this many
 };
 
@@ -168,11 +174,20 @@ ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const
   detail::LdpSolution sol;
   const bool sparse = opt.solver == ZoneSolver::Sparse || (opt.solver == ZoneSolver::Auto && m > opt.dense_limit);
   if (sparse) {
-    detail::SparseLdpOptions so;
-    so.max_factorizations = opt.max_iterations;
-    sol = detail::solve_ldp_sparse(P, so);
+    // The smaller linear system: m x m on the dual, 3n x 3n on the primal.
     res.solver = ZoneSolver::Sparse;
-    res.iterations = sol.iterations;
+    if (m > 3 * P.blocks) {
+      detail::PrimalLdpOptions po;
+      po.max_factorizations = opt.max_iterations;
+      sol = detail::solve_ldp_primal(P, po);
+      res.iterations = sol.iterations;
+    }
+    if (m <= 3 * P.blocks || sol.status == detail::LdpStatus::Failed) {
+      detail::SparseLdpOptions so;
+      so.max_factorizations = opt.max_iterations;
+      sol = detail::solve_ldp_sparse(P, so);
+      res.iterations += sol.iterations;
+    }
     if (sol.status == detail::LdpStatus::Failed && opt.solver == ZoneSolver::Auto && m <= opt.dense_fallback_limit) {
       sol = detail::solve_ldp_dense(P, opt.max_iterations);
       res.solver = ZoneSolver::Dense;
