@@ -23,7 +23,8 @@
 // triangle (pruned by the triangles' own boxes, exact pruning): the ellipsoid method's certified
 // distance bracket of each triangle against the shape, and for overlaps the direction search's
 // least overlap; boolean mismatches count where the oracle is more than 1e-6 of the size from
-// touching; distance error |d - bracket midpoint|; contacts: mismatches of "colliding" only.
+// touching; distance error |d - bracket midpoint|; contacts: mismatches of "colliding" only;
+// contacts-mpr: impact with MeshConvexOptions::fast_contacts (MPR per triangle, as FCL), time only.
 // The shapes are scaled to 1/8 of the mesh's bounding-box diagonal.
 //
 //   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N]
@@ -300,9 +301,15 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
     const double qc = rate(n, min_time, [&](std::size_t i) {
       g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second).contacts.size());
     });
+    MeshConvexOptions<double> fast;
+    fast.fast_contacts = true;
+    const double qf = rate(n, min_time, [&](std::size_t i) {
+      g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second, fast).contacts.size());
+    });
     add("boolean", "impact", qb, eb);
     add("distance", "impact", qd, ed);
     add("contacts", "impact", qc, ec);
+    add("contacts-mpr", "impact", qf, Errors{});
   }
 #ifdef IMPACT_HAVE_FCL
   {

@@ -278,6 +278,44 @@ TEST(MeshConvex, MatchesPairwiseQueries) {
   mc_check_against_pairwise("hull", m, z.hull, 24);
 }
 
+// fast_contacts (one MPR per triangle): the same triangles as the default contacts (EPA) away from
+// touching, each depth an upper bound of EPA's that translating the shape by depth * normal closes
+// exactly (the settled overlap along the normal), and the depth_gap the whole depth.
+template <class Shape>
+void mc_check_fast_contacts(const char* name, const TriangleMesh<double>& m, const Shape& s, std::uint64_t seed) {
+  const MeshBvh<Aabb<double>> tree(m);
+  const double size = shape_size(s);
+  MeshConvexOptions<double> fast;
+  fast.fast_contacts = true;
+  int compared = 0;
+  for (const Pose& ps : mc_poses_near(m, IMPACT_TEST_SANITIZED ? 4 : 12, size, seed)) {
+    const auto c = mesh_convex_contacts(tree, Pose::identity(), s, ps);
+    const auto f = mesh_convex_contacts(tree, Pose::identity(), s, ps, fast);
+    for (const auto& tc : c.contacts) {
+      const auto it = std::find_if(f.contacts.begin(), f.contacts.end(), [&](const auto& x) { return x.triangle == tc.triangle; });
+      if (tc.contact.depth - tc.contact.depth_gap > 1e-6 * size) {
+        ASSERT_TRUE(it != f.contacts.end()) << name << ": triangle " << tc.triangle;
+      }
+      if (it == f.contacts.end()) continue;
+      ++compared;
+      const ConvexContact<double>& q = it->contact;
+      EXPECT_GE(q.depth, tc.contact.depth - tc.contact.depth_gap - 1e-9 * size) << name;
+      EXPECT_EQ(q.depth_gap, q.depth) << name;
+      const TriangleShape<double> ts(m.triangle(tc.triangle));
+      EXPECT_NEAR(test::overlap_along(ts, Pose::identity(), s, ps, q.normal), q.depth, 1e-9 * size) << name;
+    }
+  }
+  EXPECT_GT(compared, 0) << name;
+}
+
+TEST(MeshConvex, FastContactsAreSettledUpperBounds) {
+  const auto& z = zoo();
+  const TriangleMesh<double> m = mc_bumpy_sphere();
+  mc_check_fast_contacts("cylinder", m, z.cylinder, 51);
+  mc_check_fast_contacts("cone", m, z.cone, 52);
+  mc_check_fast_contacts("hull", m, z.hull, 53);
+}
+
 // A flat grid in z = 0 (normals +z), shapes resting on it: depth and normal known exactly.
 TEST(MeshConvex, AnalyticContactsOnAPlane) {
   const MeshBvh<Aabb<double>> grid(make_grid<double>(8, 8, 4.0));

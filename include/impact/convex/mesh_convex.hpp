@@ -95,6 +95,13 @@ struct MeshConvexOptions {
   ConvexQueryOptions<S> convex;  ///< the per-triangle solvers' options (tolerances, iteration bound)
   /// mesh_convex_contacts: stop after this many contacts (>= 1); the default reports all.
   std::size_t max_contacts = std::numeric_limits<std::size_t>::max();
+  /// mesh_convex_contacts, triangles against cylinders, cones and hulls (and capsules whose core
+  /// meets the triangle): false (default) runs libccd's EPA, settled and certified as
+  /// convex_penetration (the least depth within its tolerance, depth_gap bounding the rest); true
+  /// runs one libccd MPR per triangle (ccdMPRPenetration, as FCL does), settled along MPR's
+  /// direction: translating the shape by depth * normal still leaves them touching, but the depth
+  /// can exceed the least one and is not certified (depth_gap = depth). Several times faster.
+  bool fast_contacts = false;
 };
 
 /// Result of mesh_convex_distance, world coordinates.
@@ -298,8 +305,10 @@ struct TriangleConvexTests {
   S shape_size_;
   Vec3<S> interior;  // the shape's interior point in the mesh frame
 
-  TriangleConvexTests(const Shape& s, const RigidTransform<S>& p, const ConvexQueryOptions<S>& o)
-      : shape(s), pose(p), options(o), shape_size_(shape_size(s)), interior(p.apply(interior_point(s))) {}
+  bool fast = false;  // MeshConvexOptions::fast_contacts
+
+  TriangleConvexTests(const Shape& s, const RigidTransform<S>& p, const ConvexQueryOptions<S>& o, bool fast_contacts = false)
+      : shape(s), pose(p), options(o), shape_size_(shape_size(s)), interior(p.apply(interior_point(s))), fast(fast_contacts) {}
 
   S tolerance(const TriangleShape<S>& t) const { return options.relative_tolerance * std::max(shape_size_, shape_size(t)); }
 
@@ -356,6 +365,18 @@ struct TriangleConvexTests {
       }
       // the general pair, or a capsule whose core meets the triangle
       const RigidTransform<S> identity;
+      if (fast) {
+        const auto r = ccd_penetration(t, identity, shape, pose, CcdAlgorithm::Mpr, ccd_settings(options, query_scale<S>(t, shape)));
+        ConvexContact<S> c;
+        c.intersecting = r.intersecting;
+        c.normal = r.normal;
+        c.point = r.point;
+        c.iterations = r.iterations;
+        c.limit_reached = r.limit_reached;
+        settle_contact(t, identity, shape, pose, c);
+        c.depth_gap = c.depth;
+        return c;
+      }
       return epa(t, identity, shape, pose, options);
     }
   }
@@ -560,7 +581,7 @@ MeshConvexContacts<S> mesh_convex_contacts(const MeshBvh<BV>& mesh, const RigidT
                                            const RigidTransform<S>& shape_pose, const MeshConvexOptions<S>& options = {}) {
   detail::validate_mesh_convex(mesh_pose, shape, shape_pose, options, "mesh_convex_contacts");
   const detail::MeshConvexFrame<S, Shape> frame(mesh, mesh_pose, shape, shape_pose, options.convex);
-  const detail::TriangleConvexTests<S, Shape> tests(shape, frame.pose, options.convex);
+  const detail::TriangleConvexTests<S, Shape> tests(shape, frame.pose, options.convex, options.fast_contacts);
   MeshConvexContacts<S> out;
   traverse(
       mesh.tree(),
