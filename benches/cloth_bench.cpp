@@ -12,7 +12,8 @@
 // checked by verify_cloth_state, the exact oracle (triangle-triangle intersections with exact
 // predicates, independent of the CCD the step uses), every step. Printed per step (every K-th
 // with --every) and in total: dynamics and collision time (per stage: broad, proximity, impulses,
-// zones, fail-safe), collisions handled, CCD passes, zones, largest zone, fail-safe uses, exact
+// zones, fail-safe), collisions handled, CCD passes, gatherings, candidate pairs, CCD tests run,
+// zones, largest zone, fail-safe uses, exact
 // intersections after the step, the minimum separation of non-adjacent primitives (searched up to
 // 4 H; "inf" beyond), the kinetic energy the collision step removed (sum m (|v1|^2 - |v1'|^2) / 2
 // over the free vertices) and the change of the free vertices' linear momentum by the collision
@@ -174,8 +175,8 @@ int main(int argc, char** argv) {
   std::printf("impact-cloth-bench: scene %s, method %s, %d vertices, %d triangles, %d cloth(s), %zu obstacle(s), dt %.6g s, h %.6g m, "
               "%d steps, %d impulse pass(es), %d thread(s)\n",
               s.name.c_str(), a.method.c_str(), nv, nt, s.components, s.rigid.size(), a.dt, a.thickness, a.steps, opt.impulse_passes, a.threads);
-  std::printf("%5s %8s %8s %7s %7s %7s %7s %7s %6s %4s %5s %6s %3s %5s %10s %11s %9s\n", "step", "dyn_ms", "coll_ms", "broad", "prox",
-              "impul", "zones", "fsafe", "coll", "pass", "zones", "lgst", "fs", "inter", "min_sep", "E_removed", "dp_rel");
+  std::printf("%5s %8s %8s %7s %7s %7s %7s %7s %6s %4s %4s %8s %7s %5s %6s %3s %5s %10s %11s %9s\n", "step", "dyn_ms", "coll_ms", "broad",
+              "prox", "impul", "zones", "fsafe", "coll", "pass", "gath", "cand", "ccd", "zones", "lgst", "fs", "inter", "min_sep", "E_removed", "dp_rel");
 
   std::vector<std::string> rows;
   std::vector<double> dyn_ms, coll_ms, coll_cpu_ms;
@@ -247,12 +248,13 @@ int main(int argc, char** argv) {
     zone_dp = std::max(zone_dp, st.zone_momentum_error);
     zone_dl = std::max(zone_dl, st.zone_angular_momentum_error);
     if (step % a.every == 0 || step + 1 == a.steps || rep.intersections > 0)
-      std::printf("%5d %8.2f %8.2f %7.2f %7.2f %7.2f %7.2f %7.2f %6zu %4d %5zu %6zu %3d %5zu %10.3e %11.4e %9.2e\n", step, dms, cms, stg[0], stg[1],
-                  stg[2], stg[3], stg[4], collisions, passes, st.zone_count, st.largest_zone, st.failsafe_used ? 1 : 0, rep.intersections,
-                  rep.min_distance, e_removed, dp_rel);
+      std::printf("%5d %8.2f %8.2f %7.2f %7.2f %7.2f %7.2f %7.2f %6zu %4d %4d %8zu %7zu %5zu %6zu %3d %5zu %10.3e %11.4e %9.2e\n", step, dms, cms, stg[0],
+                  stg[1], stg[2], stg[3], stg[4], collisions, passes, st.broad.passes, st.candidates_vf + st.candidates_ee, st.ccd_tests, st.zone_count,
+                  st.largest_zone, st.failsafe_used ? 1 : 0, rep.intersections, rep.min_distance, e_removed, dp_rel);
     JsonObject row;
     row.add("step", step).add("dynamics_ms", dms).add("collision_ms", cms).add("collision_cpu_ms", ccpu).add("collisions", collisions).add("zones", st.zone_count)
         .add("largest_zone", st.largest_zone).add("failsafe", st.failsafe_used).add("intersections", rep.intersections)
+        .add("gatherings", st.broad.passes).add("candidates", st.candidates_vf + st.candidates_ee).add("ccd_tests", st.ccd_tests)
         .raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed)
         .add("zone_momentum_error", st.zone_momentum_error).add("zone_angular_momentum_error", st.zone_angular_momentum_error);
     rows.push_back(row.str());

@@ -221,17 +221,8 @@ TYPED_TEST(ClosestPointMesh, WorkCounters) {
   EXPECT_EQ(st.node_tests, 6u);
   EXPECT_EQ(st.triangle_tests, 2u);
 
-  const int n = 4096;
-  TriangleMesh<S> same;
-  same.V.resize(3 * n, 3);
-  same.F.resize(n, 3);
-  for (int k = 0; k < n; ++k) {
-    same.V.row(3 * k) << 0, 0, 0;
-    same.V.row(3 * k + 1) << 1, 0, 0;
-    same.V.row(3 * k + 2) << 0, 1, 0;
-    same.F.row(k) << 3 * k, 3 * k + 1, 3 * k + 2;
-  }
-  const MeshBvh<BV> ts(same);
+  const int copies = 4096;
+  const MeshBvh<BV> ts(impact::test::coincident_copies<S>(copies));
   st = {};
   const auto cs = closest_point_on_mesh(ts, Vec3<S>(0.25, 0.25, 1), {}, {}, &st);
   ASSERT_TRUE(cs.has_value());
@@ -243,7 +234,7 @@ TYPED_TEST(ClosestPointMesh, WorkCounters) {
     EXPECT_LE(st.triangle_tests, 8u);
     EXPECT_LE(st.node_tests, 200u);
   } else {
-    EXPECT_EQ(st.triangle_tests, std::size_t(n));
+    EXPECT_EQ(st.triangle_tests, std::size_t(copies));
   }
 }
 

@@ -224,16 +224,7 @@ TYPED_TEST(RayMesh, SweptSphereHitsEdgesAndVerticesAndStartsInContact) {
 TYPED_TEST(RayMesh, CoincidentTrianglesArePruned) {
   using BV = TypeParam;
   using S = typename BvTraits<BV>::Scalar;
-  const int n = 4096;
-  TriangleMesh<S> m;
-  m.V.resize(3 * n, 3);
-  m.F.resize(n, 3);
-  for (int k = 0; k < n; ++k) {
-    m.V.row(3 * k) << 0, 0, 0;
-    m.V.row(3 * k + 1) << 1, 0, 0;
-    m.V.row(3 * k + 2) << 0, 1, 0;
-    m.F.row(k) << 3 * k, 3 * k + 1, 3 * k + 2;
-  }
+  const TriangleMesh<S> m = impact::test::coincident_copies<S>(4096);
   const MeshBvh<BV> bvh(m);
   const Ray<S> ray(Vec3<S>(S(0.25), S(0.25), S(1)), Vec3<S>(0, 0, -1), S(10));
   RayMeshStats st;

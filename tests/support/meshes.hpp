@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Small deterministic meshes for tests that must not depend on the data folder: random triangle
-// soups, and a closed tetrahedron-like blob.
+// soups, n copies of one triangle, and a closed tetrahedron-like blob.
 #pragma once
 
 #include "impact/geometry/triangle_mesh.hpp"
@@ -21,6 +21,21 @@ template <class S> TriangleMesh<S> random_soup(int n, std::uint64_t seed, double
       m.V.row(3 * t + k) = (c + rng.vec(-size, size)).cast<S>().transpose();
       m.F(t, k) = 3 * t + k;
     }
+  }
+  return m;
+}
+
+/// n exact copies of the triangle (0, 0, 0), (1, 0, 0), (0, 1, 0), vertices not shared: every
+/// node of a hierarchy over them has the same bounds.
+template <class S> TriangleMesh<S> coincident_copies(int n) {
+  TriangleMesh<S> m;
+  m.V.resize(3 * n, 3);
+  m.F.resize(n, 3);
+  for (int k = 0; k < n; ++k) {
+    m.V.row(3 * k) << 0, 0, 0;
+    m.V.row(3 * k + 1) << 1, 0, 0;
+    m.V.row(3 * k + 2) << 0, 1, 0;
+    m.F.row(k) << 3 * k, 3 * k + 1, 3 * k + 2;
   }
   return m;
 }

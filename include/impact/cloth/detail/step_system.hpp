@@ -5,6 +5,7 @@
 /// primitive pairs, and the stages. Not part of the interface.
 #pragma once
 
+#include "impact/bvh/traverse.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
 #include "impact/cloth/step_options.hpp"
 #include "impact/cloth/zone_projection.hpp"
@@ -132,6 +133,7 @@ class Stepper {
     ccd_ = opt.ccd;
     ccd_.min_separation = h_;
     ccd_.t_max = 1.0;
+    band_ = 0.5 * static_cast<double>(opt.separation_margin) * h_;
   }
 
   void assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm, const Vertices<S>& x0, const Vertices<S>& x1,
@@ -247,6 +249,7 @@ class Stepper {
   /// Stage 2: passes of CCD impulses, earliest first.
   void impulse_stage() {
     const auto t0 = Clock::now();
+    precise_ = false;
     for (int pass = 0; pass < opt_.impulse_passes; ++pass) {
       const auto hits = detect();
       ++stats_.impulses.passes;
@@ -262,6 +265,7 @@ class Stepper {
   /// Stage 3: impact zones (Harmon 2008 or rigid).
   void zone_stage() {
     const auto t0 = Clock::now();
+    precise_ = false;
     const std::size_t nv = sys_.w.size();
     Vertices<S> xhat = sys_.X1;  // the positions each zone stays closest to
     std::vector<std::int32_t> parent(nv);
@@ -313,6 +317,7 @@ class Stepper {
   /// nothing (boxes only shrink, so the candidates of one gathering stay a superset).
   void failsafe_stage() {
     const auto t0 = Clock::now();
+    precise_ = true;
     auto hits = detect();
     ++stats_.failsafe.passes;
     while (!hits.empty()) {
@@ -399,93 +404,61 @@ class Stepper {
       const auto occ = order[i];
       own_[std::size_t(occ / 3)] |= std::uint8_t(8u << (occ % 3));
     }
+    // Vertex -> incident triangles (CSR), for the re-gathering of the triangles of escaped vertices.
+    vtri_off_.assign(sys_.w.size() + 1, 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) ++vtri_off_[std::size_t(F(f, k)) + 1];
+    for (std::size_t v = 0; v + 1 < vtri_off_.size(); ++v) vtri_off_[v + 1] += vtri_off_[v];
+    vtri_.resize(vtri_off_.back());
+    std::vector<std::uint32_t> fill(vtri_off_.begin(), vtri_off_.end() - 1);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) vtri_[fill[std::size_t(F(f, k))]++] = static_cast<std::int32_t>(f);
     own_faces_ = sys_.F;
   }
 
+  /// The box grown by the tree's inflation, rounded outwards: the rounding error of b -/+ g is
+  /// at most half an ulp of |b| + g, and the extra 2 eps (|b| + g) covers it and the rounding of
+  /// the margin's own subtraction (g > 0, so the margin is never zero).
   Aabb<S> grow(Aabb<S> b) const {
-    const S g = sys_.tree.inflate, inf = std::numeric_limits<S>::infinity();
-    for (int i = 0; i < 3; ++i) b.min[i] = std::nextafter(b.min[i] - g, -inf), b.max[i] = std::nextafter(b.max[i] + g, inf);
+    const S g = sys_.tree.inflate, e = 2 * std::numeric_limits<S>::epsilon();
+    for (int i = 0; i < 3; ++i) {
+      b.min[i] = (b.min[i] - g) - e * (std::abs(b.min[i]) + g);
+      b.max[i] = (b.max[i] + g) + e * (std::abs(b.max[i]) + g);
+    }
     return b;
   }
 
-  /// The candidates of the whole step, gathered once (again only when a vertex leaves its
-  /// envelope). Each vertex gets an envelope box: its swept box x0 -> x1 and, if it can move, a
-  /// slack of h around it, united with its previous envelope on a re-gathering. Every later end
-  /// position of the step that stays inside the envelope has its swept box inside it too, so the
-  /// pairs gathered for the envelopes are a superset of the pairs whose swept boxes (grown by half
-  /// the proximity distance) overlap in any such state: no pair is ever missed, and each CCD pass
-  /// only re-tests candidates with a moved vertex (detect()). The tree is refitted to the
-  /// envelopes (its topology comes from the first step); overlapping triangle pairs (not both
-  /// obstacle) give the vertices and edges each owns, kept only when the primitives' own grown
-  /// envelopes overlap; adjacent primitives (sharing a vertex) are skipped.
+  /// The candidates of the whole step, gathered once. Each vertex gets an envelope box: its swept
+  /// box x0 -> x1 and, if it can move, a slack of h around it. Every later end position of the
+  /// step that stays inside the envelope has its swept box inside it too, so the pairs gathered
+  /// for the envelopes are a superset of the pairs whose swept boxes (grown by half the proximity
+  /// distance) overlap in any such state: no pair is ever missed, and each CCD pass only re-tests
+  /// candidates with a moved vertex (detect()). The tree is refitted to the envelopes (its
+  /// topology comes from the first step); overlapping triangle pairs (not both obstacle) give the
+  /// vertices and edges each owns (pairs_of), kept only when the primitives' own grown envelopes
+  /// overlap; adjacent primitives (sharing a vertex) are skipped. When a vertex leaves its
+  /// envelope later in the step, regather() grows only the envelopes that were left and adds the
+  /// pairs they bring.
   void gather() {
     const auto t0 = Clock::now();
     ++stats_.broad.passes;
     if (own_faces_.rows() != sys_.F.rows() || own_faces_ != sys_.F) build_ownership();
     const Faces& F = sys_.F;
     const std::size_t nv = sys_.w.size(), nf = static_cast<std::size_t>(F.rows());
-    const bool again = ebox_.size() == nv;  // a re-gathering within the step: envelopes only grow
     ebox_.resize(nv);
     gbox_.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) {
-      Aabb<S> b;
-      b.extend(sys_.X0.row(Eigen::Index(v)).transpose());
-      b.extend(sys_.X1.row(Eigen::Index(v)).transpose());
-      if (sys_.w[v] > 0) b.min.array() -= slack_, b.max.array() += slack_;
-      if (again) b.extend(ebox_[v]);
-      ebox_[v] = b;
-      gbox_[v] = grow(b);
+      ebox_[v] = envelope(v);
+      gbox_[v] = grow(ebox_[v]);
     }
     tbox_.resize(nf);
-    for (std::size_t f = 0; f < nf; ++f)
-      tbox_[f] = merge(merge(gbox_[std::size_t(F(Eigen::Index(f), 0))], gbox_[std::size_t(F(Eigen::Index(f), 1))]),
-                       gbox_[std::size_t(F(Eigen::Index(f), 2))]);
-    impact::refit(sys_.tree.tree, [&](const std::int32_t* ids, std::size_t n) {
-      Aabb<S> box;
-      for (std::size_t k = 0; k < n; ++k) box.extend(tbox_[std::size_t(ids[k])]);
-      return box;
-    });
+    for (std::size_t f = 0; f < nf; ++f) tbox_[f] = triangle_envelope(f);
+    refit_tree();
     cand_.clear();
-    auto incident = [&](std::int32_t v, std::int32_t f) { return F(f, 0) == v || F(f, 1) == v || F(f, 2) == v; };
-    auto vf = [&](std::int32_t ta, std::int32_t tb) {  // owned vertices of ta against face tb
-      const std::uint8_t o = own_[std::size_t(ta)];
-      for (int k = 0; k < 3; ++k) {
-        if (!(o & (1u << k))) continue;
-        const std::int32_t v = F(ta, k);
-        if (incident(v, tb) || !overlap(gbox_[std::size_t(v)], tbox_[std::size_t(tb)])) continue;  // both grown
-        Prim p;
-        p.ee = 0;
-        p.v[0] = v, p.v[1] = F(tb, 0), p.v[2] = F(tb, 1), p.v[3] = F(tb, 2);
-        cand_.push_back(p);
-      }
-    };
     traverse_self(
         sys_.tree.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
         [&](std::int32_t fa, std::int32_t fb) {
-          if (sys_.tri_obstacle[std::size_t(fa)] && sys_.tri_obstacle[std::size_t(fb)]) return true;
-          vf(fa, fb);
-          vf(fb, fa);
-          const std::uint8_t oa = own_[std::size_t(fa)], ob = own_[std::size_t(fb)];
-          if (!(oa & 0x38) || !(ob & 0x38)) return true;
-          for (int i = 0; i < 3; ++i) {
-            if (!(oa & (8u << i))) continue;
-            std::int32_t a0 = F(fa, i), a1 = F(fa, (i + 1) % 3);
-            if (a0 > a1) std::swap(a0, a1);
-            const Aabb<S> ea = merge(gbox_[std::size_t(a0)], gbox_[std::size_t(a1)]);
-            if (!overlap(ea, tbox_[std::size_t(fb)])) continue;
-            for (int j = 0; j < 3; ++j) {
-              if (!(ob & (8u << j))) continue;
-              std::int32_t b0 = F(fb, j), b1 = F(fb, (j + 1) % 3);
-              if (b0 > b1) std::swap(b0, b1);
-              if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
-              if (!overlap(ea, merge(gbox_[std::size_t(b0)], gbox_[std::size_t(b1)]))) continue;  // both grown
-              Prim p;
-              p.ee = 1;
-              const bool first = std::make_pair(a0, a1) < std::make_pair(b0, b1);
-              p.v[0] = first ? a0 : b0, p.v[1] = first ? a1 : b1, p.v[2] = first ? b0 : a0, p.v[3] = first ? b1 : a1;
-              cand_.push_back(p);
-            }
-          }
+          pairs_of(fa, fb, cand_);
           return true;
         });
     // Per candidate: a lower bound on its distance at x0 (NaN: not known yet), the pass stamp;
@@ -501,6 +474,133 @@ class Stepper {
     const double ms = ms_since(t0);
     stats_.broad.ms += ms;
     broad_acc_ += ms;
+  }
+
+  /// A gathering again within the step, after moved vertices left their envelopes: those
+  /// envelopes grow to hold the new end positions (envelopes only grow, so every candidate kept
+  /// stays one), the tree is refitted, and the triangles of the grown vertices are queried against
+  /// it. A pair that can newly overlap has a grown vertex among its four (all other boxes are
+  /// unchanged), so its generating triangle pair (the owners of its two primitives) has a grown
+  /// triangle: these queries find every new candidate. New candidates are appended (their caches
+  /// start empty); the known ones keep their index, caches and hits.
+  void regather() {
+    const auto t0 = Clock::now();
+    ++stats_.broad.passes;
+    const Faces& F = sys_.F;
+    const std::size_t nv = sys_.w.size(), nf = static_cast<std::size_t>(F.rows());
+    std::vector<std::uint8_t> grown_tri(nf, 0);
+    std::vector<std::int32_t> tris;
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (!changed_[v] || ebox_[v].contains(sys_.X1.row(Eigen::Index(v)).transpose())) continue;
+      Aabb<S> b = envelope(v);
+      b.extend(ebox_[v]);
+      ebox_[v] = b;
+      gbox_[v] = grow(b);
+      for (std::uint32_t k = vtri_off_[v]; k < vtri_off_[v + 1]; ++k)
+        if (!grown_tri[std::size_t(vtri_[k])]) grown_tri[std::size_t(vtri_[k])] = 1, tris.push_back(vtri_[k]);
+    }
+    for (auto f : tris) tbox_[std::size_t(f)] = triangle_envelope(std::size_t(f));
+    refit_tree();
+    std::vector<Prim> found;
+    for (auto fa : tris) {
+      const Aabb<S> box = tbox_[std::size_t(fa)];
+      traverse(
+          sys_.tree.tree, [&](const Aabb<S>& n) { return overlap(n, box); },
+          [&](std::int32_t fb) {
+            // each triangle pair once: a pair of two grown triangles from the smaller one
+            if (fb == fa || (grown_tri[std::size_t(fb)] && fb < fa)) return true;
+            if (overlap(box, tbox_[std::size_t(fb)])) pairs_of(fa, fb, found);
+            return true;
+          });
+    }
+    // Keep the pairs not known yet (a known pair is among the candidates of its first vertex).
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    if (inc_off_.empty()) build_incidence();
+    std::size_t added = 0;
+    for (const auto& p : found) {
+      bool known = false;
+      for (std::uint32_t k = inc_off_[std::size_t(p.v[0])]; k < inc_off_[std::size_t(p.v[0]) + 1] && !known; ++k) known = cand_[inc_[k]] == p;
+      if (!known) cand_.push_back(p), ++added;
+    }
+    if (added) {
+      d0_.resize(cand_.size(), std::numeric_limits<double>::quiet_NaN());
+      d0_exact_.resize(cand_.size(), 0);
+      stamp_.resize(cand_.size(), 0);
+      inc_off_.clear();  // rebuilt when next needed
+      inc_.clear();
+    }
+    // The new candidates each have a grown vertex, which is marked as moved: the next pass tests them.
+    const double ms = ms_since(t0);
+    stats_.broad.ms += ms;
+    broad_acc_ += ms;
+  }
+
+  /// The envelope of vertex v for the current end position: its swept box, with the slack if it
+  /// can move.
+  Aabb<S> envelope(std::size_t v) const {
+    Aabb<S> b;
+    b.extend(sys_.X0.row(Eigen::Index(v)).transpose());
+    b.extend(sys_.X1.row(Eigen::Index(v)).transpose());
+    if (sys_.w[v] > 0) b.min.array() -= slack_, b.max.array() += slack_;
+    return b;
+  }
+
+  Aabb<S> triangle_envelope(std::size_t f) const {
+    const Faces& F = sys_.F;
+    return merge(merge(gbox_[std::size_t(F(Eigen::Index(f), 0))], gbox_[std::size_t(F(Eigen::Index(f), 1))]), gbox_[std::size_t(F(Eigen::Index(f), 2))]);
+  }
+
+  void refit_tree() {
+    impact::refit(sys_.tree.tree, [&](const std::int32_t* ids, std::size_t n) {
+      Aabb<S> box;
+      for (std::size_t k = 0; k < n; ++k) box.extend(tbox_[std::size_t(ids[k])]);
+      return box;
+    });
+  }
+
+  /// The candidate primitive pairs of the triangle pair (fa, fb) (not both obstacle): the
+  /// vertices and edges each owns against the other's face and edges, kept when their grown
+  /// envelopes overlap and they share no vertex.
+  void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out) const {
+    if (sys_.tri_obstacle[std::size_t(fa)] && sys_.tri_obstacle[std::size_t(fb)]) return;
+    const Faces& F = sys_.F;
+    auto incident = [&](std::int32_t v, std::int32_t f) { return F(f, 0) == v || F(f, 1) == v || F(f, 2) == v; };
+    auto vf = [&](std::int32_t ta, std::int32_t tb) {  // owned vertices of ta against face tb
+      const std::uint8_t o = own_[std::size_t(ta)];
+      for (int k = 0; k < 3; ++k) {
+        if (!(o & (1u << k))) continue;
+        const std::int32_t v = F(ta, k);
+        if (incident(v, tb) || !overlap(gbox_[std::size_t(v)], tbox_[std::size_t(tb)])) continue;  // both grown
+        Prim p;
+        p.ee = 0;
+        p.v[0] = v, p.v[1] = F(tb, 0), p.v[2] = F(tb, 1), p.v[3] = F(tb, 2);
+        out.push_back(p);
+      }
+    };
+    vf(fa, fb);
+    vf(fb, fa);
+    const std::uint8_t oa = own_[std::size_t(fa)], ob = own_[std::size_t(fb)];
+    if (!(oa & 0x38) || !(ob & 0x38)) return;
+    for (int i = 0; i < 3; ++i) {
+      if (!(oa & (8u << i))) continue;
+      std::int32_t a0 = F(fa, i), a1 = F(fa, (i + 1) % 3);
+      if (a0 > a1) std::swap(a0, a1);
+      const Aabb<S> ea = merge(gbox_[std::size_t(a0)], gbox_[std::size_t(a1)]);
+      if (!overlap(ea, tbox_[std::size_t(fb)])) continue;
+      for (int j = 0; j < 3; ++j) {
+        if (!(ob & (8u << j))) continue;
+        std::int32_t b0 = F(fb, j), b1 = F(fb, (j + 1) % 3);
+        if (b0 > b1) std::swap(b0, b1);
+        if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
+        if (!overlap(ea, merge(gbox_[std::size_t(b0)], gbox_[std::size_t(b1)]))) continue;  // both grown
+        Prim p;
+        p.ee = 1;
+        const bool first = std::make_pair(a0, a1) < std::make_pair(b0, b1);
+        p.v[0] = first ? a0 : b0, p.v[1] = first ? a1 : b1, p.v[2] = first ? b0 : a0, p.v[3] = first ? b1 : a1;
+        out.push_back(p);
+      }
+    }
   }
 
   /// Whether some vertex moved since the last CCD pass left its envelope.
@@ -539,37 +639,108 @@ class Stepper {
   }
 
   /// True when the pair provably stays farther apart than h over the whole step, so its CCD can
-  /// be skipped: at time t its distance is at least d(x0) - relative_motion (the points' offset
-  /// changes by t times a convex combination of vertex-pair displacement differences), with a
-  /// margin for rounding. Caches the start distance bound of candidate i (thread-safe per index).
+  /// be skipped. With m the pair's relative motion (relative_motion: for fixed barycentric
+  /// weights the points' offset changes by t times a convex combination of vertex-pair
+  /// displacement differences, at most m long), the distance at time t is at least
+  /// d(0) - t m and at least d(1) - (1 - t) m, so at least their mean (d(0) + d(1) - m) / 2 over
+  /// the whole step. First the start bound alone (d(0) - m, the start distance cached per
+  /// candidate: a box bound, then the exact one), then both ends. A margin covers rounding.
+  /// Thread-safe per index.
   bool separated(std::size_t i) {
     const Prim& p = cand_[i];
-    const double need = h_ + bound_margin_ + relative_motion(p);
+    const double m = relative_motion(p), need = h_ + bound_margin_;
     if (std::isnan(d0_[i])) d0_[i] = start_box_distance(p);
-    if (d0_[i] > need) return true;
-    if (d0_exact_[i]) return false;
-    d0_[i] = closest(p, /*start=*/true).dist;
-    d0_exact_[i] = 1;
-    return d0_[i] > need;
+    if (d0_[i] > need + m) return true;
+    if (!d0_exact_[i]) {
+      d0_[i] = closest(p, /*start=*/true).dist;
+      d0_exact_[i] = 1;
+      if (d0_[i] > need + m) return true;
+    }
+    if (d0_[i] <= need) return false;  // nothing below can help: each bound is <= d(0)
+    const Contact c1 = closest(p, /*start=*/false);
+    if (0.5 * (d0_[i] + c1.dist - m) > need) return true;
+    // Sliding pairs (a large relative motion along the contact, as in resting contact) fail the
+    // bounds above; a separating direction fixed over the step proves them (hull_separated).
+    return hull_separated(p, need);
+  }
+
+  /// True when the convex hull of the pair's vertex offsets x_i - x_j (i of the first primitive,
+  /// j of the second) at the start and at the end of the step stays farther than `need` from the
+  /// origin. Every offset between a point of the first primitive and a point of the second at any
+  /// time t is a convex combination of those (positions are linear in t, points are convex
+  /// combinations of vertices), so the pair's distance stays above `need` over the whole step.
+  /// The hull's distance from the origin is approached from both sides by Gilbert's algorithm
+  /// (a point x of the hull: |x| bounds it from above; for n = x / |x|, min_k n . o_k from
+  /// below): it stops with true once the lower bound exceeds `need`, with false once |x| does not
+  /// (no fixed direction can separate by `need` then), or after a bounded number of steps.
+  /// Rounding (|n| = 1 up to an ulp, the dot products) is covered by the margin in `need`.
+  bool hull_separated(const Prim& p, double need) const {
+    const int split = p.ee ? 2 : 1;
+    Vec3<double> o[8];
+    int k = 0;
+    for (int i = 0; i < split; ++i)
+      for (int j = split; j < 4; ++j) {
+        o[k++] = p0(p.v[i]) - p0(p.v[j]);
+        o[k++] = p1(p.v[i]) - p1(p.v[j]);
+      }
+    Vec3<double> x = o[0];
+    for (int q = 1; q < k; ++q)
+      if (o[q].squaredNorm() < x.squaredNorm()) x = o[q];
+    for (int it = 0; it < 24; ++it) {
+      const double len = x.norm();
+      if (!(len > need)) return false;
+      const Vec3<double> n = x / len;
+      int best = 0;
+      double lb = n.dot(o[0]);
+      for (int q = 1; q < k; ++q) {
+        const double d = n.dot(o[q]);
+        if (d < lb) lb = d, best = q;
+      }
+      if (lb > need) return true;
+      // the hull's point nearest the origin on the segment from x to the offset found
+      const Vec3<double> d = o[best] - x;
+      const double dd = d.squaredNorm();
+      if (!(dd > 0)) return false;
+      x += std::clamp(-x.dot(d) / dd, 0.0, 1.0) * d;
+    }
+    return false;
   }
 
   CcdResult<S> ccd(const Prim& p, bool static_start) {
     ++stats_.ccd_tests;
     return ccd_at(p, static_start);
   }
-  /// The primitive CCD of a pair (thread-safe: reads only).
+  /// The primitive CCD of a pair (thread-safe: reads only). The start check and the fail-safe use
+  /// the options as given (precise_). The impulses and zones only need a hit's time and contact
+  /// to within a fraction of h: they push every hit to (1 + separation_margin) h, so a pair
+  /// reported at h + band_ (band_ = separation_margin h / 2) is pushed as it should be, and a
+  /// false positive closer than that costs one harmless impulse. There each query gets the
+  /// tolerance that reports hits within h + band_ (tolerance = band_ / (2 L), L the query's
+  /// extent, at most 1e-2 and never below the given one) and no re-check. Neither changes the
+  /// CCD's guarantee: hit == false still proves the pair stays farther apart than h.
   CcdResult<S> ccd_at(const Prim& p, bool static_start) const {
     auto a = [&](int k) { return Vec3<S>(sys_.X0.row(p.v[k]).transpose()); };
     auto b = [&](int k) { return static_start ? Vec3<S>(sys_.X0.row(p.v[k]).transpose()) : Vec3<S>(sys_.X1.row(p.v[k]).transpose()); };
-    if (p.ee) return edge_edge_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), ccd_);
-    return vertex_face_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), ccd_);
+    CcdOptions o = ccd_;
+    if (!precise_ && !static_start && band_ > 0) {
+      Vec3<double> lo = p0(p.v[0]), hi = lo;
+      for (int k = 0; k < 4; ++k) {
+        lo = lo.cwiseMin(p0(p.v[k])).cwiseMin(p1(p.v[k]));
+        hi = hi.cwiseMax(p0(p.v[k])).cwiseMax(p1(p.v[k]));
+      }
+      const double L = (hi - lo).maxCoeff();
+      o.tolerance = std::max(o.tolerance, L > 0 ? std::min(band_ / (2 * L), 1e-2) : 1e-2);
+      o.recheck_iterations = 0;
+    }
+    if (p.ee) return edge_edge_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), o);
+    return vertex_face_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), o);
   }
 
   /// CCD over the pairs that may have changed: gathers again only when a moved vertex left its
   /// envelope, then tests the candidates with a vertex moved since the last pass and the previous
   /// hits.
   std::vector<Hit> detect() {
-    if (escaped()) gather();
+    if (escaped()) regather();
     return test_changed();
   }
 
@@ -807,11 +978,15 @@ class Stepper {
   ClothStepStats& stats_;
   double h_ = 0, prox_ = 0, target_ = 0, scale_ = 0;
   CcdOptions ccd_;
+  double band_ = 0;      // the impulses' and zones' CCD locates hits within h + band_ (ccd_at)
+  bool precise_ = true;  // the CCD with the options as given (start check, fail-safe)
   double bound_margin_ = 0;
   S slack_ = S(0);
   double broad_acc_ = 0;
   std::vector<Prim> cand_, excluded_;
   std::vector<std::uint8_t> own_;
+  std::vector<std::uint32_t> vtri_off_;  // vertex -> incident triangles (CSR)
+  std::vector<std::int32_t> vtri_;
   Faces own_faces_;
   std::vector<Aabb<S>> ebox_, gbox_, tbox_;  // per vertex: envelope, grown envelope; per triangle
   std::vector<double> d0_;                   // per candidate: a lower bound on its distance at x0
