@@ -80,8 +80,10 @@ void mcf_run_all(const TriangleMesh<double>& m, int n, std::uint64_t seed) {
   const auto& z = zoo();
   const auto check = [&](const char* name, const auto& s, std::uint64_t k) {
     const McfCounts c = mcf_compare(name, m, tree, model, s, n, seed + k);
-    EXPECT_GT(c.apart, n / 10) << name;
-    EXPECT_GT(c.overlapping, n / 10) << name;
+    if (!IMPACT_TEST_SANITIZED) {  // coverage (a sanitizer build's few poses may miss a case)
+      EXPECT_GT(c.apart, n / 10) << name;
+      EXPECT_GT(c.overlapping, n / 10) << name;
+    }
   };
   check("sphere", z.sphere, 1);
   check("capsule", z.capsule, 2);

@@ -14,9 +14,11 @@
 ///   auto c = impact::mesh_convex_contacts(mesh, mesh_pose, cyl, cyl_pose);   // c.contacts[i].triangle, .contact
 ///
 /// How: the shape is moved into the mesh's frame (one relative pose per query, the tree is neither
-/// copied nor refitted) and its tight box there (six support calls) culls the tree: a node is
-/// entered when its BV (an oriented box, by separating axes; an axis-aligned box or a sphere by
-/// distance) comes within a pad of that box. Each triangle left is a TriangleShape
+/// copied nor refitted); its tight box there (six support calls) and its own box carried by the
+/// relative pose (an oriented box: exact for a Box) cull the tree: a box node is entered when no
+/// separating axis (15, obb_overlap) puts it beyond a pad of the oriented box and its hull box is
+/// within the pad of the tight box; a sphere node when its distance to both is within the pad.
+/// Each triangle left is a TriangleShape
 /// (convex/triangle_shape.hpp) against the shape:
 ///   sphere     closed form: the triangle's closest point to the centre (narrow/closest_point.hpp)
 ///   capsule    closed form: the closest points of the core segment and the triangle (end points
@@ -29,8 +31,9 @@
 ///              within the tolerance is found); distance: GJK (convex/gjk_distance.hpp);
 ///              penetration: libccd EPA settled and certified as convex_penetration's (query.hpp)
 /// The distance query walks nearest node first (traverse_nearest) and skips a node whose lower
-/// bound (the gap between its BV and the shape's box, less the pad) is above the best distance
-/// found; it stops at the first intersecting triangle.
+/// bound (the gap between its BV and the shape's boxes: the hull boxes' gap and the face-axis
+/// separations of the two oriented boxes, less the pad) is above the best distance found; it stops
+/// at the first intersecting triangle.
 ///
 /// Semantics (as FCL's mesh–shape queries and the library's mesh–mesh ones): the mesh is a surface.
 /// The shape collides with the mesh when it touches or overlaps one of its triangles; a shape
@@ -57,7 +60,7 @@
 /// forms to rounding; GJK distances are upper bounds within relative_tolerance of the larger of the
 /// two sizes; pairs closer than that count as intersecting). The tree answers as a loop over every
 /// triangle with the same per-triangle tests would: a node is skipped only when it lies farther
-/// from the shape's box than the tolerance of any triangle it holds (relative_tolerance times the
+/// from the shape's boxes than the tolerance of any triangle it holds (relative_tolerance times the
 /// larger of the shape's size and the node's diameter) plus a bound of the rounding of the box and
 /// the relative pose (16 ulps of the coordinates involved). The shape is moved into the mesh's frame
 /// by the rounded relative pose: answers can differ from a computation in world coordinates only
