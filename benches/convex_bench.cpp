@@ -13,12 +13,34 @@
 // one: GST_LIBCCD), contacts requested for penetration (CollisionRequest(1, true)) and nearest
 // points for distance (DistanceRequest(true)), since impact returns both.
 //
-//   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS]
+//
+// Mesh against convex (convex/mesh_convex.hpp), rows "mesh-<shape>": a triangle mesh in a MeshBvh
+// (OBB tree) against each shape, the shape's centre near a random vertex (within 1.5 of its size),
+// random rotations of both; boolean (mesh_convex_collides), distance (mesh_convex_distance) and
+// contacts (mesh_convex_contacts) against FCL's BVHModel<OBBRSS> (beginModel / addSubModel /
+// endModel) with fcl::collide (default request; for contacts CollisionRequest(100000, true), every
+// triangle with its penetration) and fcl::distance (default request). The oracle over every
+// triangle (pruned by the triangles' own boxes, exact pruning): the ellipsoid method's certified
+// distance bracket of each triangle against the shape, and for overlaps the direction search's
+// least overlap; boolean mismatches count where the oracle is more than 1e-6 of the size from
+// touching; distance error |d - bracket midpoint|; contacts: mismatches of "colliding" only;
+// contacts-mpr: impact with MeshConvexOptions::fast_contacts (MPR per triangle, as FCL), time only.
+// The shapes are scaled to 1/8 of the mesh's bounding-box diagonal.
+//
+//   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N]
+// Without --mesh a generated mesh is used (a torus of 7,200 triangles with its vertices moved by
+// up to 5 %).
 #include "bench_util.hpp"
+#include "impact/convex/mesh_convex.hpp"
 #include "impact/convex/query.hpp"
+#include "impact/geometry/mesh_generators.hpp"
 #include "support/convex_oracle.hpp"
 #ifdef IMPACT_HAVE_FCL
 #include "support/convex_fcl.hpp"
+#include "support/fcl_oracle.hpp"
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
 #endif
 
 #include <cmath>
@@ -192,12 +214,151 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
 #endif
 }
 
+
+// ---- mesh against convex ----
+
+struct MeshReference {
+  bool separated = false, intersecting = false;
+  double distance = 0;  // bracket midpoint when separated
+};
+
+/// The oracle over every triangle (see the file comment).
+template <class Shape>
+MeshReference mesh_reference(const TriangleMesh<double>& m, const Pose& pm, const Shape& s, const Pose& ps, double size) {
+  const Aabb<double> sb = bounding_box(s, ps);
+  std::vector<std::pair<double, int>> order;
+  for (int t = 0; t < m.F.rows(); ++t) {
+    const Triangle<double> tri = m.triangle(t);
+    const V3 a = pm.apply(tri.a), b = pm.apply(tri.b), c = pm.apply(tri.c);
+    const V3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    const V3 e = (lo - sb.max).cwiseMax(sb.min - hi).cwiseMax(V3::Zero());
+    order.emplace_back(e.norm(), t);
+  }
+  std::sort(order.begin(), order.end());
+  double lower = std::numeric_limits<double>::infinity(), upper = lower;
+  bool overlap = false;
+  for (const auto& [gap, t] : order) {
+    if (gap > upper) break;
+    const TriangleShape<double> tri(m.triangle(t));
+    const auto br = test::distance_bracket(tri, pm, s, ps, 1000);
+    lower = std::min(lower, br.lower);
+    upper = std::min(upper, br.upper);
+    if (!overlap && br.upper < 1e-9 * size && test::signed_distance_oracle(tri, pm, s, ps, 1500, 1).value < -1e-6 * size) overlap = true;
+  }
+  MeshReference r;
+  r.separated = lower > 1e-6 * size;
+  r.intersecting = overlap;
+  r.distance = (lower + upper) / 2;
+  return r;
+}
+
+template <class Shape>
+void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shape& s, int n_poses, double min_time,
+              std::vector<Row>& rows) {
+  const MeshBvh<Obb<double>> tree(m);
+  const double size = shape_size(s);
+  test::Rng rng(std::hash<std::string>{}(name) & 0xffff);
+  std::vector<std::pair<Pose, Pose>> poses;
+  for (int i = 0; i < n_poses; ++i) {
+    const Pose pm{rng.rotation(), rng.vec(-1, 1)};
+    const V3 v = m.V.row(static_cast<Eigen::Index>(rng.index(std::uint64_t(m.V.rows())))).transpose();
+    poses.emplace_back(pm, Pose{rng.rotation(), pm.apply(v) + rng.vec(-1.5 * size, 1.5 * size)});
+  }
+  std::vector<MeshReference> ref;
+  for (const auto& [pm, ps] : poses) ref.push_back(mesh_reference(m, pm, s, ps, size));
+  const std::size_t n = poses.size();
+  const auto add = [&](const char* query, const char* lib, double qps, const Errors& e) {
+    Row r;
+    r.pair = name;
+    r.query = query;
+    r.library = lib;
+    r.qps = qps;
+    r.mean_error = e.n ? e.sum / e.n / size : 0;
+    r.max_error = e.max / size;
+    r.mismatches = e.mismatches;
+    r.samples = e.n;
+    rows.push_back(r);
+  };
+  {
+    Errors eb, ed, ec;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& [pm, ps] = poses[i];
+      const bool hit = mesh_convex_collides(tree, pm, s, ps);
+      const auto d = mesh_convex_distance(tree, pm, s, ps);
+      const auto c = mesh_convex_contacts(tree, pm, s, ps);
+      if (ref[i].separated || ref[i].intersecting) {
+        ++eb.n;
+        ++ec.n;
+        eb.mismatches += hit != ref[i].intersecting;
+        ed.mismatches += d.intersecting != ref[i].intersecting;
+        ec.mismatches += c.colliding != ref[i].intersecting;
+      }
+      if (ref[i].separated && !d.intersecting) ed.add(std::abs(d.distance - ref[i].distance));
+    }
+    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + mesh_convex_collides(tree, poses[i].first, s, poses[i].second); });
+    const double qd =
+        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + mesh_convex_distance(tree, poses[i].first, s, poses[i].second).distance; });
+    const double qc = rate(n, min_time, [&](std::size_t i) {
+      g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second).contacts.size());
+    });
+    MeshConvexOptions<double> fast;
+    fast.fast_contacts = true;
+    const double qf = rate(n, min_time, [&](std::size_t i) {
+      g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second, fast).contacts.size());
+    });
+    add("boolean", "impact", qb, eb);
+    add("distance", "impact", qd, ed);
+    add("contacts", "impact", qc, ec);
+    add("contacts-mpr", "impact", qf, Errors{});
+  }
+#ifdef IMPACT_HAVE_FCL
+  {
+    const auto model = test::make_fcl_model<fcl::OBBRSSd>(m);
+    const auto shape = test::to_fcl_shape(s);
+    const auto collide = [&](std::size_t i, std::size_t max_contacts, bool contacts) {
+      fcl::CollisionRequestd req(max_contacts, contacts);
+      fcl::CollisionResultd res;
+      fcl::collide(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
+      return contacts ? res.numContacts() : std::size_t(res.isCollision());
+    };
+    const auto distance = [&](std::size_t i) {
+      fcl::DistanceRequestd req;
+      fcl::DistanceResultd res;
+      fcl::distance(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
+      return res.min_distance;
+    };
+    Errors eb, ed, ec;
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool hit = collide(i, 1, false) != 0;
+      const double d = distance(i);
+      const bool any = collide(i, 100000, true) != 0;
+      if (ref[i].separated || ref[i].intersecting) {
+        ++eb.n;
+        ++ec.n;
+        eb.mismatches += hit != ref[i].intersecting;
+        ed.mismatches += (d <= 0) != ref[i].intersecting;
+        ec.mismatches += any != ref[i].intersecting;
+      }
+      if (ref[i].separated && d > 0) ed.add(std::abs(d - ref[i].distance));
+    }
+    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + double(collide(i, 1, false)); });
+    const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + distance(i); });
+    const double qc = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + double(collide(i, 100000, true)); });
+    add("boolean", "fcl", qb, eb);
+    add("distance", "fcl", qd, ed);
+    add("contacts", "fcl", qc, ec);
+  }
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int n_poses = 1000;
   double min_time = 0.2;
-  std::string json;
+  std::string json, mesh_path;
+  int mesh_poses = 200;
+  const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--pairs" && i + 1 < argc) {
@@ -206,14 +367,34 @@ int main(int argc, char** argv) {
       json = argv[++i];
     } else if (arg == "--min-time" && i + 1 < argc) {
       min_time = std::atof(argv[++i]);
+    } else if (arg == "--mesh" && i + 1 < argc) {
+      mesh_path = argv[++i];
+    } else if (arg == "--mesh-poses" && i + 1 < argc) {
+      mesh_poses = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS]\n");
+      std::fprintf(stderr, "%s", usage);
       return 2;
     }
   }
-  if (n_poses < 1 || !(min_time >= 0)) {
-    std::fprintf(stderr, "impact-convex-bench: --pairs must be >= 1 and --min-time >= 0\n");
+  if (n_poses < 1 || mesh_poses < 1 || !(min_time >= 0)) {
+    std::fprintf(stderr, "impact-convex-bench: --pairs and --mesh-poses must be >= 1 and --min-time >= 0\n");
     return 2;
+  }
+  TriangleMesh<double> mesh;
+  std::string mesh_name = "generated torus";
+  try {
+    if (!mesh_path.empty()) {
+      mesh = bench::load_mesh_or_exit(mesh_path, usage);
+      mesh_name = mesh_path.substr(mesh_path.find_last_of('/') + 1);
+    } else {
+      mesh = make_torus(1.0, 0.35, 120, 30);
+      test::Rng jitter(99);
+      for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) mesh.V.row(i) *= jitter.uniform(0.95, 1.05);
+    }
+    validate_mesh(mesh, mesh_name);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "impact-convex-bench: %s\n", e.what());
+    return 1;
   }
   const test::ConvexZoo z;
   std::vector<Row> rows;
@@ -234,6 +415,19 @@ int main(int argc, char** argv) {
   run_pair("capsule-hull", z.capsule, z.hull, n_poses, min_time, rows);
   run_pair("box-hull", z.box, z.hull, n_poses, min_time, rows);
   run_pair("hull-hull", z.hull, z.hull, n_poses, min_time, rows);
+  {
+    const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+    const double k = diag / 8 / 0.5;  // the zoo's shapes are about 0.5 in size (shape_size)
+    std::printf("mesh: %s, %d triangles; shapes scaled by %.3g (1/8 of the bounding-box diagonal); %d poses per shape\n", mesh_name.c_str(),
+                int(mesh.F.rows()), k, mesh_poses);
+    Vertices<double> hv = z.hull.vertices * k;
+    run_mesh("mesh-sphere", mesh, Sphere<double>(V3::Zero(), z.sphere.radius * k), mesh_poses, min_time, rows);
+    run_mesh("mesh-capsule", mesh, Capsule<double>(z.capsule.radius * k, z.capsule.half_length * k), mesh_poses, min_time, rows);
+    run_mesh("mesh-cylinder", mesh, Cylinder<double>(z.cylinder.radius * k, z.cylinder.half_length * k), mesh_poses, min_time, rows);
+    run_mesh("mesh-cone", mesh, Cone<double>(z.cone.radius * k, z.cone.half_length * k), mesh_poses, min_time, rows);
+    run_mesh("mesh-box", mesh, Box<double>(z.box.half * k), mesh_poses, min_time, rows);
+    run_mesh("mesh-hull", mesh, convex_hull(hv), mesh_poses, min_time, rows);
+  }
 
   std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s\n", "pair", "query", "library", "queries/s", "mean err", "max err", "mism",
               "samples", "impact/FCL");
@@ -255,8 +449,9 @@ int main(int argc, char** argv) {
   if (!json.empty()) {
     JsonObject top;
     top.add("bench", "impact-convex-bench").add("poses_per_pair", n_poses).add("min_time_s", min_time);
+    top.add("mesh", mesh_name).add("mesh_triangles", int(mesh.F.rows())).add("mesh_poses", mesh_poses);
 #ifdef IMPACT_HAVE_FCL
-    top.add("peer", "FCL 0.7, fcl::collide / fcl::distance on shape primitives, default requests (GST_LIBCCD)");
+    top.add("peer", "FCL 0.7, fcl::collide / fcl::distance on shape primitives, default requests (GST_LIBCCD); mesh rows: BVHModel<OBBRSS>");
 #else
     top.add("peer", "none (built without FCL)");
 #endif

@@ -77,7 +77,8 @@ struct ClothCollisionOptions {
   S separation_margin = S(0.1);
   /// Stage 3: impact zones, by `zone_method`, at most `max_zone_iterations` rounds of
   /// (CCD, merge, resolve). The projection solver stops when every constraint of a zone is met to
-  /// `projection_tolerance` times h, or after `max_projection_iterations` active-set changes (the
+  /// `projection_tolerance` times h, or after `max_projection_iterations` iterations (active-set
+  /// changes of the dense solver, Newton steps of the sparse one: ZoneProjectionOptions) (the
   /// zone then goes to the rigid method, then to the fail-safe).
   bool zones = true;
   ZoneMethod zone_method = ZoneMethod::Harmon;

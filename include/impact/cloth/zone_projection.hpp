@@ -11,30 +11,39 @@
 ///    was linearised (the contact points' difference at the time of impact). Tangential motion is
 ///    changed only as far as the normals reach, so sliding survives.
 ///    Method: the problem is a least-distance programme (min |y|^2, G y >= c after the change of
-///    variable y = M^(1/2) (x - xhat)); it is solved exactly, to convergence, through its
-///    equivalent non-negative least-squares problem (Lawson and Hanson, "Solving Least Squares
-///    Problems", 1974, chapter 23: LDP through NNLS), with the Lawson-Hanson active-set algorithm.
-///    That algorithm ends after finitely many active-set changes, handles redundant and
-///    degenerate constraints, and detects an infeasible zone (the residual of the NNLS is zero).
-///    Cost: a dense m x m Gram matrix of the m constraints, then per active-set change a dense
-///    Cholesky (LDLT) of the active block: fine for zones of up to a few hundred constraints.
+///    variable y = M^(1/2) (x - xhat); cloth/zone_ldp.hpp), solved to convergence by one of two
+///    solvers of its multipliers (ZoneSolver; Auto picks by the zone's constraint count m):
+///     - dense (m <= dense_limit = 2000): LDP through non-negative least squares with the
+///       Lawson-Hanson active-set algorithm (Lawson and Hanson 1974, chapter 23): finitely many
+///       active-set changes, redundant and degenerate constraints handled, infeasibility from the
+///       NNLS residual. A dense m x m Gram matrix and a dense LDLT per active-set change: O(m^2)
+///       memory, up to O(m^4) time;
+///     - sparse (above): projected Newton on the dual with a proximal term, one sparse LDLT of
+///       the free rows' block of A W A^T per iteration, many active-set changes per iteration,
+///       KKT checked row by row, infeasibility by a weak-duality certificate
+///       (cloth/zone_ldp_sparse.hpp). A sparse run without a verdict goes to the dense solver up
+///       to dense_fallback_limit constraints.
+///    Whichever solver ran, the new positions are rebuilt here from its multipliers (so the
+///    momentum argument above holds to rounding) and every constraint is checked on them.
 ///  - rigid_zone_motion (Provot 1997, "Collision and self-collision handling in cloth model
 ///    dedicated to design garments"; Bridson et al. 2002, section 7.4): the zone moves as one rigid
 ///    body with the linear and angular momentum of its vertices' step velocities.
 /// Both work in double whatever the scalar of the step.
 #pragma once
 
+#include "impact/cloth/zone_ldp.hpp"
+#include "impact/cloth/zone_ldp_sparse.hpp"
 #include "impact/core/types.hpp"
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/QR>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <unordered_map>
 #include <vector>
 
@@ -52,30 +61,48 @@ struct ZoneConstraint {
   double b = 0;
 };
 
+/// Which solver project_zone uses for a zone's least-distance programme.
+enum class ZoneSolver {
+  /// Dense Lawson-Hanson up to `dense_limit` constraints, sparse above; a sparse run that ends
+  /// without a verdict (budget, breakdown) is repeated densely up to `dense_fallback_limit`.
+  Auto,
+  Dense,   ///< Lawson-Hanson NNLS (cloth/zone_ldp.hpp): O(m^2) memory, up to O(m^4) time
+  Sparse,  ///< block principal pivoting with sparse LDLT (cloth/zone_ldp_sparse.hpp)
+};
+
 struct ZoneProjectionOptions {
-  int max_iterations = 500;    ///< active-set changes of the NNLS (each adds or drops one constraint)
+  /// Iteration budget: active-set changes of the dense solver (each adds or drops one
+  /// constraint); sparse LDLT factorisations of the sparse one (each may change many).
+  int max_iterations = 500;
   double tolerance = 1e-9;     ///< a constraint counts as met when violated by at most this (length)
+  ZoneSolver solver = ZoneSolver::Auto;
+  int dense_limit = 2000;           ///< Auto: the dense solver up to this many constraints
+  int dense_fallback_limit = 3000;  ///< Auto: a failed sparse run goes dense up to this many
 };
 
 struct ZoneProjectionResult {
   bool converged = false;       ///< every constraint met within the tolerance
   bool infeasible = false;      ///< no positions of the zone's movable vertices meet them all
-  int iterations = 0;           ///< active-set changes
+  int iterations = 0;           ///< the budget used (see ZoneProjectionOptions::max_iterations)
   int active = 0;               ///< constraints with a positive multiplier
   double max_violation = 0;     ///< largest b - a.x left (<= 0 when every constraint is met)
+  ZoneSolver solver = ZoneSolver::Dense;  ///< the solver whose answer was taken (Dense or Sparse)
+  /// When converged: the multiplier of each constraint (input order; 0 for one with no movable
+  /// vertex), x = xhat + W sum_c lambda_c sum_k a_k n_c e_{v_k}, lambda >= 0. Empty otherwise.
+  std::vector<double> multipliers;
 };
 
 /// Projects the end positions of one zone (see the file comment). `inverse_mass[i]` for every
 /// vertex index used (0 = infinite mass: such a vertex is a constant of the constraints and never
 /// moves). `xhat` holds the positions to stay close to; `x` receives the result for the movable
 /// vertices of the constraints (other rows of x are untouched). Rows are indexed by vertex id.
-/// Returns converged == false (x unchanged) when the budget runs out or the zone is infeasible.
+/// Returns converged == false (x unchanged) when the budget runs out or the zone is infeasible;
+/// converged is decided on the new positions themselves (every constraint within the tolerance).
 template <class InverseMass, class MatIn, class MatOut>
 ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const InverseMass& inverse_mass, const MatIn& xhat, MatOut& x,
                                   const ZoneProjectionOptions& opt = {}) {
   ZoneProjectionResult res;
-  const std::size_t m = cons.size();
-  if (m == 0) {
+  if (cons.empty()) {
     res.converged = true;
     return res;
   }
@@ -89,21 +116,18 @@ ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const
         verts.push_back(c.v[k]);
       }
   auto pos = [&](std::int32_t v) { return Vec3<double>(double(xhat(v, 0)), double(xhat(v, 1)), double(xhat(v, 2))); };
-  // Row c of G (unit after scaling) as sparse blocks, and the right-hand side c_c:
-  // sum_k a_k n . (xhat_k + sqrt(w_k) y_k) >= b  <=>  g_c . y >= rhs_c.
-  struct Row {
-    int blk[4];
-    Vec3<double> g[4];
-    int nb = 0;
-    double scale = 1;  // 1 / |g_c|
-  };
-  std::vector<Row> rows(m);
-  Eigen::VectorXd rhs(static_cast<Eigen::Index>(m));
-  double rhs_max = 0;
-  for (std::size_t c = 0; c < m; ++c) {
+  // The LDP: row c of G (unit after scaling), right-hand side and tolerance:
+  // sum_k a_k n . (xhat_k + sqrt(w_k) y_k) >= b  <=>  g_c . y >= rhs_c. Constraints with no
+  // movable vertex are constants: met, or the zone is infeasible.
+  detail::ZoneLdp P;
+  P.blocks = static_cast<int>(verts.size());
+  std::vector<double> rhs, tol;
+  std::vector<std::size_t> source;  // constraint of each LDP row
+  std::vector<double> row_scale;
+  for (std::size_t c = 0; c < cons.size(); ++c) {
     const auto& k = cons[c];
     double r = k.b, norm2 = 0;
-    Row& row = rows[c];
+    detail::LdpRow row;
     for (int j = 0; j < k.count; ++j) {
       r -= k.a[j] * k.n.dot(pos(k.v[j]));
       const double w = static_cast<double>(inverse_mass[k.v[j]]);
@@ -121,118 +145,58 @@ ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const
       }
     }
     for (int q = 0; q < row.nb; ++q) norm2 += row.g[q].squaredNorm();
-    if (norm2 <= 0) {
-      // Nothing movable: the constraint holds or it cannot be met.
-      if (r > opt.tolerance) {
+    if (!(norm2 > 0)) {
+      if (r > opt.tolerance) {  // nothing movable and violated
         res.infeasible = true;
         res.max_violation = std::max(res.max_violation, r);
         return res;
       }
-      row.nb = 0;
-      rhs[static_cast<Eigen::Index>(c)] = -1;  // never active
       continue;
     }
-    row.scale = 1 / std::sqrt(norm2);
-    for (int q = 0; q < row.nb; ++q) row.g[q] *= row.scale;
-    rhs[static_cast<Eigen::Index>(c)] = r * row.scale;
-    rhs_max = std::max(rhs_max, r * row.scale);
+    const double scale = 1 / std::sqrt(norm2);
+    for (int q = 0; q < row.nb; ++q) row.g[q] *= scale;
+    P.rows.push_back(row);
+    rhs.push_back(r * scale);
+    tol.push_back(opt.tolerance * scale);
+    source.push_back(c);
+    row_scale.push_back(scale);
   }
-  if (!(rhs_max > 0)) {  // xhat already meets every constraint
-    res.converged = true;
-    res.max_violation = 0;
-    for (std::size_t c = 0; c < m; ++c)
-      if (rows[c].nb > 0) res.max_violation = std::max(res.max_violation, rhs[static_cast<Eigen::Index>(c)] / rows[c].scale);
-    return res;
+  P.c = Eigen::Map<const Eigen::VectorXd>(rhs.data(), static_cast<Eigen::Index>(rhs.size()));
+  P.tol = Eigen::Map<const Eigen::VectorXd>(tol.data(), static_cast<Eigen::Index>(tol.size()));
+  const auto m = static_cast<int>(P.rows.size());
+  // Solve: dense or sparse, as the options say.
+  detail::LdpSolution sol;
+  const bool sparse = opt.solver == ZoneSolver::Sparse || (opt.solver == ZoneSolver::Auto && m > opt.dense_limit);
+  if (sparse) {
+    detail::SparseLdpOptions so;
+    so.max_factorizations = opt.max_iterations;
+    sol = detail::solve_ldp_sparse(P, so);
+    res.solver = ZoneSolver::Sparse;
+    res.iterations = sol.iterations;
+    if (sol.status == detail::LdpStatus::Failed && opt.solver == ZoneSolver::Auto && m <= opt.dense_fallback_limit) {
+      sol = detail::solve_ldp_dense(P, opt.max_iterations);
+      res.solver = ZoneSolver::Dense;
+      res.iterations += sol.iterations;
+    }
+  } else {
+    sol = detail::solve_ldp_dense(P, opt.max_iterations);
+    res.solver = ZoneSolver::Dense;
+    res.iterations = sol.iterations;
   }
-  const Eigen::VectorXd cvec = rhs / rhs_max;  // normalised: largest entry 1
-  // Gram matrix of E = [G^T; c^T]: N = G G^T + c c^T (rows of G are sparse).
-  const auto M = static_cast<Eigen::Index>(m);
-  Eigen::MatrixXd N = cvec * cvec.transpose();
-  {
-    std::vector<std::vector<std::pair<int, int>>> by_block(verts.size());  // (constraint, slot)
-    for (std::size_t c = 0; c < m; ++c)
-      for (int q = 0; q < rows[c].nb; ++q) by_block[static_cast<std::size_t>(rows[c].blk[q])].push_back({static_cast<int>(c), q});
-    for (const auto& list : by_block)
-      for (const auto& [ci, qi] : list)
-        for (const auto& [cj, qj] : list) N(ci, cj) += rows[static_cast<std::size_t>(ci)].g[qi].dot(rows[static_cast<std::size_t>(cj)].g[qj]);
-  }
-  // Lawson-Hanson NNLS: min |E u - f|^2, u >= 0, f = e_last; E^T f = c, E^T E = N.
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(M), z(M);
-  std::vector<char> passive(m, 0);
-  const double kkt_tol = 1e-13 * static_cast<double>(M);
-  auto solve_passive = [&](Eigen::VectorXd& out) {
-    std::vector<Eigen::Index> P;
-    for (Eigen::Index i = 0; i < M; ++i)
-      if (passive[static_cast<std::size_t>(i)]) P.push_back(i);
-    const auto p = static_cast<Eigen::Index>(P.size());
-    Eigen::MatrixXd NP(p, p);
-    Eigen::VectorXd cP(p);
-    for (Eigen::Index i = 0; i < p; ++i) {
-      cP[i] = cvec[P[static_cast<std::size_t>(i)]];
-      for (Eigen::Index j = 0; j < p; ++j) NP(i, j) = N(P[static_cast<std::size_t>(i)], P[static_cast<std::size_t>(j)]);
-    }
-    Eigen::VectorXd zp = Eigen::LDLT<Eigen::MatrixXd>(NP).solve(cP);
-    if (!zp.allFinite()) zp = NP.completeOrthogonalDecomposition().solve(cP);
-    out.setZero();
-    for (Eigen::Index i = 0; i < p; ++i) out[P[static_cast<std::size_t>(i)]] = zp[i];
-  };
-  int it = 0;
-  bool budget = true;
-  while (true) {
-    const Eigen::VectorXd wgrad = cvec - N * u;
-    Eigen::Index best = -1;
-    double best_w = kkt_tol;
-    for (Eigen::Index i = 0; i < M; ++i)
-      if (!passive[static_cast<std::size_t>(i)] && wgrad[i] > best_w) {
-        best_w = wgrad[i];
-        best = i;
-      }
-    if (best < 0) break;
-    if (++it > opt.max_iterations) {
-      budget = false;
-      break;
-    }
-    passive[static_cast<std::size_t>(best)] = 1;
-    bool added_ok = false;
-    for (int inner = 0; inner < 4 * static_cast<int>(m) + 8; ++inner) {
-      solve_passive(z);
-      bool all_pos = true;
-      for (Eigen::Index i = 0; i < M; ++i)
-        if (passive[static_cast<std::size_t>(i)] && !(z[i] > 0)) all_pos = false;
-      if (all_pos) {
-        u = z;
-        added_ok = true;
-        break;
-      }
-      double alpha = 1;
-      for (Eigen::Index i = 0; i < M; ++i)
-        if (passive[static_cast<std::size_t>(i)] && !(z[i] > 0)) alpha = std::min(alpha, u[i] / (u[i] - z[i]));
-      u += alpha * (z - u);
-      for (Eigen::Index i = 0; i < M; ++i)
-        if (passive[static_cast<std::size_t>(i)] && u[i] <= 1e-15) {
-          passive[static_cast<std::size_t>(i)] = 0;
-          u[i] = 0;
-        }
-    }
-    if (!added_ok) {  // numerically stuck: the entering column is dependent; drop it
-      passive[static_cast<std::size_t>(best)] = 0;
-      u[best] = 0;
-      break;
-    }
-  }
-  res.iterations = it;
-  const double denom = 1 - cvec.dot(u);  // last residual component is c.u - 1
-  if (!(denom > 1e-12)) {
+  if (sol.status == detail::LdpStatus::Infeasible) {
     res.infeasible = true;
     return res;
   }
-  // lambda (scaled rows) = u / denom * rhs_max; positions x = xhat + W A^T lambda.
+  if (sol.status != detail::LdpStatus::Solved) return res;
+  // Positions x = xhat + W A^T lambda (lambda of the scaled rows times the row's scale).
   std::vector<Vec3<double>> dx(verts.size(), Vec3<double>::Zero());
-  for (std::size_t c = 0; c < m; ++c) {
-    const double lam = u[static_cast<Eigen::Index>(c)] / denom * rhs_max * rows[c].scale;
+  std::vector<double> multipliers(cons.size(), 0.0);
+  for (std::size_t i = 0; i < P.rows.size(); ++i) {
+    const double lam = sol.lambda[static_cast<Eigen::Index>(i)] * row_scale[i];
     if (!(lam > 0)) continue;
+    multipliers[source[i]] = lam;
     ++res.active;
-    const auto& k = cons[c];
+    const auto& k = cons[source[i]];
     for (int j = 0; j < k.count; ++j) {
       const double w = static_cast<double>(inverse_mass[k.v[j]]);
       if (w > 0) dx[static_cast<std::size_t>(local.at(k.v[j]))] += (w * k.a[j] * lam) * k.n;
@@ -250,8 +214,9 @@ ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const
     viol = std::max(viol, r);
   }
   res.max_violation = viol;
-  res.converged = budget && viol <= opt.tolerance;
+  res.converged = viol <= opt.tolerance;
   if (!res.converged) return res;
+  res.multipliers = std::move(multipliers);
   for (std::size_t l = 0; l < verts.size(); ++l) {
     const Vec3<double> p = pos(verts[l]) + dx[l];
     for (int i = 0; i < 3; ++i) x(verts[l], i) = static_cast<typename MatOut::Scalar>(p[i]);

@@ -92,8 +92,16 @@ bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
     v = cp.point;
     return true;
   }
-  // Tetrahedron: is the origin inside? Otherwise the best of the faces it is outside of.
+  // Tetrahedron: is the origin inside? Otherwise the best of the faces it is outside of. A flat
+  // tetrahedron (volume within rounding of 0: four nearly coplanar points, as when a face of one
+  // shape is parallel to a face of the other) has no inside: the sides of its faces are rounding
+  // noise, so every face is a candidate (without this a parallel pair 1e-6 apart was reported
+  // intersecting).
   static constexpr int face[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+  const Vec3<S> e1 = s[1].w - s[0].w, e2 = s[2].w - s[0].w, e3 = s[3].w - s[0].w;
+  const S volume = e1.cross(e2).dot(e3);
+  const S edge = std::max({e1.norm(), e2.norm(), e3.norm()});
+  const bool flat = !(std::abs(volume) > S(64) * std::numeric_limits<S>::epsilon() * edge * edge * edge);
   S best = std::numeric_limits<S>::infinity();
   int best_face = -1;
   Vec3<S> best_bary = Vec3<S>::Zero(), best_point = Vec3<S>::Zero();
@@ -106,7 +114,7 @@ bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
     const Vec3<S> nrm = (p1 - p0).cross(p2 - p0);
     const S side_origin = -nrm.dot(p0);
     const S side_opp = nrm.dot(opp - p0);
-    if (side_origin * side_opp >= S(0)) continue;  // origin on the tetrahedron's side of this face
+    if (!flat && side_origin * side_opp >= S(0)) continue;  // origin on the tetrahedron's side of this face
     outside_any = true;
     const auto cp = closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(p0, p1, p2));
     if (cp.squared_distance < best) {
