@@ -86,9 +86,9 @@ struct ClothCollisionOptions {
   int max_projection_iterations = 500;
   S projection_tolerance = S(1e-6);
   /// The primitive CCD's tolerance and budgets. min_separation and t_max are set by the step (h
-  /// and 1); the rest is used as given by the start check and the fail-safe. The impulses and
-  /// zones locate hits only to within separation_margin h / 2 (a larger tolerance per query, no
-  /// re-check; see the README's cloth section): what they do with a hit needs no more.
+  /// and 1); the rest is used as given by the start check, the zones and the fail-safe. The
+  /// impulse passes locate hits only to within separation_margin h / 2 (a larger tolerance per
+  /// query, no re-check; see the README's cloth section): what they do with a hit needs no more.
   CcdOptions ccd{};
   /// x0 closer than h somewhere: throw (default) or report and proceed.
   StartViolation on_start_violation = StartViolation::Throw;
