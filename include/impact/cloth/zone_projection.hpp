@@ -24,7 +24,8 @@
 ///     - sparse, m > 3n (dense self-contact: many redundant constraints on few vertices): an
 ///       augmented Lagrangian with semismooth Newton on the primal, one sparse LDLT of a
 ///       3n x 3n system per iteration (cloth/zone_ldp_primal.hpp); without a verdict it hands
-///       over to the dual one.
+///       over to the dense solver (Auto, after at most 200 steps, up to dense_fallback_limit
+///       constraints) or to the dual one.
 ///    The sparse solvers change many active constraints per iteration, check the KKT conditions
 ///    row by row and certify infeasibility by weak duality; a sparse run without a verdict goes
 ///    to the dense solver up to dense_fallback_limit constraints. Whichever solver ran, the new
@@ -176,13 +177,17 @@ ZoneProjectionResult project_zone(const std::vector<ZoneConstraint>& cons, const
   if (sparse) {
     // The smaller linear system: m x m on the dual, 3n x 3n on the primal.
     res.solver = ZoneSolver::Sparse;
+    // Auto: the primal solver gets at most 200 Newton steps (the twist runs' zones need up to
+    // about 160) and then hands over to the dense solver when it may, not to the dual one (slow
+    // on such zones).
+    const bool dense_next = opt.solver == ZoneSolver::Auto && m <= opt.dense_fallback_limit;
     if (m > 3 * P.blocks) {
       detail::PrimalLdpOptions po;
-      po.max_factorizations = opt.max_iterations;
+      po.max_factorizations = dense_next ? std::min(opt.max_iterations, 200) : opt.max_iterations;
       sol = detail::solve_ldp_primal(P, po);
       res.iterations = sol.iterations;
     }
-    if (m <= 3 * P.blocks || sol.status == detail::LdpStatus::Failed) {
+    if (m <= 3 * P.blocks || (sol.status == detail::LdpStatus::Failed && !dense_next)) {
       detail::SparseLdpOptions so;
       so.max_factorizations = opt.max_iterations;
       sol = detail::solve_ldp_sparse(P, so);
