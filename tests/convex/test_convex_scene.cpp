@@ -6,7 +6,13 @@
 // triangle for a mesh. Every broad phase, after adds and after moves; contacts (translating b by
 // depth along the normal separates the pair, and the depth is at least the oracle's); filters,
 // sleeping, static pairs and the ignore list; float against double; bad input.
+// Convex shapes as particle colliders (convex/convex_collider.hpp): the closed-form point queries
+// against the direction search; analytic bounces and resting contact; no particle ever inside a
+// collider (backtracking and projection, point and ball particles, moving colliders, float and
+// double) with the independent oracle on the final positions; bad input.
+#include "impact/convex/convex_collider.hpp"
 #include "impact/convex/scene_shapes.hpp"
+#include "impact/response/particle_step.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/sanitizer.hpp"
@@ -332,6 +338,221 @@ TEST(ConvexScene, BadInputThrowsAndLeavesTheSceneUnchanged) {
   o = {};
   o.max_iterations = 0;
   EXPECT_THROW(ConvexSceneShapes<double>{o}, InvalidInput);
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Particle colliders
+
+/// Calls f with each collider shape of the zoo (capsule, cylinder, cone, hull).
+template <class F>
+void cs_for_each_collider_shape(F&& f) {
+  const auto& z = zoo();
+  f(z.capsule);
+  f(z.cylinder);
+  f(z.cone);
+  f(z.hull);
+}
+
+TEST(ConvexCollider, PointQueriesMatchTheDirectionSearch) {
+  cs_for_each_collider_shape([](const auto& shape) {
+    test::Rng rng(5);
+    const Pose id;
+    for (int i = 0; i < (IMPACT_TEST_SANITIZED ? 10 : 40); ++i) {
+      const V3 q = rng.vec(-0.9, 0.9);
+      const ShapePointQuery<double> pq = point_query(shape, q);
+      // the signed distance of the point (a ball of radius 0) and the shape by the oracles: outside,
+      // the ellipsoid method's certified bracket; inside, the direction search's least overlap
+      const Sphere<double> point(q, 0.0);
+      const auto br = test::distance_bracket(point, id, shape, id);
+      if (br.lower > 1e-6) {
+        EXPECT_GE(pq.distance, br.lower - 1e-12) << "point " << q.transpose();
+        EXPECT_LE(pq.distance, br.upper + 1e-12) << "point " << q.transpose();
+      } else {
+        EXPECT_NEAR(pq.distance, test::signed_distance_oracle(point, id, shape, id).value, 1e-6) << "point " << q.transpose();
+      }
+      EXPECT_NEAR(pq.normal.norm(), 1.0, 1e-12);
+      EXPECT_LT((q - pq.distance * pq.normal - pq.point).norm(), 1e-12);  // q = point + distance normal
+      // the point is on the boundary, and the normal is the outward one there (the support
+      // function in that direction reaches the point's plane)
+      EXPECT_NEAR(point_query(shape, pq.point).distance, 0.0, 1e-9);
+      EXPECT_NEAR(pq.normal.dot(support(shape, pq.normal)), pq.normal.dot(pq.point), 1e-9);
+    }
+  });
+}
+
+template <class S>
+using CsColliders = ColliderSet<S, Aabb<S>, ConvexCollider<S, Capsule<S>>, ConvexCollider<S, Cylinder<S>>, ConvexCollider<S, Cone<S>>,
+                                ConvexCollider<S, ConvexHull<S>>>;
+
+template <class S>
+CsColliders<S> cs_colliders(const ConvexHull<S>& hull, Strategy strategy, S restitution, S friction) {
+  const auto& z = zoo();
+  CsColliders<S> set;
+  const Material<S> m{restitution, friction};
+  auto place = [&](auto& c, double x, double y, std::uint64_t seed) {
+    test::Rng rng(seed);
+    c.motion.pose = RigidTransform<S>(rng.rotation().cast<S>(), Vec3<S>(S(x), S(y), S(0)));
+    c.strategy = strategy;
+    return c;
+  };
+  ConvexCollider<S, Capsule<S>> cap(Capsule<S>(S(z.capsule.radius), S(z.capsule.half_length)), m);
+  ConvexCollider<S, Cylinder<S>> cyl(Cylinder<S>(S(z.cylinder.radius), S(z.cylinder.half_length)), m);
+  ConvexCollider<S, Cone<S>> cone(Cone<S>(S(z.cone.radius), S(z.cone.half_length)), m);
+  ConvexCollider<S, ConvexHull<S>> h(hull, m);
+  set.template extra_of<ConvexCollider<S, Capsule<S>>>().push_back(place(cap, -1.0, -1.0, 1));
+  set.template extra_of<ConvexCollider<S, Cylinder<S>>>().push_back(place(cyl, 1.0, -1.0, 2));
+  set.template extra_of<ConvexCollider<S, Cone<S>>>().push_back(place(cone, -1.0, 1.0, 3));
+  set.template extra_of<ConvexCollider<S, ConvexHull<S>>>().push_back(place(h, 1.0, 1.0, 4));
+  return set;
+}
+
+/// The oracle's signed distance of a particle's centre to a collider (world), as a double.
+template <class S, class C>
+double cs_particle_distance(const C& c, const Vec3<S>& x) {
+  const RigidTransform<double> pose(c.motion.pose.R.template cast<double>(), c.motion.pose.t.template cast<double>());
+  const Sphere<double> point(x.template cast<double>(), 0.0);
+  if constexpr (std::is_same_v<S, double>) {
+    return test::signed_distance_oracle(point, Pose(), c.shape, pose, IMPACT_TEST_SANITIZED ? 200 : 600, 1).value;
+  } else {
+    return double(point_query(c.shape, Vec3<S>(c.motion.pose.R.transpose() * (x - c.motion.pose.t))).distance);
+  }
+}
+
+/// A rain of particles on the four colliders (gravity, random velocities, radius 0 and 0.05):
+/// after every step no particle is inside a collider (by the point query; at the end by the
+/// oracle in double), the step hit something, and kinetic energy never grows with restitution <= 1.
+template <class S>
+void cs_rain(Strategy strategy, S restitution, S friction, bool moving) {
+  const ConvexHull<S> hull = convex_hull<S>(zoo().hull.vertices.template cast<S>());
+  CsColliders<S> set = cs_colliders<S>(hull, strategy, restitution, friction);
+  if (moving)
+    set.for_each_extra([](const auto& c) {
+      auto& m = const_cast<ColliderMotion<S>&>(c.motion);
+      m.linear_velocity = Vec3<S>(S(0), S(0), S(0.5));
+      m.angular_velocity = Vec3<S>(S(0.3), S(-0.2), S(1.0));
+    });
+  test::Rng rng(99);
+  std::vector<Particle<S>> ps(IMPACT_TEST_SANITIZED ? 60 : 300);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    ps[i].position = Vec3<S>(S(rng.uniform(-1.8, 1.8)), S(rng.uniform(-1.8, 1.8)), S(rng.uniform(0.8, 2.0)));
+    ps[i].velocity = Vec3<S>(S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(rng.uniform(-3, 0)));
+    ps[i].radius = i % 2 ? S(0.05) : S(0);
+  }
+  StepOptions<S> opt;
+  opt.strategy = strategy;
+  opt.gravity = Vec3<S>(S(0), S(0), S(-9.81));
+  const S dt = S(0.01);
+  const S slack = std::is_same_v<S, float> ? S(2e-4) : S(1e-9);
+  StepStats total;
+  for (int step = 0; step < 100; ++step) {  // 1 s: every particle reaches the colliders' height
+    total += step_particles(ps, set, dt, opt);
+    set.advance(dt);
+    int inside = 0;
+    for (const auto& p : ps)
+      set.for_each_extra([&](const auto& c) {
+        const Vec3<S> q = c.motion.pose.R.transpose() * (p.position - c.motion.pose.t);
+        if (point_query(c.shape, q).distance < p.radius - slack) ++inside;
+      });
+    ASSERT_EQ(inside, 0) << "step " << step;
+  }
+  EXPECT_GT(total.impacts + total.projections, ps.size() / 5);
+  // the final positions by the independent oracle (double; float: the closed form)
+  int inside = 0;
+  for (std::size_t i = 0; i < ps.size(); i += (IMPACT_TEST_SANITIZED ? 3 : 1))
+    set.for_each_extra([&](const auto& c) {
+      if (cs_particle_distance<S>(c, ps[i].position) < double(ps[i].radius) - double(slack) - 1e-7) ++inside;
+    });
+  EXPECT_EQ(inside, 0);
+}
+
+TEST(ConvexCollider, NoParticleEndsInsideBacktracking) { cs_rain<double>(Strategy::Backtrack, 0.5, 0.2, false); }
+TEST(ConvexCollider, NoParticleEndsInsideProjection) { cs_rain<double>(Strategy::Project, 0.5, 0.2, false); }
+TEST(ConvexCollider, NoParticleEndsInsideMovingColliders) { cs_rain<double>(Strategy::Backtrack, 1.0, 0.0, true); }
+TEST(ConvexCollider, NoParticleEndsInsideFloat) { cs_rain<float>(Strategy::Backtrack, 0.5, 0.2, false); }
+
+TEST(ConvexCollider, AnalyticBounceAndRest) {
+  // a point dropped on the flat top of an upright cylinder (cap at z = 0.5) from z = 1.5 at rest:
+  // it arrives with speed sqrt(2 g 1.0) and leaves with e times it, from the cap
+  const Cylinder<double> cyl(0.4, 0.5);
+  ColliderSet<double, Aabb<double>, ConvexCollider<double, Cylinder<double>>> set;
+  set.extra_of<ConvexCollider<double, Cylinder<double>>>().emplace_back(cyl, Material<double>{0.5, 0.0});
+  StepOptions<double> opt;
+  opt.gravity = V3(0, 0, -9.81);
+  const double g = 9.81, v_in = std::sqrt(2 * g * 1.0);
+  Particle<double> p;
+  p.position = V3(0.1, -0.2, 1.5);
+  // step exactly to the impact time and a little past it
+  const double t_hit = v_in / g;
+  StepOptions<double> bounce = opt;
+  bounce.rest_speed_factor = 0;  // (the default rest speed, 2 g dt, would call this impact a rest)
+  StepStats st = step_particle(p, set, t_hit + 0.01, bounce);
+  EXPECT_EQ(st.impacts, 1u);
+  EXPECT_NEAR(p.velocity.z(), 0.5 * v_in - g * 0.01, 1e-9);
+  EXPECT_NEAR(p.position.z(), 0.5 + 0.5 * v_in * 0.01 - g * 0.01 * 0.01 / 2, 1e-9);
+  EXPECT_NEAR(p.position.x(), 0.1, 1e-12);
+  // a ball of radius 0.1 on the hemispherical top of an upright capsule, off its axis by 0.05:
+  // it hits the sphere of radius 0.4 about (0, 0, 0.6) where the centre is 0.4 from it
+  const Capsule<double> cap(0.3, 0.6);
+  ColliderSet<double, Aabb<double>, ConvexCollider<double, Capsule<double>>> cs;
+  cs.extra_of<ConvexCollider<double, Capsule<double>>>().emplace_back(cap, Material<double>{1.0, 0.0});
+  Particle<double> b;
+  b.radius = 0.1;
+  b.position = V3(0.05, 0, 2.0);
+  b.velocity = V3(0, 0, -4);
+  StepOptions<double> o2;
+  step_particle(b, cs, 1.0, o2);
+  const double zc = 0.6 + std::sqrt(0.4 * 0.4 - 0.05 * 0.05);  // centre at the impact
+  const V3 n = (V3(0.05, 0, zc) - V3(0, 0, 0.6)).normalized();
+  const V3 v_out = V3(0, 0, -4) - 2 * V3(0, 0, -4).dot(n) * n;  // elastic reflection
+  EXPECT_LT((b.velocity - v_out).norm(), 1e-9);
+  const double t_impact = (2.0 - zc) / 4.0;
+  EXPECT_LT((b.position - (V3(0.05, 0, zc) + v_out * (1.0 - t_impact))).norm(), 1e-9);
+  // resting: a ball left on the cylinder's cap under gravity with friction comes to rest on it
+  ColliderSet<double, Aabb<double>, ConvexCollider<double, Cylinder<double>>> rs;
+  rs.extra_of<ConvexCollider<double, Cylinder<double>>>().emplace_back(cyl, Material<double>{0.0, 0.5});
+  Particle<double> r;
+  r.radius = 0.05;
+  r.position = V3(0, 0, 0.6);
+  r.velocity = V3(0.05, 0, 0);
+  for (int i = 0; i < 50; ++i) step_particle(r, rs, 0.01, opt);
+  EXPECT_EQ(r.velocity, V3::Zero());
+  EXPECT_NEAR(r.position.z(), 0.55, 1e-9);
+}
+
+TEST(ConvexCollider, BadInputThrowsAndNothingMoves) {
+  const auto& z = zoo();
+  ColliderSet<double, Aabb<double>, ConvexCollider<double, Capsule<double>>, ConvexCollider<double, ConvexHull<double>>> set;
+  set.extra_of<ConvexCollider<double, Capsule<double>>>().emplace_back(z.capsule);
+  std::vector<Particle<double>> ps(3);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    ps[i].position = V3(0, 0, 2.0 + double(i));
+    ps[i].velocity = V3(0, 0, -1);
+  }
+  const auto before = ps;
+  StepOptions<double> opt;
+  auto same = [&] {
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      if (ps[i].position != before[i].position || ps[i].velocity != before[i].velocity) return false;
+    return true;
+  };
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].shape.radius = std::nan("");
+  EXPECT_THROW(step_particles(ps, set, 0.1, opt), InvalidInput);
+  EXPECT_TRUE(same());
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].shape.radius = 0.3;
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].material.restitution = 2;
+  EXPECT_THROW(step_particles(ps, set, 0.1, opt), InvalidInput);
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].material.restitution = 0.5;
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].motion.pose.t.x() = std::nan("");
+  EXPECT_THROW(step_particles(ps, set, 0.1, opt), InvalidInput);
+  set.extra_of<ConvexCollider<double, Capsule<double>>>()[0].motion.pose.t.x() = 0;
+  set.extra_of<ConvexCollider<double, ConvexHull<double>>>().emplace_back(ConvexHull<double>{});  // not built
+  EXPECT_THROW(step_particles(ps, set, 0.1, opt), InvalidInput);
+  EXPECT_TRUE(same());
+  set.extra_of<ConvexCollider<double, ConvexHull<double>>>().clear();
+  EXPECT_EQ(set.size(), 1u);
+  EXPECT_EQ(step_particles(ps, set, 0.1, opt).impacts, 0u);  // valid again: it steps
+  EXPECT_FALSE(same());
 }
 
 }  // namespace impact_convex_scene_test
