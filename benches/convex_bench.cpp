@@ -131,6 +131,20 @@ struct Errors {
   }
 };
 
+// One result row; errors are given relative to `scale`, the size of the pair's shapes.
+Row make_row(const std::string& pair, const char* query, const char* lib, double qps, const Errors& e, double scale) {
+  Row r;
+  r.pair = pair;
+  r.query = query;
+  r.library = lib;
+  r.qps = qps;
+  r.mean_error = e.n ? e.sum / e.n / scale : 0;
+  r.max_error = e.max / scale;
+  r.mismatches = e.mismatches;
+  r.samples = e.n;
+  return r;
+}
+
 volatile double g_sink = 0;
 
 template <class A, class B>
@@ -142,16 +156,7 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
   const std::size_t n = poses.size();
 
   const auto add = [&](const char* query, const char* lib, double qps, const Errors& e) {
-    Row r;
-    r.pair = name;
-    r.query = query;
-    r.library = lib;
-    r.qps = qps;
-    r.mean_error = e.n ? e.sum / e.n / scale : 0;
-    r.max_error = e.max / scale;
-    r.mismatches = e.mismatches;
-    r.samples = e.n;
-    rows.push_back(r);
+    rows.push_back(make_row(name, query, lib, qps, e, scale));
   };
 
   // impact
@@ -268,16 +273,7 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
   for (const auto& [pm, ps] : poses) ref.push_back(mesh_reference(m, pm, s, ps, size));
   const std::size_t n = poses.size();
   const auto add = [&](const char* query, const char* lib, double qps, const Errors& e) {
-    Row r;
-    r.pair = name;
-    r.query = query;
-    r.library = lib;
-    r.qps = qps;
-    r.mean_error = e.n ? e.sum / e.n / size : 0;
-    r.max_error = e.max / size;
-    r.mismatches = e.mismatches;
-    r.samples = e.n;
-    rows.push_back(r);
+    rows.push_back(make_row(name, query, lib, qps, e, size));
   };
   {
     Errors eb, ed, ec;

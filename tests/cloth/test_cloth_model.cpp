@@ -218,7 +218,7 @@ TYPED_TEST(ClothModel, PinnedSquareSagOrderingAndStaticBalance) {
   using S = TypeParam;
   const int N = IMPACT_TEST_SANITIZED ? 4 : 6;
   const TriangleMesh<S> g = make_grid<S>(N, N, S(1));
-  auto id = [N](int i, int j) { return i + j * (N + 1); };
+  auto id = [&](int i, int j) { return i + j * (N + 1); };
   auto run = [&](S stretch, S density) {
     MassSpringParams<S> p;
     p.stretch_stiffness = stretch;

@@ -94,7 +94,7 @@ void check_pair(const char* name, const A& a, const B& b, Tol tol, std::uint64_t
         std::vector<V3> normals, ea, eb;
         test::polytope_features(a, pa, normals, ea);
         test::polytope_features(b, pb, normals, eb);
-        best = test::polytope_depth(normals, ea, eb, [&](const V3& m) { return overlap_along(a, pa, b, pb, m); });
+        best = test::polytope_depth(normals, ea, eb, [&, &qa = pa, &qb = pb](const V3& m) { return overlap_along(a, qa, b, qb, m); });
         EXPECT_GE(c.depth, best - tol.depth * scale) << name << ": depth below the exact polytope depth";
       }
       // The contract: the true depth lies in [depth - depth_gap, depth]. EPA's gap is asserted

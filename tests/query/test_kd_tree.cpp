@@ -81,8 +81,8 @@ template <class S> std::vector<Ray<S>> random_rays(Rng& rng, int n, double sprea
 }  // namespace
 
 template <class S> class KdTreeTest : public ::testing::Test {};
-using Scalars = ::testing::Types<float, double>;
-TYPED_TEST_SUITE(KdTreeTest, Scalars);
+using KdTreeScalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(KdTreeTest, KdTreeScalars);
 
 TYPED_TEST(KdTreeTest, RaysAndSegmentsMatchBruteForce) {
   using S = TypeParam;

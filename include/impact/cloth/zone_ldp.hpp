@@ -82,6 +82,38 @@ inline Eigen::VectorXd ldp_slack(const ZoneLdp& P, const Eigen::VectorXd& y) {
   return w;
 }
 
+/// The rounding bound of the sparse solvers: |fl(G^T lambda) - G^T lambda| <= rounding * sum_i
+/// lambda_i, from (deg + 1) u sum_i lambda_i |g_i|_1 with |g_i|_1 <= sqrt(12), deg the largest
+/// number of rows on one block.
+inline double ldp_rounding(const ZoneLdp& P) {
+  std::vector<int> deg(static_cast<std::size_t>(P.blocks), 0);
+  int dmax = 0;
+  for (const auto& r : P.rows)
+    for (int q = 0; q < r.nb; ++q) dmax = std::max(dmax, ++deg[static_cast<std::size_t>(r.blk[q])]);
+  return 4 * static_cast<double>(dmax + 1) * 1.2e-16;
+}
+
+/// The sparse solvers' verdict after one outer iteration reached lambda (>= 0) and y = G^T lambda.
+/// Solved: the inner iteration converged and the KKT conditions hold to a quarter of each row's
+/// tolerance (g_i . y - c_i >= -t_i / 4, and <= t_i / 4 where lambda_i > 0). Infeasible: weak
+/// duality proves every feasible y longer than far * max c_i, with the rounding of y included
+/// (`rounding` from ldp_rounding). Failed: no verdict yet (the caller iterates on when `converged`,
+/// gives up otherwise).
+inline LdpStatus ldp_outer_verdict(const ZoneLdp& P, const Eigen::VectorXd& lambda, const Eigen::VectorXd& y,
+                                   bool converged, double rounding, double far) {
+  if (converged) {
+    const Eigen::VectorXd w = ldp_slack(P, y);
+    bool kkt = true;
+    for (Eigen::Index i = 0; i < w.size() && kkt; ++i)
+      kkt = w[i] >= -0.25 * P.tol[i] && (lambda[i] == 0 || w[i] <= 0.25 * P.tol[i]);
+    if (kkt) return LdpStatus::Solved;
+  }
+  const double num = P.c.dot(lambda) - P.tol.dot(lambda);
+  const double den = y.norm() + rounding * lambda.sum();
+  if (num > 0 && num > far * P.c.maxCoeff() * den) return LdpStatus::Infeasible;
+  return LdpStatus::Failed;
+}
+
 /// Lawson-Hanson LDP through NNLS (see the file comment). `max_changes` bounds the active-set
 /// changes (each adds or drops one row). Infeasible when the NNLS residual vanishes (relative
 /// 1e-12). Solved means the NNLS's own optimality test passed; the caller checks the rows.

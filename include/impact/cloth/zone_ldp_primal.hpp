@@ -51,17 +51,8 @@ inline LdpSolution solve_ldp_primal(const ZoneLdp& P, const PrimalLdpOptions& op
     out.status = LdpStatus::Solved;
     return out;
   }
-  const double cmax = P.c.maxCoeff();
   double eps = opt.eps_start, inv_eps = 1 / eps;
-  double rounding = 0;
-  {
-    std::vector<int> deg(static_cast<std::size_t>(P.blocks), 0);
-    int dmax = 0;
-    for (const auto& r : P.rows)
-      for (int q = 0; q < r.nb; ++q) dmax = std::max(dmax, ++deg[static_cast<std::size_t>(r.blk[q])]);
-    // |fl(G^T lambda) - G^T lambda| <= (deg + 1) u sum_i lambda_i |g_i|_1, |g_i|_1 <= sqrt(12).
-    rounding = 4 * static_cast<double>(dmax + 1) * 1.2e-16;
-  }
+  const double rounding = ldp_rounding(P);
   Eigen::VectorXd mu = Eigen::VectorXd::Zero(m), lambda = Eigen::VectorXd::Zero(m), y = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd r(m), s(m);
   std::vector<char> act(static_cast<std::size_t>(m), 0), prev(static_cast<std::size_t>(m), 2);
@@ -142,33 +133,13 @@ inline LdpSolution solve_ldp_primal(const ZoneLdp& P, const PrimalLdpOptions& op
       residuals(y);
     }
   };
-  // Weak-duality bound on the length of any feasible y (rounding of G^T lambda included).
-  auto certified_infeasible = [&](const Eigen::VectorXd& yl) {
-    const double num = P.c.dot(lambda) - P.tol.dot(lambda);
-    const double den = yl.norm() + rounding * lambda.sum();
-    return num > 0 && num > opt.far * cmax * den;
-  };
   for (int outer = 0; outer <= 200; ++outer) {
     const bool ok = inner();
     const Eigen::VectorXd yl = ldp_primal(P, lambda);  // the positions the caller will build
     out.iterations = factorizations;
-    if (!ok) {
-      if (certified_infeasible(yl)) out.status = LdpStatus::Infeasible;
-      return out;  // Failed, unless certified
-    }
-    const Eigen::VectorXd w = ldp_slack(P, yl);
-    bool kkt = true;
-    for (Eigen::Index i = 0; i < m && kkt; ++i)
-      kkt = w[i] >= -0.25 * P.tol[i] && (lambda[i] == 0 || w[i] <= 0.25 * P.tol[i]);
-    if (kkt) {
-      out.lambda = lambda;
-      out.status = LdpStatus::Solved;
-      return out;
-    }
-    if (certified_infeasible(yl)) {
-      out.status = LdpStatus::Infeasible;
-      return out;
-    }
+    out.status = ldp_outer_verdict(P, lambda, yl, ok, rounding, opt.far);
+    if (out.status == LdpStatus::Solved) out.lambda = lambda;
+    if (out.status != LdpStatus::Failed || !ok) return out;
     mu = lambda;
     prev.assign(prev.size(), 2);
     eps = std::max(opt.eps, eps * opt.eps_factor);

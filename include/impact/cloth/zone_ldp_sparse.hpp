@@ -70,23 +70,21 @@ inline LdpSolution solve_ldp_sparse(const ZoneLdp& P, const SparseLdpOptions& op
   const double cmax = P.c.maxCoeff();
   // H = G G^T, both triangles, from the rows that share each block.
   Eigen::SparseMatrix<double> H(m, m);
-  double rounding = 0;
+  const double rounding = ldp_rounding(P);
   {
     std::vector<std::vector<std::pair<int, int>>> by_block(static_cast<std::size_t>(P.blocks));  // (row, slot)
     for (Eigen::Index i = 0; i < m; ++i)
       for (int q = 0; q < P.rows[static_cast<std::size_t>(i)].nb; ++q)
         by_block[static_cast<std::size_t>(P.rows[static_cast<std::size_t>(i)].blk[q])].push_back({static_cast<int>(i), q});
     std::vector<Eigen::Triplet<double>> trip;
-    std::size_t count = 0, deg = 0;
-    for (const auto& list : by_block) count += list.size() * list.size(), deg = std::max(deg, list.size());
+    std::size_t count = 0;
+    for (const auto& list : by_block) count += list.size() * list.size();
     trip.reserve(count);
     for (const auto& list : by_block)
       for (const auto& [ci, qi] : list)
         for (const auto& [cj, qj] : list)
           trip.emplace_back(ci, cj, P.rows[static_cast<std::size_t>(ci)].g[qi].dot(P.rows[static_cast<std::size_t>(cj)].g[qj]));
     H.setFromTriplets(trip.begin(), trip.end());
-    // |fl(G^T lambda) - G^T lambda| <= (deg + 1) u sum_i lambda_i |g_i|_1, |g_i|_1 <= sqrt(12).
-    rounding = 4 * static_cast<double>(deg + 1) * 1.2e-16;
   }
   const double eps = opt.eps;
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(m), mu = Eigen::VectorXd::Zero(m);
@@ -172,34 +170,14 @@ inline LdpSolution solve_ldp_sparse(const ZoneLdp& P, const SparseLdpOptions& op
       if (!moved) return false;
     }
   };
-  // Weak-duality bound on the length of any feasible y (rounding of G^T lambda included).
-  auto certified_infeasible = [&](const Eigen::VectorXd& y) {
-    const double num = P.c.dot(lambda) - P.tol.dot(lambda);
-    const double den = y.norm() + rounding * lambda.sum();
-    return num > 0 && num > opt.far * cmax * den;
-  };
   for (int outer = 0; outer <= 200; ++outer) {
     const bool ok = inner();
     lambda = lambda.cwiseMax(0.0);
     const Eigen::VectorXd y = ldp_primal(P, lambda);
     out.iterations = factorizations;
-    if (!ok) {
-      if (certified_infeasible(y)) out.status = LdpStatus::Infeasible;
-      return out;  // Failed, unless certified
-    }
-    const Eigen::VectorXd w = ldp_slack(P, y);
-    bool kkt = true;
-    for (Eigen::Index i = 0; i < m && kkt; ++i)
-      kkt = w[i] >= -0.25 * P.tol[i] && (lambda[i] == 0 || w[i] <= 0.25 * P.tol[i]);
-    if (kkt) {
-      out.lambda = lambda;
-      out.status = LdpStatus::Solved;
-      return out;
-    }
-    if (certified_infeasible(y)) {
-      out.status = LdpStatus::Infeasible;
-      return out;
-    }
+    out.status = ldp_outer_verdict(P, lambda, y, ok, rounding, opt.far);
+    if (out.status == LdpStatus::Solved) out.lambda = lambda;
+    if (out.status != LdpStatus::Failed || !ok) return out;
     mu = lambda;
   }
   return out;  // Failed: the proximal iteration does not settle

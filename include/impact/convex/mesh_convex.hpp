@@ -369,13 +369,8 @@ struct TriangleConvexTests {
       // the general pair, or a capsule whose core meets the triangle
       const RigidTransform<S> identity;
       if (fast) {
-        const auto r = ccd_penetration(t, identity, shape, pose, CcdAlgorithm::Mpr, ccd_settings(options, query_scale<S>(t, shape)));
-        ConvexContact<S> c;
-        c.intersecting = r.intersecting;
-        c.normal = r.normal;
-        c.point = r.point;
-        c.iterations = r.iterations;
-        c.limit_reached = r.limit_reached;
+        ConvexContact<S> c =
+            to_contact(ccd_penetration(t, identity, shape, pose, CcdAlgorithm::Mpr, ccd_settings(options, query_scale<S>(t, shape))));
         settle_contact(t, identity, shape, pose, c);
         c.depth_gap = c.depth;
         return c;

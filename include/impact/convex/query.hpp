@@ -164,6 +164,19 @@ CcdSettings ccd_settings(const ConvexQueryOptions<S>& o, S scale) {
   return c;
 }
 
+/// A libccd penetration result as a contact: whether the shapes intersect, the normal, the point
+/// and the solver's counters. The depth is left to settle_contact, which measures it.
+template <class S>
+ConvexContact<S> to_contact(const CcdPenetration<S>& r) {
+  ConvexContact<S> c;
+  c.intersecting = r.intersecting;
+  c.normal = r.normal;
+  c.point = r.point;
+  c.iterations = r.iterations;
+  c.limit_reached = r.limit_reached;
+  return c;
+}
+
 /// Makes an iterative solver's contact exact along its normal: depth := h_a(n) + h_b(-n) (the
 /// overlap of the shapes along n, computed from the support functions, so that translating b by
 /// depth * n makes them touch, and depth >= the true penetration depth), and the point moved along
@@ -199,12 +212,7 @@ ConvexContact<S> epa(const A& a, const RigidTransform<S>& pa, const B& b, const 
       algo = o.penetration_algorithm == CcdAlgorithm::Gjk ? CcdAlgorithm::Mpr : CcdAlgorithm::Gjk;
     }
     const auto r = ccd_penetration(a, pa, b, pb, algo, st);
-    ConvexContact<S> c;
-    c.intersecting = r.intersecting;
-    c.normal = r.normal;
-    c.point = r.point;
-    c.iterations = r.iterations;
-    c.limit_reached = r.limit_reached;
+    ConvexContact<S> c = to_contact(r);
     if (attempt == 0) {
       if (!r.intersecting) return c;
       best = c;
