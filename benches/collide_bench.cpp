@@ -165,6 +165,7 @@ int main(int argc, char** argv) {
   auto run_impact = [&](auto tag, const char* bvname) {
     using BV = decltype(tag);
     MeshBvhConfig cfg;
+    cfg.build.threads = 1;  // FCL builds on one thread: the build times compare like for like
     cfg.build.leaf_size = args.leaf;
     cfg.build.split = args.split == "median" ? SplitRule::CentroidMedian : args.split == "sah" ? SplitRule::Sah : SplitRule::SpatialMiddle;
     if (args.split == "bottom-up") cfg.build.method = BuildMethod::BottomUp;

@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -44,11 +45,11 @@ namespace {
 struct Args {
   std::vector<std::string> meshes;
   std::string json;
-  int poses = 100, rays = 1000;
+  int poses = 100, rays = 1000, threads = 0;
   std::uint64_t seed = 1;
 };
 
-constexpr const char* kUsage = "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--json FILE]\n";
+constexpr const char* kUsage = "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--threads T] [--json FILE]\n";
 
 [[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
@@ -61,11 +62,13 @@ Args parse(int argc, char** argv) {
     else if (s == "--rays") a.rays = std::atoi(next().c_str());
     else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--json") a.json = next();
+    else if (s == "--threads") a.threads = std::atoi(next().c_str());
     else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else a.meshes.push_back(s);
   }
   if (a.poses < 1) usage("--poses must be >= 1");
   if (a.rays < 1) usage("--rays must be >= 1");
+  if (a.threads < 0) usage("--threads must be >= 0 (0: the hardware concurrency)");
   return a;
 }
 
@@ -208,6 +211,39 @@ void ray_rows(Work& w, Checker& ck, std::vector<Row>& rows, MakeRow&& row, Cast&
     const auto [bv_tests, triangle_tests] = counts(st);
     r.bv_tests = double(bv_tests) / double(rays.size()), r.primitive_tests = double(triangle_tests) / double(rays.size());
     check_values(w, ck, r, w.ray_t[q], t);
+    rows.push_back(r);
+  }
+}
+
+/// The top-down build (middle split) on one thread and on `threads`: the best of three builds
+/// each, and whether the trees agree node for node (a mismatch otherwise). Rows: builder
+/// "middle-1t" and "middle-<T>t", query "build".
+template <class BV>
+void build_threads_rows(const Work& w, int threads, std::vector<Row>& rows, Checker& ck) {
+  const std::string bv = BvTraits<BV>::name;
+  Bvh<BV> trees[2];
+  for (int k = 0; k < 2; ++k) {
+    MeshBvhConfig cfg;
+    cfg.build.threads = k == 0 ? 1 : threads;
+    double best = std::numeric_limits<double>::infinity();
+    for (int rep = 0; rep < 3; ++rep) {
+      const auto t0 = Clock::now();
+      const MeshBvh<BV> tree(w.m, cfg);
+      best = std::min(best, seconds_since(t0) * 1e3);
+      if (rep == 0) trees[k] = tree.tree();
+    }
+    Row r;
+    r.mesh = w.mesh, r.bv = bv, r.builder = "middle-" + std::to_string(cfg.build.threads) + "t";
+    r.structure = bv + "/" + r.builder, r.query = "build", r.build_ms = best;
+    r.bytes_per_triangle = double(trees[k].nodes.size() * sizeof(BvhNode<BV>)) / double(w.m.num_triangles());
+    if (k == 1) {
+      bool same = trees[0].nodes.size() == trees[1].nodes.size() && trees[0].primitives == trees[1].primitives;
+      for (std::size_t i = 0; same && i < trees[0].nodes.size(); ++i)
+        same = trees[0].nodes[i].first == trees[1].nodes[i].first && trees[0].nodes[i].count == trees[1].nodes[i].count &&
+               std::memcmp(&trees[0].nodes[i].bv, &trees[1].nodes[i].bv, sizeof(BV)) == 0;
+      r.mismatches = same ? 0 : 1;
+      ck.mismatches += r.mismatches;
+    }
     rows.push_back(r);
   }
 }
@@ -377,17 +413,25 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < nb; ++k) w.distance[k] = brute_distance(w.m, w.points[k]);
     // (the rest of the reference comes from the first structure that answers: check_values)
     const std::size_t first_row = rows.size();
+    // one thread: the builders compare with each other (the parallel build has rows of its own)
+    const auto one = [](MeshBvhConfig c) { c.build.threads = 1; return c; };
     const std::pair<const char*, MeshBvhConfig> builders[] = {
-        {"middle", [] { MeshBvhConfig c; return c; }()},
-        {"median", [] { MeshBvhConfig c; c.build.split = SplitRule::CentroidMedian; return c; }()},
-        {"sah", [] { MeshBvhConfig c; c.build.split = SplitRule::Sah; return c; }()},
-        {"bottom-up", [] { MeshBvhConfig c; c.build.method = BuildMethod::BottomUp; return c; }()},
-        {"incremental", [] { MeshBvhConfig c; c.build.method = BuildMethod::Incremental; return c; }()},
+        {"middle", one({})},
+        {"median", [&] { MeshBvhConfig c; c.build.split = SplitRule::CentroidMedian; return one(c); }()},
+        {"sah", [&] { MeshBvhConfig c; c.build.split = SplitRule::Sah; return one(c); }()},
+        {"bottom-up", [&] { MeshBvhConfig c; c.build.method = BuildMethod::BottomUp; return one(c); }()},
+        {"incremental", [&] { MeshBvhConfig c; c.build.method = BuildMethod::Incremental; return one(c); }()},
     };
     for (const auto& [builder, cfg] : builders) run_bvh<Sphere<double>>(w, builder, cfg, rows, ck);
     for (const auto& [builder, cfg] : builders) run_bvh<Aabb<double>>(w, builder, cfg, rows, ck);
     for (const auto& [builder, cfg] : builders) run_bvh<Obb<double>>(w, builder, cfg, rows, ck);
     run_kd(w, rows, ck);
+    const int threads = resolve_threads(args.threads);
+    if (threads > 1) {
+      build_threads_rows<Sphere<double>>(w, threads, rows, ck);
+      build_threads_rows<Aabb<double>>(w, threads, rows, ck);
+      build_threads_rows<Obb<double>>(w, threads, rows, ck);
+    }
 
     std::printf("%-20s %-14s %9s %7s %9s %11s %11s %10s %10s %5s\n", "structure", "query", "build_ms", "B/tri", "refit_ms", "median_us",
                 "mean_us", "bv_tests", "prim_tests", "mism");

@@ -45,6 +45,9 @@ struct BuildConfig {
   SplitRule split = SplitRule::SpatialMiddle;
   int leaf_size = 1;  ///< maximum primitives per leaf (>= 1); leaves may be larger only when all centroids coincide
   int sah_bins = 16;  ///< bins per axis of SplitRule::Sah, in [2, 256]
+  /// Threads of BuildMethod::TopDown (bvh/build_top_down.hpp): <= 0 the hardware concurrency, 1
+  /// the calling thread only. The tree is the same for every count.
+  int threads = 0;
   /// Neighbours on each side that a cluster of BuildMethod::BottomUp considers (>= 1): larger
   /// finds better pairs and builds slower (8: igea builds in 1.6x the top-down time).
   int cluster_window = 8;

@@ -13,10 +13,13 @@
 #include "impact/bvh/build_config.hpp"
 #include "impact/bvh/bvh.hpp"
 #include "impact/core/error.hpp"
+#include "impact/core/parallel.hpp"
 
 #include <algorithm>
 #include <array>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 namespace impact {
 
@@ -75,12 +78,89 @@ void sah_split(const std::vector<Vec3<S>>& centroids, const std::vector<Aabb<S>>
   }
 }
 
+/// Where ids[begin, begin + count) is cut by cfg.split (count > 1): the first position of the
+/// right child, strictly inside the range. Reorders only that range of ids.
+template <class S>
+std::int32_t top_down_cut(const std::vector<Vec3<S>>& centroids, const std::vector<Aabb<S>>& sah_boxes, std::int32_t* ids,
+                          std::int32_t begin, std::int32_t count, const BuildConfig& cfg) {
+  Aabb<S> cbox;
+  for (std::int32_t k = begin; k < begin + count; ++k) cbox.extend(centroids[ids[k]]);
+  const int axis = cbox.longest_axis();
+  std::int32_t mid;
+  if (!(cbox.max[axis] > cbox.min[axis])) {
+    mid = begin + count / 2;  // all centroids coincide: cut the range in half
+  } else if (cfg.split == SplitRule::Sah) {
+    int sah_axis, sah_bin;
+    sah_split(centroids, sah_boxes, ids + begin, count, cbox, cfg.sah_bins, sah_axis, sah_bin);
+    if (sah_axis < 0) {
+      mid = begin + count / 2;  // unreachable when the centroid box has extent; kept for safety
+    } else {
+      const S lo = cbox.min[sah_axis], scale = S(cfg.sah_bins) / (cbox.max[sah_axis] - lo);
+      std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) {
+        return std::min(cfg.sah_bins - 1, static_cast<int>((centroids[p][sah_axis] - lo) * scale)) < sah_bin;
+      });
+      mid = static_cast<std::int32_t>(m - ids);
+      if (mid == begin || mid == begin + count) mid = begin + count / 2;
+    }
+  } else if (cfg.split == SplitRule::CentroidMedian) {
+    mid = begin + count / 2;
+    std::nth_element(ids + begin, ids + mid, ids + begin + count,
+                     [&](std::int32_t a, std::int32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+  } else {
+    const S cut = (cbox.min[axis] + cbox.max[axis]) / S(2);
+    std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) { return centroids[p][axis] < cut; });
+    mid = static_cast<std::int32_t>(m - ids);
+    if (mid == begin || mid == begin + count) mid = begin + count / 2;  // rounding at the cut
+  }
+  return mid;
+}
+
+/// Grows the subtree below nodes[root] (a provisional leaf: first and count give its range of
+/// ids): pops a node, fits it, cuts it, appends its two children and visits the left subtree
+/// before the right one. Nodes of more than leaf_size but at most `defer_at_most` primitives are
+/// neither fitted nor cut but listed in `deferred`, in visiting order (defer_at_most = 0: none).
+template <class BV, class Fit, class Cut>
+void grow_top_down(std::vector<BvhNode<BV>>& nodes, std::int32_t root, const std::int32_t* ids, Fit& fit, Cut& cut,
+                   int leaf_size, std::int32_t defer_at_most, std::vector<std::int32_t>& deferred) {
+  std::vector<std::int32_t> stack{root};
+  while (!stack.empty()) {
+    const std::int32_t ni = stack.back();
+    stack.pop_back();
+    const std::int32_t begin = nodes[ni].first, count = nodes[ni].count;
+    if (count > leaf_size && count <= defer_at_most) {
+      deferred.push_back(ni);
+      continue;
+    }
+    nodes[ni].bv = fit(ids + begin, static_cast<std::size_t>(count));
+    if (count <= leaf_size) continue;
+    const std::int32_t mid = cut(begin, count);
+    const auto left = static_cast<std::int32_t>(nodes.size());
+    nodes.push_back({});
+    nodes.push_back({});
+    nodes[left].first = begin;
+    nodes[left].count = mid - begin;
+    nodes[left + 1].first = mid;
+    nodes[left + 1].count = begin + count - mid;
+    nodes[ni].first = left;
+    nodes[ni].count = 0;
+    stack.push_back(left + 1);
+    stack.push_back(left);
+  }
+}
+
 }  // namespace detail
 
 /// Builds a tree over centroids.size() primitives.
 /// `fit(const std::int32_t* ids, std::size_t count) -> BV` returns a BV holding those primitives.
 /// `boxes` (one per primitive) are read by SplitRule::Sah only; without them SAH sees each
 /// primitive as its centroid.
+///
+/// Threads (BuildConfig::threads): the levels above subtrees of about n / (8 * threads)
+/// primitives are built on the calling thread, the subtrees below in parallel, each with its own
+/// copy of `fit` (so a fit that keeps scratch memory must own it: copies run concurrently), and
+/// the nodes are then laid out in the order the serial build gives. The cuts do not depend on the
+/// order in which disjoint ranges are cut, so the tree is the same, node for node and bit for
+/// bit, for every thread count. Meshes under 8,192 primitives are built serially.
 template <class BV, class Fit>
 Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& cfg = {},
                        const std::vector<Aabb<typename BvTraits<BV>::Scalar>>& boxes = {}) {
@@ -101,60 +181,68 @@ Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& c
   if (n == 0) return tree;
   tree.primitives.resize(static_cast<std::size_t>(n));
   std::iota(tree.primitives.begin(), tree.primitives.end(), 0);
-  tree.nodes.reserve(static_cast<std::size_t>(2 * (n / cfg.leaf_size + 1)));
-  tree.nodes.push_back({});
-  tree.nodes[0].first = 0;
-  tree.nodes[0].count = n;  // provisional: every node starts as a leaf over its range
-
-  std::vector<std::int32_t> stack{0};
   std::int32_t* ids = tree.primitives.data();
-  while (!stack.empty()) {
-    const std::int32_t ni = stack.back();
-    stack.pop_back();
-    const std::int32_t begin = tree.nodes[ni].first, count = tree.nodes[ni].count;
-    tree.nodes[ni].bv = fit(ids + begin, static_cast<std::size_t>(count));
-    if (count <= cfg.leaf_size) continue;
+  auto cut = [&](std::int32_t begin, std::int32_t count) {
+    return detail::top_down_cut(centroids, sah_boxes, ids, begin, count, cfg);
+  };
+  const int threads = resolve_threads(cfg.threads);
+  const std::int32_t defer_at_most = threads > 1 && n >= 8192 ? n / (8 * threads) : 0;
 
-    Aabb<S> cbox;
-    for (std::int32_t k = begin; k < begin + count; ++k) cbox.extend(centroids[ids[k]]);
-    const int axis = cbox.longest_axis();
-    std::int32_t mid;
-    if (!(cbox.max[axis] > cbox.min[axis])) {
-      mid = begin + count / 2;  // all centroids coincide: cut the range in half
-    } else if (cfg.split == SplitRule::Sah) {
-      int sah_axis, sah_bin;
-      detail::sah_split(centroids, sah_boxes, ids + begin, count, cbox, cfg.sah_bins, sah_axis, sah_bin);
-      if (sah_axis < 0) {
-        mid = begin + count / 2;  // unreachable when the centroid box has extent; kept for safety
-      } else {
-        const S lo = cbox.min[sah_axis], scale = S(cfg.sah_bins) / (cbox.max[sah_axis] - lo);
-        std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) {
-          return std::min(cfg.sah_bins - 1, static_cast<int>((centroids[p][sah_axis] - lo) * scale)) < sah_bin;
-        });
-        mid = static_cast<std::int32_t>(m - ids);
-        if (mid == begin || mid == begin + count) mid = begin + count / 2;
+  // The top of the tree (all of it when serial); provisional leaves: first/count give the range.
+  std::vector<BvhNode<BV>> top(1);
+  top[0].first = 0;
+  top[0].count = n;
+  top.reserve(defer_at_most > 0 ? std::size_t(64) * std::size_t(threads) : static_cast<std::size_t>(2 * (n / cfg.leaf_size + 1)));
+  std::vector<std::int32_t> deferred;
+  detail::grow_top_down(top, 0, ids, fit, cut, cfg.leaf_size, defer_at_most, deferred);
+  if (deferred.empty()) {
+    tree.nodes = std::move(top);
+    return tree;
+  }
+
+  // The deferred subtrees, each in its own array: its root at 0, the rest in serial order.
+  std::vector<std::vector<BvhNode<BV>>> sub(deferred.size());
+  parallel_for(deferred.size(), threads, [&](std::size_t k) {
+    auto f = fit;
+    std::vector<std::int32_t> none;
+    sub[k].reserve(static_cast<std::size_t>(2 * (top[deferred[k]].count / cfg.leaf_size + 1)));
+    sub[k].push_back(top[deferred[k]]);
+    detail::grow_top_down(sub[k], 0, ids, f, cut, cfg.leaf_size, 0, none);
+  });
+
+  // Lay the nodes out as the serial build does: replay its visiting order over the top, and
+  // append a deferred subtree's nodes where the serial build would have grown them.
+  std::vector<std::int32_t> slot(top.size(), -1);
+  for (std::size_t k = 0; k < deferred.size(); ++k) slot[static_cast<std::size_t>(deferred[k])] = static_cast<std::int32_t>(k);
+  tree.nodes.reserve(static_cast<std::size_t>(2 * (n / cfg.leaf_size + 1)));
+  tree.nodes.push_back(top[0]);
+  std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};  // (top index, final index)
+  while (!stack.empty()) {
+    const auto [t, f] = stack.back();
+    stack.pop_back();
+    if (slot[static_cast<std::size_t>(t)] >= 0) {
+      const auto& s = sub[static_cast<std::size_t>(slot[static_cast<std::size_t>(t)])];
+      const auto base = static_cast<std::int32_t>(tree.nodes.size()) - 1;  // sub index j >= 1 goes to base + j
+      for (std::size_t j = 0; j < s.size(); ++j) {
+        BvhNode<BV> node = s[j];
+        if (!node.is_leaf()) node.first += base;
+        if (j == 0) {
+          tree.nodes[static_cast<std::size_t>(f)] = node;
+        } else {
+          tree.nodes.push_back(node);
+        }
       }
-    } else if (cfg.split == SplitRule::CentroidMedian) {
-      mid = begin + count / 2;
-      std::nth_element(ids + begin, ids + mid, ids + begin + count,
-                       [&](std::int32_t a, std::int32_t b) { return centroids[a][axis] < centroids[b][axis]; });
-    } else {
-      const S cut = (cbox.min[axis] + cbox.max[axis]) / S(2);
-      std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) { return centroids[p][axis] < cut; });
-      mid = static_cast<std::int32_t>(m - ids);
-      if (mid == begin || mid == begin + count) mid = begin + count / 2;  // rounding at the cut
+      continue;
     }
+    const BvhNode<BV>& node = top[static_cast<std::size_t>(t)];
+    tree.nodes[static_cast<std::size_t>(f)] = node;
+    if (node.is_leaf()) continue;
     const auto left = static_cast<std::int32_t>(tree.nodes.size());
     tree.nodes.push_back({});
     tree.nodes.push_back({});
-    tree.nodes[left].first = begin;
-    tree.nodes[left].count = mid - begin;
-    tree.nodes[left + 1].first = mid;
-    tree.nodes[left + 1].count = begin + count - mid;
-    tree.nodes[ni].first = left;
-    tree.nodes[ni].count = 0;
-    stack.push_back(left + 1);
-    stack.push_back(left);
+    tree.nodes[static_cast<std::size_t>(f)].first = left;
+    stack.push_back({node.first + 1, left + 1});
+    stack.push_back({node.first, left});
   }
   return tree;
 }

@@ -86,16 +86,16 @@ template <class BV> class MeshBvh {
     if (V.rows() != mesh_.V.rows()) throw InvalidInput("MeshBvh::set_vertices: vertex count changed");
     validate_mesh(V, mesh_.F);
     mesh_.V = V;
-    std::vector<Vec3<S>> scratch;
-    refit(tree_, fitter(scratch, [this](std::int32_t k) { return triangle(k); }), mode);
+    refit(tree_, fitter([this](std::int32_t k) { return triangle(k); }), mode);
     update_coordinate_bound();
   }
 
  private:
   /// Fits a BV around the vertices of the triangles at leaf positions ids[0..n), gathering them in
-  /// the caller's scratch buffer (a local of build/set_vertices: it is not kept with the tree).
-  template <class Get> auto fitter(std::vector<Vec3<S>>& buf, Get get) {
-    return [this, &buf, get](const std::int32_t* ids, std::size_t n) {
+  /// a scratch buffer of its own (not kept with the tree; each copy of the fitter has its own, so
+  /// the parallel build's copies run concurrently).
+  template <class Get> auto fitter(Get get) {
+    return [this, buf = std::vector<Vec3<S>>(), get](const std::int32_t* ids, std::size_t n) mutable {
       buf.resize(3 * n);
       for (std::size_t i = 0; i < n; ++i) {
         const Triangle<S> t = get(ids[i]);
@@ -120,12 +120,11 @@ template <class BV> class MeshBvh {
       boxes.resize(m);
       for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris[t].a.cwiseMin(tris[t].b).cwiseMin(tris[t].c), tris[t].a.cwiseMax(tris[t].b).cwiseMax(tris[t].c));
     }
-    std::vector<Vec3<S>> scratch;
     auto get = [&tris](std::int32_t t) { return tris[static_cast<std::size_t>(t)]; };
     switch (cfg_.build.method) {
-      case BuildMethod::BottomUp: tree_ = build_bottom_up<BV>(centroids, boxes, fitter(scratch, get), cfg_.build); break;
-      case BuildMethod::Incremental: tree_ = build_incremental<BV>(centroids, boxes, fitter(scratch, get), cfg_.build); break;
-      default: tree_ = build_top_down<BV>(centroids, fitter(scratch, get), cfg_.build, boxes);
+      case BuildMethod::BottomUp: tree_ = build_bottom_up<BV>(centroids, boxes, fitter(get), cfg_.build); break;
+      case BuildMethod::Incremental: tree_ = build_incremental<BV>(centroids, boxes, fitter(get), cfg_.build); break;
+      default: tree_ = build_top_down<BV>(centroids, fitter(get), cfg_.build, boxes);
     }
     ids_ = tree_.primitives;
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
