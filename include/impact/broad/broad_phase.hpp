@@ -78,6 +78,7 @@ struct BroadPhaseStats {
   std::uint64_t rebuilds = 0;               ///< whole-tree rebuilds
   std::uint64_t narrow_tests = 0;           ///< exact shape–shape tests (narrow phase)
   std::uint64_t contacts = 0;               ///< contacts generated (narrow phase)
+  std::uint64_t solver_limits = 0;          ///< narrow tests an iteration bound stopped (convex shapes' solvers)
 
   BroadPhaseStats& operator+=(const BroadPhaseStats& o) {
     bv_tests += o.bv_tests;
@@ -91,6 +92,7 @@ struct BroadPhaseStats {
     rebuilds += o.rebuilds;
     narrow_tests += o.narrow_tests;
     contacts += o.contacts;
+    solver_limits += o.solver_limits;
     return *this;
   }
 };

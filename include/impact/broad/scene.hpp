@@ -3,7 +3,9 @@
 /// Scene<S>: the objects of a simulation (spheres, oriented boxes, meshes, particles; each static
 /// or dynamic, with a user id, a collision filter and a sleeping flag) and the broad phase chosen
 /// for them (BroadPhaseKind), dispatched once per call through a std::variant — never inside the
-/// inner loops.
+/// inner loops. Its second template parameter is the shape set (CoreSceneShapes below: Shape<S> and
+/// narrow_dispatch.hpp); convex/scene_shapes.hpp gives ConvexScene<S>, the same scene with
+/// capsules, cylinders, cones and convex hulls too (target impact::convex, libccd).
 ///
 ///   Scene<double> scene({BroadPhaseKind::StaticDynamic});
 ///   scene.add(7, Shape<double>::sphere(0.5), pose);               // dynamic by default
@@ -134,7 +136,121 @@ struct SceneCollideResult {
   BroadPhaseStats stats;
 };
 
+/// Pads a world box (in place) for the rounding of the narrow phase, as Scene's broad phase needs:
+/// by 32u (|t|_inf + |R|_inf P), P the shape's extent in its own frame, for the rounding of the box
+/// and of the relative pose the narrow phase moves one shape by (each pair's pads add up to about
+/// twice the bound of that rounding), and by 2 g P, g >= |R^T R - I|_2, since the narrow phase sees
+/// the other shape through R^T, which is not quite R's inverse for a pose rigid only within
+/// rotation_tolerance (a point x of the other shape it finds on this one lies within g |x - t| of
+/// where the world has it). `round`: only the pose's translation moves the shape (spheres,
+/// particles). Without the pads, shapes touching exactly at large translations were missed
+/// (tests/broad/test_narrow_dispatch.cpp).
 template <class S>
+void pad_scene_box(Aabb<S>& box, const RigidTransform<S>& pose, S P, bool round) {
+  constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
+  S g = S(0);
+  if (!round) {
+    const Mat3<S> G = pose.R.transpose() * pose.R - Mat3<S>::Identity();
+    g = G.cwiseAbs().sum() * (S(1) + S(16) * u) + S(16) * u * (pose.R.squaredNorm() + S(3));
+  }
+  const S r_inf = round ? S(1) : pose.R.cwiseAbs().rowwise().sum().maxCoeff();
+  const S pad = (S(32) * u * (pose.t.cwiseAbs().maxCoeff() + r_inf * P) + S(2) * g * P) * (S(1) + S(8) * u);
+  box.min.array() -= pad;
+  box.max.array() += pad;
+}
+
+/// The shape set of a Scene, its second template parameter. This one is the core's: Shape<S>
+/// (sphere, box, mesh, particle) with the narrow phase shapes_intersect of narrow_dispatch.hpp.
+/// The convex layer's ConvexSceneShapes (convex/scene_shapes.hpp, target impact::convex) adds
+/// capsules, cylinders, cones and convex hulls the same way, so the core scene never includes
+/// libccd. A shape set is a small value (its options, copied into the scene) with:
+///   Shape                    the objects' shape type (default constructible: a removed slot)
+///   Local                    what add() computes once per object for world_box
+///   Local local(shape)       that
+///   void check(shape, who)   throws InvalidInput naming `who` for an invalid shape
+///   Aabb<S> world_box(shape, local, pose)   the object's world box, padded so that the broad
+///                            phase never drops a pair the narrow phase would report
+///   bool intersect(a, pa, b, pb, ShapeContact<S>* contact, BroadPhaseStats& stats)
+///                            the narrow phase of a pair (contact normal from a towards b)
+/// All of it is resolved at compile time: no virtual call in the scene's loops.
+template <class S>
+struct CoreSceneShapes {
+  using Shape = impact::Shape<S>;
+  /// Meshes: the box of the vertices in the mesh frame and the largest distance of a vertex from
+  /// its centre; nothing for the other shapes.
+  struct Local {
+    Aabb<S> box;
+    S reach = S(0);
+  };
+  static Local local(const Shape& shape) {
+    Local l;
+    if (shape.kind == ShapeKind::Mesh) {
+      const auto& V = shape.mesh->mesh().V;
+      for (Eigen::Index i = 0; i < V.rows(); ++i) l.box.extend(V.row(i).transpose());
+      const Vec3<S> c = l.box.center();
+      for (Eigen::Index i = 0; i < V.rows(); ++i) l.reach = std::max(l.reach, (V.row(i).transpose() - c).norm());
+    }
+    return l;
+  }
+  static bool intersect(const Shape& a, const RigidTransform<S>& pa, const Shape& b, const RigidTransform<S>& pb,
+                        ShapeContact<S>* contact, BroadPhaseStats&) {
+    return shapes_intersect(a, pa, b, pb, contact);
+  }
+
+  /// Throws InvalidInput (naming `who`) for a negative or non-finite size or a null mesh.
+  static void check(const Shape& shape, const std::string& who) {
+    switch (shape.kind) {
+      case ShapeKind::Sphere:
+      case ShapeKind::Particle:
+        validate_length(shape.radius, who.c_str(), "radius");
+        break;
+      case ShapeKind::Box:
+        for (int k = 0; k < 3; ++k) validate_length(shape.half[k], who.c_str(), "half extent");
+        break;
+      case ShapeKind::Mesh:
+        if (!shape.mesh) throw InvalidInput(who + ": null mesh");
+        break;
+    }
+  }
+
+  /// Conservative world box: for spheres, particles and boxes their box, for meshes the
+  /// intersection of the rotated vertex box and the cube around the vertices' bounding sphere (both
+  /// contain the mesh; the first is tighter for elongated meshes, the second for round ones); then
+  /// padded by pad_scene_box.
+  static Aabb<S> world_box(const Shape& shape, const Local& loc, const RigidTransform<S>& pose) {
+    const Aabb<S>& local = loc.box;
+    const S reach = loc.reach;
+    Aabb<S> box;
+    S P = S(0);
+    switch (shape.kind) {
+      case ShapeKind::Sphere:
+      case ShapeKind::Particle: {
+        const Vec3<S> r = Vec3<S>::Constant(shape.radius);
+        box = {pose.t - r, pose.t + r};
+        P = shape.radius;  // only the centre is moved: no rotation involved
+        break;
+      }
+      case ShapeKind::Box: {
+        const Vec3<S> e = pose.R.cwiseAbs() * shape.half;
+        box = {pose.t - e, pose.t + e};
+        P = shape.half.sum();
+        break;
+      }
+      case ShapeKind::Mesh:
+      default: {
+        const Vec3<S> c = pose.apply(local.center());
+        const Vec3<S> e = (pose.R.cwiseAbs() * ((local.max - local.min) / S(2))).cwiseMin(Vec3<S>::Constant(reach));
+        box = {c - e, c + e};
+        P = local.center().cwiseAbs().sum() + reach + (local.max - local.min).sum();
+        break;
+      }
+    }
+    pad_scene_box(box, pose, P, shape.is_round());
+    return box;
+  }
+};
+
+template <class S, class Shapes = CoreSceneShapes<S>>
 class Scene {
   static_assert(is_supported_scalar_v<S>, "Scene<S>: S must be float or double");
   static_assert(is_broad_phase_v<AllPairsBroadPhase<S>, S> && is_broad_phase_v<StaticDynamicBroadPhase<S>, S> &&
@@ -142,8 +258,11 @@ class Scene {
                 "every broad phase implements the interface of broad_phase.hpp");
 
  public:
-  /// Throws InvalidInput for options outside their ranges (check_options).
-  explicit Scene(const SceneOptions& opt = {}) : opt_(opt) {
+  using ShapeType = typename Shapes::Shape;
+
+  /// Throws InvalidInput for options outside their ranges (check_options). `shapes` is the shape
+  /// set's value (its options, e.g. ConvexSceneShapes' solver tolerances).
+  explicit Scene(const SceneOptions& opt = {}, const Shapes& shapes = {}) : opt_(opt), shapes_(shapes) {
     check_options(opt);
     switch (opt.broad_phase) {
       case BroadPhaseKind::AllPairs:
@@ -162,19 +281,12 @@ class Scene {
   /// InvalidInput for a duplicate id, a non-finite or non-rigid pose (R^T R off the identity by
   /// more than sqrt(eps) for float, 1e-6 for double, or det R <= 0), a negative or non-finite
   /// size, or a null mesh.
-  void add(ObjectId id, const Shape<S>& shape, const RigidTransform<S>& pose, const ObjectOptions& options = {}) {
+  void add(ObjectId id, const ShapeType& shape, const RigidTransform<S>& pose, const ObjectOptions& options = {}) {
     if (ids_.count(id)) throw InvalidInput("Scene::add: id " + std::to_string(id) + " is already in the scene");
-    check_shape(shape, id);
+    shapes_.check(shape, "Scene::add: object " + std::to_string(id));
     check_pose(pose, "Scene::add", id);
-    Aabb<S> local;
-    S reach = S(0);
-    if (shape.kind == ShapeKind::Mesh) {
-      const auto& V = shape.mesh->mesh().V;
-      for (Eigen::Index i = 0; i < V.rows(); ++i) local.extend(V.row(i).transpose());
-      const Vec3<S> c = local.center();
-      for (Eigen::Index i = 0; i < V.rows(); ++i) reach = std::max(reach, (V.row(i).transpose() - c).norm());
-    }
-    const Aabb<S> box = world_box(shape, local, reach, pose);
+    typename Shapes::Local local = shapes_.local(shape);
+    const Aabb<S> box = shapes_.world_box(shape, local, pose);
     if (!all_finite(box.min) || !all_finite(box.max))
       throw InvalidInput("Scene::add: object " + std::to_string(id) + " has non-finite bounds");
     std::int32_t slot;
@@ -187,7 +299,7 @@ class Scene {
       objects_.emplace_back();
     }
     const auto s = static_cast<std::size_t>(slot);
-    objects_[s] = {id, shape, pose, local, reach};
+    objects_[s] = {id, shape, pose, std::move(local)};
     table_.box(slot) = box;
     table_.flags(slot) = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
                                       (options.sleeping ? ObjectTable<S>::Sleeping : 0));
@@ -218,7 +330,7 @@ class Scene {
       table_.ignore_count(slot) = 0;
     }
     table_.flags(slot) = 0;
-    objects_[s].shape = Shape<S>{};
+    objects_[s].shape = ShapeType{};
     ids_.erase(id);
     free_.push_back(slot);
     --count_;
@@ -230,7 +342,7 @@ class Scene {
     const std::int32_t slot = slot_of(id, "Scene::set_pose");
     check_pose(pose, "Scene::set_pose", id);
     const auto s = static_cast<std::size_t>(slot);
-    const Aabb<S> box = world_box(objects_[s].shape, objects_[s].local, objects_[s].reach, pose);
+    const Aabb<S> box = shapes_.world_box(objects_[s].shape, objects_[s].local, pose);
     if (!all_finite(box.min) || !all_finite(box.max))
       throw InvalidInput("Scene::set_pose: object " + std::to_string(id) + " has non-finite bounds");
     objects_[s].pose = pose;
@@ -292,7 +404,7 @@ class Scene {
   /// boxes, conservative for meshes. Throws for unknown ids.
   const Aabb<S>& bounds(ObjectId id) const { return table_.box(slot_of(id, "Scene::bounds")); }
   const RigidTransform<S>& pose(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::pose"))].pose; }
-  const Shape<S>& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
+  const ShapeType& shape(ObjectId id) const { return objects_[static_cast<std::size_t>(slot_of(id, "Scene::shape"))].shape; }
 
   /// Applies the edits since the last query to the broad phase now (refits, rebuilds, cached
   /// candidates), adding its work to *stats; otherwise the first query after edits does it. An
@@ -455,10 +567,9 @@ class Scene {
  private:
   struct Object {
     ObjectId id = 0;
-    Shape<S> shape;
+    ShapeType shape;
     RigidTransform<S> pose;
-    Aabb<S> local;  ///< meshes: box of the vertices in the mesh frame
-    S reach = 0;    ///< meshes: largest distance of a vertex from local.center()
+    typename Shapes::Local local;  ///< what world_box needs besides the shape and the pose
   };
 
   /// The ignore list changed for the pair (sa, sb): only its dynamic members can hold cached
@@ -497,7 +608,7 @@ class Scene {
     if (ob->id < oa->id) std::swap(oa, ob);
     ++stats.narrow_tests;
     ShapeContact<S> c;
-    if (!shapes_intersect(oa->shape, oa->pose, ob->shape, ob->pose, options.contacts ? &c : nullptr)) return true;
+    if (!shapes_.intersect(oa->shape, oa->pose, ob->shape, ob->pose, options.contacts ? &c : nullptr, stats)) return true;
     pairs.push_back({oa->id, ob->id});
     if (options.contacts) {
       ++stats.contacts;
@@ -531,72 +642,8 @@ class Scene {
     require(opt.tree.rebuild_ratio >= 1.0, where, "options.tree.rebuild_ratio must be >= 1");
   }
 
-  static void check_shape(const Shape<S>& shape, ObjectId id) {
-    const std::string who = "Scene::add: object " + std::to_string(id);
-    switch (shape.kind) {
-      case ShapeKind::Sphere:
-      case ShapeKind::Particle:
-        validate_length(shape.radius, who.c_str(), "radius");
-        break;
-      case ShapeKind::Box:
-        for (int k = 0; k < 3; ++k) validate_length(shape.half[k], who.c_str(), "half extent");
-        break;
-      case ShapeKind::Mesh:
-        if (!shape.mesh) throw InvalidInput(who + ": null mesh");
-        break;
-    }
-  }
-
-  /// Conservative world box: for spheres, particles and boxes their box, for meshes the
-  /// intersection of the rotated vertex box and the cube around the vertices' bounding sphere (both
-  /// contain the mesh; the first is tighter for elongated meshes, the second for round ones); then
-  /// padded so that the broad phase never drops a pair the narrow phase would report: by 32u
-  /// (|t|_inf + |R|_inf P), P the shape's extent in its own frame, for the rounding of this box and
-  /// of the relative pose the narrow phase moves one shape by (each pair's pads add up to about
-  /// twice the bound of that rounding), and by 2 g P, g >= |R^T R - I|_2, since the narrow phase
-  /// sees the other shape through R^T, which is not quite R's inverse for a pose rigid only
-  /// within rotation_tolerance (a point x of the other shape it finds on this one lies within
-  /// g |x - t| of where the world has it). Without the pads, shapes touching exactly at large
-  /// translations were missed (tests/broad/test_narrow_dispatch.cpp).
-  static Aabb<S> world_box(const Shape<S>& shape, const Aabb<S>& local, S reach, const RigidTransform<S>& pose) {
-    constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
-    Aabb<S> box;
-    S P = S(0), g = S(0);
-    switch (shape.kind) {
-      case ShapeKind::Sphere:
-      case ShapeKind::Particle: {
-        const Vec3<S> r = Vec3<S>::Constant(shape.radius);
-        box = {pose.t - r, pose.t + r};
-        P = shape.radius;  // only the centre is moved: no rotation involved
-        break;
-      }
-      case ShapeKind::Box: {
-        const Vec3<S> e = pose.R.cwiseAbs() * shape.half;
-        box = {pose.t - e, pose.t + e};
-        P = shape.half.sum();
-        break;
-      }
-      case ShapeKind::Mesh:
-      default: {
-        const Vec3<S> c = pose.apply(local.center());
-        const Vec3<S> e = (pose.R.cwiseAbs() * ((local.max - local.min) / S(2))).cwiseMin(Vec3<S>::Constant(reach));
-        box = {c - e, c + e};
-        P = local.center().cwiseAbs().sum() + reach + (local.max - local.min).sum();
-        break;
-      }
-    }
-    if (!shape.is_round()) {
-      const Mat3<S> G = pose.R.transpose() * pose.R - Mat3<S>::Identity();
-      g = G.cwiseAbs().sum() * (S(1) + S(16) * u) + S(16) * u * (pose.R.squaredNorm() + S(3));
-    }
-    const S r_inf = shape.is_round() ? S(1) : pose.R.cwiseAbs().rowwise().sum().maxCoeff();
-    const S pad = (S(32) * u * (pose.t.cwiseAbs().maxCoeff() + r_inf * P) + S(2) * g * P) * (S(1) + S(8) * u);
-    box.min.array() -= pad;
-    box.max.array() += pad;
-    return box;
-  }
-
   SceneOptions opt_;
+  Shapes shapes_;
   ObjectTable<S> table_;
   std::vector<Object> objects_;
   std::unordered_map<ObjectId, std::int32_t> ids_;

@@ -295,13 +295,13 @@ ConvexContact<S> swapped(ConvexContact<S> c) {
 
 }  // namespace detail
 
-/// Penetration of shapes a (at pose_a) and b (at pose_b): when they intersect, depth, normal (from
-/// a towards b) and contact point (see the file comment for the method per pair).
+namespace detail {
+/// convex_penetration without the validation, for callers that validated the shapes, poses and
+/// options once (the scene of convex/scene_shapes.hpp). Also takes what validate_shape rejects but
+/// the queries handle: a sphere of radius 0 (a point) and a box with a zero half extent (flat).
 template <class S, class A, class B>
-ConvexContact<S> convex_penetration(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
-                                    const ConvexQueryOptions<S>& options = {}) {
-  using namespace detail;
-  detail::validate_query(a, pose_a, b, pose_b, options, "convex_penetration");
+ConvexContact<S> penetration_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                                       const ConvexQueryOptions<S>& options) {
   constexpr PairMethod method = pair_method<S, A, B>();
   if constexpr (method == PairMethod::RoundRound) {
     const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
@@ -320,6 +320,50 @@ ConvexContact<S> convex_penetration(const A& a, const RigidTransform<S>& pose_a,
   } else {
     return epa(a, pose_a, b, pose_b, options);
   }
+}
+
+/// convex_intersect without the validation (as penetration_unchecked).
+template <class S, class A, class B>
+bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                         const ConvexQueryOptions<S>& options, bool* limit_reached) {
+  if (limit_reached) *limit_reached = false;
+  constexpr PairMethod method = pair_method<S, A, B>();
+  if constexpr (method == PairMethod::RoundRound) {
+    const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
+    const S r = round_radius(a) + round_radius(b);
+    return (q.b - q.a).squaredNorm() <= r * r;
+  } else if constexpr (method == PairMethod::SphereBox) {
+    return sphere_box_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::BoxSphere) {
+    return sphere_box_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
+  } else if constexpr (method == PairMethod::BoxBox) {
+    return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
+  } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
+    // GJK on the core with the radius as margin: stops as soon as the answer is decided.
+    ConvexDistance<S> d;
+    const S tol = options.relative_tolerance * query_scale<S>(a, b);
+    if constexpr (method == PairMethod::RoundOther) {
+      const auto core = core_of(a);
+      d = gjk(core, pose_a, core_interior(core), b, pose_b, interior_point(b), tol, options.max_iterations, round_radius(a));
+    } else {
+      const auto core = core_of(b);
+      d = gjk(a, pose_a, interior_point(a), core, pose_b, core_interior(core), tol, options.max_iterations, round_radius(b));
+    }
+    if (limit_reached) *limit_reached = d.limit_reached;
+    return d.intersecting;
+  } else {
+    return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
+  }
+}
+}  // namespace detail
+
+/// Penetration of shapes a (at pose_a) and b (at pose_b): when they intersect, depth, normal (from
+/// a towards b) and contact point (see the file comment for the method per pair).
+template <class S, class A, class B>
+ConvexContact<S> convex_penetration(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
+                                    const ConvexQueryOptions<S>& options = {}) {
+  detail::validate_query(a, pose_a, b, pose_b, options, "convex_penetration");
+  return detail::penetration_unchecked(a, pose_a, b, pose_b, options);
 }
 
 /// Separation distance of shapes a and b with the closest points of each (0 when they intersect).
@@ -351,36 +395,8 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
 template <class S, class A, class B>
 bool convex_intersect(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
                       const ConvexQueryOptions<S>& options = {}, bool* limit_reached = nullptr) {
-  using namespace detail;
   detail::validate_query(a, pose_a, b, pose_b, options, "convex_intersect");
-  if (limit_reached) *limit_reached = false;
-  constexpr PairMethod method = pair_method<S, A, B>();
-  if constexpr (method == PairMethod::RoundRound) {
-    const CorePoints<S> q = core_points(a, pose_a, b, pose_b);
-    const S r = round_radius(a) + round_radius(b);
-    return (q.b - q.a).squaredNorm() <= r * r;
-  } else if constexpr (method == PairMethod::SphereBox) {
-    return sphere_box_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
-  } else if constexpr (method == PairMethod::BoxSphere) {
-    return sphere_box_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
-  } else if constexpr (method == PairMethod::BoxBox) {
-    return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
-  } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
-    // GJK on the core with the radius as margin: stops as soon as the answer is decided.
-    ConvexDistance<S> d;
-    const S tol = options.relative_tolerance * query_scale<S>(a, b);
-    if constexpr (method == PairMethod::RoundOther) {
-      const auto core = core_of(a);
-      d = gjk(core, pose_a, core_interior(core), b, pose_b, interior_point(b), tol, options.max_iterations, round_radius(a));
-    } else {
-      const auto core = core_of(b);
-      d = gjk(a, pose_a, interior_point(a), core, pose_b, core_interior(core), tol, options.max_iterations, round_radius(b));
-    }
-    if (limit_reached) *limit_reached = d.limit_reached;
-    return d.intersecting;
-  } else {
-    return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
-  }
+  return detail::intersect_unchecked(a, pose_a, b, pose_b, options, limit_reached);
 }
 
 }  // namespace impact

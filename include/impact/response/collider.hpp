@@ -4,7 +4,8 @@
 /// through the Aabb constructor) and a triangle mesh (a MeshBvh), each placed in the world by a
 /// rigid pose that may move with a linear and an angular velocity, and each with its own
 /// Material and strategy. ColliderSet holds them in one vector per type, so the step loops are
-/// plain templated code with no virtual dispatch.
+/// plain templated code with no virtual dispatch; further collider types join it as trailing
+/// template parameters (convex/convex_collider.hpp: capsules, cylinders, cones, convex hulls).
 ///
 /// Every collider answers two local-frame questions, used by particle_step.hpp:
 ///  - first hit: the first t in [0, t_max] at which a sphere of radius r >= 0 (a point for r = 0)
@@ -51,6 +52,9 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <tuple>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
@@ -523,15 +527,33 @@ template <class BV> struct MeshCollider {
   S scale_ = S(0);
 };
 
-/// All colliders of a scene, one vector per type (planes, spheres, boxes, meshes). A contact's
-/// `collider` index counts through them in that order.
-template <class S, class BV = Aabb<S>> struct ColliderSet {
+/// All colliders of a scene, one vector per type (planes, spheres, boxes, meshes, then one per
+/// trailing type `Extra`). A contact's `collider` index counts through them in that order.
+///
+/// Extra collider types extend the set without the core knowing them (convex/convex_collider.hpp's
+/// ConvexCollider: capsules, cylinders, cones, hulls); the step loops over them at compile time like
+/// over the core's. Each is a solid that particles stay outside of, and provides: members
+/// `motion`, `material` and `strategy`; `static constexpr const char* kind` (for messages);
+/// `S scale() const`; `S clearance(q) const` (a lower bound of the distance from the local point q
+/// to the surface, 0 inside); local_first_hit and local_penetration as above; and
+/// `void validate(const char* where, const std::string& name) const` (throws InvalidInput for an
+/// invalid shape).
+template <class S, class BV = Aabb<S>, class... Extra> struct ColliderSet {
   std::vector<PlaneCollider<S>> planes;
   std::vector<SphereCollider<S>> spheres;
   std::vector<BoxCollider<S>> boxes;
   std::vector<MeshCollider<BV>> meshes;
+  std::tuple<std::vector<Extra>...> extra;  ///< the trailing types' colliders, after the meshes
 
-  std::size_t size() const { return planes.size() + spheres.size() + boxes.size() + meshes.size(); }
+  /// The vector of colliders of the trailing type C.
+  template <class C> std::vector<C>& extra_of() { return std::get<std::vector<C>>(extra); }
+  template <class C> const std::vector<C>& extra_of() const { return std::get<std::vector<C>>(extra); }
+
+  std::size_t size() const {
+    std::size_t n = planes.size() + spheres.size() + boxes.size() + meshes.size();
+    std::apply([&](const auto&... v) { ((n += v.size()), ...); }, extra);
+    return n;
+  }
   /// Calls f(collider, index) for every collider.
   template <class F> void for_each(F&& f) const {
     int i = 0;
@@ -539,6 +561,11 @@ template <class S, class BV = Aabb<S>> struct ColliderSet {
     for (const auto& c : spheres) f(c, i++);
     for (const auto& c : boxes) f(c, i++);
     for (const auto& c : meshes) f(c, i++);
+    for_each_extra([&](const auto& c) { f(c, i++); });
+  }
+  /// Calls f(collider) for every collider of the trailing types.
+  template <class F> void for_each_extra(F&& f) const {
+    std::apply([&](const auto&... v) { (..., [&](const auto& vec) { for (const auto& c : vec) f(c); }(v)); }, extra);
   }
   /// True when some collider moves.
   bool any_moving() const {
@@ -597,6 +624,12 @@ template <class S, class BV = Aabb<S>> struct ColliderSet {
               name("mesh", "compact_tree") + " was not built from its mesh's tree (primitive counts differ)");
       ++index;
     }
+    for_each_extra([&](const auto& c) {
+      using C = std::decay_t<decltype(c)>;
+      common(c, C::kind);
+      c.validate(where, name(C::kind, "shape"));
+      ++index;
+    });
   }
   /// Moves every collider's pose forward by dt (call after each step). Throws InvalidInput, with
   /// nothing moved, for dt NaN or infinite.
@@ -606,6 +639,7 @@ template <class S, class BV = Aabb<S>> struct ColliderSet {
     for (auto& c : spheres) c.motion.advance(dt);
     for (auto& c : boxes) c.motion.advance(dt);
     for (auto& c : meshes) c.motion.advance(dt);
+    std::apply([&](auto&... v) { (..., [&](auto& vec) { for (auto& c : vec) c.motion.advance(dt); }(v)); }, extra);
   }
 };
 

@@ -178,8 +178,8 @@ template <class S> struct FreeBallRefresh {
 /// free_ball_factor * len and is a cheap lower bound of the distance: the walk descends only
 /// into nodes whose box contains x; any other node bounds its triangles by its box's distance,
 /// and the leaves that contain x give exact triangle distances. Conservative, O(depth) per mesh.
-template <class S, class BV>
-inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV>& colliders,
+template <class S, class BV, class... X>
+inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV, X...>& colliders,
                                        const StepOptions<S>& opt) {
   FreeBallRefresh<S> out;
   const S eps = std::numeric_limits<S>::epsilon();
@@ -227,6 +227,7 @@ inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const 
   for (const auto& c : colliders.planes) simple(c);
   for (const auto& c : colliders.spheres) simple(c);
   for (const auto& c : colliders.boxes) simple(c);
+  colliders.for_each_extra(simple);
   out.other_radius = shrink(Ro);
   return out;
 }
@@ -241,9 +242,9 @@ inline S clear_radius(const FreeBallRefresh<S>& f) {
 /// segment x -> e clear, given clear radii rx and re for the meshes at both ends (balls of
 /// centres clear of every mesh): the two balls cover the segment (their radii add up to its
 /// length), or the ball around the midpoint bridges the gap between them.
-template <class S, class BV>
+template <class S, class BV, class... X>
 inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, S len, S radius,
-                                const ColliderSet<S, BV>& colliders, const StepOptions<S>& opt) {
+                                const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt) {
   const S margin = S(64) * std::numeric_limits<S>::epsilon() * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
   if (rx + re >= len + margin) return true;
   if (!(rx > S(0) && re > S(0))) return false;
@@ -292,7 +293,7 @@ template <class S> struct StepContext {
   bool use_free_ball = false;  ///< the free-ball cache is in use
   bool any_projection = false;  ///< some collider uses projection
   bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
-  template <class BV> StepContext(const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
+  template <class BV, class... X> StepContext(const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
     rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
     moving = colliders.any_moving();
     use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
@@ -331,8 +332,8 @@ struct LegClearance {
 /// The free-ball test of the leg x -> x + d of particle p (the free-ball cache is in use: every
 /// collider is static): inside the particle's ball, every collider is clear; else the ball is
 /// refreshed (StepOptions::free_ball_factor) and the meshes, or the rest, may still be clear.
-template <class S, class BV>
-LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, const ColliderSet<S, BV>& colliders,
+template <class S, class BV, class... X>
+LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, const ColliderSet<S, BV, X...>& colliders,
                            const StepOptions<S>& opt, const StepContext<S>& ctx) {
   LegClearance c;
   const Vec3<S> e = x + d;
@@ -386,8 +387,8 @@ LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, c
 /// The first hit of the chord x -> x + d (travelled during [tau0, tau0 + len] of the step) of a
 /// particle of the given radius against every backtracking collider not known to be clear, as a
 /// contact whose time is the chord fraction; `scale` gets the hit collider's scale.
-template <class S, class BV>
-std::optional<Contact<S>> first_hit(const ColliderSet<S, BV>& colliders, const Vec3<S>& x, const Vec3<S>& d, S radius, S tau0,
+template <class S, class BV, class... X>
+std::optional<Contact<S>> first_hit(const ColliderSet<S, BV, X...>& colliders, const Vec3<S>& x, const Vec3<S>& d, S radius, S tau0,
                                     S len, const LegClearance& clear, const StepOptions<S>& opt, S& scale) {
   std::optional<Contact<S>> hit;
   S best_t = S(1);
@@ -407,8 +408,8 @@ std::optional<Contact<S>> first_hit(const ColliderSet<S, BV>& colliders, const V
 /// that moved from x_start to x and ended inside a collider, or within its radius, goes to the
 /// closest surface point plus (radius + offset) along the normal, with the response on v; up to
 /// max_iterations passes over the colliders. Returns whether it was moved.
-template <class S, class BV>
-bool project(S radius, const Vec3<S>& x_start, Vec3<S>& x, Vec3<S>& v, const ColliderSet<S, BV>& colliders, S dt,
+template <class S, class BV, class... X>
+bool project(S radius, const Vec3<S>& x_start, Vec3<S>& x, Vec3<S>& v, const ColliderSet<S, BV, X...>& colliders, S dt,
              const StepOptions<S>& opt, const ResponseOptions<S>& ropt, StepStats& st) {
   bool projected = false;
   for (int pass = 0; pass < opt.max_iterations; ++pass) {
@@ -436,8 +437,8 @@ bool project(S radius, const Vec3<S>& x_start, Vec3<S>& x, Vec3<S>& v, const Col
 }
 
 /// step_particle with the per-step context computed by the caller.
-template <class S, class BV, class LegObserver>
-StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx,
+template <class S, class BV, class... X, class LegObserver>
+StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx,
                            LegObserver& on_leg) {
   StepStats st;
   ResponseOptions<S> ropt;
@@ -574,8 +575,8 @@ template <class S> void validate_particle(const Particle<S>& p, std::size_t inde
 /// Throws InvalidInput, with nothing modified, for a non-finite particle, a negative radius, dt
 /// NaN, infinite or negative, bad options (detail::validate_step_options) or an invalid collider
 /// (ColliderSet::validate): checks of O(colliders) per call.
-template <class S, class BV, class LegObserver = detail::NoLegObserver>
-StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt,
+template <class S, class BV, class... X, class LegObserver = detail::NoLegObserver>
+StepStats step_particle(Particle<S>& p, const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt,
                         LegObserver&& on_leg = {}) {
   detail::validate_step_options(dt, opt, "step_particle");
   colliders.validate("step_particle");
@@ -629,8 +630,8 @@ template <class S> std::vector<std::uint32_t> spatial_order(const std::vector<Pa
 /// The particles and counters are the same, bit for bit, for every thread count. Throws
 /// InvalidInput, before any particle moves, on the checks of step_particle (one pass over the
 /// particles, then the colliders and options once).
-template <class S, class BV>
-StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV>& colliders, S dt, const StepOptions<S>& opt) {
+template <class S, class BV, class... X>
+StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
   detail::validate_step_options(dt, opt, "step_particles");
   colliders.validate("step_particles");
   for (std::size_t i = 0; i < particles.size(); ++i) detail::validate_particle(particles[i], i, dt, "step_particles");
