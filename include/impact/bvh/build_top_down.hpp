@@ -210,40 +210,44 @@ Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& c
     detail::grow_top_down(sub[k], 0, ids, f, cut, cfg.leaf_size, 0, none);
   });
 
-  // Lay the nodes out as the serial build does: replay its visiting order over the top, and
-  // append a deferred subtree's nodes where the serial build would have grown them.
+  // Lay the nodes out as the serial build does: replay its visiting order over the top, number
+  // the top's nodes, and reserve each deferred subtree's nodes where the serial build would have
+  // grown them; then copy the subtrees into their places in parallel.
   std::vector<std::int32_t> slot(top.size(), -1);
   for (std::size_t k = 0; k < deferred.size(); ++k) slot[static_cast<std::size_t>(deferred[k])] = static_cast<std::int32_t>(k);
-  tree.nodes.reserve(static_cast<std::size_t>(2 * (n / cfg.leaf_size + 1)));
-  tree.nodes.push_back(top[0]);
+  std::vector<std::pair<std::int32_t, std::int32_t>> place(deferred.size());  // (final index of its root, base)
+  std::vector<std::pair<std::int32_t, BvhNode<BV>>> top_nodes;               // (final index, node)
+  std::int32_t size = 1;
   std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};  // (top index, final index)
   while (!stack.empty()) {
     const auto [t, f] = stack.back();
     stack.pop_back();
-    if (slot[static_cast<std::size_t>(t)] >= 0) {
-      const auto& s = sub[static_cast<std::size_t>(slot[static_cast<std::size_t>(t)])];
-      const auto base = static_cast<std::int32_t>(tree.nodes.size()) - 1;  // sub index j >= 1 goes to base + j
-      for (std::size_t j = 0; j < s.size(); ++j) {
-        BvhNode<BV> node = s[j];
-        if (!node.is_leaf()) node.first += base;
-        if (j == 0) {
-          tree.nodes[static_cast<std::size_t>(f)] = node;
-        } else {
-          tree.nodes.push_back(node);
-        }
-      }
+    const std::int32_t k = slot[static_cast<std::size_t>(t)];
+    if (k >= 0) {  // its sub index j >= 1 goes to base + j
+      place[static_cast<std::size_t>(k)] = {f, size - 1};
+      size += static_cast<std::int32_t>(sub[static_cast<std::size_t>(k)].size()) - 1;
       continue;
     }
-    const BvhNode<BV>& node = top[static_cast<std::size_t>(t)];
-    tree.nodes[static_cast<std::size_t>(f)] = node;
-    if (node.is_leaf()) continue;
-    const auto left = static_cast<std::int32_t>(tree.nodes.size());
-    tree.nodes.push_back({});
-    tree.nodes.push_back({});
-    tree.nodes[static_cast<std::size_t>(f)].first = left;
-    stack.push_back({node.first + 1, left + 1});
-    stack.push_back({node.first, left});
+    BvhNode<BV> node = top[static_cast<std::size_t>(t)];
+    if (!node.is_leaf()) {
+      stack.push_back({node.first + 1, size + 1});
+      stack.push_back({node.first, size});
+      node.first = size;
+      size += 2;
+    }
+    top_nodes.push_back({f, node});
   }
+  tree.nodes.resize(static_cast<std::size_t>(size));
+  for (const auto& [f, node] : top_nodes) tree.nodes[static_cast<std::size_t>(f)] = node;
+  parallel_for(deferred.size(), threads, [&](std::size_t k) {
+    const auto& s = sub[k];
+    const auto [f, base] = place[k];
+    for (std::size_t j = 0; j < s.size(); ++j) {
+      BvhNode<BV> node = s[j];
+      if (!node.is_leaf()) node.first += base;
+      tree.nodes[j == 0 ? static_cast<std::size_t>(f) : static_cast<std::size_t>(base) + j] = node;
+    }
+  });
   return tree;
 }
 
