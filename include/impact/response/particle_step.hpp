@@ -260,15 +260,23 @@ inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, 
 }
 
 /// Time of impact within a leg of length `left` starting at x with velocity v and acceleration
-/// a: the chord's hit fraction s refined on the parabola against the tangent plane at the hit,
-/// n . (x + v tau + a tau^2 / 2 - p) = 0 (exact for planes; second order otherwise), so that the
-/// velocity at impact follows free flight exactly. Falls back to s * left when the refined root is
-/// not in [0, left].
-template <class S> inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, const Vec3<S>& a, const Contact<S>& c, S s, S left) {
+/// a, of a particle of radius r: the chord's hit fraction s refined on the parabola against the
+/// tangent plane at the hit, which moves with the collider's velocity there and passes through
+/// the contact point c.point at the chord's hit time s * left: the centre reaches distance r from
+/// it when n . (x + v tau + a tau^2 / 2 - c.point - v_c (tau - s left)) = r (exact for planes;
+/// second order otherwise), so that the velocity at impact follows free flight exactly. Falls back
+/// to s * left when the refined root is not in [0, left].
+/// (Before, the radius and the plane's motion before the hit were left out: a ball's impact came
+/// r / v_n late, and the time in between was dropped from the step, so a collider moving towards
+/// the ball ran into it by about its speed times r / v_n: 4.4e-3 in a rain of balls of radius 0.05
+/// on a rising cone, tests/convex/test_convex_scene.cpp.)
+template <class S>
+inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, const Vec3<S>& a, const Contact<S>& c, S s, S left, S r) {
   const S chord = s * left;
   const S c2 = a.dot(c.normal) / S(2);
   if (c2 == S(0)) return chord;
-  const S c0 = (x - c.point).dot(c.normal), c1 = (v - c.collider_velocity).dot(c.normal);
+  const S vcn = c.collider_velocity.dot(c.normal);
+  const S c0 = (x - c.point).dot(c.normal) + vcn * chord - r, c1 = v.dot(c.normal) - vcn;
   const S disc = c1 * c1 - S(4) * c2 * c0;
   if (!(disc >= S(0)) || !(c0 >= S(0))) return chord;
   const S sq = std::sqrt(disc);
@@ -506,7 +514,7 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colli
     const Vec3<S> x_new = x + s_safe * d;
     on_leg(x, x_new);
     x = x_new;
-    const S tau = detail::impact_time(x_leg, v, a, *hit, s, left);
+    const S tau = detail::impact_time(x_leg, v, a, *hit, s, left, p.radius);
     const ResponseResult<S> r = respond(Vec3<S>(v + a * tau), hit->normal, hit->collider_velocity, hit->material, ropt);
     v = r.velocity;
     if (r.resting && opt.gravity.dot(hit->normal) < S(0) && n_active < 3) {
