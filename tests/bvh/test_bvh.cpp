@@ -67,7 +67,11 @@ template <class BV> std::int32_t check_node(const MeshBvh<BV>& m, std::int32_t i
   }
   if (node.is_leaf()) {
     ++leaves;
-    EXPECT_LE(node.count, leaf_size);
+    // larger leaves hold copies of one triangle only (the top-down build gathers them)
+    if (node.count > leaf_size) {
+      for (auto p = node.first + 1; p < node.first + node.count; ++p)
+        EXPECT_TRUE(test::same_shape(m.triangle(p), m.triangle(node.first))) << "leaf " << i << " of " << node.count;
+    }
     for (auto p = node.first; p < node.first + node.count; ++p) ++seen[static_cast<std::size_t>(tree.primitives[static_cast<std::size_t>(p)])];
   } else {
     EXPECT_GT(node.left(), i);
@@ -120,8 +124,13 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   m.V << 0, 0, 0, 1, 0, 0, 0, 1, 0;
   m.F.resize(64, 3);
   for (int t = 0; t < 64; ++t) m.F.row(t) << 0, 1, 2;
+  // top-down: copies of one triangle are gathered in one leaf (no cut by centroids can separate
+  // them), each marked as repeating the one before it
   MeshBvh<BV> tree(m);
-  EXPECT_EQ(bvh_stats(tree.tree()).leaves, 64u);
+  EXPECT_EQ(bvh_stats(tree.tree()).leaves, 1u);
+  EXPECT_EQ(tree.tree().nodes[0].count, 64);
+  EXPECT_FALSE(tree.repeats_previous(0));
+  for (std::int32_t k = 1; k < 64; ++k) EXPECT_TRUE(tree.repeats_previous(k)) << k;
   // bottom-up: equal primitives pair up, so the tree is balanced (depth log2 64)
   MeshBvhConfig bottom_up;
   bottom_up.build.method = BuildMethod::BottomUp;
@@ -139,8 +148,27 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   z.V = Vertices<S>::Zero(1, 3);
   z.F = Faces::Zero(10, 3);
   MeshBvh<BV> zt(z);
-  EXPECT_EQ(bvh_stats(zt.tree()).leaves, 10u);
+  EXPECT_EQ(bvh_stats(zt.tree()).leaves, 1u);
   EXPECT_TRUE(collides(zt, RigidTransform<S>{}, tree, RigidTransform<S>{}));
+  // two shapes with exactly the same centroid (1, 1, 0), 30 copies each in three vertex orders,
+  // interleaved: the range is cut between the shapes, each shape one leaf, its copies sorted by
+  // vertex order (one run per order: 30 - 3 marked per shape)
+  TriangleMesh<S> two;
+  two.V.resize(6, 3);
+  two.V << 0, 0, 0, 3, 0, 0, 0, 3, 0, 2, 2, 0, 1, -1, 0, 0, 2, 0;
+  two.F.resize(60, 3);
+  for (int t = 0; t < 60; ++t) {
+    const int b = t % 2 ? 3 : 0, r = (t / 2) % 3;
+    two.F.row(t) << b + r, b + (r + 1) % 3, b + (r + 2) % 3;
+  }
+  const MeshBvh<BV> tt(two);
+  EXPECT_EQ(bvh_stats(tt.tree()).leaves, 2u);
+  int marked = 0;
+  for (std::int32_t k = 0; k < 60; ++k) marked += tt.repeats_previous(k);
+  EXPECT_EQ(marked, 54);
+  std::vector<int> seen(60, 0);
+  int leaves = 0;
+  check_node(tt, 0, seen, 1, leaves);
 }
 
 TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {

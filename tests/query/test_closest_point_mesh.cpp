@@ -186,8 +186,8 @@ TEST(ClosestPointMeshExact, DegenerateSoupDistanceIsTheLoopMinimum) {
 
 // The work counters count every node key and every triangle tested: one triangle is one node and
 // one triangle; two far apart triangles need the root, both children and the nearer triangle only
-// (the farther child's key exceeds the distance found). 4,096 copies of one triangle: in a box
-// tree, nodes at the distance found are pruned (before issue 12, every copy was tested).
+// (the farther child's key exceeds the distance found). 4,096 copies of one triangle: the tree
+// gathers them in one leaf and the query tests one (before issue 12, every copy was tested).
 TYPED_TEST(ClosestPointMesh, WorkCounters) {
   using BV = TypeParam;
   using S = typename BvTraits<BV>::Scalar;
@@ -227,9 +227,16 @@ TYPED_TEST(ClosestPointMesh, WorkCounters) {
   const auto cs = closest_point_on_mesh(ts, Vec3<S>(0.25, 0.25, 1), {}, {}, &st);
   ASSERT_TRUE(cs.has_value());
   EXPECT_EQ(cs->distance, S(1));
-  EXPECT_GE(st.triangle_tests, 1u);
-  // Boxes only: sphere and oriented-box keys are below the copies' distance (their volumes are
-  // grown by rounding bounds), so those trees test every copy.
+  EXPECT_EQ(st.triangle_tests, 1u);
+  EXPECT_EQ(st.node_tests, 1u);
+  // a tree that does not gather them (bottom-up) relies on pruning: in a box tree, nodes at the
+  // distance found are pruned; sphere and oriented-box keys are below the copies' distance (their
+  // volumes are grown by rounding bounds), so those trees test every copy
+  MeshBvhConfig bottom_up;
+  bottom_up.build.method = BuildMethod::BottomUp;
+  const MeshBvh<BV> tb(impact::test::coincident_copies<S>(copies), bottom_up);
+  st = {};
+  ASSERT_TRUE(closest_point_on_mesh(tb, Vec3<S>(0.25, 0.25, 1), {}, {}, &st).has_value());
   if constexpr (std::is_same_v<BV, Aabb<S>>) {
     EXPECT_LE(st.triangle_tests, 8u);
     EXPECT_LE(st.node_tests, 200u);

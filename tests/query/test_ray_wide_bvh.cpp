@@ -9,6 +9,7 @@
 // copies, and a rigid pose. The SIMD node test gives bit for bit the scalar one's answers.
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
+#include "support/meshes.hpp"
 #include "support/random.hpp"
 
 #include <gtest/gtest.h>
@@ -85,8 +86,16 @@ template <class S> void check_structure(const TriangleMesh<S>& m, const WideBvh<
       Item child{n.first[c], {}, {}};
       for (int k = 0; k < 3; ++k) child.lo[k] = n.bounds[2 * k][c], child.hi[k] = n.bounds[2 * k + 1][c];
       if (n.count[c] > 0) {
-        ASSERT_LE(n.count[c], leaf_size);
+        // larger leaves hold copies of one triangle only (a leaf of the source tree)
+        for (std::int32_t k = n.first[c] + 1; n.count[c] > leaf_size && k < n.first[c] + n.count[c]; ++k)
+          ASSERT_TRUE(test::same_shape(w.triangle(k), w.triangle(n.first[c])));
+        ASSERT_FALSE(w.repeats_previous(n.first[c]));  // marks stay within a leaf
         for (std::int32_t k = n.first[c]; k < n.first[c] + n.count[c]; ++k) {
+          if (w.repeats_previous(k)) {
+            ASSERT_EQ(w.triangle(k).a, w.triangle(k - 1).a);
+            ASSERT_EQ(w.triangle(k).b, w.triangle(k - 1).b);
+            ASSERT_EQ(w.triangle(k).c, w.triangle(k - 1).c);
+          }
           ++covered[static_cast<std::size_t>(k)];
           const Triangle<S>& t = w.triangle(k);
           ASSERT_TRUE(inside(t.a, child.lo, child.hi) && inside(t.b, child.lo, child.hi) && inside(t.c, child.lo, child.hi));

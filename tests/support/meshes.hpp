@@ -25,6 +25,14 @@ template <class S> TriangleMesh<S> random_soup(int n, std::uint64_t seed, double
   return m;
 }
 
+/// True when two triangles have the same three vertices, in any order (copies, as the top-down
+/// build gathers them in one leaf: bvh/build_top_down.hpp, TriangleCopyOrder).
+template <class S> bool same_shape(const Triangle<S>& a, const Triangle<S>& b) {
+  const auto in_b = [&](const Vec3<S>& x) { return x == b.a || x == b.b || x == b.c; };
+  const auto in_a = [&](const Vec3<S>& x) { return x == a.a || x == a.b || x == a.c; };
+  return in_b(a.a) && in_b(a.b) && in_b(a.c) && in_a(b.a) && in_a(b.b) && in_a(b.c);
+}
+
 /// n exact copies of the triangle (0, 0, 0), (1, 0, 0), (0, 1, 0), vertices not shared: every
 /// node of a hierarchy over them has the same bounds.
 template <class S> TriangleMesh<S> coincident_copies(int n) {

@@ -43,7 +43,7 @@ enum class SiblingSearch {
 struct BuildConfig {
   BuildMethod method = BuildMethod::TopDown;
   SplitRule split = SplitRule::SpatialMiddle;
-  int leaf_size = 1;  ///< maximum primitives per leaf (>= 1); leaves may be larger only when all centroids coincide
+  int leaf_size = 1;  ///< maximum primitives per leaf (>= 1); a top-down leaf of a mesh may be larger when it holds copies of one triangle (MeshBvh)
   int sah_bins = 16;  ///< bins per axis of SplitRule::Sah, in [2, 256]
   /// Threads of BuildMethod::TopDown (bvh/build_top_down.hpp): <= 0 the hardware concurrency, 1
   /// the calling thread only. The tree is the same for every count.

@@ -7,13 +7,16 @@
 /// Each node's BV is fitted by the caller's `fit` callable around that node's primitives (for a
 /// mesh: around the triangles' vertices), which is tighter than merging the children's BVs.
 /// Degenerate splits (all centroids equal along the axis) fall back to cutting the index range in
-/// half, so the build always terminates. Time O(n log n) for balanced splits.
+/// half, so the build always terminates; given a CopyOrder (MeshBvh passes one), a range whose
+/// centroids all coincide is instead sorted by shape, cut between two shapes, and made one leaf
+/// when it holds copies of a single triangle (see CopyOrder). Time O(n log n) for balanced splits.
 #pragma once
 
 #include "impact/bvh/build_config.hpp"
 #include "impact/bvh/bvh.hpp"
 #include "impact/core/error.hpp"
 #include "impact/core/parallel.hpp"
+#include "impact/geometry/triangle.hpp"
 
 #include <algorithm>
 #include <array>
@@ -22,6 +25,44 @@
 #include <vector>
 
 namespace impact {
+
+/// No ordering of primitives by shape: a range whose centroids all coincide is cut in half.
+struct NoCopyOrder {
+  static constexpr bool enabled = false;
+  bool less(std::int32_t, std::int32_t) const { return false; }
+  bool same_shape(std::int32_t, std::int32_t) const { return false; }
+};
+
+/// Copies of a triangle (the same three points, in any vertex order) share their centroid, so no
+/// cut by centroids can separate them, and a tree of many copies, whose nodes all hold the same
+/// shape, cannot prune any of them in a nearest-first query (the keys of all nodes are equal).
+/// With a CopyOrder a range whose centroids all coincide is sorted by `less` (by shape, then by
+/// vertex order, then by id: a strict weak order, so the tree does not depend on the thread
+/// count), cut at the boundary between two shapes nearest its middle, and made one leaf, of any
+/// size, when `same_shape` holds for its first and last primitives. The queries then test one
+/// copy per vertex order (MeshBvh::repeats_previous).
+template <class S> struct TriangleCopyOrder {
+  static constexpr bool enabled = true;
+  const std::vector<Triangle<S>>* triangles;  ///< by primitive id
+
+  /// The vertices as a key: in order (`sorted` false) or sorted lexicographically (the shape).
+  std::array<S, 9> key(std::int32_t p, bool sorted) const {
+    const Triangle<S>& t = (*triangles)[static_cast<std::size_t>(p)];
+    std::array<std::array<S, 3>, 3> v{{{t.a.x(), t.a.y(), t.a.z()}, {t.b.x(), t.b.y(), t.b.z()}, {t.c.x(), t.c.y(), t.c.z()}}};
+    if (sorted) std::sort(v.begin(), v.end());
+    std::array<S, 9> k;
+    for (std::size_t j = 0; j < 9; ++j) k[j] = v[j / 3][j % 3];
+    return k;
+  }
+  bool less(std::int32_t a, std::int32_t b) const {
+    const auto sa = key(a, true), sb = key(b, true);
+    if (sa != sb) return sa < sb;
+    const auto oa = key(a, false), ob = key(b, false);
+    if (oa != ob) return oa < ob;
+    return a < b;
+  }
+  bool same_shape(std::int32_t a, std::int32_t b) const { return key(a, true) == key(b, true); }
+};
 
 namespace detail {
 
@@ -78,17 +119,37 @@ void sah_split(const std::vector<Vec3<S>>& centroids, const std::vector<Aabb<S>>
   }
 }
 
-/// Where ids[begin, begin + count) is cut by cfg.split (count > 1): the first position of the
-/// right child, strictly inside the range. Reorders only that range of ids.
+/// Cuts ids[begin, begin + count) between the centroids below `at` and the rest along `axis`: the
+/// first position of the right part. Equal centroids stay on one side.
 template <class S>
+std::int32_t partition_below(const std::vector<Vec3<S>>& centroids, std::int32_t* ids, std::int32_t begin, std::int32_t count, int axis, S at) {
+  std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) { return centroids[p][axis] < at; });
+  return static_cast<std::int32_t>(m - ids);
+}
+
+/// Where ids[begin, begin + count) is cut by cfg.split (count > 1): the first position of the
+/// right child, strictly inside the range, or begin + count when the range stays one leaf (copies
+/// of one triangle, see TriangleCopyOrder). Reorders only that range of ids.
+template <class S, class CopyOrder>
 std::int32_t top_down_cut(const std::vector<Vec3<S>>& centroids, const std::vector<Aabb<S>>& sah_boxes, std::int32_t* ids,
-                          std::int32_t begin, std::int32_t count, const BuildConfig& cfg) {
+                          std::int32_t begin, std::int32_t count, const BuildConfig& cfg, const CopyOrder& copies) {
   Aabb<S> cbox;
   for (std::int32_t k = begin; k < begin + count; ++k) cbox.extend(centroids[ids[k]]);
   const int axis = cbox.longest_axis();
   std::int32_t mid;
   if (!(cbox.max[axis] > cbox.min[axis])) {
-    mid = begin + count / 2;  // all centroids coincide: cut the range in half
+    mid = begin + count / 2;  // all centroids coincide: cut the range in half, or
+    if constexpr (CopyOrder::enabled) {  // between two shapes, nearest the middle
+      std::int32_t* r = ids + begin;
+      std::sort(r, r + count, [&](std::int32_t a, std::int32_t b) { return copies.less(a, b); });
+      if (copies.same_shape(r[0], r[count - 1])) return begin + count;
+      std::int32_t lo = count / 2, hi = count / 2;  // a boundary k: r[k - 1] and r[k] differ
+      while (lo > 1 && copies.same_shape(r[lo - 1], r[lo])) --lo;
+      while (hi < count - 1 && copies.same_shape(r[hi - 1], r[hi])) ++hi;
+      const bool lo_ok = !copies.same_shape(r[lo - 1], r[lo]);
+      const bool hi_ok = !copies.same_shape(r[hi - 1], r[hi]);
+      mid = begin + (lo_ok && (!hi_ok || count / 2 - lo <= hi - count / 2) ? lo : hi);
+    }
   } else if (cfg.split == SplitRule::Sah) {
     int sah_axis, sah_bin;
     sah_split(centroids, sah_boxes, ids + begin, count, cbox, cfg.sah_bins, sah_axis, sah_bin);
@@ -100,18 +161,25 @@ std::int32_t top_down_cut(const std::vector<Vec3<S>>& centroids, const std::vect
         return std::min(cfg.sah_bins - 1, static_cast<int>((centroids[p][sah_axis] - lo) * scale)) < sah_bin;
       });
       mid = static_cast<std::int32_t>(m - ids);
-      if (mid == begin || mid == begin + count) mid = begin + count / 2;
     }
   } else if (cfg.split == SplitRule::CentroidMedian) {
     mid = begin + count / 2;
     std::nth_element(ids + begin, ids + mid, ids + begin + count,
                      [&](std::int32_t a, std::int32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+    // equal centroids on one side: those equal to the median go right, or left if none is below
+    const S at = centroids[ids[mid]][axis];
+    mid = partition_below(centroids, ids, begin, count, axis, at);
+    if (mid == begin) {
+      std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) { return !(at < centroids[p][axis]); });
+      mid = static_cast<std::int32_t>(m - ids);
+    }
   } else {
-    const S cut = (cbox.min[axis] + cbox.max[axis]) / S(2);
-    std::int32_t* m = std::partition(ids + begin, ids + begin + count, [&](std::int32_t p) { return centroids[p][axis] < cut; });
-    mid = static_cast<std::int32_t>(m - ids);
-    if (mid == begin || mid == begin + count) mid = begin + count / 2;  // rounding at the cut
+    mid = partition_below(centroids, ids, begin, count, axis, (cbox.min[axis] + cbox.max[axis]) / S(2));
   }
+  // A cut rounded onto an end of the centroid box (its extent a few ulps) left one side empty:
+  // cut below the largest centroid instead, which keeps equal centroids together (copies of a
+  // triangle whose vertex orders round their centroids apart, see TriangleCopyOrder).
+  if (mid == begin || mid == begin + count) mid = partition_below(centroids, ids, begin, count, axis, cbox.max[axis]);
   return mid;
 }
 
@@ -134,6 +202,7 @@ void grow_top_down(std::vector<BvhNode<BV>>& nodes, std::int32_t root, const std
     nodes[ni].bv = fit(ids + begin, static_cast<std::size_t>(count));
     if (count <= leaf_size) continue;
     const std::int32_t mid = cut(begin, count);
+    if (mid == begin + count) continue;  // one leaf of copies
     const auto left = static_cast<std::int32_t>(nodes.size());
     nodes.push_back({});
     nodes.push_back({});
@@ -161,9 +230,13 @@ void grow_top_down(std::vector<BvhNode<BV>>& nodes, std::int32_t root, const std
 /// the nodes are then laid out in the order the serial build gives. The cuts do not depend on the
 /// order in which disjoint ranges are cut, so the tree is the same, node for node and bit for
 /// bit, for every thread count. Meshes under 8,192 primitives are built serially.
-template <class BV, class Fit>
+///
+/// `copies` (a TriangleCopyOrder, or NoCopyOrder) decides how ranges whose centroids all
+/// coincide are cut; with a TriangleCopyOrder leaves may exceed cfg.leaf_size, holding copies of
+/// one triangle only.
+template <class BV, class Fit, class CopyOrder = NoCopyOrder>
 Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& cfg = {},
-                       const std::vector<Aabb<typename BvTraits<BV>::Scalar>>& boxes = {}) {
+                       const std::vector<Aabb<typename BvTraits<BV>::Scalar>>& boxes = {}, const CopyOrder& copies = {}) {
   using S = typename BvTraits<BV>::Scalar;
   if (cfg.leaf_size < 1) throw InvalidInput("build_top_down: leaf_size must be >= 1");
   if (cfg.split == SplitRule::Sah && (cfg.sah_bins < 2 || cfg.sah_bins > 256))
@@ -183,7 +256,7 @@ Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& c
   std::iota(tree.primitives.begin(), tree.primitives.end(), 0);
   std::int32_t* ids = tree.primitives.data();
   auto cut = [&](std::int32_t begin, std::int32_t count) {
-    return detail::top_down_cut(centroids, sah_boxes, ids, begin, count, cfg);
+    return detail::top_down_cut(centroids, sah_boxes, ids, begin, count, cfg, copies);
   };
   const int threads = resolve_threads(cfg.threads);
   const std::int32_t defer_at_most = threads > 1 && n >= 8192 ? n / (8 * threads) : 0;

@@ -103,13 +103,17 @@ template <class S> class WideBvh {
   bool packed() const { return full_.empty() && !packed_.empty(); }
   /// Row of F of the triangle at leaf-order position k.
   std::int32_t triangle_id(std::int32_t k) const { return ids_[static_cast<std::size_t>(k)]; }
+  /// True when the triangle at position k repeats the one at k - 1 in the same leaf, vertex order
+  /// included (MeshBvh::repeats_previous of the source tree, whose leaves a wide leaf never
+  /// splits): a cast that has just tested k - 1 may skip k. False on meshes without copies.
+  bool repeats_previous(std::int32_t k) const { return !repeats_.empty() && repeats_[static_cast<std::size_t>(k)]; }
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
   /// An upper bound of |x|_inf over the vertices (the scale of the casts' rounding).
   S coordinate_bound() const { return coordinate_bound_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(WideBvhNode) + full_.capacity() * sizeof(S) + packed_.capacity() * sizeof(float) +
-           ids_.capacity() * sizeof(std::int32_t);
+           ids_.capacity() * sizeof(std::int32_t) + repeats_.capacity() / 8;
   }
 
  private:
@@ -124,6 +128,10 @@ template <class S> class WideBvh {
       // leaf order: the source tree's permutation (a subtree's triangles are contiguous in it)
       const std::int32_t leaf = tree.primitives[static_cast<std::size_t>(k)];
       ids_[static_cast<std::size_t>(k)] = mesh.triangle_id(leaf);
+      if (k > 0 && mesh.repeats_previous(leaf) && tree.primitives[static_cast<std::size_t>(k - 1)] == leaf - 1) {
+        if (repeats_.empty()) repeats_.assign(static_cast<std::size_t>(n), false);
+        repeats_[static_cast<std::size_t>(k)] = true;
+      }
       const Triangle<S> t = mesh.triangle(leaf);
       S* p = full.data() + 9 * static_cast<std::size_t>(k);
       for (int c = 0; c < 3; ++c) p[c] = t.a[c], p[3 + c] = t.b[c], p[6 + c] = t.c[c];
@@ -203,6 +211,7 @@ template <class S> class WideBvh {
   std::vector<float> packed_;  // 9 coordinates a triangle, leaf order, when all are floats
   std::vector<S> full_;        // 9 coordinates a triangle, leaf order, otherwise
   std::vector<std::int32_t> ids_;
+  std::vector<bool> repeats_;  // repeats_previous() by leaf-order position; empty when none repeats
   S coordinate_bound_ = S(0);
 };
 

@@ -182,6 +182,7 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
       },
       bound,
       [&](std::int32_t k) {
+        if (mesh.repeats_previous(k)) return true;  // the same distance as the triangle before it: never strictly better
         if (stats) ++stats->triangle_tests;
         const Triangle<S> tri = mesh.triangle(k);
         const TrianglePoint<S> tp = detail::closest_on_triangle(p, tri);

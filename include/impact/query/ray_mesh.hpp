@@ -318,6 +318,7 @@ struct FirstHitCast {
   /// its triangles anyway: sphere trees prune only nodes entered strictly after best.
   S bound() const { return limit; }
   bool visit(std::int32_t k) {
+    if (mesh.repeats_previous(k)) return true;  // the triangle just tested, again: the same answer
     if (stats) ++stats->triangle_tests;
     pr.ray.t_max = best;
     const auto h = detail::ray_mesh_triangle_hit(pr, inv, mesh.triangle(k));
@@ -467,6 +468,7 @@ bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::
   traverse(
       mesh.tree(), [&](const BV& bv) { return detail::ray_bv_entry(o, d, inv, bv, ray.t_max).has_value(); },
       [&](std::int32_t k) {
+        if (mesh.repeats_previous(k)) return true;  // missed like the triangle before it
         found = detail::ray_mesh_triangle_hit(pr, inv, mesh.triangle(k)).has_value();
         return !found;
       });

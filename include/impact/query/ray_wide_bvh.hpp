@@ -158,6 +158,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   for (;;) {
     if (count > 0) {
       for (std::int32_t k = first; k < first + count; ++k) {
+        if (wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
         ++triangle_tests;
         pr.ray.t_max = best;
         const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));

@@ -86,6 +86,7 @@ std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_f
   traverse_nearest(
       mesh.tree(), [&](const BV& bv) { return detail::ray_bv_entry(o, d, inv, bv, best, radius); }, [&]() { return best; },
       [&](std::int32_t k) {
+        if (mesh.repeats_previous(k)) return true;  // the same answer as the triangle before it
         auto h = detail::swept_sphere_triangle(o, d, radius, mesh.triangle(k), best);
         if (h && (!out || h->t < best)) {
           best = h->t;
