@@ -434,9 +434,10 @@ void cs_rain(Strategy strategy, S restitution, S friction, bool moving) {
     });
   test::Rng rng(99);
   std::vector<Particle<S>> ps(IMPACT_TEST_SANITIZED ? 60 : 300);
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    ps[i].position = Vec3<S>(S(rng.uniform(-1.8, 1.8)), S(rng.uniform(-1.8, 1.8)), S(rng.uniform(0.8, 2.0)));
-    ps[i].velocity = Vec3<S>(S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(rng.uniform(-3, 0)));
+  for (std::size_t i = 0; i < ps.size(); ++i) {  // each above one of the colliders at (+-1, +-1, 0)
+    const double cx = i % 4 < 2 ? -1.0 : 1.0, cy = i % 2 ? 1.0 : -1.0;
+    ps[i].position = Vec3<S>(S(cx + rng.uniform(-0.5, 0.5)), S(cy + rng.uniform(-0.5, 0.5)), S(rng.uniform(0.8, 2.0)));
+    ps[i].velocity = Vec3<S>(S(rng.uniform(-0.3, 0.3)), S(rng.uniform(-0.3, 0.3)), S(rng.uniform(-3, 0)));
     ps[i].radius = i % 2 ? S(0.05) : S(0);
   }
   StepOptions<S> opt;
@@ -456,8 +457,8 @@ void cs_rain(Strategy strategy, S restitution, S friction, bool moving) {
       });
     ASSERT_EQ(inside, 0) << "step " << step;
   }
-  // the rain reaches the colliders: 11-12 of the 60 particles of a sanitizer build hit one
-  EXPECT_GT(total.impacts + total.projections, ps.size() / 10);
+  // the rain reaches the colliders (more than a fifth of the particles hit one)
+  EXPECT_GT(total.impacts + total.projections, ps.size() / 5);
   // the final positions by the independent oracle (double; float: the closed form)
   int inside = 0;
   for (std::size_t i = 0; i < ps.size(); i += (IMPACT_TEST_SANITIZED ? 3 : 1))
