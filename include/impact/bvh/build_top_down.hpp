@@ -29,39 +29,32 @@ namespace impact {
 /// No ordering of primitives by shape: a range whose centroids all coincide is cut in half.
 struct NoCopyOrder {
   static constexpr bool enabled = false;
-  bool less(std::int32_t, std::int32_t) const { return false; }
-  bool same_shape(std::int32_t, std::int32_t) const { return false; }
 };
 
 /// Copies of a triangle (the same three points, in any vertex order) share their centroid, so no
 /// cut by centroids can separate them, and a tree of many copies, whose nodes all hold the same
 /// shape, cannot prune any of them in a nearest-first query (the keys of all nodes are equal).
-/// With a CopyOrder a range whose centroids all coincide is sorted by `less` (by shape, then by
-/// vertex order, then by id: a strict weak order, so the tree does not depend on the thread
+/// With a CopyOrder a range whose centroids all coincide is sorted by key (the shape, then the
+/// vertex order, then the id: a strict weak order, so the tree does not depend on the thread
 /// count), cut at the boundary between two shapes nearest its middle, and made one leaf, of any
-/// size, when `same_shape` holds for its first and last primitives. The queries then test one
-/// copy per vertex order (MeshBvh::repeats_previous).
+/// size, when it holds one shape. The queries then test one copy per vertex order
+/// (MeshBvh::repeats_previous).
 template <class S> struct TriangleCopyOrder {
   static constexpr bool enabled = true;
   const std::vector<Triangle<S>>* triangles;  ///< by primitive id
 
-  /// The vertices as a key: in order (`sorted` false) or sorted lexicographically (the shape).
-  std::array<S, 9> key(std::int32_t p, bool sorted) const {
+  /// The vertices sorted lexicographically (the shape: entries 0-8), then in their order (9-17).
+  std::array<S, 18> key(std::int32_t p) const {
     const Triangle<S>& t = (*triangles)[static_cast<std::size_t>(p)];
     std::array<std::array<S, 3>, 3> v{{{t.a.x(), t.a.y(), t.a.z()}, {t.b.x(), t.b.y(), t.b.z()}, {t.c.x(), t.c.y(), t.c.z()}}};
-    if (sorted) std::sort(v.begin(), v.end());
-    std::array<S, 9> k;
+    std::array<S, 18> k;
+    for (std::size_t j = 0; j < 9; ++j) k[9 + j] = v[j / 3][j % 3];
+    std::sort(v.begin(), v.end());
     for (std::size_t j = 0; j < 9; ++j) k[j] = v[j / 3][j % 3];
     return k;
   }
-  bool less(std::int32_t a, std::int32_t b) const {
-    const auto sa = key(a, true), sb = key(b, true);
-    if (sa != sb) return sa < sb;
-    const auto oa = key(a, false), ob = key(b, false);
-    if (oa != ob) return oa < ob;
-    return a < b;
-  }
-  bool same_shape(std::int32_t a, std::int32_t b) const { return key(a, true) == key(b, true); }
+  /// Whether two keys are of one shape.
+  static bool same_shape(const std::array<S, 18>& a, const std::array<S, 18>& b) { return std::equal(a.begin(), a.begin() + 9, b.begin()); }
 };
 
 namespace detail {
@@ -141,13 +134,22 @@ std::int32_t top_down_cut(const std::vector<Vec3<S>>& centroids, const std::vect
     mid = begin + count / 2;  // all centroids coincide: cut the range in half, or
     if constexpr (CopyOrder::enabled) {  // between two shapes, nearest the middle
       std::int32_t* r = ids + begin;
-      std::sort(r, r + count, [&](std::int32_t a, std::int32_t b) { return copies.less(a, b); });
-      if (copies.same_shape(r[0], r[count - 1])) return begin + count;
-      std::int32_t lo = count / 2, hi = count / 2;  // a boundary k: r[k - 1] and r[k] differ
-      while (lo > 1 && copies.same_shape(r[lo - 1], r[lo])) --lo;
-      while (hi < count - 1 && copies.same_shape(r[hi - 1], r[hi])) ++hi;
-      const bool lo_ok = !copies.same_shape(r[lo - 1], r[lo]);
-      const bool hi_ok = !copies.same_shape(r[hi - 1], r[hi]);
+      const auto first = copies.key(r[0]);
+      std::int32_t k = 1;
+      while (k < count && copies.key(r[k]) == first) ++k;
+      if (k == count) return begin + count;  // one triangle, in one vertex order: a leaf as it is
+      std::vector<std::pair<std::array<S, 18>, std::int32_t>> keyed(static_cast<std::size_t>(count));
+      for (std::int32_t j = 0; j < count; ++j) keyed[static_cast<std::size_t>(j)] = {copies.key(r[j]), r[j]};
+      std::sort(keyed.begin(), keyed.end());
+      for (std::int32_t j = 0; j < count; ++j) r[j] = keyed[static_cast<std::size_t>(j)].second;
+      const auto same = [&](std::int32_t a, std::int32_t b) {
+        return CopyOrder::same_shape(keyed[static_cast<std::size_t>(a)].first, keyed[static_cast<std::size_t>(b)].first);
+      };
+      if (same(0, count - 1)) return begin + count;
+      std::int32_t lo = count / 2, hi = count / 2;  // a boundary j: entries j - 1 and j differ
+      while (lo > 1 && same(lo - 1, lo)) --lo;
+      while (hi < count - 1 && same(hi - 1, hi)) ++hi;
+      const bool lo_ok = !same(lo - 1, lo), hi_ok = !same(hi - 1, hi);
       mid = begin + (lo_ok && (!hi_ok || count / 2 - lo <= hi - count / 2) ? lo : hi);
     }
   } else if (cfg.split == SplitRule::Sah) {
