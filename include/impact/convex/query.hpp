@@ -65,6 +65,12 @@ struct ConvexQueryOptions {
   /// with Newton refinement (convex/epa.hpp), which is the default; libccd also answers when the
   /// own solver meets a degenerate (flat) Minkowski difference.
   bool libccd_penetration = false;
+  /// Curved pairs: stop the own EPA at a gap of 1e-3 of the size and refine the normal by Newton's
+  /// method (convex/epa.hpp), going on with EPA when the refinement does not verify. Off by
+  /// default: on the zoo's cylinders and cones the support's edges (rulings, rims) stop it on most
+  /// poses (verified on 10 of 130 cylinder–cylinder penetrations), so it cost more support calls
+  /// than it saved (38.9 against 31.5 per query there), while EPA alone closes its gap to 1e-10.
+  bool newton_refinement = false;
 };
 
 namespace detail {
@@ -269,7 +275,7 @@ ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>&
   st.tolerance = o.relative_tolerance * scale;
   st.coarse_tolerance = S(1e-3) * scale;
   st.max_iterations = o.max_iterations;
-  st.refine = !(is_polytope_v<A, S> && is_polytope_v<B, S>);
+  st.refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
   const EpaPenetration<S> r = epa_penetration(sa, sb, Vec3<S>(wa - wb), st);
   ConvexContact<S> c;
   failed = r.failed;
