@@ -14,6 +14,7 @@
 #include "impact/bvh/wide_bvh.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/closest_point_mesh.hpp"
+#include "impact/query/kd_tree.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
@@ -202,6 +203,44 @@ template <class S> void check_flat_trees() {
 TEST(CoincidentCopiesFlat, CompactAndWideTreesTestOneCopyPerVertexOrder) {
   check_flat_trees<double>();
   check_flat_trees<float>();
+}
+
+// The kd-tree: the copies make one leaf (no plane separates them); its references are sorted by
+// vertices and the repeats skipped: the loop's answers with about the torus's own tests.
+template <class S> void check_kd_tree() {
+  const TriangleMesh<S> m = torus_with_copies<S>(4000);
+  const KdTree<S> kd(m), kd0(make_torus<S>(S(1), S(0.4), 48, 12));
+  int marked = 0;
+  for (std::int32_t k = 0; k < std::int32_t(kd.references().size()); ++k) marked += kd.repeats_previous(k);
+  EXPECT_GE(marked, 4000 + 1 + 1000 - 6);  // at least once per copy beyond the first of its group
+  const Triangle<S> t = m.triangle(100);
+  test::Rng rng(9);
+  for (int i = 0; i < 40; ++i) {
+    const Vec3<S> target = t.a + S(0.3) * (t.b - t.a) + S(0.3) * (t.c - t.a);
+    const Vec3<S> o = (target.template cast<double>() + rng.vec(-1, 1)).template cast<S>();
+    const Ray<S> ray(o, Vec3<S>(target - o), S(2));
+    const auto expected = loop_first_hit(m, ray);
+    KdTreeStats st, st0;
+    const auto h = kd.first_hit(ray, &st);
+    kd0.first_hit(ray, &st0);
+    ASSERT_EQ(h.has_value(), expected.has_value()) << i;
+    if (expected) {
+      EXPECT_EQ(h->t, *expected) << i;
+    }
+    EXPECT_LE(st.triangle_tests, 2 * st0.triangle_tests + 12) << i;
+    const Vec3<S> p = (target.template cast<double>() + 0.01 * rng.vec(-1, 1)).template cast<S>();
+    KdTreeStats cs, cs0;
+    const auto c = kd.closest_point(p, &cs);
+    kd0.closest_point(p, &cs0);
+    ASSERT_TRUE(c.has_value());
+    EXPECT_EQ(c->distance, loop_closest(m, p)) << i;
+    EXPECT_LE(cs.triangle_tests, 2 * cs0.triangle_tests + 12) << i;
+  }
+}
+
+TEST(CoincidentCopiesFlat, KdTreeTestsOneCopyPerVertexOrder) {
+  check_kd_tree<double>();
+  check_kd_tree<float>();
 }
 
 // Queries that list pairs must still list every copy: all pairs against another mesh and self

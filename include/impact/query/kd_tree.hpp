@@ -12,7 +12,10 @@
 /// are bounded on any input: depth at most max_depth (default 8 + 1.3 log2 n, as PBRT), triangle
 /// references at most max_references_per_triangle * n (beyond that cells become leaves), and a
 /// split must leave fewer triangles on each side than in the cell, so coincident triangles make
-/// one leaf instead of a deep chain.
+/// one leaf instead of a deep chain. In a leaf of more than leaf_size triangles the references are
+/// sorted by their triangles' vertices, and a triangle equal to the one before it (the same three
+/// points in the same order: coincident copies) is marked and skipped by both queries, which it
+/// would give exactly the same answer (as MeshBvh::repeats_previous).
 ///
 /// Numerical contract. Rays: the first hit is the smallest t among the triangles hit by the
 /// library's triangle rule (detail::ray_mesh_triangle_hit of query/ray_mesh.hpp: the watertight
@@ -111,8 +114,14 @@ template <class S> class KdTree {
   const std::vector<std::int32_t>& references() const { return refs_; }
   const Aabb<S>& bounds() const { return root_box_; }
   const TriangleMesh<S>& mesh() const { return mesh_; }
-  /// Heap bytes beyond the copied mesh: nodes and triangle references (capacities).
-  std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + refs_.capacity() * sizeof(std::int32_t); }
+  /// Heap bytes beyond the copied mesh: nodes and triangle references (capacities), and the marks
+  /// of repeated triangles (only when some leaf holds copies).
+  std::size_t memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + refs_.capacity() * sizeof(std::int32_t) + repeats_.capacity() / 8;
+  }
+  /// True when reference k's triangle has exactly the vertices of reference k - 1's, in the same
+  /// order, within one leaf (a query that has just tested k - 1 may skip k).
+  bool repeats_previous(std::int32_t k) const { return !repeats_.empty() && repeats_[static_cast<std::size_t>(k)]; }
   /// Depth of the deepest leaf (the root has depth 0).
   int depth() const { return depth_; }
 
@@ -188,6 +197,7 @@ template <class S> class KdTree {
       const Node& leaf = nodes_[static_cast<std::size_t>(it.node)];
       if (stats) ++stats->node_visits;
       for (std::int32_t k = leaf.child_or_first; k < leaf.child_or_first + leaf.count; ++k) {
+        if (repeats_previous(k)) continue;  // the triangle just tested, again
         const std::int32_t t = refs_[static_cast<std::size_t>(k)];
         if (stats) ++stats->triangle_tests;
         pr.ray.t_max = best;
@@ -244,6 +254,7 @@ template <class S> class KdTree {
       if (stats) ++stats->node_visits;
       if (n.is_leaf()) {
         for (std::int32_t k = n.child_or_first; k < n.child_or_first + n.count; ++k) {
+          if (repeats_previous(k)) continue;  // the same distance as the triangle just tested
           const std::int32_t t = refs_[static_cast<std::size_t>(k)];
           std::int32_t& slot = seen[static_cast<std::uint32_t>(t) & 31u];
           if (slot == t) continue;
@@ -316,6 +327,7 @@ template <class S> class KdTree {
         leaf.axis = 3;
         leaf.child_or_first = static_cast<std::int32_t>(refs_.size());
         leaf.count = count;
+        if (count > cfg_.leaf_size) mark_copies(job.tris, refs_.size());
         refs_.insert(refs_.end(), job.tris.begin(), job.tris.end());
       };
       if (count <= cfg_.leaf_size || job.depth >= max_depth || refs_total >= max_refs) {
@@ -391,6 +403,26 @@ template <class S> class KdTree {
     }
     nodes_.shrink_to_fit();
     refs_.shrink_to_fit();
+    if (!repeats_.empty()) repeats_.resize(refs_.size(), false);
+  }
+
+  /// Sorts the triangles of a large leaf (whose references will start at `at`) by their
+  /// vertices, then by id, so copies are adjacent, and marks each copy of the one before it.
+  void mark_copies(std::vector<std::int32_t>& tris, std::size_t at) {
+    using Key = std::array<S, 9>;
+    const auto key = [&](std::int32_t t) {
+      const Triangle<S> x = mesh_.triangle(t);
+      return Key{x.a.x(), x.a.y(), x.a.z(), x.b.x(), x.b.y(), x.b.z(), x.c.x(), x.c.y(), x.c.z()};
+    };
+    std::vector<std::pair<Key, std::int32_t>> keyed(tris.size());
+    for (std::size_t j = 0; j < tris.size(); ++j) keyed[j] = {key(tris[j]), tris[j]};
+    std::sort(keyed.begin(), keyed.end());
+    for (std::size_t j = 0; j < tris.size(); ++j) {
+      tris[j] = keyed[j].second;
+      if (j == 0 || keyed[j].first != keyed[j - 1].first) continue;
+      if (repeats_.size() < at + tris.size()) repeats_.resize(at + tris.size(), false);
+      repeats_[at + j] = true;
+    }
   }
 
   static S half_area(const Aabb<S>& b) {
@@ -402,6 +434,7 @@ template <class S> class KdTree {
   KdTreeConfig cfg_;
   std::vector<Node> nodes_;
   std::vector<std::int32_t> refs_;
+  std::vector<bool> repeats_;  // repeats_previous() by reference; empty when no leaf holds copies
   Aabb<S> root_box_;
   int depth_ = 0;
 };
