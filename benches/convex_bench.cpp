@@ -4,8 +4,10 @@
 // of each against an oracle independent of both (tests/support/convex_oracle.hpp):
 //   distance     the certified bracket of the ellipsoid method (width < 1e-11), error |d - mid|
 //   penetration  the exact least overlap over the candidate axes for box/hull pairs; for curved
-//                shapes the least overlap found by a grid search over directions (an upper bound
-//                of the true depth: only a depth above it counts as error)
+//                shapes the better of two upper bounds of the true depth, the least overlap found
+//                by a grid search over directions and the least ray exit distance found by a
+//                pattern search from the grid's direction (ray_depth_upper; only a depth above
+//                it counts as error)
 //   boolean      mismatches against the oracle's sign where |signed distance| > 1e-6 of the size
 // Errors are relative to the larger shape's size (shape_size). FCL is set up as its users do:
 // fcl::Sphere / Capsule / Cylinder / Cone / Box / Convex, fcl::collide and fcl::distance on
@@ -84,6 +86,7 @@ Reference reference(const A& a, const Pose& pa, const B& b, const Pose& pb, doub
   }
   const auto o = test::signed_distance_oracle(a, pa, b, pb);
   double depth = -o.value;
+  if (depth > 1e-6 * scale) depth = std::min(depth, test::ray_depth_upper(a, pa, b, pb, o.normal));
   constexpr bool polytopes = (std::is_same_v<A, Box<double>> || std::is_same_v<A, ConvexHull<double>>)&&(
       std::is_same_v<B, Box<double>> || std::is_same_v<B, ConvexHull<double>>);
   if constexpr (polytopes) {

@@ -83,6 +83,80 @@ SignedDistance signed_distance_oracle(const A& a, const RigidTransform<double>& 
   return best;
 }
 
+/// The exit distance of the ray from the origin along unit u out of D = A - B (the origin inside D):
+///   rho(u) = min over v orthogonal to u of g(v),  g(v) = h_D(u + v)
+/// (the supporting plane with normal u + v meets the ray at h_D(u + v) / |u|^2; the least such is
+/// the exit point). g is convex in v, so the ellipsoid method in the plane (centre and shape from
+/// `v0` and radius `r0`) converges whatever the kinks of h_D; the value returned is the least g
+/// evaluated, an upper bound of rho(u), hence of the penetration depth, whichever v it stops at.
+/// `v_out` is the best v (a warm start for nearby u).
+template <class A, class B>
+double ray_exit_upper(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb, const Eigen::Vector3d& u,
+                      const Eigen::Vector2d& v0, double r0, Eigen::Vector2d* v_out = nullptr, int iterations = 360) {
+  const Eigen::Vector3d e1 = (std::abs(u.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(u).normalized();
+  const Eigen::Vector3d e2 = u.cross(e1);
+  Eigen::Vector2d c = v0, best_v = v0;
+  Eigen::Matrix2d P = Eigen::Matrix2d::Identity() * (r0 * r0);
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < iterations; ++k) {
+    const Eigen::Vector3d m = u + c.x() * e1 + c.y() * e2;
+    const Eigen::Vector3d sd = support(a, pa, m) - support(b, pb, Eigen::Vector3d(-m));
+    const double g = m.dot(sd);
+    if (g < best) {
+      best = g;
+      best_v = c;
+    }
+    const Eigen::Vector2d sub(e1.dot(sd), e2.dot(sd));
+    const double den = std::sqrt(std::max(sub.dot(P * sub), 0.0));
+    if (!(den > 1e-300)) break;
+    const Eigen::Vector2d Pg = P * sub / den;
+    c -= Pg / 3.0;
+    P = (4.0 / 3.0) * (P - (2.0 / 3.0) * Pg * Pg.transpose());
+    P = (P + P.transpose()).eval() / 2.0;
+  }
+  if (v_out) *v_out = best_v;
+  return best;
+}
+
+/// A second upper bound of the penetration depth of intersecting A and B, by a search over ray
+/// directions u of the exit distance rho(u) (ray_exit_upper): depth = min_u rho(u), and unlike the
+/// overlap f(n) of signed_distance_oracle, rho has no valley along the edges of D at its minimum
+/// (there the boundary of D is met by the largest ball about the origin, so it is smooth; edges
+/// of D are ridges of rho), so a pattern search from a start near the minimum (the grid search's
+/// normal) converges to it. Returns the least upper bound found and the direction in `u_out`.
+template <class A, class B>
+double ray_depth_upper(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb, const Eigen::Vector3d& u0,
+                       Eigen::Vector3d* u_out = nullptr) {
+  const Eigen::Vector3d e1 = (std::abs(u0.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(u0).normalized();
+  const Eigen::Vector3d e2 = u0.cross(e1);
+  Eigen::Vector2d x = Eigen::Vector2d::Zero(), warm = Eigen::Vector2d::Zero();
+  const auto rho = [&](const Eigen::Vector2d& p, Eigen::Vector2d* w) {
+    const Eigen::Vector3d u = (u0 + p.x() * e1 + p.y() * e2).normalized();
+    return ray_exit_upper(a, pa, b, pb, u, Eigen::Vector2d::Zero(), 4.0, w);
+  };
+  double best = rho(x, &warm);
+  static const int dirs[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {1, -1}, {-1, 1}, {-1, -1}};
+  for (double step = 2e-2; step > 1e-10; step /= 4) {
+    for (int moves = 0; moves < 40; ++moves) {
+      double bv = best;
+      Eigen::Vector2d bx = x;
+      for (const auto& d : dirs) {
+        const Eigen::Vector2d p = x + step * Eigen::Vector2d(d[0], d[1]);
+        const double r = rho(p, nullptr);
+        if (r < bv) {
+          bv = r;
+          bx = p;
+        }
+      }
+      if (!(bv < best)) break;
+      best = bv;
+      x = bx;
+    }
+  }
+  if (u_out) *u_out = (u0 + x.x() * e1 + x.y() * e2).normalized();
+  return best;
+}
+
 /// Certified bracket of the distance of two separated convex sets by the ellipsoid method on the
 /// convex function g(x) = h_A(x) + h_B(-x) over the unit ball (distance = -min g; a subgradient of
 /// g at x is s_A(x) - s_B(-x), the difference of support points). `lower` and `upper` bound the

@@ -35,6 +35,10 @@ struct ConvexContact {
   /// distance from the origin to the boundary of the solver's inner polytope of the Minkowski
   /// difference). The true depth lies in [depth - depth_gap, depth]. 0 for closed forms.
   S depth_gap = S(0);
+  /// The depth is EPA's refined by Newton's method (convex/epa.hpp): f(normal) at a verified local
+  /// minimum of the overlap f inside EPA's certified bracket [depth - depth_gap, depth] (the
+  /// bracket stays the coarse EPA one; the refined depth is typically within 1e-9 of the size).
+  bool refined = false;
   /// The deepest point of a inside b (on a's surface): point + depth / 2 * normal.
   Vec3<S> point_a() const { return point + depth / S(2) * normal; }
   /// The deepest point of b inside a (on b's surface): point - depth / 2 * normal.

@@ -375,7 +375,7 @@ struct TriangleConvexTests {
         c.depth_gap = c.depth;
         return c;
       }
-      return epa(t, identity, shape, pose, options);
+      return penetration_unchecked(t, identity, shape, pose, options);  // a capsule through its core, as the pairwise query
     }
   }
 };
