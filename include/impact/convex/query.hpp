@@ -22,8 +22,8 @@
 ///                                     itself meets the other shape: the own EPA on the core, plus
 ///                                     the radius
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
-///                                     (gjk_distance.hpp); penetration: the own EPA with Newton
-///                                     refinement (convex/epa.hpp; libccd's EPA or MPR with
+///                                     (gjk_distance.hpp); penetration: the own EPA (convex/epa.hpp;
+///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
 /// Definitions: the normal is a unit vector from a towards b; translating b by depth * normal
