@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace {
@@ -468,6 +470,58 @@ TEST(ZoneProjection, LargeInfeasibleStackIsReported) {
     const auto r2 = project_zone(ok.cons, ok.w, ok.xhat, x2, zone_solver_options(solver));
     EXPECT_TRUE(r2.converged);
     EXPECT_FALSE(r2.infeasible);
+  }
+}
+
+// The primal solver's Newton system (detail::PrimalSystem: block order, permuted upper triangle
+// written in place) against the matrix built here densely, I + sum_{active} g_i g_i^T / eps, on
+// random rows of one to four blocks (blocks repeated across rows, some blocks in no active row,
+// one row on a single block): K^-1 x must solve the dense system to rounding, for several active
+// sets of one LDP (the order is recomputed for each) and with no row active (K = I).
+TEST(ZoneProjection, PrimalNewtonSystemSolvesTheDenseSystem) {
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int blocks = 5 + 7 * trial, m = 4 * blocks;
+    detail::ZoneLdp P;
+    P.blocks = blocks;
+    std::uniform_int_distribution<int> B(0, blocks - 3), NB(1, 4);  // the last two blocks are in no row
+    for (int i = 0; i < m; ++i) {
+      detail::LdpRow r;
+      r.nb = i == 0 ? 1 : std::min(NB(rng), blocks - 2);
+      double norm2 = 0;
+      for (int a = 0; a < r.nb; ++a) {
+        int b;
+        do b = B(rng);
+        while (std::find(r.blk, r.blk + a, b) != r.blk + a);
+        r.blk[a] = b;
+        r.g[a] = Vec3<double>(U(rng), U(rng), U(rng));
+        norm2 += r.g[a].squaredNorm();
+      }
+      for (int a = 0; a < r.nb; ++a) r.g[a] /= std::sqrt(norm2);
+      P.rows.push_back(r);
+    }
+    P.c = Eigen::VectorXd::Zero(m), P.tol = Eigen::VectorXd::Constant(m, 1e-9);
+    detail::PrimalSystem sys(blocks);
+    for (int pass = 0; pass < 4; ++pass) {
+      std::vector<char> act(static_cast<std::size_t>(m));
+      for (auto& a : act) a = pass == 3 ? 0 : static_cast<char>(U(rng) > -0.3 + 0.4 * pass);
+      const double inv_eps = pass == 1 ? 1e6 : 1e2;
+      Eigen::MatrixXd K = Eigen::MatrixXd::Identity(3 * blocks, 3 * blocks);
+      for (int i = 0; i < m; ++i) {
+        if (!act[static_cast<std::size_t>(i)]) continue;
+        Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * blocks);
+        const auto& r = P.rows[static_cast<std::size_t>(i)];
+        for (int a = 0; a < r.nb; ++a) g.segment<3>(3 * r.blk[a]) = r.g[a];
+        K += inv_eps * g * g.transpose();
+      }
+      const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(3 * blocks, [&](Eigen::Index) { return U(rng); });
+      sys.order(P, [&](std::size_t i) { return act[i] != 0; });
+      ASSERT_TRUE(sys.factorize(P, act, inv_eps));
+      const Eigen::VectorXd d = sys.solve(x);
+      EXPECT_LE((K * d - x).norm(), 1e-9 * x.norm()) << "trial " << trial << " pass " << pass;
+      EXPECT_LE((d - K.ldlt().solve(x)).norm(), 1e-8 * std::max(1.0, d.norm())) << "trial " << trial << " pass " << pass;
+    }
   }
 }
 

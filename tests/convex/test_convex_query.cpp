@@ -209,7 +209,8 @@ TEST(ConvexQuery, CurvedDepthsAgainstRayOracle) {
   check_against_rays("cylinder-cone", z.cylinder, z.cone, 82);
   check_against_rays("cone-box", z.cone, z.box, 83);
   check_against_rays("cone-hull", z.cone, z.hull, 84);
-  check_against_rays("sphere-cylinder", z.sphere, z.cylinder, 85);
+  check_against_rays("sphere-cylinder", z.sphere, z.cylinder, 85);  // closed form inside, GJK outside
+  check_against_rays("cylinder-sphere", z.cylinder, z.sphere, 87);
   check_against_rays("capsule-cone", z.capsule, z.cone, 86);
 }
 

@@ -14,14 +14,16 @@
 /// Which method answers, per pair (first match):
 ///   sphere/capsule – sphere/capsule   closed form on the cores (centre, segment) and the radii
 ///   sphere – box                      closed form (closest point of the box, or its nearest face)
+///   sphere – cylinder (penetration)   closed form when the centre is inside the cylinder (the
+///                                     nearer of side and caps), else as sphere/capsule – other
 ///   box – box                         separating axes (boolean, penetration); GJK for distance
 ///   sphere/capsule – other            GJK distance between the core and the other shape, minus
 ///                                     the radius (exact up to GJK's tolerance); when the core
 ///                                     itself meets the other shape: the own EPA on the core, plus
 ///                                     the radius
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
-///                                     (gjk_distance.hpp); penetration: the own EPA with Newton
-///                                     refinement (convex/epa.hpp; libccd's EPA or MPR with
+///                                     (gjk_distance.hpp); penetration: the own EPA (convex/epa.hpp;
+///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
 /// Definitions: the normal is a unit vector from a towards b; translating b by depth * normal
@@ -315,6 +317,31 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
 template <class S, class R, class B>
 ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                const ConvexQueryOptions<S>& o, bool flip) {
+  if constexpr (std::is_same_v<R, Sphere<S>> && std::is_same_v<B, Cylinder<S>>) {
+    // A sphere whose centre is inside a cylinder leaves it through the nearer of its side and
+    // its caps: depth = radius + that distance, exactly (no solver).
+    const Vec3<S> centre = pa.apply(a.center);
+    const Vec3<S> q = pb.R.transpose() * (centre - pb.t);
+    const S rho = std::sqrt(q.x() * q.x() + q.y() * q.y());
+    const S side = b.radius - rho, cap = b.half_length - std::abs(q.z());
+    if (side > S(0) && cap > S(0)) {
+      Vec3<S> u;  // the exit direction in b's frame
+      if (side < cap) {
+        u = rho > S(0) ? Vec3<S>(q.x() / rho, q.y() / rho, S(0)) : Vec3<S>(Vec3<S>::UnitX());
+      } else {
+        u = Vec3<S>(S(0), S(0), q.z() >= S(0) ? S(1) : S(-1));
+      }
+      const Vec3<S> exit_dir = pb.R * u;
+      ConvexContact<S> c;
+      c.intersecting = true;
+      c.normal = -exit_dir;  // b moves against the exit direction
+      c.depth = a.radius + std::min(side, cap);
+      c.point = (centre + a.radius * c.normal + centre + std::min(side, cap) * exit_dir) / S(2);
+      settle_contact(a, pa, b, pb, c);
+      if (flip) c.normal = -c.normal;
+      return c;
+    }
+  }
   const auto core = core_of(a);
   const S scale = query_scale<S>(a, b);
   const S tol = o.relative_tolerance * scale;

@@ -24,8 +24,8 @@
 ///   core – core                       the core scene's (narrow_dispatch.hpp), unchanged
 ///   sphere/particle/box – convex,     convex/query.hpp on the pair of types: closed forms where
 ///   convex – convex                   they exist (sphere/capsule pairs, sphere–box), GJK on the
-///                                     core of a sphere or capsule, libccd MPR (boolean) and EPA
-///                                     (contacts, settled and certified) for the general pairs; a
+///                                     core of a sphere or capsule, libccd MPR (boolean) and the
+///                                     own EPA (contacts, certified) for the general pairs; a
 ///                                     particle is a sphere of its radius (0: a point), a core box
 ///                                     is the convex layer's Box (a zero half extent: a flat box)
 ///   mesh – convex                     convex/mesh_convex.hpp through the mesh's sphere tree:
