@@ -47,13 +47,6 @@ struct ConvexContact {
 
 namespace detail {
 
-/// A unit vector orthogonal to u (u unit).
-template <class S>
-inline Vec3<S> any_orthogonal(const Vec3<S>& u) {
-  const Vec3<S> t = std::abs(u.x()) < S(0.6) ? Vec3<S>::UnitX() : Vec3<S>::UnitY();
-  return u.cross(t).normalized();
-}
-
 /// Two balls (centres ca, cb; radii ra, rb): the base of every round closed form. `fallback` is the
 /// normal used when the centres coincide.
 template <class S>

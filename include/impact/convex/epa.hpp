@@ -173,7 +173,7 @@ bool gjk_enclose(const SupportA& support_a, const SupportB& support_b, Vec3<S> f
   };
   if (!(first.squaredNorm() > S(0))) first = Vec3<S>::UnitX();
   int n = 1;
-  S lambda[4];
+  S lambda[4] = {S(1), S(0), S(0), S(0)};
   s[0] = supp(Vec3<S>(-first));
   Vec3<S> v = s[0].w;
   const S tiny = std::numeric_limits<S>::epsilon() * S(16) * scale;
@@ -187,31 +187,11 @@ bool gjk_enclose(const SupportA& support_a, const SupportB& support_b, Vec3<S> f
     if (vv <= tiny * tiny) break;  // origin on the simplex: complete it below
     const SimplexPoint<S> p = supp(Vec3<S>(-v));
     if (v.dot(p.w) > S(0)) return false;  // -v separates
-    bool repeated = false;
-    for (int i = 0; i < n; ++i) repeated = repeated || s[i].w == p.w;
-    if (repeated) break;  // origin within rounding of the simplex
-    SimplexPoint<S> saved[4];
-    S saved_lambda[4];
-    const int saved_n = n;
-    for (int i = 0; i < n; ++i) {
-      saved[i] = s[i];
-      saved_lambda[i] = lambda[i];
-    }
-    s[n++] = p;
-    Vec3<S> nv;
-    if (!closest_on_simplex(s, n, lambda, nv)) {
-      inside = true;
-      break;
-    }
-    if (!(nv.squaredNorm() < vv)) {  // no progress: the origin is within rounding of the simplex
-      n = saved_n;
-      for (int i = 0; i < n; ++i) {
-        s[i] = saved[i];
-        lambda[i] = saved_lambda[i];
-      }
-      break;
-    }
-    v = nv;
+    // a repeated support point or no progress: the origin is within rounding of the simplex
+    const GjkStep step = gjk_step(s, n, lambda, v, vv, p);
+    if (step == GjkStep::Progress) continue;
+    inside = step == GjkStep::Inside;
+    break;
   }
   if (inside) return true;
   // Complete the simplex to a tetrahedron holding the origin (on its boundary).

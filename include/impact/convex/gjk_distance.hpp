@@ -150,6 +150,49 @@ bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
 /// only "distance <= margin?" and stops as soon as that is decided: intersecting is then set when
 /// an upper bound of the distance is <= margin, cleared when a lower bound exceeds it (the
 /// distance and points are then those bounds', not converged).
+/// A unit vector orthogonal to u (u unit).
+template <class S>
+inline Vec3<S> any_orthogonal(const Vec3<S>& u) {
+  const Vec3<S> t = std::abs(u.x()) < S(0.6) ? Vec3<S>::UnitX() : Vec3<S>::UnitY();
+  return u.cross(t).normalized();
+}
+
+/// What one GJK step did with a new support point p (gjk_step).
+enum class GjkStep {
+  Repeated,    ///< p is already a vertex of the simplex: nothing changed
+  Inside,      ///< the simplex with p holds the origin
+  NoProgress,  ///< the closest point did not come nearer (rounding): the simplex is kept as it was
+  Progress,    ///< p joined the simplex; v is its new closest point to the origin
+};
+
+/// Adds p to the simplex s[0..n) (barycentric lambda, closest point v to the origin, |v|^2 = vv)
+/// and reduces it to the face closest to the origin: the step shared by the distance query and
+/// EPA's enclosing simplex (epa.hpp).
+template <class S> GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v, S vv, const SimplexPoint<S>& p) {
+  for (int i = 0; i < n; ++i)
+    if (s[i].w == p.w) return GjkStep::Repeated;
+  SimplexPoint<S> saved[4];
+  S saved_lambda[4];
+  const int saved_n = n;
+  for (int i = 0; i < n; ++i) {
+    saved[i] = s[i];
+    saved_lambda[i] = lambda[i];
+  }
+  s[n++] = p;
+  Vec3<S> nv;
+  if (!closest_on_simplex(s, n, lambda, nv)) return GjkStep::Inside;
+  if (!(nv.squaredNorm() < vv)) {
+    n = saved_n;
+    for (int i = 0; i < n; ++i) {
+      s[i] = saved[i];
+      lambda[i] = saved_lambda[i];
+    }
+    return GjkStep::NoProgress;
+  }
+  v = nv;
+  return GjkStep::Progress;
+}
+
 template <class S, class SupportA, class SupportB>
 ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& support_b, Vec3<S> first, S tolerance,
                                int max_iterations, S margin = S(-1)) {
@@ -188,36 +231,12 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
       converged = true;
       break;
     }
-    bool repeated = false;
-    for (int i = 0; i < n; ++i) repeated = repeated || s[i].w == p.w;
-    if (repeated) {  // no new support point: v is as close as the arithmetic allows
-      converged = true;
-      break;
-    }
-    SimplexPoint<S> saved[4];
-    S saved_lambda[4];
-    const int saved_n = n;
-    for (int i = 0; i < n; ++i) {
-      saved[i] = s[i];
-      saved_lambda[i] = lambda[i];
-    }
-    s[n++] = p;
-    Vec3<S> nv;
-    if (!closest_on_simplex(s, n, lambda, nv)) {
-      out.intersecting = true;
-      converged = true;
-      break;
-    }
-    if (!(nv.squaredNorm() < vv)) {  // no progress (rounding): keep the previous simplex
-      n = saved_n;
-      for (int i = 0; i < n; ++i) {
-        s[i] = saved[i];
-        lambda[i] = saved_lambda[i];
-      }
-      converged = true;
-      break;
-    }
-    v = nv;
+    // a repeated support point or no progress (rounding): v is as close as the arithmetic allows
+    const GjkStep step = gjk_step(s, n, lambda, v, vv, p);
+    if (step == GjkStep::Progress) continue;
+    out.intersecting = step == GjkStep::Inside;
+    converged = true;
+    break;
   }
   out.limit_reached = !converged;
   Vec3<S> pa = Vec3<S>::Zero(), pb = Vec3<S>::Zero();
