@@ -20,6 +20,7 @@
 #include "impact/query/ray_wide_bvh.hpp"
 #include "impact/query/swept_sphere_mesh.hpp"
 #include "support/brute_force.hpp"
+#include "support/loop_oracles.hpp"
 #include "support/meshes.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
@@ -59,26 +60,6 @@ template <class S> TriangleMesh<S> torus_with_copies(int copies) {
     if (k % 3 == 2) m.F.row(f) << v, v + 2, v + 1;
   }
   return m;
-}
-
-template <class S> std::optional<S> loop_first_hit(const TriangleMesh<S>& m, const Ray<S>& ray) {
-  PreparedRay<S> pr(ray);
-  std::optional<S> best;
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    pr.ray.t_max = best ? *best : ray.t_max;
-    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
-    if (h && (!best || h->t < *best)) best = h->t;
-  }
-  return best;
-}
-
-template <class S> S loop_closest(const TriangleMesh<S>& m, const Vec3<S>& p) {
-  S best = std::numeric_limits<S>::infinity();
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    const Triangle<S> tri = m.triangle(t);
-    best = std::min(best, detail::triangle_squared_distance(p, tri, detail::closest_on_triangle(p, tri)));
-  }
-  return std::sqrt(best);
 }
 
 template <class S> std::optional<S> loop_swept(const TriangleMesh<S>& m, const Ray<S>& ray, S r) {
@@ -122,17 +103,17 @@ TYPED_TEST(CoincidentCopies, NearestQueriesTestOneCopyPerVertexOrder) {
       const Vec3<S> target = t.a + S(u) * (t.b - t.a) + S(w) * (t.c - t.a);
       const Vec3<S> o = (target.template cast<double>() + rng.vec(-1, 1)).template cast<S>();
       const Ray<S> ray(o, Vec3<S>(target - o), S(i % 2 ? 2 : 1e6));
-      const auto expected = loop_first_hit(m, ray);
+      const auto b = test::loop_first_hit(m, ray);
       RayMeshStats st, st0;
       const auto h = ray_mesh_first_hit(bvh, ray, {}, &st);
       ray_mesh_first_hit(alone, ray, {}, &st0);
-      ASSERT_EQ(h.has_value(), expected.has_value()) << i;
-      EXPECT_EQ(ray_mesh_any_hit(bvh, ray), expected.has_value()) << i;
-      if (expected) {
+      ASSERT_EQ(h.has_value(), b.has_value()) << i;
+      EXPECT_EQ(ray_mesh_any_hit(bvh, ray), b.has_value()) << i;
+      if (b) {
         if constexpr (std::is_same_v<BV, Sphere<S>>) {  // sphere trees: the first hit to rounding
-          EXPECT_NEAR(h->t, *expected, S(1e-4) * (S(1) + *expected)) << i;
+          EXPECT_NEAR(h->t, b->first, S(1e-4) * (S(1) + b->first)) << i;
         } else {
-          EXPECT_EQ(h->t, *expected) << i;
+          EXPECT_EQ(h->t, b->first) << i;
         }
       }
       EXPECT_LE(st.triangle_tests, 2 * st0.triangle_tests + 12) << i;  // before: every copy on the ray's way
@@ -142,7 +123,7 @@ TYPED_TEST(CoincidentCopies, NearestQueriesTestOneCopyPerVertexOrder) {
       const auto c = closest_point_on_mesh(bvh, p, {}, {}, &cs);
       closest_point_on_mesh(alone, p, {}, {}, &cs0);
       ASSERT_TRUE(c.has_value());
-      const S d = loop_closest(m, p);
+      const S d = test::loop_distance(m, p);
       if constexpr (std::is_same_v<BV, Sphere<S>>) {
         EXPECT_NEAR(c->distance, d, S(1024) * eps) << i;
       } else {
@@ -178,7 +159,7 @@ template <class S> void check_flat_trees() {
     const Vec3<S> target = t.a + S(0.3) * (t.b - t.a) + S(0.3) * (t.c - t.a);
     const Vec3<S> o = (target.template cast<double>() + rng.vec(-1, 1)).template cast<S>();
     const Ray<S> ray(o, Vec3<S>(target - o), S(2));
-    const auto expected = loop_first_hit(m, ray);
+    const auto b = test::loop_first_hit(m, ray);
     RayMeshStats sc, sw, st, sc0, sw0, st0;  // ...0: the torus alone
     ray_mesh_first_hit(bvh0, fast0, ray, {}, &sc0);
     ray_mesh_first_hit(wide0, ray, RigidTransform<S>(), &sw0);
@@ -186,13 +167,13 @@ template <class S> void check_flat_trees() {
     const auto hc = ray_mesh_first_hit(bvh, fast, ray, {}, &sc);
     const auto hw = ray_mesh_first_hit(wide, ray, RigidTransform<S>(), &sw);
     const auto ht = ray_mesh_first_hit(wide_of_tree, ray, RigidTransform<S>(), &st);
-    ASSERT_EQ(hc.has_value(), expected.has_value()) << i;
-    ASSERT_EQ(hw.has_value(), expected.has_value()) << i;
-    ASSERT_EQ(ht.has_value(), expected.has_value()) << i;
-    if (expected) {
-      EXPECT_EQ(hc->t, *expected) << i;
-      EXPECT_EQ(hw->t, *expected) << i;
-      EXPECT_EQ(ht->t, *expected) << i;
+    ASSERT_EQ(hc.has_value(), b.has_value()) << i;
+    ASSERT_EQ(hw.has_value(), b.has_value()) << i;
+    ASSERT_EQ(ht.has_value(), b.has_value()) << i;
+    if (b) {
+      EXPECT_EQ(hc->t, b->first) << i;
+      EXPECT_EQ(hw->t, b->first) << i;
+      EXPECT_EQ(ht->t, b->first) << i;
     }
     EXPECT_LE(sc.triangle_tests, 2 * sc0.triangle_tests + 12) << i;
     EXPECT_LE(sw.triangle_tests, 2 * sw0.triangle_tests + 12) << i;
@@ -219,13 +200,13 @@ template <class S> void check_kd_tree() {
     const Vec3<S> target = t.a + S(0.3) * (t.b - t.a) + S(0.3) * (t.c - t.a);
     const Vec3<S> o = (target.template cast<double>() + rng.vec(-1, 1)).template cast<S>();
     const Ray<S> ray(o, Vec3<S>(target - o), S(2));
-    const auto expected = loop_first_hit(m, ray);
+    const auto b = test::loop_first_hit(m, ray);
     KdTreeStats st, st0;
     const auto h = kd.first_hit(ray, &st);
     kd0.first_hit(ray, &st0);
-    ASSERT_EQ(h.has_value(), expected.has_value()) << i;
-    if (expected) {
-      EXPECT_EQ(h->t, *expected) << i;
+    ASSERT_EQ(h.has_value(), b.has_value()) << i;
+    if (b) {
+      EXPECT_EQ(h->t, b->first) << i;
     }
     EXPECT_LE(st.triangle_tests, 2 * st0.triangle_tests + 12) << i;
     const Vec3<S> p = (target.template cast<double>() + 0.01 * rng.vec(-1, 1)).template cast<S>();
@@ -233,7 +214,7 @@ template <class S> void check_kd_tree() {
     const auto c = kd.closest_point(p, &cs);
     kd0.closest_point(p, &cs0);
     ASSERT_TRUE(c.has_value());
-    EXPECT_EQ(c->distance, loop_closest(m, p)) << i;
+    EXPECT_EQ(c->distance, test::loop_distance(m, p)) << i;
     EXPECT_LE(cs.triangle_tests, 2 * cs0.triangle_tests + 12) << i;
   }
 }

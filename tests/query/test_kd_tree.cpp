@@ -9,6 +9,7 @@
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/closest_point_mesh.hpp"
 #include "impact/query/ray_mesh.hpp"
+#include "support/loop_oracles.hpp"
 #include "support/meshes.hpp"
 
 #include <gtest/gtest.h>
@@ -20,39 +21,18 @@ using namespace impact::test;
 
 namespace {
 
-/// Smallest t over all triangles (NaN on a miss) by the library's triangle rule (ray_mesh.hpp).
-template <class S> S brute_first_hit(const TriangleMesh<S>& m, const Ray<S>& r) {
-  const PreparedRay<S> pr(r);
-  S best = std::numeric_limits<S>::quiet_NaN();
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
-    if (!h) continue;
-    if (std::isnan(best) || h->t < best) best = h->t;
-  }
-  return best;
-}
-/// Smallest distance over all triangles by the library's per-triangle rule (the narrow phase's
-/// closest point, its squared distance raised to the triangle box's: query/closest_point_mesh.hpp).
-template <class S> S brute_distance(const TriangleMesh<S>& m, const Vec3<S>& p) {
-  S best = std::numeric_limits<S>::infinity();
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    const Triangle<S> tri = m.triangle(t);
-    best = std::min(best, detail::triangle_squared_distance(p, tri, detail::closest_on_triangle(p, tri)));
-  }
-  return std::sqrt(best);
-}
-
 /// Casts rays and compares with brute force; returns the number of hits.
 template <class S> int expect_rays_match(const KdTree<S>& kd, const TriangleMesh<S>& m, const std::vector<Ray<S>>& rays) {
   int hits = 0;
   for (std::size_t k = 0; k < rays.size(); ++k) {
-    const S expected = brute_first_hit(m, rays[k]);
+    const auto b = loop_first_hit(m, rays[k]);
     const auto h = kd.first_hit(rays[k]);
-    if (std::isnan(expected)) {
+    if (!b) {
       EXPECT_FALSE(h.has_value()) << "ray " << k << " t " << h->t;
       continue;
     }
     ++hits;
+    const S expected = b->first;
     if (!h) {
       ADD_FAILURE() << "ray " << k << " missed, brute force hit at " << expected;
       continue;
@@ -150,7 +130,7 @@ TYPED_TEST(KdTreeTest, ClosestPointMatchesBruteForce) {
     const Vec3<S> p = rng.vec(-1.5, 1.5).template cast<S>();
     const auto c = kd.closest_point(p);
     ASSERT_TRUE(c.has_value());
-    EXPECT_EQ(c->distance, brute_distance(m, p)) << "point " << k;
+    EXPECT_EQ(c->distance, loop_distance(m, p)) << "point " << k;
     EXPECT_EQ((closest_point_on_triangle(p, m.triangle(c->triangle)).point - c->point).norm(), S(0));
   }
   // max_distance: nothing beyond it
@@ -204,7 +184,7 @@ TYPED_TEST(KdTreeTest, DegenerateMeshesStayBoundedAndCorrect) {
     expect_rays_match(kd, mixed, random_rays<S>(rng, 150, 2.0, false));
     for (int k = 0; k < 50; ++k) {
       const Vec3<S> p = rng.vec(-1.2, 1.2).template cast<S>();
-      EXPECT_EQ(kd.closest_point(p)->distance, brute_distance(mixed, p));
+      EXPECT_EQ(kd.closest_point(p)->distance, loop_distance(mixed, p));
     }
   }
 

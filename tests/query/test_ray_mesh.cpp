@@ -10,6 +10,7 @@
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/swept_sphere_mesh.hpp"
 #include "support/data.hpp"
+#include "support/loop_oracles.hpp"
 #include "support/meshes.hpp"
 #include "support/obj_reader.hpp"
 #include "support/random.hpp"
@@ -31,17 +32,6 @@ template <class S> TriangleMesh<S> transformed(const TriangleMesh<S>& m, const R
 }
 
 // Brute force: the same watertight test on every triangle of the mesh given in world coordinates.
-template <class S> std::optional<std::pair<S, int>> brute_first_hit(const TriangleMesh<S>& w, const Ray<S>& ray) {
-  PreparedRay<S> pr(ray);
-  std::optional<std::pair<S, int>> best;
-  for (int t = 0; t < w.num_triangles(); ++t) {
-    pr.ray.t_max = best ? best->first : ray.t_max;
-    const auto h = detail::ray_mesh_triangle_hit(pr, w.triangle(t));
-    if (h && (!best || h->t < best->first)) best = std::make_pair(h->t, t);
-  }
-  return best;
-}
-
 template <class T> class RayMesh : public ::testing::Test {};
 using RayBVs = ::testing::Types<Aabb<float>, Aabb<double>, Sphere<float>, Sphere<double>, Obb<float>, Obb<double>>;
 TYPED_TEST_SUITE(RayMesh, RayBVs);
@@ -65,7 +55,7 @@ template <class BV> void check_against_brute_force(const TriangleMesh<typename B
     const S t_max = k % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform(0.2, 1.2));
     const Ray<S> ray(o, target - o, t_max);
     const auto h = ray_mesh_first_hit(bvh, ray, P);
-    const auto b = brute_first_hit(w, ray);
+    const auto b = test::loop_first_hit(w, ray);
     ASSERT_EQ(h.has_value(), b.has_value()) << "ray " << k;
     EXPECT_EQ(ray_mesh_any_hit(bvh, ray, P), b.has_value());
     if (!h) continue;
@@ -321,7 +311,7 @@ template <class S> void check_integer_grid_rays(std::uint64_t seed) {
       if (k % 2) d = m.vertex(int(rng.index(std::uint64_t(nv)))) - o;  // through a vertex, at t = 1
       if (d == Vec3<S>::Zero()) continue;
       const Ray<S> ray(o, d, k % 4 == 1 ? S(1) : std::numeric_limits<S>::infinity());
-      const auto b = brute_first_hit(m, ray);
+      const auto b = test::loop_first_hit(m, ray);
       hits += b.has_value();
       const auto ha = ray_mesh_first_hit(ab, ray), hc = ray_mesh_first_hit(ab, fast, ray), hs = ray_mesh_first_hit(sp, ray);
       const auto ho = ray_mesh_first_hit(ob, ray);
@@ -368,7 +358,7 @@ template <class S> void check_degenerate_soup_rays(std::uint64_t seed) {
       const Vec3<S> target = k % 2 ? m.vertex(int(rng.index(std::uint64_t(m.num_vertices())))) : Vec3<S>(rng.vec(-1, 1).cast<S>());
       if (target == o) continue;
       const Ray<S> ray(o, target - o, k % 3 == 0 ? S(1) : std::numeric_limits<S>::infinity());
-      const auto b = brute_first_hit(m, ray);
+      const auto b = test::loop_first_hit(m, ray);
       const auto ha = ray_mesh_first_hit(ab, ray), hs = ray_mesh_first_hit(sp, ray), ho = ray_mesh_first_hit(ob, ray);
       ASSERT_EQ(ha.has_value(), b.has_value()) << k;
       ASSERT_EQ(ho.has_value(), b.has_value()) << k;
