@@ -164,12 +164,8 @@ template <class S, class SupportA, class SupportB>
 bool gjk_enclose(const SupportA& support_a, const SupportB& support_b, Vec3<S> first, S scale, int max_iterations, SimplexPoint<S>* s,
                  int& iterations, bool& limit, bool& failed) {
   const auto supp = [&](const Vec3<S>& d) {
-    SimplexPoint<S> p;
-    p.a = support_a(d);
-    p.b = support_b(Vec3<S>(-d));
-    p.w = p.a - p.b;
     ++iterations;
-    return p;
+    return minkowski_support<S>(support_a, support_b, d);
   };
   if (!(first.squaredNorm() > S(0))) first = Vec3<S>::UnitX();
   int n = 1;
@@ -255,12 +251,8 @@ EpaPenetration<S> epa_penetration(const SupportA& support_a, const SupportB& sup
   }
   out.intersecting = true;
   const auto supp = [&](const Vec3<S>& d) {
-    SimplexPoint<S> p;
-    p.a = support_a(d);
-    p.b = support_b(Vec3<S>(-d));
-    p.w = p.a - p.b;
     ++its;
-    return p;
+    return detail::minkowski_support<S>(support_a, support_b, d);
   };
 
   std::unique_ptr<detail::EpaPolytope<S>> poly_ptr(new detail::EpaPolytope<S>);  // default-initialised: no zeroing

@@ -157,6 +157,16 @@ inline Vec3<S> any_orthogonal(const Vec3<S>& u) {
   return u.cross(t).normalized();
 }
 
+/// The support point of the Minkowski difference A - B in direction d, with its two witnesses.
+template <class S, class SupportA, class SupportB>
+SimplexPoint<S> minkowski_support(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& d) {
+  SimplexPoint<S> p;
+  p.a = support_a(d);
+  p.b = support_b(Vec3<S>(-d));
+  p.w = p.a - p.b;
+  return p;
+}
+
 /// What one GJK step did with a new support point p (gjk_step).
 enum class GjkStep {
   Repeated,    ///< p is already a vertex of the simplex: nothing changed
