@@ -17,6 +17,10 @@
 // distances must be identical across structures (the first structure to answer is the
 // reference), and the first 32 rays and points are also checked against brute force over all
 // triangles; any mismatch is printed and the bench exits with status 3.
+// --copies N adds the mesh "copies-N": N copies of one tilted triangle, in three vertex orders
+// (coincident copies, README "Nearest-first queries"): the middle-split tree of each BV and the
+// kd-tree, build time, ray casts through the triangle and closest points near it (--rays of each,
+// the first 8 checked against brute force), with their triangle tests.
 // --json FILE writes one row per structure and query (structure, bv, builder, query, build_ms,
 // bytes_per_triangle, median_us, mean_us, tests, bv_tests, primitive_tests, refit_ms, mismatches).
 #include "bench_util.hpp"
@@ -45,11 +49,12 @@ namespace {
 struct Args {
   std::vector<std::string> meshes;
   std::string json;
-  int poses = 100, rays = 1000, threads = 0;
+  int poses = 100, rays = 1000, threads = 0, copies = 0;
   std::uint64_t seed = 1;
 };
 
-constexpr const char* kUsage = "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--threads T] [--json FILE]\n";
+constexpr const char* kUsage =
+    "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--threads T] [--copies N] [--json FILE]\n";
 
 [[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
@@ -63,12 +68,14 @@ Args parse(int argc, char** argv) {
     else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
     else if (s == "--json") a.json = next();
     else if (s == "--threads") a.threads = std::atoi(next().c_str());
+    else if (s == "--copies") a.copies = std::atoi(next().c_str());
     else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else a.meshes.push_back(s);
   }
   if (a.poses < 1) usage("--poses must be >= 1");
   if (a.rays < 1) usage("--rays must be >= 1");
   if (a.threads < 0) usage("--threads must be >= 0 (0: the hardware concurrency)");
+  if (a.copies < 0 || a.copies > 10000000) usage("--copies must be in [0, 1e7]");
   return a;
 }
 
@@ -371,6 +378,97 @@ void run_kd(Work& w, std::vector<Row>& rows, Checker& ck) {
 
 }  // namespace
 
+/// N copies of one tilted triangle, a third each in the vertex orders (a, b, c), (b, c, a), (a, c, b).
+TriangleMesh<double> tilted_copies(int n) {
+  TriangleMesh<double> m;
+  m.V.resize(3, 3);
+  m.V << 0, 0, 0, 1, 0, 0.4, 0, 1, 0.7;
+  m.F.resize(n, 3);
+  for (int k = 0; k < n; ++k) {
+    if (k % 3 == 0) m.F.row(k) << 0, 1, 2;
+    if (k % 3 == 1) m.F.row(k) << 1, 2, 0;
+    if (k % 3 == 2) m.F.row(k) << 0, 2, 1;
+  }
+  return m;
+}
+
+/// The "copies-N" rows (--copies): build, ray casts through the copied triangle and closest points
+/// near it, per structure; the first 8 answers of each against brute force.
+void copies_rows(const Args& args, std::vector<Row>& rows, Checker& ck) {
+  Work w;
+  w.mesh = "copies-" + std::to_string(args.copies);
+  w.m = tilted_copies(args.copies);
+  impact::test::Rng rng(args.seed + 29);
+  std::vector<Ray<double>> rays;
+  std::vector<Vec3<double>> points;
+  for (int k = 0; k < args.rays; ++k) {
+    const double u = rng.uniform(0.05, 0.9), v = rng.uniform(0.05, 0.95) * (1 - u);
+    const Vec3<double> target(u, v, 0.4 * u + 0.7 * v);
+    const Vec3<double> o = target + Vec3<double>(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.2, 1));
+    rays.emplace_back(o, target - o, 2.0);
+    points.push_back(target + 0.05 * Vec3<double>(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+  }
+  const std::size_t nb = std::min<std::size_t>(8, rays.size());
+  std::vector<double> ref_t(nb), ref_d(nb);
+  for (std::size_t k = 0; k < nb; ++k) ref_t[k] = brute_ray(w.m, rays[k]), ref_d[k] = brute_distance(w.m, points[k]);
+  auto add = [&](const std::string& structure, const std::string& bv, const std::string& builder, double build_ms, double bpt, auto&& ray,
+                 auto&& closest) {
+    for (const char* query : {"copies_ray", "copies_closest"}) {
+      Row r;
+      r.mesh = w.mesh, r.structure = structure, r.bv = bv, r.builder = builder, r.query = query;
+      r.build_ms = build_ms, r.bytes_per_triangle = bpt;
+      std::size_t tests = 0;
+      const bool is_ray = std::strcmp(query, "copies_ray") == 0;
+      r.us = time_each(rays.size(), [&](std::size_t k) {
+        const double got = is_ray ? ray(rays[k], tests) : closest(points[k], tests);
+        if (k < nb && !same(got, is_ray ? ref_t[k] : ref_d[k])) ++r.mismatches, ck.report(w, structure, query, k, "differs from brute force");
+      });
+      r.primitive_tests = double(tests) / double(rays.size());
+      rows.push_back(r);
+    }
+  };
+  auto tree = [&](auto tag) {
+    using BV = decltype(tag);
+    const auto t0 = Clock::now();
+    MeshBvhConfig one;
+    one.build.threads = 1;
+    const MeshBvh<BV> bvh(w.m, one);
+    const double ms = seconds_since(t0) * 1e3;
+    add(std::string(BvTraits<BV>::name) + "/middle", BvTraits<BV>::name, "middle", ms, double(bvh.tree_bytes()) / double(args.copies),
+        [&](const Ray<double>& r, std::size_t& tests) {
+          RayMeshStats st;
+          const auto h = ray_mesh_first_hit(bvh, r, {}, &st);
+          tests += st.triangle_tests;
+          return h ? h->t : std::numeric_limits<double>::quiet_NaN();
+        },
+        [&](const Vec3<double>& p, std::size_t& tests) {
+          ClosestPointStats st;
+          const auto c = closest_point_on_mesh(bvh, p, {}, {}, &st);
+          tests += st.triangle_tests;
+          return c ? c->distance : std::numeric_limits<double>::infinity();
+        });
+  };
+  tree(Sphere<double>());
+  tree(Aabb<double>());
+  tree(Obb<double>());
+  const auto t0 = Clock::now();
+  const KdTree<double> kd(w.m);
+  const double ms = seconds_since(t0) * 1e3;
+  add("kd-tree/sah", "none", "kd-sah", ms, double(kd.memory_bytes()) / double(args.copies),
+      [&](const Ray<double>& r, std::size_t& tests) {
+        KdTreeStats st;
+        const auto h = kd.first_hit(r, &st);
+        tests += st.triangle_tests;
+        return h ? h->t : std::numeric_limits<double>::quiet_NaN();
+      },
+      [&](const Vec3<double>& p, std::size_t& tests) {
+        KdTreeStats st;
+        const auto c = kd.closest_point(p, &st);
+        tests += st.triangle_tests;
+        return c ? c->distance : std::numeric_limits<double>::infinity();
+      });
+}
+
 int main(int argc, char** argv) {
   const Args args = parse(argc, argv);
   struct Input {
@@ -397,6 +495,13 @@ int main(int argc, char** argv) {
   }
   std::vector<Row> rows;
   Checker ck;
+  if (args.copies > 0) {
+    copies_rows(args, rows, ck);
+    std::printf("impact-hierarchy-bench: %s, %d rays and points (prim_tests: triangle tests per query)\n", rows.front().mesh.c_str(), args.rays);
+    for (const Row& r : rows)
+      std::printf("%-20s %-14s build %9.2f ms  median %11.3f us  mean %11.3f us  prim_tests %10.1f  mism %d\n", r.structure.c_str(),
+                  r.query.c_str(), r.build_ms, r.us.median, r.us.mean, r.primitive_tests, r.mismatches);
+  }
   for (auto& input : meshes) {
     const std::string& name = input.name;
     Work w = make_work(name, std::move(input.m), std::move(input.other), args);
