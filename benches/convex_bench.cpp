@@ -29,8 +29,8 @@
 // contacts-mpr: impact with MeshConvexOptions::fast_contacts (MPR per triangle, as FCL), time only.
 // The shapes are scaled to 1/8 of the mesh's bounding-box diagonal.
 //
-//   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N]
-// Without --mesh a generated mesh is used (a torus of 7,200 triangles with its vertices moved by
+//   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]
+// --only runs the rows whose pair name contains TEXT (e.g. "cylinder", "mesh-"). Without --mesh a generated mesh is used (a torus of 7,200 triangles with its vertices moved by
 // up to 5 %).
 #include "bench_util.hpp"
 #include "impact/convex/mesh_convex.hpp"
@@ -357,7 +357,8 @@ int main(int argc, char** argv) {
   double min_time = 0.2;
   std::string json, mesh_path;
   int mesh_poses = 200;
-  const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N]\n";
+  std::string only;
+  const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--pairs" && i + 1 < argc) {
@@ -370,6 +371,8 @@ int main(int argc, char** argv) {
       mesh_path = argv[++i];
     } else if (arg == "--mesh-poses" && i + 1 < argc) {
       mesh_poses = std::atoi(argv[++i]);
+    } else if (arg == "--only" && i + 1 < argc) {
+      only = argv[++i];
     } else {
       std::fprintf(stderr, "%s", usage);
       return 2;
@@ -399,33 +402,41 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   std::printf("impact-convex-bench: %d poses per pair, each query timed for >= %.2f s; errors relative to the larger shape's size\n",
               n_poses, min_time);
-  run_pair("sphere-sphere", z.sphere, z.sphere, n_poses, min_time, rows);
-  run_pair("sphere-capsule", z.sphere, z.capsule, n_poses, min_time, rows);
-  run_pair("capsule-capsule", z.capsule, z.capsule, n_poses, min_time, rows);
-  run_pair("sphere-box", z.sphere, z.box, n_poses, min_time, rows);
-  run_pair("box-box", z.box, z.box, n_poses, min_time, rows);
-  run_pair("capsule-box", z.capsule, z.box, n_poses, min_time, rows);
-  run_pair("sphere-cylinder", z.sphere, z.cylinder, n_poses, min_time, rows);
-  run_pair("capsule-cylinder", z.capsule, z.cylinder, n_poses, min_time, rows);
-  run_pair("cylinder-cylinder", z.cylinder, z.cylinder, n_poses, min_time, rows);
-  run_pair("cylinder-cone", z.cylinder, z.cone, n_poses, min_time, rows);
-  run_pair("cone-box", z.cone, z.box, n_poses, min_time, rows);
-  run_pair("sphere-hull", z.sphere, z.hull, n_poses, min_time, rows);
-  run_pair("capsule-hull", z.capsule, z.hull, n_poses, min_time, rows);
-  run_pair("box-hull", z.box, z.hull, n_poses, min_time, rows);
-  run_pair("hull-hull", z.hull, z.hull, n_poses, min_time, rows);
-  {
+  const auto wanted = [&](const std::string& name) { return only.empty() || name.find(only) != std::string::npos; };
+  const auto pair = [&](const std::string& name, const auto& a, const auto& b, int np, double mt, std::vector<Row>& out) {
+    if (wanted(name)) run_pair(name, a, b, np, mt, out);
+  };
+  pair("sphere-sphere", z.sphere, z.sphere, n_poses, min_time, rows);
+  pair("sphere-capsule", z.sphere, z.capsule, n_poses, min_time, rows);
+  pair("capsule-capsule", z.capsule, z.capsule, n_poses, min_time, rows);
+  pair("sphere-box", z.sphere, z.box, n_poses, min_time, rows);
+  pair("box-box", z.box, z.box, n_poses, min_time, rows);
+  pair("capsule-box", z.capsule, z.box, n_poses, min_time, rows);
+  pair("sphere-cylinder", z.sphere, z.cylinder, n_poses, min_time, rows);
+  pair("capsule-cylinder", z.capsule, z.cylinder, n_poses, min_time, rows);
+  pair("cylinder-cylinder", z.cylinder, z.cylinder, n_poses, min_time, rows);
+  pair("cylinder-cone", z.cylinder, z.cone, n_poses, min_time, rows);
+  pair("cone-box", z.cone, z.box, n_poses, min_time, rows);
+  pair("sphere-hull", z.sphere, z.hull, n_poses, min_time, rows);
+  pair("capsule-hull", z.capsule, z.hull, n_poses, min_time, rows);
+  pair("box-hull", z.box, z.hull, n_poses, min_time, rows);
+  pair("hull-hull", z.hull, z.hull, n_poses, min_time, rows);
+  const auto mesh_row = [&](const std::string& name, const TriangleMesh<double>& m, const auto& s, int np, double mt, std::vector<Row>& out) {
+    if (wanted(name)) run_mesh(name, m, s, np, mt, out);
+  };
+  if (wanted("mesh-sphere") || wanted("mesh-capsule") || wanted("mesh-cylinder") || wanted("mesh-cone") || wanted("mesh-box") ||
+      wanted("mesh-hull")) {
     const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
     const double k = diag / 8 / 0.5;  // the zoo's shapes are about 0.5 in size (shape_size)
     std::printf("mesh: %s, %d triangles; shapes scaled by %.3g (1/8 of the bounding-box diagonal); %d poses per shape\n", mesh_name.c_str(),
                 int(mesh.F.rows()), k, mesh_poses);
     Vertices<double> hv = z.hull.vertices * k;
-    run_mesh("mesh-sphere", mesh, Sphere<double>(V3::Zero(), z.sphere.radius * k), mesh_poses, min_time, rows);
-    run_mesh("mesh-capsule", mesh, Capsule<double>(z.capsule.radius * k, z.capsule.half_length * k), mesh_poses, min_time, rows);
-    run_mesh("mesh-cylinder", mesh, Cylinder<double>(z.cylinder.radius * k, z.cylinder.half_length * k), mesh_poses, min_time, rows);
-    run_mesh("mesh-cone", mesh, Cone<double>(z.cone.radius * k, z.cone.half_length * k), mesh_poses, min_time, rows);
-    run_mesh("mesh-box", mesh, Box<double>(z.box.half * k), mesh_poses, min_time, rows);
-    run_mesh("mesh-hull", mesh, convex_hull(hv), mesh_poses, min_time, rows);
+    mesh_row("mesh-sphere", mesh, Sphere<double>(V3::Zero(), z.sphere.radius * k), mesh_poses, min_time, rows);
+    mesh_row("mesh-capsule", mesh, Capsule<double>(z.capsule.radius * k, z.capsule.half_length * k), mesh_poses, min_time, rows);
+    mesh_row("mesh-cylinder", mesh, Cylinder<double>(z.cylinder.radius * k, z.cylinder.half_length * k), mesh_poses, min_time, rows);
+    mesh_row("mesh-cone", mesh, Cone<double>(z.cone.radius * k, z.cone.half_length * k), mesh_poses, min_time, rows);
+    mesh_row("mesh-box", mesh, Box<double>(z.box.half * k), mesh_poses, min_time, rows);
+    mesh_row("mesh-hull", mesh, convex_hull(hv), mesh_poses, min_time, rows);
   }
 
   std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s\n", "pair", "query", "library", "queries/s", "mean err", "max err", "mism",
@@ -448,6 +459,7 @@ int main(int argc, char** argv) {
   if (!json.empty()) {
     JsonObject top;
     top.add("bench", "impact-convex-bench").add("poses_per_pair", n_poses).add("min_time_s", min_time);
+    if (!only.empty()) top.add("only", only);
     top.add("mesh", mesh_name).add("mesh_triangles", int(mesh.F.rows())).add("mesh_poses", mesh_poses);
 #ifdef IMPACT_HAVE_FCL
     top.add("peer", "FCL 0.7, fcl::collide / fcl::distance on shape primitives, default requests (GST_LIBCCD); mesh rows: BVHModel<OBBRSS>");

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// Closed-form queries for the pairs that have one: sphere–sphere, sphere–capsule, capsule–capsule
-/// (point and segment distances), sphere–box (closest point of the box), box–box (separating axes:
-/// boolean and penetration). Eigen only; convex/query.hpp picks them before any iterative solver.
+/// (point and segment distances), sphere–box (closest point of the box), sphere–cylinder (closest
+/// point of the cylinder by a radial and an axial clamp), box–box (separating axes: boolean and
+/// penetration). Eigen only; convex/query.hpp picks them before any iterative solver.
 ///
 /// Numerical contract: APPROXIMATE, but without iteration: each answer is a few dozen floating
 /// point operations from the inputs, so distances, depths and normals carry only rounding error
@@ -17,6 +18,7 @@
 #include "impact/geometry/ray.hpp"
 #include "impact/narrow/closest_point.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -70,11 +72,16 @@ inline ConvexDistance<S> balls_distance(const Vec3<S>& ca, S ra, const Vec3<S>& 
   ConvexDistance<S> out;
   const Vec3<S> d = cb - ca;
   const S dist = d.norm();
-  const Vec3<S> n = dist > S(0) ? Vec3<S>(d / dist) : fallback;
   out.distance = std::max(dist - ra - rb, S(0));
   out.intersecting = dist <= ra + rb;
-  out.point_a = ca + ra * n;
-  out.point_b = cb - rb * n;
+  if (dist > S(0)) {  // one division: the witnesses along d scaled by the radii over |d|
+    const S inv = S(1) / dist;
+    out.point_a = ca + (ra * inv) * d;
+    out.point_b = cb - (rb * inv) * d;
+  } else {
+    out.point_a = ca + ra * fallback;
+    out.point_b = cb - rb * fallback;
+  }
   return out;
 }
 
@@ -190,6 +197,85 @@ inline ConvexDistance<S> sphere_box_distance(const Vec3<S>& c, S r, const Box<S>
   out.distance = std::max(dist - r, S(0));
   out.point_b = pb.apply(q);
   out.point_a = dist > S(0) ? Vec3<S>(c + (out.point_b - c) * (r / dist)) : c;
+  return out;
+}
+
+/// A point q against a solid cylinder (radius R, half length h), in the cylinder's frame. The
+/// cylinder is a disc times an interval, so the squared distance splits into a radial part
+/// dr = max(rho - R, 0) (rho = |q_xy|) and an axial part dz = max(|z| - h, 0): the closest point
+/// clamps each on its own, and the direction from it to q is (dr radial + dz up) / distance, taken
+/// from dr and dz (differences of the inputs) rather than from q minus the closest point, so it
+/// stays accurate for q within rounding of the surface.
+template <class S>
+struct CylinderPoint {
+  S rho, side, cap;  ///< |q_xy|; R - rho and h - |z| (both >= 0: inside or on the boundary)
+  Vec3<S> radial;    ///< q_xy / rho, or +x on the axis
+  Vec3<S> up;        ///< +z or -z, the side of z
+  S distance;        ///< from q to the cylinder (0 inside)
+  Vec3<S> outward;   ///< outside: unit, from the closest point towards q
+  Vec3<S> closest;   ///< the closest point of the cylinder (q itself inside)
+};
+template <class S>
+inline CylinderPoint<S> cylinder_point(const Cylinder<S>& cyl, const Vec3<S>& q) {
+  CylinderPoint<S> c;
+  c.rho = std::sqrt(q.x() * q.x() + q.y() * q.y());
+  c.side = cyl.radius - c.rho;
+  c.cap = cyl.half_length - std::abs(q.z());
+  c.radial = c.rho > S(0) ? Vec3<S>(q.x() / c.rho, q.y() / c.rho, S(0)) : Vec3<S>(Vec3<S>::UnitX());
+  c.up = Vec3<S>(S(0), S(0), q.z() >= S(0) ? S(1) : S(-1));
+  const S dr = std::max(-c.side, S(0)), dz = std::max(-c.cap, S(0));
+  c.distance = std::sqrt(dr * dr + dz * dz);
+  c.outward = c.distance > S(0) ? Vec3<S>((dr / c.distance) * c.radial + (dz / c.distance) * c.up) : Vec3<S>(c.radial);
+  c.closest = q - c.distance * c.outward;
+  return c;
+}
+
+/// Does the sphere (world centre c, radius r) touch or overlap the cylinder? (The boolean of
+/// sphere_cylinder_contact, without a square root unless the centre is beyond the side.)
+template <class S>
+inline bool sphere_cylinder_overlap(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
+  const Vec3<S> q = pb.R.transpose() * (c - pb.t);
+  const S rho2 = q.x() * q.x() + q.y() * q.y();
+  const S dz = std::max(std::abs(q.z()) - cyl.half_length, S(0));
+  const S dr = rho2 > cyl.radius * cyl.radius ? std::sqrt(rho2) - cyl.radius : S(0);
+  return dr * dr + dz * dz <= r * r;
+}
+
+/// Sphere (world centre c, radius r) against a cylinder (cylinder_point). Centre outside: normal
+/// from the centre towards its closest point of the cylinder, depth r - distance. Centre inside or
+/// on the boundary: it leaves through the nearer of the side and the caps (the caps on a tie, so a
+/// centre on the rim goes through the cap; a centre on the axis nearer the side goes along +x of
+/// the cylinder's frame), depth r + that distance. Normal from the sphere towards the cylinder;
+/// the point midway between the deepest points.
+template <class S>
+inline ConvexContact<S> sphere_cylinder_contact(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
+  ConvexContact<S> out;
+  const CylinderPoint<S> cp = cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t)));
+  if (cp.distance > r) return out;
+  out.intersecting = true;
+  if (cp.distance > S(0)) {  // outside
+    out.normal = pb.rotate(Vec3<S>(-cp.outward));
+    out.depth = r - cp.distance;
+    out.point = (c + r * out.normal + pb.apply(cp.closest)) / S(2);
+    return out;
+  }
+  const S gap = std::min(cp.side, cp.cap);
+  const Vec3<S> exit_dir = pb.rotate(cp.cap <= cp.side ? cp.up : cp.radial);  // the exit direction
+  out.normal = -exit_dir;  // b moves against the exit direction
+  out.depth = r + gap;
+  // deepest points: c + r n (of the sphere), c + gap * exit (the cylinder's face the centre leaves by)
+  out.point = c + (gap - r) / S(2) * exit_dir;
+  return out;
+}
+
+template <class S>
+inline ConvexDistance<S> sphere_cylinder_distance(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
+  ConvexDistance<S> out;
+  const CylinderPoint<S> cp = cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t)));
+  out.intersecting = cp.distance <= r;
+  out.distance = std::max(cp.distance - r, S(0));
+  out.point_b = pb.apply(cp.closest);
+  out.point_a = c - r * pb.rotate(cp.outward);
   return out;
 }
 

@@ -14,8 +14,9 @@
 /// Which method answers, per pair (first match):
 ///   sphere/capsule – sphere/capsule   closed form on the cores (centre, segment) and the radii
 ///   sphere – box                      closed form (closest point of the box, or its nearest face)
-///   sphere – cylinder (penetration)   closed form when the centre is inside the cylinder (the
-///                                     nearer of side and caps), else as sphere/capsule – other
+///   sphere – cylinder                 closed form: the closest point of the cylinder (a radial
+///                                     and an axial clamp), or, centre inside, the nearer of side
+///                                     and caps
 ///   box – box                         separating axes (boolean, penetration); GJK for distance
 ///   sphere/capsule – other            GJK distance between the core and the other shape, minus
 ///                                     the radius (exact up to GJK's tolerance); when the core
@@ -121,6 +122,8 @@ enum class PairMethod {
   RoundRound,  ///< both spheres or capsules: closed form on the cores and the radii
   SphereBox,   ///< closed form (closest point of the box, or its nearest face)
   BoxSphere,   ///< the same with the roles swapped (the result swapped back)
+  SphereCylinder,  ///< closed form (closest point of the cylinder, or the nearer of side and caps)
+  CylinderSphere,  ///< the same with the roles swapped
   BoxBox,      ///< separating axes (boolean, penetration); GJK for distance
   RoundOther,  ///< a sphere or capsule against any other shape: GJK on its core, EPA when the core touches
   OtherRound,  ///< the same with b the sphere or capsule
@@ -134,6 +137,8 @@ constexpr PairMethod pair_method() {
   if (is_round_v<A, S> && is_round_v<B, S>) return PairMethod::RoundRound;
   if (sphere_a && box_b) return PairMethod::SphereBox;
   if (box_a && sphere_b) return PairMethod::BoxSphere;
+  if (sphere_a && std::is_same_v<B, Cylinder<S>>) return PairMethod::SphereCylinder;
+  if (std::is_same_v<A, Cylinder<S>> && sphere_b) return PairMethod::CylinderSphere;
   if (box_a && box_b) return PairMethod::BoxBox;
   if (is_round_v<A, S>) return PairMethod::RoundOther;
   if (is_round_v<B, S>) return PairMethod::OtherRound;
@@ -142,11 +147,31 @@ constexpr PairMethod pair_method() {
 
 template <class S>
 void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
+  if (IMPACT_LIKELY(o.max_iterations >= 1 && o.max_iterations <= 100000 && o.relative_tolerance > S(0) && o.relative_tolerance <= S(0.1) &&
+                    o.epa_relative_tolerance > S(0) && o.epa_relative_tolerance <= S(0.1)))
+    return;
   validate_in_range(o.max_iterations, 1, 100000, where, "options.max_iterations");
   if (!(o.relative_tolerance > S(0) && o.relative_tolerance <= S(0.1)))
     throw InvalidInput(describe_rejected(where, "options.relative_tolerance", "be in (0, 0.1]", o.relative_tolerance));
   if (!(o.epa_relative_tolerance > S(0) && o.epa_relative_tolerance <= S(0.1)))
     throw InvalidInput(describe_rejected(where, "options.epa_relative_tolerance", "be in (0, 0.1]", o.epa_relative_tolerance));
+}
+
+/// The conditions of validate_pose (t within CoordinateRange, R^T R = I within
+/// rotation_tolerance, det R > 0) checked the cheap way, for the queries' per-call validation:
+/// the six distinct entries of R^T R are the columns' dot products and, with orthonormal
+/// columns, det R = c0 . (c1 x c2). Every comparison is false for NaN and an infinite entry fails
+/// one, so anything not plainly valid goes on to validate_pose, which decides and words the error.
+template <class S>
+inline bool pose_plainly_valid(const RigidTransform<S>& p) {
+  constexpr S range = CoordinateRange<S>::max;
+  const S tol = rotation_tolerance<S>();
+  const Vec3<S> c0 = p.R.col(0), c1 = p.R.col(1), c2 = p.R.col(2);
+  const auto unit = [tol](S d) { return std::abs(d - S(1)) <= tol; };
+  const auto zero = [tol](S d) { return std::abs(d) <= tol; };
+  return std::abs(p.t.x()) <= range && std::abs(p.t.y()) <= range && std::abs(p.t.z()) <= range && unit(c0.squaredNorm()) &&
+         unit(c1.squaredNorm()) && unit(c2.squaredNorm()) && zero(c0.dot(c1)) && zero(c0.dot(c2)) && zero(c1.dot(c2)) &&
+         c0.dot(c1.cross(c2)) > S(0);
 }
 
 template <class S, class A, class B>
@@ -155,8 +180,8 @@ void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const R
   static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
   validate_shape(a, where);
   validate_shape(b, where);
-  validate_pose(pa, where, "pose_a");
-  validate_pose(pb, where, "pose_b");
+  if (!IMPACT_LIKELY(pose_plainly_valid(pa))) validate_pose(pa, where, "pose_a");
+  if (!IMPACT_LIKELY(pose_plainly_valid(pb))) validate_pose(pb, where, "pose_b");
   validate_query_options(o, where);
 }
 
@@ -317,31 +342,6 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
 template <class S, class R, class B>
 ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                const ConvexQueryOptions<S>& o, bool flip) {
-  if constexpr (std::is_same_v<R, Sphere<S>> && std::is_same_v<B, Cylinder<S>>) {
-    // A sphere whose centre is inside a cylinder leaves it through the nearer of its side and
-    // its caps: depth = radius + that distance, exactly (no solver).
-    const Vec3<S> centre = pa.apply(a.center);
-    const Vec3<S> q = pb.R.transpose() * (centre - pb.t);
-    const S rho = std::sqrt(q.x() * q.x() + q.y() * q.y());
-    const S side = b.radius - rho, cap = b.half_length - std::abs(q.z());
-    if (side > S(0) && cap > S(0)) {
-      Vec3<S> u;  // the exit direction in b's frame
-      if (side < cap) {
-        u = rho > S(0) ? Vec3<S>(q.x() / rho, q.y() / rho, S(0)) : Vec3<S>(Vec3<S>::UnitX());
-      } else {
-        u = Vec3<S>(S(0), S(0), q.z() >= S(0) ? S(1) : S(-1));
-      }
-      const Vec3<S> exit_dir = pb.R * u;
-      ConvexContact<S> c;
-      c.intersecting = true;
-      c.normal = -exit_dir;  // b moves against the exit direction
-      c.depth = a.radius + std::min(side, cap);
-      c.point = (centre + a.radius * c.normal + centre + std::min(side, cap) * exit_dir) / S(2);
-      settle_contact(a, pa, b, pb, c);
-      if (flip) c.normal = -c.normal;
-      return c;
-    }
-  }
   const auto core = core_of(a);
   const S scale = query_scale<S>(a, b);
   const S tol = o.relative_tolerance * scale;
@@ -430,6 +430,10 @@ ConvexContact<S> penetration_unchecked(const A& a, const RigidTransform<S>& pose
     return sphere_box_contact(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::BoxSphere) {
     return swapped(sphere_box_contact(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (method == PairMethod::SphereCylinder) {
+    return sphere_cylinder_contact(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::CylinderSphere) {
+    return swapped(sphere_cylinder_contact(pose_b.apply(b.center), b.radius, a, pose_a));
   } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, true);
   } else if constexpr (method == PairMethod::RoundOther) {
@@ -455,6 +459,10 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     return sphere_box_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::BoxSphere) {
     return sphere_box_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
+  } else if constexpr (method == PairMethod::SphereCylinder) {
+    return sphere_cylinder_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::CylinderSphere) {
+    return sphere_cylinder_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
   } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
   } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
@@ -499,6 +507,10 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
     return sphere_box_distance(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::BoxSphere) {
     return swapped(sphere_box_distance(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (method == PairMethod::SphereCylinder) {
+    return sphere_cylinder_distance(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::CylinderSphere) {
+    return swapped(sphere_cylinder_distance(pose_b.apply(b.center), b.radius, a, pose_a));
   } else if constexpr (method == PairMethod::RoundOther) {
     return round_distance(a, pose_a, b, pose_b, options);
   } else if constexpr (method == PairMethod::OtherRound) {

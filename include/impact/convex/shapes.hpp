@@ -69,6 +69,10 @@ struct Box {
 /// > 0 and in range.
 template <class S>
 void validate_shape(const Sphere<S>& s, const char* where) {
+  constexpr S range = CoordinateRange<S>::max;  // the common case first (comparisons are false for NaN)
+  if (IMPACT_LIKELY(std::abs(s.center.x()) <= range && std::abs(s.center.y()) <= range && std::abs(s.center.z()) <= range &&
+                    s.radius > S(0) && s.radius <= range))
+    return;
   validate_coordinates(s.center, where, "sphere.center");
   validate_length(s.radius, where, "sphere.radius");
   validate_positive(s.radius, where, "sphere.radius");
@@ -81,6 +85,9 @@ namespace detail {
 template <class S>
 void validate_radius_and_half_length(S radius, S half_length, bool zero_length_ok, const char* where, const char* radius_name,
                                      const char* length_name) {
+  constexpr S range = CoordinateRange<S>::max;  // the common case first (comparisons are false for NaN)
+  if (IMPACT_LIKELY(radius > S(0) && radius <= range && (zero_length_ok ? half_length >= S(0) : half_length > S(0)) && half_length <= range))
+    return;
   validate_length(radius, where, radius_name);
   validate_positive(radius, where, radius_name);
   validate_length(half_length, where, length_name);
