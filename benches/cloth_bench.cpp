@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
     JsonObject row;
     row.add("step", step).add("dynamics_ms", dms).add("collision_ms", cms).add("collision_cpu_ms", ccpu).add("collisions", collisions).add("zones", st.zone_count)
         .add("largest_zone", st.largest_zone).add("failsafe", st.failsafe_used).add("intersections", rep.intersections)
-        .add("gatherings", st.broad.passes).add("candidates", st.candidates_vf + st.candidates_ee).add("ccd_tests", st.ccd_tests)
+        .add("gatherings", st.broad.passes).add("proximity_rounds", st.proximity.passes).add("proximity_converged", st.proximity_converged).add("candidates", st.candidates_vf + st.candidates_ee).add("ccd_tests", st.ccd_tests)
         .raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed)
         .add("zone_momentum_error", st.zone_momentum_error).add("zone_angular_momentum_error", st.zone_angular_momentum_error);
     rows.push_back(row.str());

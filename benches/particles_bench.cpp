@@ -3,7 +3,7 @@
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
 //                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--grid G]
-//                          [--compact C] [--threads T] [--seed X] [--json FILE]
+//                          [--compact C] [--wide 0|1] [--threads T] [--seed X] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -11,6 +11,8 @@
 // box slightly larger than the mesh's box, with an elastic material (restitution 1, no friction)
 // so that energy should be conserved. The same initial particles run with
 //  - backtrack:  continuous stepping, BVH first-hit ray casts;
+//  - backtrack-wide: the same with the mesh collider's ray casts through a WideBvh (--wide 1, the
+//                default; MeshCollider::wide_tree), its build printed and not timed;
 //  - project:    unconstrained step, then projection to the closest surface point (BVH);
 //  - naive:      backtracking with every triangle tested (a one-leaf tree), for the first M
 //                particles;
@@ -76,6 +78,7 @@ struct Args {
   int leaf = 1;
   int grid = 64;
   int compact = 4;
+  int wide = 1;
   int threads = 0;
   std::uint64_t seed = 1;
 };
@@ -420,6 +423,12 @@ template <class S> int run_all(const Args& a) {
   if (a.grid > 0) cs_bt.meshes[0].distance_grid = &grid;
   const CompactBvh compact = a.compact > 0 ? CompactBvh(bvh.tree(), a.compact) : CompactBvh();
   if (a.compact > 0) cs_bt.meshes[0].compact_tree = &compact;
+  const double tw0 = thread_seconds();
+  const WideBvh<S> wide = a.wide ? WideBvh<S>(mesh) : WideBvh<S>();
+  const double wide_seconds = thread_seconds() - tw0;
+  auto cs_wide = cs_bt;
+  cs_wide.meshes[0].compact_tree = nullptr;
+  cs_wide.meshes[0].wide_tree = &wide;
 
   auto cs_pr = scene(bvh, Strategy::Project);
   if (a.grid > 0) cs_pr.meshes[0].distance_grid = &grid;  // skips the particles it proves far from the surface
@@ -438,6 +447,8 @@ template <class S> int run_all(const Args& a) {
   const RunResult<S> bt = measure(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
   const RunResult<S> pr = measure(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
   const RunResult<S> nv = measure(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
+  if (a.wide)
+    std::printf("wide tree: %.1f MB, built in %.2f s (not timed)\n", double(wide.memory_bytes()) / 1e6, wide_seconds);
 
   auto row = [&](const char* method, const RunResult<S>& r, int n, int substeps) {
     Row w;
@@ -458,6 +469,7 @@ template <class S> int run_all(const Args& a) {
   };
   std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
                            row("reference", ref, n_ref, a.substeps)};
+  if (a.wide) rows.push_back(row("backtrack-wide", measure(ps, cs_wide, bvh, container, opt, a.dt, a.steps, 1, a.sort_every), a.particles, 1));
 #ifdef IMPACT_HAVE_EMBREE
   {
     // the peer: a user's loop on Embree (float casts), backed off 1e-5 of the diagonal at each hit
@@ -513,14 +525,17 @@ template <class S> int run_all(const Args& a) {
               a.substeps);
   if (n_naive > 0) std::printf("backtrack / naive speed: %.0fx\n", rows[0].rate / std::max(rows[2].rate, 1e-300));
   for (const auto& w : rows)
-    if (w.method == "embree-user") std::printf("backtrack / embree-user speed: %.2fx\n", rows[0].rate / std::max(w.rate, 1e-300));
+    if (w.method == "embree-user")
+      for (const auto& m : rows)
+        if (m.method == "backtrack" || m.method == "backtrack-wide")
+          std::printf("%s / embree-user speed: %.2fx\n", m.method.c_str(), m.rate / std::max(w.rate, 1e-300));
   for (const auto& [name, x, y] : speedups)
     std::printf("%s, %d threads / 1 thread (same final state): %.2fx by the wall clock, %.2fx by the CPU times%s\n", name.c_str(),
                 threads, x, y, a.particles < 512 ? " (fewer than 512 particles: stepped serially)" : "");
   if (!a.json.empty()) {
     bench::JsonObject top;
     top.add("bench", "impact-particles-bench").add("mesh", mesh_name).add("triangles", mesh.num_triangles()).add("dt", a.dt);
-    top.add("substeps", a.substeps).add("diagonal", diag).add("grid", a.grid).add("grid_build_s", grid_seconds).add("compact", a.compact);
+    top.add("substeps", a.substeps).add("diagonal", diag).add("grid", a.grid).add("grid_build_s", grid_seconds).add("compact", a.compact).add("wide", a.wide);
     top.raw("rows", bench::JsonObject::array(items));
     if (!bench::write_file(a.json, top.str())) {
       std::fprintf(stderr, "impact-particles-bench: cannot write %s\n", a.json.c_str());
@@ -536,7 +551,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
                  "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
-                 "                              [--grid G] [--compact C] [--threads T] [--seed X] [--json FILE]\n");
+                 "                              [--grid G] [--compact C] [--wide 0|1] [--threads T] [--seed X] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -554,6 +569,7 @@ int main(int argc, char** argv) {
     else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
     else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
     else if (s == "--compact" && (v = next())) a.compact = std::max(0, std::atoi(v));
+    else if (s == "--wide" && (v = next())) a.wide = std::atoi(v) != 0;
     else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
     else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
     else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);

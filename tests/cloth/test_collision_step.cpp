@@ -119,6 +119,12 @@ TYPED_TEST(ClothStep, BadInputThrowsAndModifiesNothing) {
     o = opt;
     o.friction = S(-1);
     expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "friction < 0");
+    o = opt;
+    o.proximity_rounds = 0;
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "proximity_rounds 0");
+    o = opt;
+    o.proximity_tolerance = S(0);
+    expect_throw([&] { cloth_collision_step(F, w, x0, x1, none, o); }, "proximity_tolerance 0");
   }
   {
     auto w2 = w;

@@ -2,7 +2,8 @@
 // The loader's pre-checks (io/file_checks.hpp and io/detail/*_check.hpp) against the defects of
 // issue 12 and their class: headers whose counts the file cannot hold (D2: an element without
 // properties, D5: OFF keywords such as COFF255, huge PLY/OFF counts), PLY headers assimp reads by
-// content (D3: "ply ", "plyZ", "ply\0", stray line ends, any extension), empty face index lists
+// content (D3: "ply ", "plyZ", "ply\0", stray line ends, any extension; a .ply file must start
+// with "ply"; header lines between properties), empty face index lists
 // (D4: assimp aborts), non-numeric tokens (D6: assimp leaks). Each hostile file is loaded in a
 // forked child with a time and memory limit (isolated_load.hpp): it must end in InvalidInput with
 // the stated reason, never a hang, crash, abort or huge allocation. Valid variants (CRLF, upper-case
@@ -204,6 +205,55 @@ TEST(FileChecks, D6NonNumericTokens) {
   expect_rejected(f.write("x_count.off", "OFF\n3 1x 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), "is not a whole number");
   // STL grammar: a facet missing its third vertex
   expect_rejected(f.write("two_vertices.stl", std::string(stl).erase(stl.find("vertex 0 1 0"), 13)), "where 'vertex' is due");
+}
+
+// Header lines between an element's properties: assimp 5.2 ends the property list at any line
+// that is not a property, so it read the body with another layout than the check. Found by
+// fuzzing: blank lines between two vertex properties of a binary file made assimp abort the
+// process (an empty face index list); a comment there made it drop y and z and return a flat
+// triangle, silently. assimp now reads the header as the check understood it.
+TEST(FileChecks, HeaderLinesBetweenPropertiesKeepTheLayout) {
+  Files f;
+  const std::string between[] = {"comment made by hand\n", "\n\n\n", "obj_info scanner 7\n", "  \t\n"};
+  int n = 0;
+  for (const std::string& lines : between) {
+    std::string ascii = kPlyAscii;
+    ascii.insert(ascii.find("property float y"), lines);
+    std::string binary = binary_ply("", 3, true);
+    binary.insert(binary.find("property float y"), lines);
+    std::string format_later = "ply\n" + lines + kPlyAsciiHeader + kPlyAsciiBody;  // assimp wanted it second
+    for (const std::string& bytes : {ascii, binary, format_later}) {
+      const std::string path = f.write("between" + std::to_string(n++) + ".ply", bytes);
+      expect_loaded(path, 1);
+      const TriangleMesh<double> m = load_mesh<double>(path);  // safe now: it loaded in the child
+      ASSERT_EQ(m.num_vertices(), 3) << path;
+      Eigen::MatrixXd expected(3, 3);
+      expected << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+      EXPECT_EQ(Eigen::MatrixXd(m.V), expected) << path;
+    }
+  }
+  // a stray word there is still refused: the layout it meant cannot be known
+  std::string stray = kPlyAscii;
+  stray.insert(stray.find("property float y"), "pry\n");
+  expect_rejected(f.write("stray.ply", stray), "unknown PLY header line 'pry'");
+  std::string twice = kPlyAscii;
+  twice.insert(twice.find("element face"), "format ascii 1.0\n");
+  expect_rejected(f.write("two_formats.ply", twice), "two PLY format lines");
+}
+
+// A file named .ply must start with a line "ply": assimp's reader did not always refuse other
+// bytes, and looped forever on one fuzz input ("\0\nply" and a garbled header).
+TEST(FileChecks, PlyNamedFilesMustStartWithPly) {
+  Files f;
+  const std::pair<std::string, std::string> starts[] = {
+      {"nul_line", std::string("\0\nply\n", 6)}, {"blank_line", "\nply\n"}, {"space", " ply\n"}, {"bom", "\xef\xbb\xbfply\n"}};
+  for (const auto& [name, start] : starts) {
+    expect_rejected(f.write(name + ".ply", start + kPlyAsciiHeader + kPlyAsciiBody), "cannot be parsed");
+    expect_rejected(f.write(name + "_garbled.ply", start + "format ascii 1.0\nelement vertex 1\npropg*\t" + std::string(1, '\0') +
+                                                      "aes\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                    "cannot be parsed");
+  }
+  expect_rejected(f.write("off_content.ply", kOff), "must start with a line 'ply'");
 }
 
 // Formats: assimp hands a file to another reader by its content when the extension's readers

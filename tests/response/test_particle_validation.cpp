@@ -202,6 +202,12 @@ TYPED_TEST(ParticleValidation, BadCollidersThrow) {
     sc.colliders.meshes[0].compact_tree = &wrong;
     expect_step_rejects(ps, sc.colliders, dt, opt, {"mesh collider 3 compact_tree"});
   }
+  {
+    Scene<S> sc;
+    const WideBvh<S> wrong(make_icosphere<S>(S(1), 1));
+    sc.colliders.meshes[0].wide_tree = &wrong;
+    expect_step_rejects(ps, sc.colliders, dt, opt, {"mesh collider 3 wide_tree"});
+  }
   {  // advance() with a NaN dt moves nothing
     Scene<S> sc;
     sc.colliders.spheres[0].motion.linear_velocity = Vec3<S>(1, 0, 0);

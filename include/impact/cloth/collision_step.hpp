@@ -13,7 +13,9 @@
 ///
 /// Stages, in order, each switchable and counted in ClothStepStats:
 ///  1. proximity (Bridson 2002, section 7.1): pairs closer than the proximity distance at x0 get an
-///     inelastic normal impulse (they stop approaching) and Coulomb friction;
+///     inelastic normal impulse (they stop approaching) and Coulomb friction, relaxed in rounds
+///     until no pair approaches (cloth/detail/relax_contacts.hpp), so that resting contact (a
+///     stack of sheets) is settled here and not by the CCD stages;
 ///  2. CCD impulses (Bridson 2002, section 7.2): passes over the CCD hits with minimum separation h,
 ///     earliest first, each an inelastic impulse with Coulomb friction; a bounded number of passes;
 ///  3. impact zones: the remaining collisions are grouped into zones (merged when they share a
@@ -75,7 +77,7 @@ class ClothCollisionWorkspace {
 /// refit instead of rebuilding between steps.
 /// Throws InvalidInput, with nothing modified, on: sizes that do not match, out-of-range indices,
 /// NaN/Inf coordinates or masses, negative masses, h <= 0 or NaN, proximity_distance in (0, h),
-/// negative counts or friction; and (StartViolation::Throw) x0 with a tested pair closer than h,
+/// proximity_rounds < 1, proximity_tolerance <= 0, negative counts or friction; and (StartViolation::Throw) x0 with a tested pair closer than h,
 /// naming the first pairs.
 /// Returns the statistics; see the file comment for the guarantee.
 template <class S>

@@ -65,11 +65,20 @@ struct ClothCollisionOptions {
   S thickness = S(0);
   /// Stage 1: pairs within `proximity_distance` at x0 stop approaching. 0 means 2 h; otherwise it
   /// must be >= h. Also the inflation of the swept boxes (candidates within it are gathered once).
+  /// The impulses are relaxed in rounds (Gauss-Seidel, cloth/detail/relax_contacts.hpp) until no
+  /// pair approaches by more than `proximity_tolerance` h (> 0), at most `proximity_rounds`
+  /// (>= 1; 1 is a single pass over the pairs): resting contact (a stack of sheets on a floor)
+  /// is then stopped here, before the CCD stages.
   bool proximity = true;
   S proximity_distance = S(0);
+  int proximity_rounds = 500;
+  S proximity_tolerance = S(1e-3);
   /// Stage 2: at most `impulse_passes` passes of CCD impulses (0 skips the stage).
+  /// After each pass its hits join the proximity pairs' constraints and the whole set is relaxed
+  /// again for at most `impulse_relax_rounds` rounds (0: the hits' own impulses only).
   bool impulses = true;
   int impulse_passes = 3;
+  int impulse_relax_rounds = 10;
   /// Coulomb friction coefficient (>= 0) of the proximity and CCD impulses.
   S friction = S(0.3);
   /// The impulses and zones aim at a separation of (1 + separation_margin) h along the collision
@@ -117,11 +126,17 @@ struct ClothStepStats {
   /// Swept tree build/refit and candidate gathering; passes = gatherings (1 unless a vertex
   /// left its envelope during the step, see the README's broad-phase paragraph).
   ClothStageStats broad;
-  ClothStageStats proximity;  ///< collisions = proximity pairs that got an impulse
+  /// collisions = proximity pairs that got an impulse, passes = relaxation rounds
+  ClothStageStats proximity;
   ClothStageStats impulses;   ///< collisions = CCD hits handled by impulses, passes = CCD passes
   ClothStageStats zones;      ///< collisions = constraints in zones, passes = zone rounds
   ClothStageStats failsafe;   ///< collisions = hits that froze vertices, passes = its CCD rounds
   double total_ms = 0;
+  std::size_t proximity_impulses = 0;  ///< impulses of the proximity stage (all rounds)
+  /// The proximity stage's last round applied nothing: every pair within the proximity distance
+  /// approaches by at most proximity_tolerance h (false: proximity_rounds ran out first).
+  bool proximity_converged = true;
+  std::size_t impulse_relax_impulses = 0;  ///< impulses of the relaxations after the CCD impulse passes
   std::size_t candidates_vf = 0, candidates_ee = 0;  ///< primitive pairs after the first gathering
   std::size_t ccd_tests = 0;                         ///< primitive CCD tests run (all stages)
   /// Candidate tests settled without a CCD: the pair's distance at x0 minus its largest relative

@@ -48,11 +48,15 @@ inline std::string sniff_format(const std::string& data) {
 }
 
 /// Runs the check of `format` ("ply", "off" or "stl"; other formats are not checked) on the file's
-/// bytes. by_extension: the file is named with that extension (a headerless OFF file is then
-/// allowed, as assimp reads one only by name).
-inline void check_format(const std::string& path, const std::string& data, const std::string& format, bool by_extension) {
+/// bytes, `data`, and turns them into the bytes assimp is to read: a PLY header is replaced by
+/// the one the check understood (PlyHeaderText). by_extension: the file is named with that
+/// extension (a headerless OFF file is then allowed, as assimp reads one only by name).
+inline void check_format(const std::string& path, std::string& data, const std::string& format, bool by_extension) {
   if (format == "ply") {
-    if (looks_like_ply(data)) check_ply(path, data);  // else assimp rejects the magic number
+    // also when the bytes do not start with "ply": assimp's reader does not always reject them
+    // (one fuzz input, "\0\nply" and a garbled header, made it loop forever)
+    const PlyHeaderText header = check_ply(path, data);
+    if (data.compare(0, header.body, header.canonical) != 0) data.replace(0, header.body, header.canonical);
   } else if (format == "off") {
     check_off(path, data, by_extension);
   } else if (format == "stl") {

@@ -7,6 +7,7 @@
 
 #include "impact/bvh/traverse.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/detail/relax_contacts.hpp"
 #include "impact/cloth/step_options.hpp"
 #include "impact/cloth/zone_projection.hpp"
 #include "impact/core/error.hpp"
@@ -114,6 +115,10 @@ void validate_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm
     throw InvalidInput(fn + "separation_margin must be in [0, 10]");
   if (o.impulse_passes < 0 || o.max_zone_iterations < 0 || o.max_projection_iterations < 1)
     throw InvalidInput(fn + "negative pass or iteration count");
+  if (o.impulse_relax_rounds < 0) throw InvalidInput(fn + "impulse_relax_rounds must be >= 0");
+  if (o.proximity_rounds < 1) throw InvalidInput(fn + "proximity_rounds must be >= 1");
+  if (!(o.proximity_tolerance > S(0)) || !std::isfinite(double(o.proximity_tolerance)))
+    throw InvalidInput(fn + "proximity_tolerance must be positive and finite");
   if (!(o.projection_tolerance > S(0)) || !std::isfinite(double(o.projection_tolerance)))
     throw InvalidInput(fn + "projection_tolerance must be positive and finite");
   if (!(o.ccd.tolerance >= 0) || !std::isfinite(o.ccd.tolerance) || o.ccd.max_iterations < 1 || o.ccd.recheck_iterations < 0)
@@ -234,15 +239,21 @@ class Stepper {
     broad_acc_ = 0;  // the start's gathering is counted in stats_.broad; no stage subtracts it
   }
 
-  /// Stage 1: pairs within the proximity distance at x0 stop approaching (inelastic) with friction.
+  /// Stage 1: pairs within the proximity distance at x0 stop approaching (inelastic) with
+  /// friction: each pair's gap along its normal at x0 (closest points' weights at x0) may not
+  /// fall below its distance at x0. Relaxed in rounds (relax_contacts) until every pair meets
+  /// that to proximity_tolerance h, or proximity_rounds run out (the CCD stages take the rest).
   void proximity_stage() {
     const auto t0 = Clock::now();
-    stats_.proximity.passes = 1;
-    for (const auto& q : near_) {
-      if (q.c.dist <= 0) continue;
-      ZoneConstraint k = constraint_of(q.p, q.c.a, q.c.n, q.c.dist);
-      if (apply_impulse(k)) ++stats_.proximity.collisions;
-    }
+    contacts_.reserve(near_.size());
+    for (const auto& q : near_)
+      if (q.c.dist > 0) contacts_.push_back(constraint_of(q.p, q.c.a, q.c.n, q.c.dist));
+    std::vector<std::uint8_t> acted(contacts_.size(), 0);
+    const RelaxStats r = relax(opt_.proximity_rounds, &acted);
+    stats_.proximity.passes += r.rounds;
+    stats_.proximity_impulses += r.impulses;
+    stats_.proximity_converged = r.converged;
+    for (auto a : acted) stats_.proximity.collisions += a;
     stats_.proximity.ms += ms_since(t0);
   }
 
@@ -257,7 +268,12 @@ class Stepper {
       for (const auto& hit : hits) {
         ZoneConstraint k = constraint_at_hit(hit);
         if (apply_impulse(k)) ++stats_.impulses.collisions;
+        if (opt_.impulse_relax_rounds > 0) contacts_.push_back(k);
       }
+      // The hits join the contact set and it is relaxed again: an impulse that stops a landing
+      // sheet pushes the sheet below it into the resting stack, which the proximity pairs carry
+      // down to the floor (without it, those pairs are the next pass's and the zones' hits).
+      if (opt_.impulse_relax_rounds > 0) stats_.impulse_relax_impulses += relax(opt_.impulse_relax_rounds, nullptr).impulses;
     }
     stats_.impulses.ms += ms_since(t0) - broad_ms_in_stage();
   }
@@ -908,6 +924,13 @@ class Stepper {
     return constraint_of(p, c.a, n, target_);
   }
 
+  /// Relaxes the contact set contacts_ (relax_contacts) with the proximity tolerance.
+  RelaxStats relax(int rounds, std::vector<std::uint8_t>* acted) {
+    return relax_contacts(
+        contacts_, sys_.w, static_cast<double>(opt_.proximity_tolerance) * h_, rounds, [&](const ZoneConstraint& k) { return gap(k); },
+        [&](const ZoneConstraint& k) { return apply_impulse(k); }, acted);
+  }
+
   double gap(const ZoneConstraint& k) const {
     double g = 0;
     for (int j = 0; j < k.count; ++j) g += k.a[j] * k.n.dot(p1(k.v[j]));
@@ -1049,6 +1072,8 @@ class Stepper {
   std::vector<std::uint32_t> stamp_, inc_off_, inc_;
   std::uint32_t stamp_now_ = 0;
   std::vector<Near> near_;
+  // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
+  std::vector<ZoneConstraint> contacts_;
   std::vector<Hit> last_hits_;
   std::vector<std::uint8_t> changed_;
 };

@@ -1,11 +1,19 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// The PLY check of load_mesh, run before assimp sees a file whose bytes start with "ply": assimp
-/// 5.2 trusts the header's counts (it allocates by them), loops or reads past its buffer on a
-/// header cut short or holding stray line-end bytes, aborts the process on a face with an empty
-/// index list, pads a short body with made-up items and leaks on a non-numeric token. This check
-/// reads the header and walks the body without building anything, and throws InvalidInput on
-/// any of those. Its work and memory are linear in the file size whatever the header declares.
+/// The PLY check of load_mesh, run before assimp sees a file read as PLY (named .ply, or unnamed,
+/// .txt or .dat with bytes that start with "ply"): assimp 5.2 trusts the header's counts (it
+/// allocates by them), loops or reads past its buffer on a header cut short or holding stray
+/// line-end bytes, aborts the process on a face with an empty index list, pads a short body with
+/// made-up items and leaks on a non-numeric token. This check reads the header and walks the body
+/// without building anything, and throws InvalidInput on any of those. Its work and memory are
+/// linear in the file size whatever the header declares.
+///
+/// It also gives back the header as it understood it, with the comment, obj_info and blank lines
+/// left out and the format line first: assimp 5.2 ends an element's property list at any line
+/// that is not a property (a comment or a blank line included) and ignores the properties after
+/// it, so it would read the body with another layout than the one checked here. Two fuzz inputs
+/// made it abort that way; a comment between two vertex properties made it drop y and z and
+/// return flattened triangles. load_mesh hands assimp this header in place of the file's.
 #pragma once
 
 #include "impact/io/detail/text_scan.hpp"
@@ -64,19 +72,28 @@ inline bool ply_is_index_list(const PlyElement& e, const PlyProperty& p) {
   return (e.name == "face" || e.name == "tristrips") && (p.name == "vertex_indices" || p.name == "vertex_index");
 }
 
-/// True when data starts like a file assimp's PLY reader accepts: "ply" in any case, after at
-/// most line-end bytes (assimp skips them).
+/// True when data starts like a PLY file: "ply" in any case, after at most line-end bytes (assimp
+/// skips them). Used to recognise unnamed files; check_ply then demands a first line "ply".
 inline bool looks_like_ply(const std::string& data) {
   std::size_t b = 0;
   while (b < data.size() && (data[b] == '\r' || data[b] == '\n')) ++b;
   return starts_with_ci(std::string_view(data).substr(b), "ply");
 }
 
+/// The header of a checked PLY file: where its body starts in the file, and the header that says
+/// the same without comment, obj_info and blank lines, format line first (the one assimp is given).
+struct PlyHeaderText {
+  std::size_t body = 0;
+  std::string canonical;
+};
+
 /// Checks a PLY file (data holds its bytes): a first line of exactly "ply", a complete header of
-/// known keywords only (format, element, property, comment, obj_info, end_header) and types with counts that the file's size can hold, one item per line in ASCII
-/// bodies with exactly the declared values, every value a number of its type, no empty face index
-/// list, face indices in [0, vertices) (-1 also allowed in triangle strips), and no item cut off.
-inline void check_ply(const std::string& path, const std::string& data) {
+/// known keywords only (format, element, property, comment, obj_info, end_header), known types,
+/// counts that the file's size can hold, one item per line in ASCII bodies with exactly the
+/// declared values, every value a number of its type, no empty face index list, face indices in
+/// [0, vertices) (-1 also allowed in triangle strips), and no item cut off. Returns the header
+/// as understood (PlyHeaderText).
+inline PlyHeaderText check_ply(const std::string& path, const std::string& data) {
   std::size_t pos = 0;
   std::string_view line;
   if (!next_line(path, data, pos, line, "the PLY header") || lower_ascii(line) != "ply")
@@ -86,6 +103,12 @@ inline void check_ply(const std::string& path, const std::string& data) {
   enum class Format { unknown, ascii, little, big } format = Format::unknown;
   std::vector<PlyElement> elements;
   bool ended = false;
+  std::string format_line, element_lines;  // of the canonical header
+  auto joined = [](const std::vector<std::string_view>& tokens) {
+    std::string out;
+    for (const auto& t : tokens) out.append(out.empty() ? "" : " ").append(t);
+    return out + "\n";
+  };
   while (next_line(path, data, pos, line, "the PLY header")) {
     const auto tok = split_tokens(line);
     if (tok.empty()) continue;
@@ -94,6 +117,12 @@ inline void check_ply(const std::string& path, const std::string& data) {
       break;
     }
     if (tok[0] == "comment" || tok[0] == "obj_info") continue;
+    if (tok[0] == "format") {
+      if (!format_line.empty()) fail(path, "cannot be parsed: two PLY format lines");
+      format_line = joined(tok);
+    } else {
+      element_lines += joined(tok);
+    }
     if (tok[0] == "format") {
       if (tok.size() < 2) fail(path, "cannot be parsed: PLY format line without a format");
       if (tok[1] == "ascii") format = Format::ascii;
@@ -136,6 +165,7 @@ inline void check_ply(const std::string& path, const std::string& data) {
   }
   if (!ended) fail(path, "cannot be parsed: truncated or malformed PLY header (no end_header line)");
   if (format == Format::unknown) fail(path, "cannot be parsed: PLY header has no format line");
+  const PlyHeaderText header{pos, "ply\n" + format_line + element_lines + "end_header\n"};
 
   // Every declared count bounded by the bytes left before anything is walked (or allocated by
   // assimp): an ASCII item takes a line of at least 2 bytes, a binary one its fixed bytes.
@@ -214,7 +244,7 @@ inline void check_ply(const std::string& path, const std::string& data) {
                          std::to_string(tok.size()) + " values, more than declared");
       }
     }
-    return;
+    return header;
   }
 
   const bool big = format == Format::big;
@@ -255,6 +285,7 @@ inline void check_ply(const std::string& path, const std::string& data) {
       }
     }
   }
+  return header;
 }
 
 }  // namespace impact::detail::mesh_file
