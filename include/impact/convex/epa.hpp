@@ -35,7 +35,10 @@
 ///
 /// Numerical contract: APPROXIMATE. depth is f(normal) (an upper bound up to rounding); `lower` is
 /// certified; when refined, depth is the value of f at a verified local minimiser.
-/// Thread safety: pure functions; the polytope (about 50 kB) is allocated per query.
+/// Thread safety: pure functions for the caller. The polytope (about 50 kB) is scratch storage of
+/// the calling thread (detail::epa_scratch: allocated on the thread's first query, then reused, no
+/// heap allocation per query), so queries on different threads never share it; the support
+/// functions must not call epa_penetration themselves (none in this library does).
 #pragma once
 
 #include "impact/convex/gjk_distance.hpp"
@@ -122,7 +125,7 @@ struct EpaPolytope {
     const Vec3<S> m = (vtx[b].w - vtx[a].w).cross(vtx[c].w - vtx[a].w);
     const S len = m.norm();
     if (!(len > S(0))) return -2 - id;  // degenerate
-    f.n = m / len;
+    f.n = m * (S(1) / len);
     f.dist = f.n.dot(vtx[a].w);
     f.alive = true;
     key[id] = f.dist;
@@ -148,6 +151,16 @@ struct EpaPolytope {
     silhouette(f.adj[(e + 2) % 3], f.adj_edge[(e + 2) % 3], w, depth + 1);
   }
 };
+
+/// The calling thread's polytope (about 50 kB for double), allocated on its first EPA query and
+/// reused by every later one (no heap allocation per query); one per scalar type and thread, so
+/// queries on different threads never share it.
+template <class S>
+EpaPolytope<S>& epa_scratch() {
+  static thread_local std::unique_ptr<EpaPolytope<S>> polytope;
+  if (!polytope) polytope.reset(new EpaPolytope<S>);  // default-initialised: no zeroing
+  return *polytope;
+}
 
 template <class S>
 inline void epa_link(EpaFace<S>* face, int f, int e, int g, int h) {
@@ -255,8 +268,8 @@ EpaPenetration<S> epa_penetration(const SupportA& support_a, const SupportB& sup
     return detail::minkowski_support<S>(support_a, support_b, d);
   };
 
-  std::unique_ptr<detail::EpaPolytope<S>> poly_ptr(new detail::EpaPolytope<S>);  // default-initialised: no zeroing
-  detail::EpaPolytope<S>& P = *poly_ptr;
+  detail::EpaPolytope<S>& P = detail::epa_scratch<S>();
+  P.nv = P.nf = P.nfree = P.nh = P.ndead = 0;  // reset (only the counters need it)
   // the tetrahedron, faces outward
   {
     const Vec3<S> e1 = simplex[1].w - simplex[0].w, e2 = simplex[2].w - simplex[0].w, e3 = simplex[3].w - simplex[0].w;

@@ -190,6 +190,20 @@ S query_scale(const A& a, const B& b) {
   return std::max(shape_size(a), shape_size(b));
 }
 
+/// b's frame seen from a's: EPA runs in a's frame, where a's support needs no rotation and b's one
+/// rotation each way (instead of two rotations per shape in the world).
+template <class S>
+struct PairFrame {
+  Mat3<S> R;  ///< pa.R^T pb.R
+  Vec3<S> t;  ///< pa.R^T (pb.t - pa.t)
+  PairFrame(const RigidTransform<S>& pa, const RigidTransform<S>& pb) : R(pa.R.transpose() * pb.R), t(pa.R.transpose() * (pb.t - pa.t)) {}
+  Vec3<S> b_to_a(const Vec3<S>& p) const { return R * p + t; }
+  template <class B>
+  Vec3<S> support_b(const B& b, const Vec3<S>& d) const {
+    return b_to_a(support(b, Vec3<S>(R.transpose() * d)));
+  }
+};
+
 /// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
 template <class S, class A, class B>
 ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
@@ -287,32 +301,33 @@ template <class T, class S>
 inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_v<T, ConvexHull<S>> || std::is_same_v<T, TriangleShape<S>> ||
                                       std::is_same_v<T, PointCore<S>> || std::is_same_v<T, SegmentCore<S>>;
 
-/// The own EPA (convex/epa.hpp) on a and b, in a frame centred between their interior points (for
-/// precision far from the world origin), `extra` added to the depth (the radius of a round shape
-/// whose core a is). `failed` is set when it meets a degenerate Minkowski difference.
+/// The own EPA (convex/epa.hpp) on a and b, in a's frame (PairFrame) translated to the midpoint of
+/// their interior points (for precision far from the world origin and far from a's centre).
+/// `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
 template <class S, class A, class B>
 ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                          const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed) {
-  const Vec3<S> wa = pa.apply(ia), wb = pb.apply(ib);
-  const Vec3<S> origin = (wa + wb) / S(2);
-  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support(a, pa, d) - origin); };
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support(b, pb, d) - origin); };
+  const PairFrame<S> f(pa, pb);
+  const Vec3<S> la = ia, lb = f.b_to_a(ib);
+  const Vec3<S> origin = (la + lb) / S(2);
+  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support(a, d) - origin); };
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(f.support_b(b, d) - origin); };
   EpaSettings<S> st;
   st.scale = scale;
   st.tolerance = o.relative_tolerance * scale;
   st.coarse_tolerance = S(1e-3) * scale;
   st.max_iterations = o.max_iterations;
   st.refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
-  const EpaPenetration<S> r = epa_penetration(sa, sb, Vec3<S>(wa - wb), st);
+  const EpaPenetration<S> r = epa_penetration(sa, sb, Vec3<S>(la - lb), st);
   ConvexContact<S> c;
   failed = r.failed;
   c.iterations = r.iterations;
   c.limit_reached = r.limit_reached;
   if (!r.intersecting || r.failed) return c;
   c.intersecting = true;
-  c.normal = r.normal;
+  c.normal = pa.rotate(r.normal);
   c.depth = r.depth;
-  c.point = (r.point_a + r.point_b) / S(2) + origin;
+  c.point = pa.apply(Vec3<S>((r.point_a + r.point_b) / S(2) + origin));
   c.depth_gap = std::max(r.depth - r.lower, S(0));
   c.refined = r.refined;
   return c;
