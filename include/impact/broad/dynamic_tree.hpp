@@ -603,7 +603,7 @@ class HierarchicalBroadPhase {
     }
     dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
     dynamics_.push_back(slot);
-    cache_.reset(slot);
+    cache_.push_back(t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -616,12 +616,12 @@ class HierarchicalBroadPhase {
     dynamic_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
     const std::int32_t pos = dyn_pos_[s];
+    cache_.swap_remove(static_cast<std::size_t>(pos));
     const std::int32_t last = dynamics_.back();
     dynamics_[static_cast<std::size_t>(pos)] = last;
     dyn_pos_[static_cast<std::size_t>(last)] = pos;
     dynamics_.pop_back();
     dyn_pos_[s] = -1;
-    cache_.reset(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -637,13 +637,14 @@ class HierarchicalBroadPhase {
     }
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    cache_.set_active(pos_of(slot), t.active(slot));
     dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
     if (t.is_static(slot))
       near_static_changed(t.box(slot));
     else
-      cache_.invalidate(slot);
+      cache_.invalidate(pos_of(slot));
   }
 
   /// Applies the moves since the last update: refits (reinsertions for objects that left their fat
@@ -670,7 +671,7 @@ class HierarchicalBroadPhase {
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(t, dynamics_, 0, dynamics_.size(), visit, st)) return false;
+    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
     return dynamic_.self_pairs(pair_filter(t, visit, st), st);
   }
 
@@ -686,7 +687,7 @@ class HierarchicalBroadPhase {
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(t, dynamics_, task.begin, task.end, visit, st);
+    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
     return dynamic_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
@@ -713,11 +714,14 @@ class HierarchicalBroadPhase {
     dynamic_.query(
         box,
         [&](std::int32_t a) {
-          cache_.invalidate(a);
+          cache_.invalidate(pos_of(a));
           return true;
         },
         ignored);
   }
+
+  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
+  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
 
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
@@ -726,7 +730,6 @@ class HierarchicalBroadPhase {
       dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
     }
-    cache_.grow(n);
   }
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
     for (const std::int32_t slot : moved_) {
@@ -738,10 +741,10 @@ class HierarchicalBroadPhase {
         if (static_.update(leaf, t.box(slot))) ++st.reinserts;
         continue;
       }
-      cache_.moved(slot);
+      cache_.moved(pos_of(slot));
       if (dynamic_.update(leaf, t.box(slot))) {
         ++st.reinserts;
-        cache_.invalidate(slot);  // the fat box changed: query the static tree again
+        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
       }
     }
     moved_.clear();
@@ -755,7 +758,7 @@ class HierarchicalBroadPhase {
   std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  StaticCandidates<S> cache_;  // dynamic slot -> static candidates and hits
+  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
 };
 
 }  // namespace impact

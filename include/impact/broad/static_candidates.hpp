@@ -65,87 +65,99 @@ inline void for_chunks(std::size_t n, int threads, BroadPhaseStats& st, Body&& b
 }
 }  // namespace detail
 
+/// The lists are indexed by the object's position in the broad phase's list of dynamic objects
+/// (`dynamics` below), kept dense by swap-removal, so that the per-step passes over the dynamic
+/// objects read consecutive entries instead of one scattered slot record each.
 template <class S>
 class StaticCandidates {
  public:
-  /// Room for slots [0, n).
-  void grow(std::size_t n) {
-    if (n <= cand_.size()) return;
-    cand_.resize(n);
-    hits_.resize(n);
-    cand_epoch_.resize(n, 0);
-    stale_.resize(n, 1);
+  /// A dynamic object appended to the list at position size(): no lists yet.
+  void push_back(bool active) {
+    cand_.emplace_back();
+    hits_.emplace_back();
+    cand_epoch_.push_back(0);
+    stale_.push_back(1);
+    active_.push_back(active);
   }
-  /// A dynamic object was added or removed at this slot: no lists.
-  void reset(std::int32_t slot) {
-    const auto s = static_cast<std::size_t>(slot);
-    cand_[s].clear();
-    hits_[s].clear();
-    cand_epoch_[s] = 0;
-    stale_[s] = 1;
+  /// The dynamic object at position pos is removed and the last one takes its place.
+  void swap_remove(std::size_t pos) {
+    const std::size_t last = cand_.size() - 1;
+    if (pos != last) {
+      cand_[pos].swap(cand_[last]);
+      hits_[pos].swap(hits_[last]);
+      cand_epoch_[pos] = cand_epoch_[last];
+      stale_[pos] = stale_[last];
+      active_[pos] = active_[last];
+    }
+    cand_.pop_back();
+    hits_.pop_back();
+    cand_epoch_.pop_back();
+    stale_.pop_back();
+    active_.pop_back();
   }
+  std::size_t size() const { return cand_.size(); }
+  /// The object is active (awake) or not: its pairs are reported, its lists kept up to date.
+  void set_active(std::size_t pos, bool active) { active_[pos] = active; }
   /// The object's candidates must be found again (its fat box or filter changed, or a static
   /// object near it changed).
-  void invalidate(std::int32_t slot) { cand_epoch_[static_cast<std::size_t>(slot)] = 0; }
+  void invalidate(std::size_t pos) { cand_epoch_[pos] = 0; }
   /// Every object's candidates must be found again.
   void invalidate_all() { ++epoch_; }
   /// The object's tight box changed: its hits must be recomputed.
-  void moved(std::int32_t slot) { stale_[static_cast<std::size_t>(slot)] = 1; }
+  void moved(std::size_t pos) { stale_[pos] = 1; }
 
-  /// Brings the lists of the active objects of `dynamics` up to date. `bounds`: a box around the
-  /// static objects (for the Morton order; null when there are none). query(a, cand, stats)
-  /// appends to cand the static objects the filter accepts whose boxes overlap a's fat box
-  /// (counting its node tests and filtered pairs in stats). Counts static_queries and, for the
-  /// tight-box tests, pairs_tested.
+  /// Brings the lists of the active objects up to date; dynamics[pos] is the slot of the object at
+  /// position pos. `bounds`: a box around the static objects (for the Morton order; null when
+  /// there are none). query(a, cand, stats) appends to cand the static objects the filter accepts
+  /// whose boxes overlap slot a's fat box (counting its node tests and filtered pairs in stats).
+  /// Counts static_queries and, for the tight-box tests, pairs_tested.
   template <class Query>
   void update(const ObjectTable<S>& t, const std::vector<std::int32_t>& dynamics, const Aabb<S>* bounds, int threads,
               BroadPhaseStats& st, Query&& query) {
     need_.clear();
-    for (const std::int32_t a : dynamics)
-      if (t.active(a) && cand_epoch_[static_cast<std::size_t>(a)] != epoch_) need_.push_back({0u, a});
+    const std::size_t n = cand_.size();
+    for (std::size_t p = 0; p < n; ++p)
+      if (active_[p] && cand_epoch_[p] != epoch_) need_.push_back({0u, static_cast<std::uint32_t>(p)});
     if (!need_.empty() && bounds) {
       const Vec3<S> scale =
           Vec3<S>::Constant(S(1023)).cwiseQuotient((bounds->max - bounds->min).cwiseMax(Vec3<S>::Constant(S(1e-30))));
-      for (auto& q : need_) q.first = detail::morton_code<S>(t.box(q.second).center(), bounds->min, scale);
+      for (auto& q : need_) q.first = detail::morton_code<S>(t.box(dynamics[q.second]).center(), bounds->min, scale);
       std::sort(need_.begin(), need_.end());
     }
     detail::for_chunks(need_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
-      const std::int32_t a = need_[k].second;
-      const auto sa = static_cast<std::size_t>(a);
-      cand_[sa].clear();
+      const std::size_t p = need_[k].second;
+      cand_[p].clear();
       ++cs.static_queries;
-      if (bounds) query(a, cand_[sa], cs);
-      cand_epoch_[sa] = epoch_;
-      stale_[sa] = 1;
+      if (bounds) query(dynamics[p], cand_[p], cs);
+      cand_epoch_[p] = epoch_;
+      stale_[p] = 1;
     });
     // Hits from the tight box, recomputed only for active objects that moved (sleeping ones'
     // static pairs are inactive pairs: they wait until the object wakes).
     stale_list_.clear();
-    for (const std::int32_t a : dynamics)
-      if (t.active(a) && stale_[static_cast<std::size_t>(a)]) stale_list_.push_back(a);
+    for (std::size_t p = 0; p < n; ++p)
+      if (active_[p] && stale_[p]) stale_list_.push_back(static_cast<std::uint32_t>(p));
     detail::for_chunks(stale_list_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
-      const std::int32_t a = stale_list_[k];
-      const auto sa = static_cast<std::size_t>(a);
-      std::vector<std::int32_t>& hits = hits_[sa];
+      const std::size_t p = stale_list_[k];
+      std::vector<std::int32_t>& hits = hits_[p];
       hits.clear();
-      const Aabb<S>& box = t.box(a);
-      for (const std::int32_t b : cand_[sa]) {
+      const Aabb<S>& box = t.box(dynamics[p]);
+      for (const std::int32_t b : cand_[p]) {
         ++cs.pairs_tested;
         if (overlap(box, t.box(b))) hits.push_back(b);
       }
-      stale_[sa] = 0;
+      stale_[p] = 0;
     });
   }
 
-  /// Reports the hits of the active objects of dynamics[begin, end) as visit(a, b); false when
+  /// Reports the hits of the active objects at positions [begin, end) as visit(a, b); false when
   /// visit stopped it.
   template <class Visit>
-  bool pairs(const ObjectTable<S>& t, const std::vector<std::int32_t>& dynamics, std::size_t begin, std::size_t end, Visit& visit,
-             BroadPhaseStats& st) const {
+  bool pairs(const std::vector<std::int32_t>& dynamics, std::size_t begin, std::size_t end, Visit& visit, BroadPhaseStats& st) const {
     for (std::size_t p = begin; p < end; ++p) {
+      if (!active_[p]) continue;
       const std::int32_t a = dynamics[p];
-      if (!t.active(a)) continue;
-      for (const std::int32_t b : hits_[static_cast<std::size_t>(a)]) {
+      for (const std::int32_t b : hits_[p]) {
         ++st.pairs_found;
         if (!visit(a, b)) return false;
       }
@@ -154,12 +166,13 @@ class StaticCandidates {
   }
 
  private:
-  std::vector<std::vector<std::int32_t>> cand_;               // dynamic slot -> accepted static slots overlapping its fat box
-  std::vector<std::vector<std::int32_t>> hits_;               // dynamic slot -> those overlapping its tight box
-  std::vector<std::uint32_t> cand_epoch_;                     // cand_ valid when equal to epoch_
-  std::vector<std::uint8_t> stale_;                           // hits_ must be recomputed from cand_
-  std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query (update's scratch)
-  std::vector<std::int32_t> stale_list_;                      // active slots whose hits update recomputes (update's scratch)
+  std::vector<std::vector<std::int32_t>> cand_;                // position -> accepted static slots overlapping its fat box
+  std::vector<std::vector<std::int32_t>> hits_;                // position -> those overlapping its tight box
+  std::vector<std::uint32_t> cand_epoch_;                      // cand_ valid when equal to epoch_
+  std::vector<std::uint8_t> stale_;                            // hits_ must be recomputed from cand_
+  std::vector<std::uint8_t> active_;                           // the object is awake
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> need_;  // (Morton code, position) to query (update's scratch)
+  std::vector<std::uint32_t> stale_list_;                      // active positions whose hits update recomputes (update's scratch)
   std::uint32_t epoch_ = 1;
 };
 

@@ -48,7 +48,7 @@ class StaticDynamicBroadPhase {
     leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
     dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
     dynamics_.push_back(slot);
-    cache_.reset(slot);
+    cache_.push_back(t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -59,12 +59,12 @@ class StaticDynamicBroadPhase {
     dyn_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
     const std::int32_t pos = dyn_pos_[s];
+    cache_.swap_remove(static_cast<std::size_t>(pos));
     const std::int32_t last = dynamics_.back();
     dynamics_[static_cast<std::size_t>(pos)] = last;
     dyn_pos_[static_cast<std::size_t>(last)] = pos;
     dynamics_.pop_back();
     dyn_pos_[s] = -1;
-    cache_.reset(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -78,13 +78,14 @@ class StaticDynamicBroadPhase {
     }
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    cache_.set_active(pos_of(slot), t.active(slot));
     dyn_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
     if (t.is_static(slot))
       cache_.invalidate_all();  // every candidate list may name it
     else
-      cache_.invalidate(slot);
+      cache_.invalidate(pos_of(slot));
   }
 
   /// Applies the edits since the last update: refits and reinsertions of moved objects, rebuilds;
@@ -101,7 +102,7 @@ class StaticDynamicBroadPhase {
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(t, dynamics_, 0, dynamics_.size(), visit, st)) return false;
+    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
     return dyn_.self_pairs(pair_filter(t, visit, st), st);
   }
 
@@ -117,7 +118,7 @@ class StaticDynamicBroadPhase {
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(t, dynamics_, task.begin, task.end, visit, st);
+    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
     return dyn_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
@@ -157,6 +158,9 @@ class StaticDynamicBroadPhase {
         });
   }
 
+  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
+  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
+
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
     if (n > leaf_.size()) {
@@ -164,7 +168,6 @@ class StaticDynamicBroadPhase {
       dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
     }
-    cache_.grow(n);
   }
 
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
@@ -174,10 +177,10 @@ class StaticDynamicBroadPhase {
       const std::int32_t leaf = leaf_[s];
       if (leaf == DynamicTree<S>::null) continue;  // removed (or now static) since it moved
       ++st.refits;
-      cache_.moved(slot);
+      cache_.moved(pos_of(slot));
       if (dyn_.update(leaf, t.box(s))) {
         ++st.reinserts;
-        cache_.invalidate(slot);  // the fat box changed: query the static tree again
+        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
       }
     }
     moved_.clear();
@@ -220,7 +223,7 @@ class StaticDynamicBroadPhase {
   std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  StaticCandidates<S> cache_;  // dynamic slot -> static candidates and hits
+  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
 };
 
 }  // namespace impact
