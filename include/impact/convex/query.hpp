@@ -207,10 +207,10 @@ struct PairFrame {
 /// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
 template <class S, class A, class B>
 ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1)) {
+                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
   const auto sa = [&](const Vec3<S>& d) { return support(a, pa, d); };
   const auto sb = [&](const Vec3<S>& d) { return support(b, pb, d); };
-  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin);
+  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin, stop_within_margin);
 }
 
 template <class S>
@@ -360,8 +360,10 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
   const auto core = core_of(a);
   const S scale = query_scale<S>(a, b);
   const S tol = o.relative_tolerance * scale;
-  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
   const S r = round_radius(a);
+  // the radius as margin, stopping only when the core is farther than it (no contact: the common
+  // case, decided as cheaply as the boolean); else converged as without a margin
+  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations, r, false);
   if (!d.intersecting && d.distance > tol) {
     ConvexContact<S> c;
     c.iterations = d.iterations;

@@ -44,9 +44,14 @@ template <class S> struct RigidTransform {
   bool is_finite() const { return all_finite(R) && all_finite(t); }
   /// True when R is a rotation within `tol`: every entry of R^T R - I at most tol in magnitude and
   /// det R > 0 (false for NaN entries).
+  /// Written out on the columns (R^T R holds their dot products, det R = c0 . (c1 x c2)): every
+  /// public query checks its poses, so this is on the path of the cheapest queries.
   bool is_rigid(S tol) const {
-    const Mat3<S> e = R.transpose() * R - Mat3<S>::Identity();
-    return e.cwiseAbs().maxCoeff() <= tol && R.determinant() > S(0);
+    const Vec3<S> c0 = R.col(0), c1 = R.col(1), c2 = R.col(2);
+    const auto unit = [tol](S d) { return std::abs(d - S(1)) <= tol; };
+    const auto zero = [tol](S d) { return std::abs(d) <= tol; };
+    return unit(c0.squaredNorm()) && unit(c1.squaredNorm()) && unit(c2.squaredNorm()) && zero(c0.dot(c1)) && zero(c0.dot(c2)) &&
+           zero(c1.dot(c2)) && c0.dot(c1.cross(c2)) > S(0);
   }
 };
 
@@ -60,7 +65,11 @@ template <class S> inline S rotation_tolerance() { return std::max(std::sqrt(std
 /// culling wrong without any sign of it, hence the check at every public query (about 40 flops).
 template <class S> void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
   // the common case without building a message (queries call this once per call)
-  if (IMPACT_LIKELY(pose.is_finite() && pose.t.cwiseAbs().maxCoeff() <= CoordinateRange<S>::max && pose.is_rigid(rotation_tolerance<S>())))
+  // (no NaN or infinity passes: every comparison with NaN is false, an infinite t fails the range
+  // and an infinite entry of R makes its column's squared norm infinite or NaN)
+  constexpr S range = CoordinateRange<S>::max;
+  if (IMPACT_LIKELY(std::abs(pose.t.x()) <= range && std::abs(pose.t.y()) <= range && std::abs(pose.t.z()) <= range &&
+                    pose.is_rigid(rotation_tolerance<S>())))
     return;
   if (!pose.is_finite()) {
     std::ostringstream s;
