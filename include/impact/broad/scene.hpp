@@ -634,20 +634,13 @@ class Scene {
     if (IMPACT_LIKELY(plainly_rigid(pose))) return;
     validate_pose(pose, where, ("pose of object " + std::to_string(id)).c_str());
   }
-  /// True only for poses validate_pose accepts: t within CoordinateRange, each entry of R^T R - I
-  /// (the dot products of R's columns) within half of rotation_tolerance (the half covers any
-  /// difference of rounding from validate_pose's own product) and det R = c0 . (c1 x c2) > 1/2
-  /// (it is near 1 for such columns). NaN or infinite entries fail a comparison. Poses it turns
-  /// down go to validate_pose, which decides.
+  /// validate_pose's own test of the common case (t within CoordinateRange, R rigid within
+  /// rotation_tolerance; NaN and infinities fail it), so that the name is built only when
+  /// validate_pose is going to throw.
   static bool plainly_rigid(const RigidTransform<S>& pose) {
-    const S range = CoordinateRange<S>::max;
+    constexpr S range = CoordinateRange<S>::max;
     const Vec3<S>& t = pose.t;
-    if (!(std::abs(t.x()) <= range && std::abs(t.y()) <= range && std::abs(t.z()) <= range)) return false;
-    const S tol = rotation_tolerance<S>() / S(2);
-    const Vec3<S> c0 = pose.R.col(0), c1 = pose.R.col(1), c2 = pose.R.col(2);
-    return std::abs(c0.squaredNorm() - S(1)) <= tol && std::abs(c1.squaredNorm() - S(1)) <= tol &&
-           std::abs(c2.squaredNorm() - S(1)) <= tol && std::abs(c0.dot(c1)) <= tol && std::abs(c0.dot(c2)) <= tol &&
-           std::abs(c1.dot(c2)) <= tol && c0.dot(c1.cross(c2)) > S(0.5);
+    return std::abs(t.x()) <= range && std::abs(t.y()) <= range && std::abs(t.z()) <= range && pose.is_rigid(rotation_tolerance<S>());
   }
 
   /// A broad phase of the enum, static_leaf_size >= 1, the tree's fat_fraction, fat_margin and
