@@ -157,31 +157,14 @@ void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
     throw InvalidInput(describe_rejected(where, "options.epa_relative_tolerance", "be in (0, 0.1]", o.epa_relative_tolerance));
 }
 
-/// The conditions of validate_pose (t within CoordinateRange, R^T R = I within
-/// rotation_tolerance, det R > 0) checked the cheap way, for the queries' per-call validation:
-/// the six distinct entries of R^T R are the columns' dot products and, with orthonormal
-/// columns, det R = c0 . (c1 x c2). Every comparison is false for NaN and an infinite entry fails
-/// one, so anything not plainly valid goes on to validate_pose, which decides and words the error.
-template <class S>
-inline bool pose_plainly_valid(const RigidTransform<S>& p) {
-  constexpr S range = CoordinateRange<S>::max;
-  const S tol = rotation_tolerance<S>();
-  const Vec3<S> c0 = p.R.col(0), c1 = p.R.col(1), c2 = p.R.col(2);
-  const auto unit = [tol](S d) { return std::abs(d - S(1)) <= tol; };
-  const auto zero = [tol](S d) { return std::abs(d) <= tol; };
-  return std::abs(p.t.x()) <= range && std::abs(p.t.y()) <= range && std::abs(p.t.z()) <= range && unit(c0.squaredNorm()) &&
-         unit(c1.squaredNorm()) && unit(c2.squaredNorm()) && zero(c0.dot(c1)) && zero(c0.dot(c2)) && zero(c1.dot(c2)) &&
-         c0.dot(c1.cross(c2)) > S(0);
-}
-
 template <class S, class A, class B>
 void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o,
                     const char* where) {
   static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
   validate_shape(a, where);
   validate_shape(b, where);
-  if (!IMPACT_LIKELY(pose_plainly_valid(pa))) validate_pose(pa, where, "pose_a");
-  if (!IMPACT_LIKELY(pose_plainly_valid(pb))) validate_pose(pb, where, "pose_b");
+  validate_pose(pa, where, "pose_a");
+  validate_pose(pb, where, "pose_b");
   validate_query_options(o, where);
 }
 

@@ -59,29 +59,37 @@ template <class S> struct RigidTransform {
 /// rotations converted from float pass).
 template <class S> inline S rotation_tolerance() { return std::max(std::sqrt(std::numeric_limits<S>::epsilon()), S(1e-6)); }
 
-/// Throws InvalidInput unless `pose` is a rigid transform every query can rely on: R and t finite,
-/// t within CoordinateRange (core/validate.hpp), R orthonormal within rotation_tolerance<S>() (each entry of R^T R - I) and det R > 0 (a proper
-/// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
-/// culling wrong without any sign of it, hence the check at every public query (about 40 flops).
-template <class S> void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
-  // the common case without building a message (queries call this once per call)
-  // (no NaN or infinity passes: every comparison with NaN is false, an infinite t fails the range
-  // and an infinite entry of R makes its column's squared norm infinite or NaN)
-  constexpr S range = CoordinateRange<S>::max;
-  if (IMPACT_LIKELY(std::abs(pose.t.x()) <= range && std::abs(pose.t.y()) <= range && std::abs(pose.t.z()) <= range &&
-                    pose.is_rigid(rotation_tolerance<S>())))
-    return;
+namespace detail {
+
+/// Words the error of a pose that failed validate_pose's check (kept out of line, so that the
+/// check itself stays small enough to inline into every query).
+template <class S> [[noreturn]] void reject_pose(const RigidTransform<S>& pose, const char* where, const char* name) {
   if (!pose.is_finite()) {
     std::ostringstream s;
     s << where << ": " << name << " must be finite (R and t have a NaN or infinite entry)";
     throw InvalidInput(s.str());
   }
   validate_coordinates(pose.t, where, (std::string(name) + ".t").c_str());
-  if (!pose.is_rigid(rotation_tolerance<S>())) {
-    std::ostringstream s;
-    s << where << ": " << name << ".R must be a rotation (R^T R = I within " << rotation_tolerance<S>() << ", det R > 0)";
-    throw InvalidInput(s.str());
-  }
+  std::ostringstream s;
+  s << where << ": " << name << ".R must be a rotation (R^T R = I within " << rotation_tolerance<S>() << ", det R > 0)";
+  throw InvalidInput(s.str());
+}
+
+}  // namespace detail
+
+/// Throws InvalidInput unless `pose` is a rigid transform every query can rely on: R and t finite,
+/// t within CoordinateRange (core/validate.hpp), R orthonormal within rotation_tolerance<S>() (each entry of R^T R - I) and det R > 0 (a proper
+/// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
+/// culling wrong without any sign of it, hence the check at every public query (about 40 flops,
+/// no message built unless it fails). No NaN or infinity passes: every comparison with NaN is
+/// false, an infinite t fails the range and an infinite entry of R makes its column's squared norm
+/// infinite or NaN.
+template <class S> inline void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
+  constexpr S range = CoordinateRange<S>::max;
+  if (IMPACT_LIKELY(std::abs(pose.t.x()) <= range && std::abs(pose.t.y()) <= range && std::abs(pose.t.z()) <= range &&
+                    pose.is_rigid(rotation_tolerance<S>())))
+    return;
+  detail::reject_pose(pose, where, name);
 }
 
 /// Transform that maps coordinates of frame b into frame a, given both poses in a common frame.
