@@ -601,9 +601,7 @@ class HierarchicalBroadPhase {
       near_static_changed(t.box(s));
       return;
     }
-    dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
-    dynamics_.push_back(slot);
-    cache_.push_back(t.active(slot));
+    cache_.add(slot, t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -615,13 +613,7 @@ class HierarchicalBroadPhase {
     }
     dynamic_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
-    const std::int32_t pos = dyn_pos_[s];
-    cache_.swap_remove(static_cast<std::size_t>(pos));
-    const std::int32_t last = dynamics_.back();
-    dynamics_[static_cast<std::size_t>(pos)] = last;
-    dyn_pos_[static_cast<std::size_t>(last)] = pos;
-    dynamics_.pop_back();
-    dyn_pos_[s] = -1;
+    cache_.remove(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -655,7 +647,7 @@ class HierarchicalBroadPhase {
     flush(t, st);
     const std::int32_t root = static_.root();
     const Aabb<S>* bounds = root == DynamicTree<S>::null ? nullptr : &static_.box(root);
-    cache_.update(t, dynamics_, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {
+    cache_.update(t, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {
       static_.query(
           dynamic_.box(leaf_[static_cast<std::size_t>(a)]),
           [&](std::int32_t b) {
@@ -671,7 +663,7 @@ class HierarchicalBroadPhase {
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
+    if (!cache_.pairs(0, cache_.size(), visit, st)) return false;
     return dynamic_.self_pairs(pair_filter(t, visit, st), st);
   }
 
@@ -679,7 +671,7 @@ class HierarchicalBroadPhase {
   /// seeds of the dynamic tree's self traversal.
   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
     std::vector<PairTask> tasks;
-    const std::size_t n = dynamics_.size();
+    const std::size_t n = cache_.size();
     const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
     for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
     for (const auto& seed : dynamic_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
@@ -687,7 +679,7 @@ class HierarchicalBroadPhase {
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
+    if (task.kind == 0) return cache_.pairs(task.begin, task.end, visit, st);
     return dynamic_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
@@ -720,14 +712,13 @@ class HierarchicalBroadPhase {
         ignored);
   }
 
-  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
-  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
+  /// The position of dynamic object `slot` in cache_.
+  std::size_t pos_of(std::int32_t slot) const { return cache_.pos_of(slot); }
 
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
     if (n > leaf_.size()) {
       leaf_.resize(n, DynamicTree<S>::null);
-      dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
     }
   }
@@ -754,11 +745,9 @@ class HierarchicalBroadPhase {
 
   DynamicTree<S> static_, dynamic_;
   std::vector<std::int32_t> leaf_;      // slot -> leaf in its tree
-  std::vector<std::int32_t> dyn_pos_;   // slot -> index in dynamics_
-  std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
+  StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
 };
 
 }  // namespace impact

@@ -65,36 +65,47 @@ inline void for_chunks(std::size_t n, int threads, BroadPhaseStats& st, Body&& b
 }
 }  // namespace detail
 
-/// The lists are indexed by the object's position in the broad phase's list of dynamic objects
-/// (`dynamics` below), kept dense by swap-removal, so that the per-step passes over the dynamic
-/// objects read consecutive entries instead of one scattered slot record each.
+/// The broad phase's dynamic objects, each at a position in a list kept dense by swap-removal
+/// (add, remove, pos_of), with its lists stored at that position, so that the per-step passes
+/// over the dynamic objects read consecutive entries instead of one scattered slot record each.
 template <class S>
 class StaticCandidates {
  public:
-  /// A dynamic object appended to the list at position size(): no lists yet.
-  void push_back(bool active) {
+  /// Dynamic object `slot` is appended at position size(), with no lists yet.
+  void add(std::int32_t slot, bool active) {
+    const auto s = static_cast<std::size_t>(slot);
+    if (s >= pos_.size()) pos_.resize(s + 1, -1);
+    pos_[s] = static_cast<std::int32_t>(slots_.size());
+    slots_.push_back(slot);
     cand_.emplace_back();
     hits_.emplace_back();
     cand_epoch_.push_back(0);
     stale_.push_back(1);
     active_.push_back(active);
   }
-  /// The dynamic object at position pos is removed and the last one takes its place.
-  void swap_remove(std::size_t pos) {
+  /// Dynamic object `slot` is removed and the last one takes its position.
+  void remove(std::int32_t slot) {
+    const auto pos = pos_of(slot);
     const std::size_t last = cand_.size() - 1;
     if (pos != last) {
+      slots_[pos] = slots_[last];
+      pos_[static_cast<std::size_t>(slots_[pos])] = static_cast<std::int32_t>(pos);
       cand_[pos].swap(cand_[last]);
       hits_[pos].swap(hits_[last]);
       cand_epoch_[pos] = cand_epoch_[last];
       stale_[pos] = stale_[last];
       active_[pos] = active_[last];
     }
+    pos_[static_cast<std::size_t>(slot)] = -1;
+    slots_.pop_back();
     cand_.pop_back();
     hits_.pop_back();
     cand_epoch_.pop_back();
     stale_.pop_back();
     active_.pop_back();
   }
+  /// The position of dynamic object `slot`.
+  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(pos_[static_cast<std::size_t>(slot)]); }
   std::size_t size() const { return cand_.size(); }
   /// The object is active (awake) or not: its pairs are reported, its lists kept up to date.
   void set_active(std::size_t pos, bool active) { active_[pos] = active; }
@@ -106,13 +117,12 @@ class StaticCandidates {
   /// The object's tight box changed: its hits must be recomputed.
   void moved(std::size_t pos) { stale_[pos] = 1; }
 
-  /// Brings the lists of the active objects up to date; dynamics[pos] is the slot of the object at
-  /// position pos. `bounds`: a box around the static objects (for the Morton order; null when
+  /// Brings the lists of the active objects up to date. `bounds`: a box around the static objects (for the Morton order; null when
   /// there are none). query(a, cand, stats) appends to cand the static objects the filter accepts
   /// whose boxes overlap slot a's fat box (counting its node tests and filtered pairs in stats).
   /// Counts static_queries and, for the tight-box tests, pairs_tested.
   template <class Query>
-  void update(const ObjectTable<S>& t, const std::vector<std::int32_t>& dynamics, const Aabb<S>* bounds, int threads,
+  void update(const ObjectTable<S>& t, const Aabb<S>* bounds, int threads,
               BroadPhaseStats& st, Query&& query) {
     need_.clear();
     const std::size_t n = cand_.size();
@@ -121,14 +131,14 @@ class StaticCandidates {
     if (!need_.empty() && bounds) {
       const Vec3<S> scale =
           Vec3<S>::Constant(S(1023)).cwiseQuotient((bounds->max - bounds->min).cwiseMax(Vec3<S>::Constant(S(1e-30))));
-      for (auto& q : need_) q.first = detail::morton_code<S>(t.box(dynamics[q.second]).center(), bounds->min, scale);
+      for (auto& q : need_) q.first = detail::morton_code<S>(t.box(slots_[q.second]).center(), bounds->min, scale);
       std::sort(need_.begin(), need_.end());
     }
     detail::for_chunks(need_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
       const std::size_t p = need_[k].second;
       cand_[p].clear();
       ++cs.static_queries;
-      if (bounds) query(dynamics[p], cand_[p], cs);
+      if (bounds) query(slots_[p], cand_[p], cs);
       cand_epoch_[p] = epoch_;
       stale_[p] = 1;
     });
@@ -141,7 +151,7 @@ class StaticCandidates {
       const std::size_t p = stale_list_[k];
       std::vector<std::int32_t>& hits = hits_[p];
       hits.clear();
-      const Aabb<S>& box = t.box(dynamics[p]);
+      const Aabb<S>& box = t.box(slots_[p]);
       for (const std::int32_t b : cand_[p]) {
         ++cs.pairs_tested;
         if (overlap(box, t.box(b))) hits.push_back(b);
@@ -153,10 +163,10 @@ class StaticCandidates {
   /// Reports the hits of the active objects at positions [begin, end) as visit(a, b); false when
   /// visit stopped it.
   template <class Visit>
-  bool pairs(const std::vector<std::int32_t>& dynamics, std::size_t begin, std::size_t end, Visit& visit, BroadPhaseStats& st) const {
+  bool pairs(std::size_t begin, std::size_t end, Visit& visit, BroadPhaseStats& st) const {
     for (std::size_t p = begin; p < end; ++p) {
       if (!active_[p]) continue;
-      const std::int32_t a = dynamics[p];
+      const std::int32_t a = slots_[p];
       for (const std::int32_t b : hits_[p]) {
         ++st.pairs_found;
         if (!visit(a, b)) return false;
@@ -166,6 +176,8 @@ class StaticCandidates {
   }
 
  private:
+  std::vector<std::int32_t> slots_;                            // position -> dynamic slot
+  std::vector<std::int32_t> pos_;                              // slot -> position (-1: none)
   std::vector<std::vector<std::int32_t>> cand_;                // position -> accepted static slots overlapping its fat box
   std::vector<std::vector<std::int32_t>> hits_;                // position -> those overlapping its tight box
   std::vector<std::uint32_t> cand_epoch_;                      // cand_ valid when equal to epoch_

@@ -46,9 +46,7 @@ class StaticDynamicBroadPhase {
       return;
     }
     leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
-    dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
-    dynamics_.push_back(slot);
-    cache_.push_back(t.active(slot));
+    cache_.add(slot, t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -58,13 +56,7 @@ class StaticDynamicBroadPhase {
     }
     dyn_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
-    const std::int32_t pos = dyn_pos_[s];
-    cache_.swap_remove(static_cast<std::size_t>(pos));
-    const std::int32_t last = dynamics_.back();
-    dynamics_[static_cast<std::size_t>(pos)] = last;
-    dyn_pos_[static_cast<std::size_t>(last)] = pos;
-    dynamics_.pop_back();
-    dyn_pos_[s] = -1;
+    cache_.remove(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -96,13 +88,13 @@ class StaticDynamicBroadPhase {
     // Dynamic against static: the static tree is large, so the queries' Morton order is what
     // keeps its nodes in cache.
     const Aabb<S>* bounds = static_tree_.empty() ? nullptr : &static_tree_.root().bv;
-    cache_.update(t, dynamics_, bounds, threads, st,
+    cache_.update(t, bounds, threads, st,
                   [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) { query_static(t, a, cand, cs); });
   }
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
+    if (!cache_.pairs(0, cache_.size(), visit, st)) return false;
     return dyn_.self_pairs(pair_filter(t, visit, st), st);
   }
 
@@ -110,7 +102,7 @@ class StaticDynamicBroadPhase {
   /// tree's self traversal.
   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
     std::vector<PairTask> tasks;
-    const std::size_t n = dynamics_.size();
+    const std::size_t n = cache_.size();
     const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
     for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
     for (const auto& seed : dyn_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
@@ -118,7 +110,7 @@ class StaticDynamicBroadPhase {
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
+    if (task.kind == 0) return cache_.pairs(task.begin, task.end, visit, st);
     return dyn_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
@@ -158,14 +150,13 @@ class StaticDynamicBroadPhase {
         });
   }
 
-  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
-  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
+  /// The position of dynamic object `slot` in cache_.
+  std::size_t pos_of(std::int32_t slot) const { return cache_.pos_of(slot); }
 
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
     if (n > leaf_.size()) {
       leaf_.resize(n, DynamicTree<S>::null);
-      dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
     }
   }
@@ -219,11 +210,9 @@ class StaticDynamicBroadPhase {
   std::vector<std::int32_t> static_slots_;  // static tree primitive id -> slot
   bool static_dirty_ = false;
   std::vector<std::int32_t> leaf_;      // slot -> dynamic tree leaf
-  std::vector<std::int32_t> dyn_pos_;   // slot -> index in dynamics_
-  std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
+  StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
 };
 
 }  // namespace impact
