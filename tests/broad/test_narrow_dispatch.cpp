@@ -11,9 +11,9 @@
 #include "impact/broad/scene.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "support/brute_force.hpp"
+#include "support/multiprecision.hpp"
 #include "support/random.hpp"
 
-#include <boost/multiprecision/cpp_int.hpp>
 #include <gtest/gtest.h>
 
 #include <array>

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <string>
 #include <vector>
 
 namespace impact_convex_scene_test {
@@ -472,6 +473,20 @@ TEST(ConvexCollider, NoParticleEndsInsideBacktracking) { cs_rain<double>(Strateg
 TEST(ConvexCollider, NoParticleEndsInsideProjection) { cs_rain<double>(Strategy::Project, 0.5, 0.2, false); }
 TEST(ConvexCollider, NoParticleEndsInsideMovingColliders) { cs_rain<double>(Strategy::Backtrack, 1.0, 0.0, true); }
 TEST(ConvexCollider, NoParticleEndsInsideFloat) { cs_rain<float>(Strategy::Backtrack, 0.5, 0.2, false); }
+
+TEST(ConvexCollider, ValidateNamesTheColliderOnlyOnFailure) {
+  ConvexCollider<double, Cylinder<double>> c(Cylinder<double>(0.4, 0.5), Material<double>{0.5, 0.0});
+  EXPECT_NO_THROW(c.validate("step", "collider 7"));
+  c.shape.radius = std::nan("");  // changed after construction: only validate catches it
+  try {
+    c.validate("step", "collider 7");
+    ADD_FAILURE() << "a NaN radius passed validate";
+  } catch (const InvalidInput& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("step: collider 7"), std::string::npos) << what;
+    EXPECT_NE(what.find("cylinder.radius"), std::string::npos) << what;
+  }
+}
 
 TEST(ConvexCollider, AnalyticBounceAndRest) {
   // a point dropped on the flat top of an upright cylinder (cap at z = 0.5) from z = 1.5 at rest:

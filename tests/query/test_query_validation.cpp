@@ -70,6 +70,62 @@ TYPED_TEST(QueryValidation, CollidePosesAreChecked) {
   expect_invalid([&] { collides(a, RigidTransform<S>(shear, Vec3<S>::Zero()), b, cross); }, {"rotation"});
 }
 
+// The pose check's boundaries, entry by entry: an infinite or NaN entry anywhere in R or t, a
+// translation beyond CoordinateRange, and a departure of R^T R from I just above the tolerance
+// in any one entry (a column's norm or two columns' dot product) are refused; just below, and an
+// exact rotation by any angle, pass. Then det R decides: a rotation composed with a mirror fails.
+TYPED_TEST(QueryValidation, PoseCheckBoundaries) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  const MeshBvh<BV> a(make_box<S>(Vec3<S>::Constant(S(1))));
+  const Mat3<S> rot = Eigen::AngleAxis<S>(S(2.1), Vec3<S>(S(1), S(-2), S(0.5)).normalized()).toRotationMatrix();
+  const Vec3<S> t(S(0.3), S(0.1), S(-0.2));
+  EXPECT_NO_THROW(collides(a, RigidTransform<S>(), a, RigidTransform<S>(rot, t)));
+  for (int i = 0; i < 12; ++i)
+    for (const S bad : {std::numeric_limits<S>::infinity(), -std::numeric_limits<S>::infinity(), std::numeric_limits<S>::quiet_NaN()}) {
+      RigidTransform<S> p(rot, t);
+      if (i < 9) {
+        p.R(i / 3, i % 3) = bad;
+      } else {
+        p.t(i - 9) = bad;
+      }
+      expect_invalid([&] { collides(a, RigidTransform<S>(), a, p); }, {"collides", "pose_b", "finite"});
+    }
+  for (int i = 0; i < 3; ++i) {
+    RigidTransform<S> p(rot, t);
+    p.t(i) = S(2) * CoordinateRange<S>::max;
+    expect_invalid([&] { collides(a, p, a, RigidTransform<S>()); }, {"collides", "pose_a"});
+  }
+  const S tol = rotation_tolerance<S>();
+  for (int c = 0; c < 3; ++c) {
+    // scaling column c by (1 + e) moves its squared norm by about 2e
+    for (const S e : {S(0.25) * tol, S(2) * tol}) {
+      Mat3<S> m = rot;
+      m.col(c) *= S(1) + e;
+      const RigidTransform<S> p(m, t);
+      if (e < tol) {
+        EXPECT_NO_THROW(collides(a, RigidTransform<S>(), a, p)) << "column " << c;
+      } else {
+        expect_invalid([&] { collides(a, RigidTransform<S>(), a, p); }, {"pose_b", "rotation"});
+      }
+    }
+    // tilting column c towards the next one by e makes their dot product about e
+    for (const S e : {S(0.25) * tol, S(2) * tol}) {
+      Mat3<S> m = rot;
+      m.col(c) = (m.col(c) + e * m.col((c + 1) % 3)).normalized();
+      const RigidTransform<S> p(m, t);
+      if (e < tol) {
+        EXPECT_NO_THROW(collides(a, RigidTransform<S>(), a, p)) << "column " << c;
+      } else {
+        expect_invalid([&] { collides(a, RigidTransform<S>(), a, p); }, {"pose_b", "rotation"});
+      }
+    }
+  }
+  Mat3<S> mirrored = rot;
+  mirrored.col(1) = -mirrored.col(1);
+  expect_invalid([&] { collides(a, RigidTransform<S>(), a, RigidTransform<S>(mirrored, t)); }, {"pose_b", "rotation"});
+}
+
 // A rotation computed in double and rounded to float, then used in double, passes (the tolerance
 // is 1e-6 in double for this).
 TEST(QueryValidation, RotationRoundedToFloatPasses) {

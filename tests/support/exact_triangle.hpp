@@ -11,7 +11,7 @@
 
 #include "impact/geometry/triangle.hpp"
 
-#include <boost/multiprecision/cpp_int.hpp>
+#include "support/multiprecision.hpp"
 
 #include <array>
 #include <climits>

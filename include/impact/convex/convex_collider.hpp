@@ -44,6 +44,7 @@
 
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/shapes.hpp"
+#include "impact/core/error.hpp"
 #include "impact/narrow/closest_point.hpp"
 #include "impact/response/collider.hpp"
 
@@ -223,7 +224,15 @@ struct ConvexCollider {
   }
 
   /// Throws InvalidInput for an invalid shape (ColliderSet::validate calls it with the collider's name).
-  void validate(const char* where, const std::string& name) const { validate_shape(shape, (std::string(where) + ": " + name).c_str()); }
+  /// The message naming the collider is built only on failure: a valid shape costs the checks alone.
+  void validate(const char* where, const std::string& name) const {
+    try {
+      validate_shape(shape, where);
+    } catch (const InvalidInput&) {
+      validate_shape(shape, (std::string(where) + ": " + name).c_str());  // the same checks: throw again, with the name
+      throw;
+    }
+  }
 };
 
 }  // namespace impact

@@ -144,12 +144,6 @@ bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
   return true;
 }
 
-/// GJK distance between A and B given world support functions support_a(d), support_b(d) (points
-/// maximising the dot product with d), a first direction (e.g. the difference of two interior
-/// points, a minus b), an absolute tolerance and an iteration bound. With `margin` >= 0 it answers
-/// only "distance <= margin?" and stops as soon as that is decided: intersecting is then set when
-/// an upper bound of the distance is <= margin, cleared when a lower bound exceeds it (the
-/// distance and points are then those bounds', not converged).
 /// A unit vector orthogonal to u (u unit).
 template <class S>
 inline Vec3<S> any_orthogonal(const Vec3<S>& u) {
@@ -203,9 +197,19 @@ template <class S> GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<
   return GjkStep::Progress;
 }
 
+/// GJK distance between A and B given world support functions support_a(d), support_b(d) (points
+/// maximising the dot product with d), a first direction (e.g. the difference of two interior
+/// points, a minus b), an absolute tolerance and an iteration bound. With `margin` >= 0 it answers
+/// only "distance <= margin?" and stops as soon as that is decided: intersecting is then set when
+/// an upper bound of the distance is <= margin, cleared when a lower bound exceeds it (the
+/// distance and points are then those bounds', not converged). With `margin` >= 0 and
+/// `stop_within_margin` false it stops early only on a lower bound beyond the margin (cleared,
+/// distance > margin) and otherwise converges to the tolerance as without a margin: the exact
+/// distance where it is needed, the cheap answer where it is not (a round shape's core farther
+/// than its radius).
 template <class S, class SupportA, class SupportB>
 ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& support_b, Vec3<S> first, S tolerance,
-                               int max_iterations, S margin = S(-1)) {
+                               int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
   ConvexDistance<S> out;
   if (!(first.squaredNorm() > S(0))) first = Vec3<S>::UnitX();
   SimplexPoint<S> s[4];
@@ -220,7 +224,7 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   bool converged = false;
   while (out.iterations < max_iterations) {
     const S vv = v.squaredNorm();
-    if (vv <= tol2 || (margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
+    if (vv <= tol2 || (stop_within_margin && margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
       out.intersecting = true;
       converged = true;
       break;

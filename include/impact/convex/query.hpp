@@ -157,31 +157,14 @@ void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
     throw InvalidInput(describe_rejected(where, "options.epa_relative_tolerance", "be in (0, 0.1]", o.epa_relative_tolerance));
 }
 
-/// The conditions of validate_pose (t within CoordinateRange, R^T R = I within
-/// rotation_tolerance, det R > 0) checked the cheap way, for the queries' per-call validation:
-/// the six distinct entries of R^T R are the columns' dot products and, with orthonormal
-/// columns, det R = c0 . (c1 x c2). Every comparison is false for NaN and an infinite entry fails
-/// one, so anything not plainly valid goes on to validate_pose, which decides and words the error.
-template <class S>
-inline bool pose_plainly_valid(const RigidTransform<S>& p) {
-  constexpr S range = CoordinateRange<S>::max;
-  const S tol = rotation_tolerance<S>();
-  const Vec3<S> c0 = p.R.col(0), c1 = p.R.col(1), c2 = p.R.col(2);
-  const auto unit = [tol](S d) { return std::abs(d - S(1)) <= tol; };
-  const auto zero = [tol](S d) { return std::abs(d) <= tol; };
-  return std::abs(p.t.x()) <= range && std::abs(p.t.y()) <= range && std::abs(p.t.z()) <= range && unit(c0.squaredNorm()) &&
-         unit(c1.squaredNorm()) && unit(c2.squaredNorm()) && zero(c0.dot(c1)) && zero(c0.dot(c2)) && zero(c1.dot(c2)) &&
-         c0.dot(c1.cross(c2)) > S(0);
-}
-
 template <class S, class A, class B>
 void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o,
                     const char* where) {
   static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
   validate_shape(a, where);
   validate_shape(b, where);
-  if (!IMPACT_LIKELY(pose_plainly_valid(pa))) validate_pose(pa, where, "pose_a");
-  if (!IMPACT_LIKELY(pose_plainly_valid(pb))) validate_pose(pb, where, "pose_b");
+  validate_pose(pa, where, "pose_a");
+  validate_pose(pb, where, "pose_b");
   validate_query_options(o, where);
 }
 
@@ -207,10 +190,10 @@ struct PairFrame {
 /// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
 template <class S, class A, class B>
 ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1)) {
+                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
   const auto sa = [&](const Vec3<S>& d) { return support(a, pa, d); };
   const auto sb = [&](const Vec3<S>& d) { return support(b, pb, d); };
-  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin);
+  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin, stop_within_margin);
 }
 
 template <class S>
@@ -360,8 +343,10 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
   const auto core = core_of(a);
   const S scale = query_scale<S>(a, b);
   const S tol = o.relative_tolerance * scale;
-  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
   const S r = round_radius(a);
+  // the radius as margin, stopping only when the core is farther than it (no contact: the common
+  // case, decided as cheaply as the boolean); else converged as without a margin
+  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations, r, false);
   if (!d.intersecting && d.distance > tol) {
     ConvexContact<S> c;
     c.iterations = d.iterations;

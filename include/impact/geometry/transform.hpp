@@ -44,9 +44,14 @@ template <class S> struct RigidTransform {
   bool is_finite() const { return all_finite(R) && all_finite(t); }
   /// True when R is a rotation within `tol`: every entry of R^T R - I at most tol in magnitude and
   /// det R > 0 (false for NaN entries).
+  /// Written out on the columns (R^T R holds their dot products, det R = c0 . (c1 x c2)): every
+  /// public query checks its poses, so this is on the path of the cheapest queries.
   bool is_rigid(S tol) const {
-    const Mat3<S> e = R.transpose() * R - Mat3<S>::Identity();
-    return e.cwiseAbs().maxCoeff() <= tol && R.determinant() > S(0);
+    const Vec3<S> c0 = R.col(0), c1 = R.col(1), c2 = R.col(2);
+    const auto unit = [tol](S d) { return std::abs(d - S(1)) <= tol; };
+    const auto zero = [tol](S d) { return std::abs(d) <= tol; };
+    return unit(c0.squaredNorm()) && unit(c1.squaredNorm()) && unit(c2.squaredNorm()) && zero(c0.dot(c1)) && zero(c0.dot(c2)) &&
+           zero(c1.dot(c2)) && c0.dot(c1.cross(c2)) > S(0);
   }
 };
 
@@ -54,25 +59,37 @@ template <class S> struct RigidTransform {
 /// rotations converted from float pass).
 template <class S> inline S rotation_tolerance() { return std::max(std::sqrt(std::numeric_limits<S>::epsilon()), S(1e-6)); }
 
-/// Throws InvalidInput unless `pose` is a rigid transform every query can rely on: R and t finite,
-/// t within CoordinateRange (core/validate.hpp), R orthonormal within rotation_tolerance<S>() (each entry of R^T R - I) and det R > 0 (a proper
-/// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
-/// culling wrong without any sign of it, hence the check at every public query (about 40 flops).
-template <class S> void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
-  // the common case without building a message (queries call this once per call)
-  if (IMPACT_LIKELY(pose.is_finite() && pose.t.cwiseAbs().maxCoeff() <= CoordinateRange<S>::max && pose.is_rigid(rotation_tolerance<S>())))
-    return;
+namespace detail {
+
+/// Words the error of a pose that failed validate_pose's check (kept out of line, so that the
+/// check itself stays small enough to inline into every query).
+template <class S> [[noreturn]] void reject_pose(const RigidTransform<S>& pose, const char* where, const char* name) {
   if (!pose.is_finite()) {
     std::ostringstream s;
     s << where << ": " << name << " must be finite (R and t have a NaN or infinite entry)";
     throw InvalidInput(s.str());
   }
   validate_coordinates(pose.t, where, (std::string(name) + ".t").c_str());
-  if (!pose.is_rigid(rotation_tolerance<S>())) {
-    std::ostringstream s;
-    s << where << ": " << name << ".R must be a rotation (R^T R = I within " << rotation_tolerance<S>() << ", det R > 0)";
-    throw InvalidInput(s.str());
-  }
+  std::ostringstream s;
+  s << where << ": " << name << ".R must be a rotation (R^T R = I within " << rotation_tolerance<S>() << ", det R > 0)";
+  throw InvalidInput(s.str());
+}
+
+}  // namespace detail
+
+/// Throws InvalidInput unless `pose` is a rigid transform every query can rely on: R and t finite,
+/// t within CoordinateRange (core/validate.hpp), R orthonormal within rotation_tolerance<S>() (each entry of R^T R - I) and det R > 0 (a proper
+/// rotation, not a reflection). A scaled or sheared R would make the queries' distances, times and
+/// culling wrong without any sign of it, hence the check at every public query (about 40 flops,
+/// no message built unless it fails). No NaN or infinity passes: every comparison with NaN is
+/// false, an infinite t fails the range and an infinite entry of R makes its column's squared norm
+/// infinite or NaN.
+template <class S> inline void validate_pose(const RigidTransform<S>& pose, const char* where, const char* name = "pose") {
+  constexpr S range = CoordinateRange<S>::max;
+  if (IMPACT_LIKELY(std::abs(pose.t.x()) <= range && std::abs(pose.t.y()) <= range && std::abs(pose.t.z()) <= range &&
+                    pose.is_rigid(rotation_tolerance<S>())))
+    return;
+  detail::reject_pose(pose, where, name);
 }
 
 /// Transform that maps coordinates of frame b into frame a, given both poses in a common frame.

@@ -223,7 +223,10 @@ template <class BV> struct MeshNodeOverlap {
   PosePad<S> pad;
 
   MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
-      : a(a_), b(b_), b_to_a(x), a_to_b(x.inverse()), tests(counter), pad(x, a_.coordinate_bound(), b_.coordinate_bound()) {}
+      : a(a_), b(b_), b_to_a(x), a_to_b(x.inverse()), tests(counter) {
+    // oriented boxes bound the rounding of the transform in their own overlap test
+    if constexpr (std::is_same_v<BV, Sphere<S>> || std::is_same_v<BV, Aabb<S>>) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
+  }
 
   bool leaf_touches(const MeshBvh<BV>& m, const BvhNode<BV>& leaf, const Vec3<S>& c, S r) const {
     for (std::int32_t k = leaf.first; k < leaf.first + leaf.count; ++k)
