@@ -216,6 +216,50 @@ TYPED_TEST(BroadTyped, UnmovedObjectsAreNotRefittedOrRequeried) {
   EXPECT_EQ(sc.s[1].find_pairs().stats.static_queries, 0u);
 }
 
+// Dynamic objects that never move keep their static candidates cached (static/dynamic and
+// hierarchical): a static object added next to one, moved onto one, moved away, refiltered or
+// removed must still change their pairs, and in the hierarchical broad phase only the dynamic
+// objects near the edit query the static tree again.
+TYPED_TEST(BroadTyped, StaticEditsReachRestingObjects) {
+  using S = TypeParam;
+  Scenes<S> sc;
+  for (ObjectId i = 0; i < 40; ++i)  // dynamic spheres on a line, 3 apart, never moving
+    sc.each([&](Scene<S>& s) { s.add(i, Shape<S>::sphere(S(0.5)), pose_at<S>(Eigen::Vector3d(3.0 * double(i), 0, 0))); });
+  for (ObjectId i = 0; i < 40; ++i)  // static spheres far above them
+    sc.each([&](Scene<S>& s) {
+      s.add(100 + i, Shape<S>::sphere(S(0.5)), pose_at<S>(Eigen::Vector3d(3.0 * double(i), 10, 0)), {BodyType::Static});
+    });
+  auto check = [&](const char* what, std::size_t expected) {
+    const auto ref = sorted_pairs(sc.s[0].find_pairs().pairs);
+    EXPECT_EQ(ref.size(), expected) << what;
+    for (std::size_t k = 1; k < sc.s.size(); ++k) EXPECT_EQ(sorted_pairs(sc.s[k].find_pairs().pairs), ref) << what << ", broad phase " << k;
+  };
+  check("start", 0);
+  const auto requeries = [&] { return sc.s[2].find_pairs().stats.static_queries; };
+  sc.each([&](Scene<S>& s) { s.add(200, Shape<S>::sphere(S(0.5)), pose_at<S>(Eigen::Vector3d(0.5, 0, 0)), {BodyType::Static}); });
+  EXPECT_LE(requeries(), 2u);  // objects 0 and perhaps 1 (fat boxes), not all 40
+  check("static added on object 0", 1);
+  sc.each([&](Scene<S>& s) { s.set_pose(105, pose_at<S>(Eigen::Vector3d(15.2, 0, 0))); });
+  EXPECT_LE(requeries(), 2u);
+  check("static moved onto object 5", 2);
+  sc.each([&](Scene<S>& s) { s.set_pose(105, pose_at<S>(Eigen::Vector3d(15.2, 0, 5))); });
+  check("static moved away from object 5", 1);
+  sc.each([&](Scene<S>& s) { s.set_pose(105, pose_at<S>(Eigen::Vector3d(21.2, 0, 0))); });
+  check("static moved onto object 7", 2);
+  sc.each([&](Scene<S>& s) { s.set_filter(200, {1u, 0u}); });
+  check("static refiltered", 1);
+  sc.each([&](Scene<S>& s) { s.set_filter(200, {1u, 1u}); });
+  check("static filter restored", 2);
+  sc.each([&](Scene<S>& s) { s.remove(105); });
+  check("static removed", 1);
+  sc.each([&](Scene<S>& s) {  // its slot reused by a static object on object 9
+    s.add(300, Shape<S>::sphere(S(0.5)), pose_at<S>(Eigen::Vector3d(27.3, 0, 0)), {BodyType::Static});
+  });
+  check("static added in a reused slot", 2);
+  sc.each([&](Scene<S>& s) { s.remove(300); });
+  check("static removed again", 1);
+}
+
 TYPED_TEST(BroadTyped, SleepingObjectsAreSkipped) {
   using S = TypeParam;
   Scenes<S> sc;

@@ -25,6 +25,7 @@
 #pragma once
 
 #include "impact/broad/broad_phase.hpp"
+#include "impact/broad/static_candidates.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 
 #include <algorithm>
@@ -575,10 +576,14 @@ class DynamicTree {
 /// The hierarchical broad phase: two DynamicTrees, one over the static objects (tight leaves) and
 /// one over the dynamic ones (fattened leaves, sleeping ones flagged inactive). At update() (the
 /// scene's first query after edits), moved objects are refitted (reinserted only when they leave
-/// their fat box; unmoved ones are not touched); find_pairs() then traverses the dynamic tree
-/// against itself and against the static tree, larger node first, skipping node pairs without an
-/// active object. Unlike the static/dynamic split, static objects can be added, removed or moved
-/// incrementally without a rebuild.
+/// their fat box; unmoved ones are not touched). Dynamic–dynamic pairs come from the dynamic tree's
+/// self traversal (larger node first, skipping node pairs without an active object); dynamic–static
+/// pairs from a StaticCandidates cache, as Bullet keeps its pairs: a dynamic object queries the
+/// static tree with its fat box only when that box changed (or a static object near it was added,
+/// removed, moved or refiltered), and otherwise re-tests its candidates against its tight box when
+/// it moved. Unlike the static/dynamic split, static objects can be added, removed or moved
+/// incrementally without a rebuild: such an edit queries the dynamic tree with the static object's
+/// boxes (before and after) and invalidates the candidates of the dynamic objects it finds.
 ///
 /// Thread safety: find_pairs, split_pairs and find_pairs_part are const and read only: any number
 /// of threads may run them at once between updates. Edits and update() must not overlap any call.
@@ -592,54 +597,105 @@ class HierarchicalBroadPhase {
     const auto s = static_cast<std::size_t>(slot);
     const bool st = t.is_static(slot);
     leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box(s), t.active(slot), st);
+    if (st) {
+      near_static_changed(t.box(s));
+      return;
+    }
+    dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
+    dynamics_.push_back(slot);
+    cache_.push_back(t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
-    (t.is_static(slot) ? static_ : dynamic_).remove(leaf_[s]);
+    if (t.is_static(slot)) {
+      near_static_changed(static_.box(leaf_[s]));
+      static_.remove(leaf_[s]);
+      leaf_[s] = DynamicTree<S>::null;
+      return;
+    }
+    dynamic_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
+    const std::int32_t pos = dyn_pos_[s];
+    cache_.swap_remove(static_cast<std::size_t>(pos));
+    const std::int32_t last = dynamics_.back();
+    dynamics_[static_cast<std::size_t>(pos)] = last;
+    dyn_pos_[static_cast<std::size_t>(last)] = pos;
+    dynamics_.pop_back();
+    dyn_pos_[s] = -1;
   }
-  void moved(std::int32_t slot, const ObjectTable<S>&) {
-    if (!moved_flag_[static_cast<std::size_t>(slot)]) {
-      moved_flag_[static_cast<std::size_t>(slot)] = 1;
+  void moved(std::int32_t slot, const ObjectTable<S>& t) {
+    const auto s = static_cast<std::size_t>(slot);
+    if (t.is_static(slot)) {
+      // The leaf still holds the box of the last update: every box the object had since is
+      // queried when it is set, so the dynamic objects near any of them are invalidated.
+      if (!moved_flag_[s]) near_static_changed(static_.box(leaf_[s]));
+      near_static_changed(t.box(slot));
+    }
+    if (!moved_flag_[s]) {
+      moved_flag_[s] = 1;
       moved_.push_back(slot);
     }
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    cache_.set_active(pos_of(slot), t.active(slot));
     dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
-  void filter_changed(std::int32_t, const ObjectTable<S>&) {}
+  void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    if (t.is_static(slot))
+      near_static_changed(t.box(slot));
+    else
+      cache_.invalidate(pos_of(slot));
+  }
 
   /// Applies the moves since the last update: refits (reinsertions for objects that left their fat
-  /// box) and rebuilds of degraded trees. Serial (tree edits); `threads` is unused.
-  void update(const ObjectTable<S>& t, BroadPhaseStats& st, int /*threads*/) { flush(t, st); }
+  /// box) and rebuilds of degraded trees, serial; then the static-tree queries of the dynamic
+  /// objects whose candidates are out of date and the tight-box re-tests of those that moved, on
+  /// `threads` threads.
+  void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
+    flush(t, st);
+    const std::int32_t root = static_.root();
+    const Aabb<S>* bounds = root == DynamicTree<S>::null ? nullptr : &static_.box(root);
+    cache_.update(t, dynamics_, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {
+      static_.query(
+          dynamic_.box(leaf_[static_cast<std::size_t>(a)]),
+          [&](std::int32_t b) {
+            if (t.accepts(a, b))
+              cand.push_back(b);
+            else
+              ++cs.pairs_filtered;
+            return true;
+          },
+          cs);
+    });
+  }
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    const auto leaf_pair = pair_filter(t, visit, st);
-    if (!dynamic_.self_pairs(leaf_pair, st)) return false;
-    return dynamic_.cross_pairs(static_, leaf_pair, st);
+    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
+    return dynamic_.self_pairs(pair_filter(t, visit, st), st);
   }
 
-  /// Parts of find_pairs (broad_phase.hpp): seeds of the dynamic tree's self traversal, then of
-  /// its traversal against the static tree.
+  /// Parts of find_pairs (broad_phase.hpp): ranges of the dynamic objects' static pairs, then
+  /// seeds of the dynamic tree's self traversal.
   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
     std::vector<PairTask> tasks;
-    for (const auto& seed : dynamic_.split_self_pairs(want)) tasks.push_back({0, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
-    for (const auto& seed : dynamic_.split_cross_pairs(static_, want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
+    const std::size_t n = dynamics_.size();
+    const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
+    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
+    for (const auto& seed : dynamic_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
     return tasks;
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    const auto leaf_pair = pair_filter(t, visit, st);
-    const typename DynamicTree<S>::PairSeed seed{task.i, task.j, task.pre_bv_tests};
-    return task.kind == 0 ? dynamic_.self_pairs_from(seed, leaf_pair, st) : dynamic_.cross_pairs_from(static_, seed, leaf_pair, st);
+    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
+    return dynamic_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
   const DynamicTree<S>& static_tree() const { return static_; }
   const DynamicTree<S>& dynamic_tree() const { return dynamic_; }
 
  private:
-  /// The leaf-pair visitor of the traversals: rules 1 to 3 of the pair rule, then visit.
+  /// The leaf-pair visitor of the self traversal: rules 1 to 3 of the pair rule, then visit.
   template <class Visit>
   static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
     return [&t, &visit, &st](std::int32_t a, std::int32_t b) {
@@ -650,10 +706,29 @@ class HierarchicalBroadPhase {
     };
   }
 
+  /// A static object with this box was added, removed, moved or refiltered: the dynamic objects
+  /// whose fat boxes overlap it find their candidates again (the others' cannot name it, before or
+  /// after). Counts nothing: an edit has no stats.
+  void near_static_changed(const Aabb<S>& box) {
+    BroadPhaseStats ignored;
+    dynamic_.query(
+        box,
+        [&](std::int32_t a) {
+          cache_.invalidate(pos_of(a));
+          return true;
+        },
+        ignored);
+  }
+
+  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
+  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
+
   void grow(std::int32_t slot) {
-    if (static_cast<std::size_t>(slot) >= leaf_.size()) {
-      leaf_.resize(static_cast<std::size_t>(slot) + 1, DynamicTree<S>::null);
-      moved_flag_.resize(static_cast<std::size_t>(slot) + 1, 0);
+    const auto n = static_cast<std::size_t>(slot) + 1;
+    if (n > leaf_.size()) {
+      leaf_.resize(n, DynamicTree<S>::null);
+      dyn_pos_.resize(n, -1);
+      moved_flag_.resize(n, 0);
     }
   }
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
@@ -662,7 +737,15 @@ class HierarchicalBroadPhase {
       const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
       if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
       ++st.refits;
-      if ((t.is_static(slot) ? static_ : dynamic_).update(leaf, t.box(slot))) ++st.reinserts;
+      if (t.is_static(slot)) {
+        if (static_.update(leaf, t.box(slot))) ++st.reinserts;
+        continue;
+      }
+      cache_.moved(pos_of(slot));
+      if (dynamic_.update(leaf, t.box(slot))) {
+        ++st.reinserts;
+        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
+      }
     }
     moved_.clear();
     if (static_.maybe_rebuild()) ++st.rebuilds;
@@ -670,9 +753,12 @@ class HierarchicalBroadPhase {
   }
 
   DynamicTree<S> static_, dynamic_;
-  std::vector<std::int32_t> leaf_;
+  std::vector<std::int32_t> leaf_;      // slot -> leaf in its tree
+  std::vector<std::int32_t> dyn_pos_;   // slot -> index in dynamics_
+  std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
+  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
 };
 
 }  // namespace impact

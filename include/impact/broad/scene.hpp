@@ -39,8 +39,11 @@
 #include "impact/broad/static_dynamic.hpp"
 #include "impact/core/error.hpp"
 #include "impact/core/parallel.hpp"
+#include "impact/core/validate.hpp"
+#include "impact/geometry/transform.hpp"
 
 #include <atomic>
+#include <cmath>
 #include <limits>
 #include <mutex>
 #include <string>
@@ -297,9 +300,11 @@ class Scene {
       slot = table_.size();
       table_.push_back();
       objects_.emplace_back();
+      slot_ids_.emplace_back();
     }
     const auto s = static_cast<std::size_t>(slot);
     objects_[s] = {id, shape, pose, std::move(local)};
+    slot_ids_[s] = id;
     table_.box(slot) = box;
     table_.flags(slot) = std::uint8_t(ObjectTable<S>::Alive | (options.body == BodyType::Static ? ObjectTable<S>::Static : 0) |
                                       (options.sleeping ? ObjectTable<S>::Sleeping : 0));
@@ -594,7 +599,7 @@ class Scene {
 
   /// The ids of slots x and y, smaller first.
   std::pair<ObjectId, ObjectId> ids_of(std::int32_t x, std::int32_t y) const {
-    ObjectId ia = objects_[static_cast<std::size_t>(x)].id, ib = objects_[static_cast<std::size_t>(y)].id;
+    ObjectId ia = slot_ids_[static_cast<std::size_t>(x)], ib = slot_ids_[static_cast<std::size_t>(y)];
     if (ib < ia) std::swap(ia, ib);
     return {ia, ib};
   }
@@ -623,8 +628,19 @@ class Scene {
     return it->second;
   }
 
+  /// validate_pose with the object's name in the message. The plainly valid case is decided first
+  /// without building the name (set_pose runs once per moving object and step).
   static void check_pose(const RigidTransform<S>& pose, const char* where, ObjectId id) {
+    if (IMPACT_LIKELY(plainly_rigid(pose))) return;
     validate_pose(pose, where, ("pose of object " + std::to_string(id)).c_str());
+  }
+  /// validate_pose's own test of the common case (t within CoordinateRange, R rigid within
+  /// rotation_tolerance; NaN and infinities fail it), so that the name is built only when
+  /// validate_pose is going to throw.
+  static bool plainly_rigid(const RigidTransform<S>& pose) {
+    constexpr S range = CoordinateRange<S>::max;
+    const Vec3<S>& t = pose.t;
+    return std::abs(t.x()) <= range && std::abs(t.y()) <= range && std::abs(t.z()) <= range && pose.is_rigid(rotation_tolerance<S>());
   }
 
   /// A broad phase of the enum, static_leaf_size >= 1, the tree's fat_fraction, fat_margin and
@@ -646,6 +662,7 @@ class Scene {
   Shapes shapes_;
   ObjectTable<S> table_;
   std::vector<Object> objects_;
+  std::vector<ObjectId> slot_ids_;  ///< objects_[slot].id, dense: reporting a pair reads only these
   std::unordered_map<ObjectId, std::int32_t> ids_;
   std::vector<std::int32_t> free_;
   std::size_t count_ = 0;

@@ -23,35 +23,13 @@
 #pragma once
 
 #include "impact/broad/dynamic_tree.hpp"
+#include "impact/broad/static_candidates.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/traverse.hpp"
-#include "impact/core/parallel.hpp"
 
 #include <algorithm>
 
 namespace impact {
-
-namespace detail {
-/// Spreads the low 10 bits of v so that there are two zero bits between consecutive ones.
-inline std::uint32_t spread_bits3(std::uint32_t v) {
-  v &= 0x3ffu;
-  v = (v | (v << 16)) & 0x030000ffu;
-  v = (v | (v << 8)) & 0x0300f00fu;
-  v = (v | (v << 4)) & 0x030c30c3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
-/// 30-bit Morton code of p quantised to 10 bits per axis by (p - lo) * scale (clamped).
-template <class S>
-inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& scale) {
-  std::uint32_t c[3];
-  for (int k = 0; k < 3; ++k) {
-    const S q = (p[k] - lo[k]) * scale[k];
-    c[k] = q > S(0) ? std::uint32_t(std::min(q, S(1023))) : 0u;
-  }
-  return spread_bits3(c[0]) | (spread_bits3(c[1]) << 1) | (spread_bits3(c[2]) << 2);
-}
-}  // namespace detail
 
 template <class S>
 class StaticDynamicBroadPhase {
@@ -70,9 +48,7 @@ class StaticDynamicBroadPhase {
     leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
     dyn_pos_[s] = static_cast<std::int32_t>(dynamics_.size());
     dynamics_.push_back(slot);
-    cand_epoch_[s] = 0;
-    cand_[s].clear();
-    hits_[s].clear();
+    cache_.push_back(t.active(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -83,14 +59,12 @@ class StaticDynamicBroadPhase {
     dyn_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
     const std::int32_t pos = dyn_pos_[s];
+    cache_.swap_remove(static_cast<std::size_t>(pos));
     const std::int32_t last = dynamics_.back();
     dynamics_[static_cast<std::size_t>(pos)] = last;
     dyn_pos_[static_cast<std::size_t>(last)] = pos;
     dynamics_.pop_back();
     dyn_pos_[s] = -1;
-    cand_[s].clear();
-    hits_[s].clear();
-    cand_epoch_[s] = 0;
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -104,13 +78,14 @@ class StaticDynamicBroadPhase {
     }
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
+    cache_.set_active(pos_of(slot), t.active(slot));
     dyn_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
     if (t.is_static(slot))
-      ++epoch_;  // every candidate list may name it
+      cache_.invalidate_all();  // every candidate list may name it
     else
-      cand_epoch_[static_cast<std::size_t>(slot)] = 0;
+      cache_.invalidate(pos_of(slot));
   }
 
   /// Applies the edits since the last update: refits and reinsertions of moved objects, rebuilds;
@@ -118,41 +93,16 @@ class StaticDynamicBroadPhase {
   /// each object writing only its own candidates) and the tight-box re-tests of those that moved.
   void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
     flush(t, st);
-    // Dynamic against static. Objects whose fat box changed query the static tree, in Morton
-    // order of their centres so that consecutive queries walk the same part of the tree (the
-    // static tree is large: this is what keeps its nodes in cache).
-    need_.clear();
-    for (const std::int32_t a : dynamics_)
-      if (t.active(a) && cand_epoch_[static_cast<std::size_t>(a)] != epoch_) need_.push_back({0u, a});
-    if (!need_.empty() && !static_tree_.empty()) {
-      const Aabb<S>& root = static_tree_.root().bv;
-      const Vec3<S> scale = Vec3<S>::Constant(S(1023)).cwiseQuotient((root.max - root.min).cwiseMax(Vec3<S>::Constant(S(1e-30))));
-      for (auto& [code, a] : need_) code = detail::morton_code<S>(t.box(a).center(), root.min, scale);
-      std::sort(need_.begin(), need_.end());
-    }
-    for_chunks(need_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) { query_static(t, need_[k].second, cs); });
-    // Hits from the tight box, recomputed only for active objects that moved (sleeping ones'
-    // static pairs are inactive pairs: they wait until the object wakes).
-    stale_list_.clear();
-    for (const std::int32_t a : dynamics_)
-      if (t.active(a) && stale_[static_cast<std::size_t>(a)]) stale_list_.push_back(a);
-    for_chunks(stale_list_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
-      const std::int32_t a = stale_list_[k];
-      const auto sa = static_cast<std::size_t>(a);
-      std::vector<std::int32_t>& hits = hits_[sa];
-      hits.clear();
-      const Aabb<S>& box = t.box(sa);
-      for (const std::int32_t b : cand_[sa]) {
-        ++cs.pairs_tested;
-        if (overlap(box, t.box(b))) hits.push_back(b);
-      }
-      stale_[sa] = 0;
-    });
+    // Dynamic against static: the static tree is large, so the queries' Morton order is what
+    // keeps its nodes in cache.
+    const Aabb<S>* bounds = static_tree_.empty() ? nullptr : &static_tree_.root().bv;
+    cache_.update(t, dynamics_, bounds, threads, st,
+                  [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) { query_static(t, a, cand, cs); });
   }
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!static_pairs(t, 0, dynamics_.size(), visit, st)) return false;
+    if (!cache_.pairs(dynamics_, 0, dynamics_.size(), visit, st)) return false;
     return dyn_.self_pairs(pair_filter(t, visit, st), st);
   }
 
@@ -168,7 +118,7 @@ class StaticDynamicBroadPhase {
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return static_pairs(t, task.begin, task.end, visit, st);
+    if (task.kind == 0) return cache_.pairs(dynamics_, task.begin, task.end, visit, st);
     return dyn_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
   }
 
@@ -176,20 +126,6 @@ class StaticDynamicBroadPhase {
   const Bvh<Aabb<S>>& static_tree() const { return static_tree_; }
 
  private:
-  /// The cached static pairs of dynamics_[begin, end) (active ones).
-  template <class Visit>
-  bool static_pairs(const ObjectTable<S>& t, std::size_t begin, std::size_t end, Visit& visit, BroadPhaseStats& st) const {
-    for (std::size_t p = begin; p < end; ++p) {
-      const std::int32_t a = dynamics_[p];
-      if (!t.active(a)) continue;
-      for (const std::int32_t b : hits_[static_cast<std::size_t>(a)]) {
-        ++st.pairs_found;
-        if (!visit(a, b)) return false;
-      }
-    }
-    return true;
-  }
-
   /// The dynamic tree's leaf-pair visitor: rules 1 to 3 of the pair rule, then visit.
   template <class Visit>
   static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
@@ -202,12 +138,8 @@ class StaticDynamicBroadPhase {
   }
 
   /// Static-tree query of dynamic object a with its fat box: its accepted candidates.
-  void query_static(const ObjectTable<S>& t, std::int32_t a, BroadPhaseStats& st) {
-    const auto sa = static_cast<std::size_t>(a);
-    std::vector<std::int32_t>& cand = cand_[sa];
-    cand.clear();
-    ++st.static_queries;
-    const Aabb<S>& fat = dyn_.box(leaf_[sa]);
+  void query_static(const ObjectTable<S>& t, std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& st) const {
+    const Aabb<S>& fat = dyn_.box(leaf_[static_cast<std::size_t>(a)]);
     traverse(
         static_tree_,
         [&](const Aabb<S>& bv) {
@@ -224,26 +156,10 @@ class StaticDynamicBroadPhase {
             ++st.pairs_filtered;
           return true;
         });
-    cand_epoch_[sa] = epoch_;
-    stale_[sa] = 1;
   }
 
-  /// body(k, stats) for k in [0, n), on `threads` threads when n is large enough to pay; the
-  /// counters of every chunk added to st (integer sums: the same totals for any thread count).
-  template <class Body>
-  static void for_chunks(std::size_t n, int threads, BroadPhaseStats& st, Body&& body) {
-    constexpr std::size_t grain = 64;
-    if (threads <= 1 || n < 2 * grain) {
-      for (std::size_t k = 0; k < n; ++k) body(k, st);
-      return;
-    }
-    std::vector<BroadPhaseStats> chunk_stats((n + grain - 1) / grain);
-    parallel_for_ranges(n, grain, threads, [&](std::size_t b, std::size_t e) {
-      BroadPhaseStats& cs = chunk_stats[b / grain];
-      for (std::size_t k = b; k < e; ++k) body(k, cs);
-    });
-    for (const auto& cs : chunk_stats) st += cs;
-  }
+  /// The position of dynamic object `slot` in dynamics_ (and in cache_).
+  std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(dyn_pos_[static_cast<std::size_t>(slot)]); }
 
   void grow(std::int32_t slot) {
     const auto n = static_cast<std::size_t>(slot) + 1;
@@ -251,10 +167,6 @@ class StaticDynamicBroadPhase {
       leaf_.resize(n, DynamicTree<S>::null);
       dyn_pos_.resize(n, -1);
       moved_flag_.resize(n, 0);
-      cand_.resize(n);
-      hits_.resize(n);
-      cand_epoch_.resize(n, 0);
-      stale_.resize(n, 1);
     }
   }
 
@@ -265,10 +177,10 @@ class StaticDynamicBroadPhase {
       const std::int32_t leaf = leaf_[s];
       if (leaf == DynamicTree<S>::null) continue;  // removed (or now static) since it moved
       ++st.refits;
-      stale_[s] = 1;
+      cache_.moved(pos_of(slot));
       if (dyn_.update(leaf, t.box(s))) {
         ++st.reinserts;
-        cand_epoch_[s] = 0;  // the fat box changed: query the static tree again
+        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
       }
     }
     moved_.clear();
@@ -298,7 +210,7 @@ class StaticDynamicBroadPhase {
         },
         cfg);
     static_dirty_ = false;
-    ++epoch_;
+    cache_.invalidate_all();
   }
 
   DynamicTree<S> dyn_;
@@ -311,13 +223,7 @@ class StaticDynamicBroadPhase {
   std::vector<std::int32_t> dynamics_;  // dynamic slots
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
-  std::vector<std::vector<std::int32_t>> cand_;               // dynamic slot -> accepted static slots overlapping its fat box
-  std::vector<std::vector<std::int32_t>> hits_;               // dynamic slot -> those overlapping its tight box
-  std::vector<std::uint32_t> cand_epoch_;                     // cand_ valid when equal to epoch_
-  std::vector<std::uint8_t> stale_;                           // hits_ must be recomputed from cand_
-  std::vector<std::pair<std::uint32_t, std::int32_t>> need_;  // (Morton code, slot) to query (update's scratch)
-  std::vector<std::int32_t> stale_list_;                      // active slots whose hits_ update recomputes (update's scratch)
-  std::uint32_t epoch_ = 1;
+  StaticCandidates<S> cache_;  // position in dynamics_ -> static candidates and hits
 };
 
 }  // namespace impact
