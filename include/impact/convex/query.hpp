@@ -187,13 +187,19 @@ struct PairFrame {
   }
 };
 
-/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
+/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()), run in
+/// a's frame (PairFrame: a's support without rotation, b's with one each way); witness points in
+/// the world.
 template <class S, class A, class B>
 ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                       const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
-  const auto sa = [&](const Vec3<S>& d) { return support(a, pa, d); };
-  const auto sb = [&](const Vec3<S>& d) { return support(b, pb, d); };
-  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin, stop_within_margin);
+  const PairFrame<S> f(pa, pb);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(ia - f.b_to_a(ib)), tolerance, max_iterations, margin, stop_within_margin);
+  r.point_a = pa.apply(r.point_a);
+  r.point_b = pa.apply(r.point_b);
+  return r;
 }
 
 template <class S>
@@ -284,23 +290,21 @@ template <class T, class S>
 inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_v<T, ConvexHull<S>> || std::is_same_v<T, TriangleShape<S>> ||
                                       std::is_same_v<T, PointCore<S>> || std::is_same_v<T, SegmentCore<S>>;
 
-/// The own EPA (convex/epa.hpp) on a and b, in a's frame (PairFrame) translated to the midpoint of
-/// their interior points (for precision far from the world origin and far from a's centre).
-/// `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
-template <class S, class A, class B>
-ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                         const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed) {
-  const PairFrame<S> f(pa, pb);
-  const Vec3<S> la = ia, lb = f.b_to_a(ib);
+/// The own EPA (convex/epa.hpp) on support functions sa, sb of one frame, from interior points
+/// la of a and lb of b there, translated to their midpoint (for precision far from the frame's
+/// origin). `failed` is set when it meets a degenerate Minkowski difference. Results in that frame.
+template <class S, class SupportA, class SupportB>
+ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& la, const Vec3<S>& lb, S scale,
+                                  const ConvexQueryOptions<S>& o, bool refine, bool& failed) {
   const Vec3<S> origin = (la + lb) / S(2);
-  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support(a, d) - origin); };
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(f.support_b(b, d) - origin); };
+  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support_a(d) - origin); };
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support_b(d) - origin); };
   EpaSettings<S> st;
   st.scale = scale;
   st.tolerance = o.relative_tolerance * scale;
   st.coarse_tolerance = S(1e-3) * scale;
   st.max_iterations = o.max_iterations;
-  st.refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
+  st.refine = refine;
   const EpaPenetration<S> r = epa_penetration(sa, sb, Vec3<S>(la - lb), st);
   ConvexContact<S> c;
   failed = r.failed;
@@ -308,11 +312,27 @@ ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>&
   c.limit_reached = r.limit_reached;
   if (!r.intersecting || r.failed) return c;
   c.intersecting = true;
-  c.normal = pa.rotate(r.normal);
+  c.normal = r.normal;
   c.depth = r.depth;
-  c.point = pa.apply(Vec3<S>((r.point_a + r.point_b) / S(2) + origin));
+  c.point = (r.point_a + r.point_b) / S(2) + origin;
   c.depth_gap = std::max(r.depth - r.lower, S(0));
   c.refined = r.refined;
+  return c;
+}
+
+/// The own EPA on a and b in a's frame (PairFrame: a's support without rotation, b's with one each
+/// way). `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
+template <class S, class A, class B>
+ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
+                         const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed) {
+  const PairFrame<S> f(pa, pb);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
+  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed);
+  if (!c.intersecting) return c;
+  c.normal = pa.rotate(c.normal);
+  c.point = pa.apply(c.point);
   return c;
 }
 
