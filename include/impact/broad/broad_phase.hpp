@@ -98,13 +98,14 @@ struct BroadPhaseStats {
 };
 
 /// Per-slot object data the broad phases read. Owned by the scene; slots of removed objects are
-/// dead (alive == 0) until reused. One 64-byte record per slot (for double): the broad phases read
-/// the box, flags and filter of random slots together.
+/// dead (alive == 0) until reused. One 64-byte record per slot (for double), aligned to a cache
+/// line: the broad phases read the box, flags and filter of random slots together, and a record
+/// straddling two lines would cost two misses.
 template <class S>
 struct ObjectTable {
   enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
 
-  struct Record {
+  struct alignas(sizeof(S) == 8 ? 64 : 8) Record {
     Aabb<S> box;  ///< world AABB of the object itself (never fattened)
     CollisionFilter filter;
     std::uint32_t ignore_count = 0;  ///< entries of the ignore list naming this slot
@@ -144,13 +145,11 @@ struct ObjectTable {
   }
 };
 
-/// One independent part of a broad phase's find_pairs (see split_pairs above). Its fields mean
-/// what the broad phase that made it says: a node pair of a tree traversal (i, j) with the node
-/// tests of its ancestors (pre_bv_tests), or a range [begin, end) of a list of objects.
+/// One independent part of a broad phase's find_pairs (see split_pairs above): a range [begin,
+/// end) of positions in one of the broad phase's lists of objects, the list named by `kind` (what
+/// the broad phase that made it says).
 struct PairTask {
   std::uint8_t kind = 0;
-  std::int32_t i = -1, j = -1;
-  std::uint64_t pre_bv_tests = 0;
   std::size_t begin = 0, end = 0;
 };
 

@@ -107,6 +107,10 @@ class StaticCandidates {
   /// The position of dynamic object `slot`.
   std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(pos_[static_cast<std::size_t>(slot)]); }
   std::size_t size() const { return cand_.size(); }
+  /// The slot of the dynamic object at position pos.
+  std::int32_t slot(std::size_t pos) const { return slots_[pos]; }
+  /// Whether the object at position pos is active (awake).
+  bool active(std::size_t pos) const { return active_[pos]; }
   /// The object is active (awake) or not: its pairs are reported, its lists kept up to date.
   void set_active(std::size_t pos, bool active) { active_[pos] = active; }
   /// The object's candidates must be found again (its fat box or filter changed, or a static
