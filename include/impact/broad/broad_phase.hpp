@@ -53,8 +53,8 @@ namespace impact {
 /// Which broad phase a scene uses. All three return the same pair sets.
 enum class BroadPhaseKind : std::uint8_t {
   AllPairs,       ///< O(active * n) reference (all_pairs.hpp)
-  StaticDynamic,  ///< static tree built once, cached static candidates, dynamic tree (static_dynamic.hpp)
-  Hierarchical,   ///< incremental AABB trees for static and dynamic objects, self and cross pair traversal (dynamic_tree.hpp)
+  StaticDynamic,  ///< static tree built once, cached static candidates, dynamic tree with cached pairs (static_dynamic.hpp)
+  Hierarchical,   ///< incremental AABB trees for static and dynamic objects, cached static candidates and dynamic pairs (hierarchical.hpp)
 };
 
 /// Group/mask filter: objects a and b may collide only when (a.group & b.mask) and
@@ -154,6 +154,17 @@ struct PairTask {
 };
 
 namespace detail {
+
+/// Asks the processor to bring in the cache line at p (a hint; nothing where the compiler offers
+/// none). The broad phases' passes over scattered records (the moved objects, their candidates)
+/// issue it a few iterations ahead, so that several misses are under way at once.
+inline void prefetch(const void* p) {
+#if defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(p);
+#else
+  (void)p;
+#endif
+}
 
 /// Rules 2 and 3 for a pair whose activity (rule 1) the caller has established, with counting.
 /// Returns true when the pair is to be reported.

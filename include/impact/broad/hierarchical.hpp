@@ -160,7 +160,19 @@ class HierarchicalBroadPhase {
     }
   }
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
-    for (const std::int32_t slot : moved_) {
+    const std::size_t n = moved_.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k + 8 < n) {  // this loop's scattered reads for the object 8 ahead, and its leaf for the one 4 ahead
+        const auto f = static_cast<std::size_t>(moved_[k + 8]);
+        detail::prefetch(&leaf_[f]);
+        detail::prefetch(&moved_flag_[f]);
+        detail::prefetch(&t.box(moved_[k + 8]));
+      }
+      if (k + 4 < n) {
+        const std::int32_t l = leaf_[static_cast<std::size_t>(moved_[k + 4])];
+        if (l != DynamicTree<S>::null) detail::prefetch(t.is_static(moved_[k + 4]) ? &static_.box(l) : &dynamic_.box(l));
+      }
+      const std::int32_t slot = moved_[k];
       moved_flag_[static_cast<std::size_t>(slot)] = 0;
       const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
       if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
