@@ -19,9 +19,10 @@
 ///                                     and caps
 ///   box – box                         separating axes (boolean, penetration); GJK for distance
 ///   sphere/capsule – other            GJK distance between the core and the other shape, minus
-///                                     the radius (exact up to GJK's tolerance); when the core
-///                                     itself meets the other shape: the own EPA on the core, plus
-///                                     the radius
+///                                     the radius (exact up to GJK's tolerance; a capsule's segment
+///                                     against a cylinder by convex/segment_cylinder.hpp); when the
+///                                     core itself meets the other shape: the own EPA on the core,
+///                                     plus the radius
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
@@ -44,6 +45,7 @@
 #include "impact/convex/epa.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
+#include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/convex/triangle_shape.hpp"
 
@@ -355,6 +357,19 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
   return epa(a, pa, b, pb, o);
 }
 
+/// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
+/// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
+/// when the segment stays clear of the cylinder (GJK otherwise).
+template <class S, class C, class B>
+ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
+                                int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
+  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
+    ConvexDistance<S> d;
+    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) return d;
+  }
+  return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin);
+}
+
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
 /// core touches b. `flip` swaps the roles back for the caller (b was the round one).
 template <class S, class R, class B>
@@ -366,7 +381,7 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
   const S r = round_radius(a);
   // the radius as margin, stopping only when the core is farther than it (no contact: the common
   // case, decided as cheaply as the boolean); else converged as without a margin
-  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations, r, false);
+  const ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations, r, false);
   if (!d.intersecting && d.distance > tol) {
     ConvexContact<S> c;
     c.iterations = d.iterations;
@@ -408,7 +423,7 @@ ConvexDistance<S> round_distance(const R& a, const RigidTransform<S>& pa, const 
                                  const ConvexQueryOptions<S>& o) {
   const auto core = core_of(a);
   const S tol = o.relative_tolerance * query_scale<S>(a, b);
-  ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
+  ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations);
   const S r = round_radius(a);
   if (d.intersecting || d.distance <= r) {
     d.intersecting = true;
