@@ -458,6 +458,59 @@ TEST(DynamicTree, RandomEditsStayValidAndBalanced) {
   EXPECT_TRUE(tree.valid());
 }
 
+// DynamicTree::fresh_pairs: after random edits, the pairs of overlapping fat boxes with at least
+// one fresh leaf (inserted or reinserted since the last call, active or not, including leaves
+// removed and node ids reused in between), each once, as brute force finds them.
+TEST(DynamicTree, FreshPairsAreThePairsOfFreshLeaves) {
+  Rng rng(9);
+  DynamicTree<double> tree;
+  const int n = 600;
+  std::vector<std::int32_t> leaf(n, -1);
+  std::vector<bool> fresh(n, false);
+  auto insert = [&](int i) {
+    const Eigen::Vector3d c = rng.vec(0, 30), e = rng.vec(0, 1);
+    leaf[std::size_t(i)] = tree.insert(i, {c - e, c + e}, i % 3 == 0);
+    tree.mark_fresh(leaf[std::size_t(i)]);
+    fresh[std::size_t(i)] = true;
+  };
+  for (int i = 0; i < n; ++i) insert(i);
+  for (int round = 0; round < 12; ++round) {
+    std::vector<std::pair<int, int>> got;
+    BroadPhaseStats st;
+    tree.fresh_pairs([&](std::int32_t a, std::int32_t b) { got.push_back({std::min(a, b), std::max(a, b)}); }, st);
+    std::sort(got.begin(), got.end());
+    std::vector<std::pair<int, int>> want;
+    for (int a = 0; a < n; ++a)
+      for (int b = a + 1; b < n; ++b)
+        if (leaf[std::size_t(a)] >= 0 && leaf[std::size_t(b)] >= 0 && (fresh[std::size_t(a)] || fresh[std::size_t(b)]) &&
+            overlap(tree.box(leaf[std::size_t(a)]), tree.box(leaf[std::size_t(b)])))
+          want.push_back({a, b});
+    EXPECT_FALSE(want.empty());
+    ASSERT_EQ(got, want) << "round " << round;
+    std::fill(fresh.begin(), fresh.end(), false);
+    for (int k = 0; k < 80; ++k) {
+      const std::size_t i = rng.index(std::size_t(n));
+      const double u = rng.uniform();
+      if (leaf[i] >= 0 && u < 0.25) {  // removed, perhaps after being marked
+        tree.remove(leaf[i]);
+        leaf[i] = -1;
+        fresh[i] = false;
+      } else if (leaf[i] < 0) {
+        insert(int(i));
+      } else {
+        const Eigen::Vector3d d = rng.vec(-1.5, 1.5);
+        const Aabb<double> moved{tree.box(leaf[i]).min + d, tree.box(leaf[i]).max + d};
+        if (tree.update(leaf[i], moved)) {
+          tree.mark_fresh(leaf[i]);
+          fresh[i] = true;
+        }
+      }
+    }
+    tree.maybe_rebuild();
+    ASSERT_TRUE(tree.valid());
+  }
+}
+
 // Narrow phase per pair of kinds, with known answers.
 TYPED_TEST(BroadTyped, NarrowDispatch) {
   using S = TypeParam;

@@ -220,7 +220,7 @@ TYPED_TEST(ClothStep, RigidlyMovingSheetNeedsNoCcd) {
   const Vertices<S> x1_in = x1;
   Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(x0.rows());
   ClothCollisionOptions<S> opt;
-  opt.thickness = S(0.04);  // the envelopes (grown by h + h) reach the neighbouring cells
+  opt.thickness = S(0.04);  // the grown envelopes (h around each swept box) reach the neighbouring cells
   opt.proximity = false;
   const auto st = cloth_collision_step(g.F, w, x0, x1, ClothObstacles<S>{}, opt);
   EXPECT_TRUE(st.collision_free);

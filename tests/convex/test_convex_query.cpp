@@ -143,6 +143,38 @@ TEST(ConvexQuery, RoundAgainstGeneral) {
   check_pair("sphere-hull", z.sphere, z.hull, {1e-9, 1e-9}, 26);
 }
 
+// A capsule's segment against a cylinder (convex/segment_cylinder.hpp): wherever it answers, the
+// distance agrees with GJK on the core within the tolerance, its points lie on the segment and on
+// the cylinder's boundary at that distance; it declines segments that meet the cylinder.
+TEST(ConvexQuery, SegmentCylinderMatchesGjk) {
+  const auto& z = zoo();
+  const double tol = 1e-10 * std::max(shape_size(z.capsule), shape_size(z.cylinder));
+  int answered = 0, declined = 0;
+  for (const auto& [pa, pb] : convex_poses(300, 1.2, 41)) {
+    ConvexDistance<double> d;
+    if (!detail::segment_cylinder_distance(z.capsule.half_length, pa, z.cylinder, pb, tol, d)) {
+      ++declined;
+      const auto g = detail::gjk(detail::SegmentCore<double>{z.capsule.half_length}, pa, V3(V3::Zero()), z.cylinder, pb, V3(V3::Zero()), tol, 128);
+      EXPECT_TRUE(g.intersecting || g.distance <= 2 * tol) << "declined a segment " << g.distance << " away";
+      continue;
+    }
+    ++answered;
+    const auto g = detail::gjk(detail::SegmentCore<double>{z.capsule.half_length}, pa, V3(V3::Zero()), z.cylinder, pb, V3(V3::Zero()), tol, 128);
+    ASSERT_FALSE(g.intersecting);
+    EXPECT_NEAR(d.distance, g.distance, 2 * tol);
+    EXPECT_NEAR((d.point_a - d.point_b).norm(), d.distance, 1e-14);
+    const V3 la = pa.inverse().apply(d.point_a), lb = pb.inverse().apply(d.point_b);
+    EXPECT_LT(std::hypot(la.x(), la.y()), 1e-14);  // on the segment
+    EXPECT_LE(std::abs(la.z()), z.capsule.half_length + 1e-14);
+    const double rho = std::hypot(lb.x(), lb.y());  // on the cylinder's boundary
+    EXPECT_LE(rho, z.cylinder.radius + 1e-14);
+    EXPECT_LE(std::abs(lb.z()), z.cylinder.half_length + 1e-14);
+    EXPECT_TRUE(std::abs(rho - z.cylinder.radius) < 1e-14 || std::abs(std::abs(lb.z()) - z.cylinder.half_length) < 1e-14);
+  }
+  EXPECT_GT(answered, 100);
+  EXPECT_GT(declined, 0);
+}
+
 TEST(ConvexQuery, GeneralPairs) {
   const auto& z = zoo();
   check_pair("box-hull", z.box, z.hull, {1e-9, 1e-9}, 31);

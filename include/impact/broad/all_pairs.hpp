@@ -46,7 +46,7 @@ class AllPairsBroadPhase {
     std::vector<PairTask> tasks;
     const std::size_t n = active_.size();
     const std::size_t chunk = std::max<std::size_t>(8, n / std::max<std::size_t>(want, 1));
-    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
+    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, b, std::min(n, b + chunk)});
     return tasks;
   }
   template <class Visit>

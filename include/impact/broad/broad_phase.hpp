@@ -53,8 +53,8 @@ namespace impact {
 /// Which broad phase a scene uses. All three return the same pair sets.
 enum class BroadPhaseKind : std::uint8_t {
   AllPairs,       ///< O(active * n) reference (all_pairs.hpp)
-  StaticDynamic,  ///< static tree built once, cached static candidates, dynamic tree (static_dynamic.hpp)
-  Hierarchical,   ///< incremental AABB trees for static and dynamic objects, self and cross pair traversal (dynamic_tree.hpp)
+  StaticDynamic,  ///< static tree built once, cached static candidates, dynamic tree with cached pairs (static_dynamic.hpp)
+  Hierarchical,   ///< incremental AABB trees for static and dynamic objects, cached static candidates and dynamic pairs (hierarchical.hpp)
 };
 
 /// Group/mask filter: objects a and b may collide only when (a.group & b.mask) and
@@ -98,13 +98,14 @@ struct BroadPhaseStats {
 };
 
 /// Per-slot object data the broad phases read. Owned by the scene; slots of removed objects are
-/// dead (alive == 0) until reused. One 64-byte record per slot (for double): the broad phases read
-/// the box, flags and filter of random slots together.
+/// dead (alive == 0) until reused. One 64-byte record per slot (for double), aligned to a cache
+/// line: the broad phases read the box, flags and filter of random slots together, and a record
+/// straddling two lines would cost two misses.
 template <class S>
 struct ObjectTable {
   enum Flags : std::uint8_t { Alive = 1, Static = 2, Sleeping = 4 };
 
-  struct Record {
+  struct alignas(sizeof(S) == 8 ? 64 : 8) Record {
     Aabb<S> box;  ///< world AABB of the object itself (never fattened)
     CollisionFilter filter;
     std::uint32_t ignore_count = 0;  ///< entries of the ignore list naming this slot
@@ -144,17 +145,26 @@ struct ObjectTable {
   }
 };
 
-/// One independent part of a broad phase's find_pairs (see split_pairs above). Its fields mean
-/// what the broad phase that made it says: a node pair of a tree traversal (i, j) with the node
-/// tests of its ancestors (pre_bv_tests), or a range [begin, end) of a list of objects.
+/// One independent part of a broad phase's find_pairs (see split_pairs above): a range [begin,
+/// end) of positions in one of the broad phase's lists of objects, the list named by `kind` (what
+/// the broad phase that made it says).
 struct PairTask {
   std::uint8_t kind = 0;
-  std::int32_t i = -1, j = -1;
-  std::uint64_t pre_bv_tests = 0;
   std::size_t begin = 0, end = 0;
 };
 
 namespace detail {
+
+/// Asks the processor to bring in the cache line at p (a hint; nothing where the compiler offers
+/// none). The broad phases' passes over scattered records (the moved objects, their candidates)
+/// issue it a few iterations ahead, so that several misses are under way at once.
+inline void prefetch(const void* p) {
+#if defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(p);
+#else
+  (void)p;
+#endif
+}
 
 /// Rules 2 and 3 for a pair whose activity (rule 1) the caller has established, with counting.
 /// Returns true when the pair is to be reported.

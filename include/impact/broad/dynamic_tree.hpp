@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// DynamicTree: an incremental AABB tree over objects, and HierarchicalBroadPhase, the broad phase
-/// built on it.
+/// DynamicTree: an incremental AABB tree over objects (the dynamic tree of the static/dynamic
+/// split, both trees of the hierarchical broad phase).
 ///
 /// The tree lives in one flat node pool with a free list (the build-once `Bvh` of bvh/ cannot grow).
 /// Leaves hold *fattened* boxes: the object's tight box grown by a margin, so an object that moves a
@@ -14,18 +14,20 @@
 /// rebuild, the tree is rebuilt top-down (median split on the longest axis of the leaf centres).
 /// Leaf node ids are stable across rotations and rebuilds, so callers keep them as handles.
 ///
-/// Each node also records whether its subtree holds an *active* leaf (dynamic and awake): pair
-/// traversal skips node pairs with no active leaf on either side, so static–static and sleeping
-/// pairs are never reached. Pair traversal descends the larger node first (FCL's collisionRecurse
-/// rule, written iteratively), for the tree against itself and against another tree.
+/// Each node also records whether its subtree holds an *active* leaf (dynamic and awake): the
+/// self pair traversal (self_pairs) skips node pairs with no active leaf on either side, so
+/// static–static and sleeping pairs are never reached; it descends the larger node first (FCL's
+/// collisionRecurse rule, written iteratively). A cache of pairs (dynamic_pairs.hpp) needs only
+/// the pairs whose fat boxes changed: leaves marked *fresh* (mark_fresh) after an insertion or a
+/// reinsertion give theirs by fresh_pairs, each fresh leaf querying the subtrees beside its path
+/// to the root.
 ///
-/// Thread safety: the const members of DynamicTree (query, self_pairs, cross_pairs and their
-/// split/seeded forms) only read: any number of threads may call them at once while no thread
-/// edits the tree (insert, remove, update, set_active, rebuild, maybe_rebuild).
+/// Thread safety: the const members of DynamicTree (query, self_pairs) only read: any number of
+/// threads may call them at once while no thread edits the tree (insert, remove, update,
+/// set_active, mark_fresh, fresh_pairs, rebuild, maybe_rebuild).
 #pragma once
 
 #include "impact/broad/broad_phase.hpp"
-#include "impact/broad/static_candidates.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 
 #include <algorithm>
@@ -63,7 +65,9 @@ class DynamicTree {
     std::int32_t child[2] = {null, null};  ///< child[0] == null for leaves; a leaf keeps its object in child[1]
     std::int16_t height = 0;               ///< 0 for leaves, -1 for free nodes
     std::uint8_t active = 0;               ///< the subtree holds an active leaf
-    std::uint8_t exact = 0;                ///< leaf stored with its tight box (objects that never move)
+    std::uint8_t exact : 1;                ///< leaf stored with its tight box (objects that never move)
+    std::uint8_t fresh : 1;                ///< a fresh leaf (mark_fresh)
+    Node() : exact(0), fresh(0) {}
     bool is_leaf() const { return child[0] == null; }
     std::int32_t object() const { return child[1]; }  ///< the caller's payload (leaves)
   };
@@ -186,27 +190,13 @@ class DynamicTree {
     return true;
   }
 
-  /// A node pair where a pair traversal can start, and the node tests its ancestors in the
-  /// traversal took (counted by whichever part of a split traversal reaches it first).
-  struct PairSeed {
-    std::int32_t i = null, j = null;
-    std::uint64_t pre_bv_tests = 0;
-  };
-
   /// Calls visit(object_a, object_b) once for every unordered pair of leaves whose fat boxes
   /// overlap and of which at least one is active. Larger node first; stops when visit returns false.
   template <class Visit>
   bool self_pairs(Visit&& visit, BroadPhaseStats& st) const {
     if (root_ == null) return true;
-    return self_pairs_from(PairSeed{root_, root_, 0}, visit, st);
-  }
-
-  /// self_pairs restricted to the subtraversal below one seed of split_self_pairs().
-  template <class Visit>
-  bool self_pairs_from(const PairSeed& seed, Visit&& visit, BroadPhaseStats& st) const {
-    st.bv_tests += seed.pre_bv_tests;
     detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-    stack.push({seed.i, seed.j});
+    stack.push({root_, root_});
     while (!stack.empty()) {
       const auto [i, j] = stack.pop();
       const Node& ni = node(i);
@@ -221,56 +211,51 @@ class DynamicTree {
       if (!(ni.active | nj.active)) continue;
       ++st.bv_tests;
       if (!overlap(ni.box, nj.box)) continue;
-      if (!descend(*this, *this, i, j, stack))
+      if (!descend(i, j, stack))
         if (!visit(ni.object(), nj.object())) return false;
     }
     return true;
   }
 
-  /// Splits self_pairs into at least `want` seeds where the tree allows (fewer for small trees):
-  /// running self_pairs_from on each seed in order visits exactly the pairs of self_pairs, in its
-  /// order, with the same work counters summed (the split itself counts nothing). Seeds are
-  /// independent: they can run on different threads. O(seeds) beyond the first levels' tests.
-  std::vector<PairSeed> split_self_pairs(std::size_t want) const {
-    std::vector<PairSeed> seeds;
-    if (root_ == null) return seeds;
-    seeds.push_back({root_, root_, 0});
-    return split_seeds(*this, std::move(seeds), want, true);
+  /// Marks a leaf *fresh*: its fat box is new (inserted or reinserted), so its pairs are to be
+  /// found again by fresh_pairs().
+  void mark_fresh(std::int32_t leaf) {
+    if (node(leaf).fresh) return;
+    node(leaf).fresh = 1;
+    fresh_.push_back(leaf);
   }
-
-  /// Calls visit(object_of_this, object_of_other) for every leaf pair of the two trees whose fat
-  /// boxes overlap and of which at least one is active. Larger node first.
+  /// Calls visit(object_a, object_b) once for every unordered pair of leaves whose fat boxes
+  /// overlap and of which at least one is fresh, active or not; then unmarks the fresh leaves.
+  /// Each fresh leaf walks up to the root and queries, at every ancestor, the subtree on the
+  /// other side with its box: about one node test per level where a query from the root takes
+  /// two, and the pairs of two fresh leaves come from the one with the smaller id.
   template <class Visit>
-  bool cross_pairs(const DynamicTree& other, Visit&& visit, BroadPhaseStats& st) const {
-    if (root_ == null || other.root_ == null) return true;
-    return cross_pairs_from(other, PairSeed{root_, other.root_, 0}, visit, st);
-  }
-
-  /// cross_pairs restricted to the subtraversal below one seed of split_cross_pairs().
-  template <class Visit>
-  bool cross_pairs_from(const DynamicTree& other, const PairSeed& seed, Visit&& visit, BroadPhaseStats& st) const {
-    st.bv_tests += seed.pre_bv_tests;
-    detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-    stack.push({seed.i, seed.j});
-    while (!stack.empty()) {
-      const auto [i, j] = stack.pop();
-      const Node& ni = node(i);
-      const Node& nj = other.node(j);
-      if (!(ni.active | nj.active)) continue;
-      ++st.bv_tests;
-      if (!overlap(ni.box, nj.box)) continue;
-      if (!descend(*this, other, i, j, stack))
-        if (!visit(ni.object(), nj.object())) return false;
+  void fresh_pairs(Visit&& visit, BroadPhaseStats& st) {
+    std::sort(fresh_.begin(), fresh_.end());  // a removed fresh leaf's node may have been reused
+    fresh_.erase(std::unique(fresh_.begin(), fresh_.end()), fresh_.end());
+    detail::TraversalStack<std::int32_t> stack;
+    for (const std::int32_t leaf : fresh_) {
+      const Node& nl = node(leaf);
+      if (nl.height != 0 || !nl.fresh) continue;  // removed since it was marked
+      for (std::int32_t c = leaf, p = nl.parent; p != null; c = p, p = node(p).parent) {
+        const Node& np = node(p);
+        stack.push(np.child[np.child[0] == c ? 1 : 0]);
+        while (!stack.empty()) {
+          const std::int32_t i = stack.pop();
+          const Node& n = node(i);
+          ++st.bv_tests;
+          if (!overlap(n.box, nl.box)) continue;
+          if (!n.is_leaf()) {
+            stack.push(n.child[1]);
+            stack.push(n.child[0]);
+          } else if (!n.fresh || leaf < i) {
+            visit(nl.object(), n.object());
+          }
+        }
+      }
     }
-    return true;
-  }
-
-  /// Splits cross_pairs like split_self_pairs splits self_pairs.
-  std::vector<PairSeed> split_cross_pairs(const DynamicTree& other, std::size_t want) const {
-    std::vector<PairSeed> seeds;
-    if (root_ == null || other.root_ == null) return seeds;
-    seeds.push_back({root_, other.root_, 0});
-    return split_seeds(other, std::move(seeds), want, false);
+    for (const std::int32_t leaf : fresh_) node(leaf).fresh = 0;
+    fresh_.clear();
   }
 
   const Node& node(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)]; }
@@ -334,13 +319,12 @@ class DynamicTree {
     return {tight.min.array() - m, tight.max.array() + m};
   }
 
-  /// Pushes the children pairs of (i, j) when one of them is inner; returns false for two leaves.
+  /// Pushes the children of the larger of nodes i and j, or of the inner one when the other is a
+  /// leaf (FCL's collisionRecurse rule); false when both are leaves.
   template <class Stack>
-  /// Pushes the children of the larger of node i (of tree a) and node j (of tree b), or of the
-  /// inner one when the other is a leaf; false when both are leaves.
-  static bool descend(const DynamicTree& a, const DynamicTree& b, std::int32_t i, std::int32_t j, Stack& stack) {
-    const Node& ni = a.node(i);
-    const Node& nj = b.node(j);
+  bool descend(std::int32_t i, std::int32_t j, Stack& stack) const {
+    const Node& ni = node(i);
+    const Node& nj = node(j);
     const bool li = ni.is_leaf(), lj = nj.is_leaf();
     if (li && lj) return false;
     if (lj || (!li && size(ni.box) >= size(nj.box))) {
@@ -351,51 +335,6 @@ class DynamicTree {
       stack.push({i, nj.child[0]});
     }
     return true;
-  }
-
-  /// Replaces, round by round, every seed the traversal would expand by its children in the
-  /// traversal's pop order (the first child inherits the parent's test count), until there are
-  /// `want` seeds or nothing left to expand. Seeds the traversal would cull or report stay as they
-  /// are: their own tests are counted when they run.
-  std::vector<PairSeed> split_seeds(const DynamicTree& other, std::vector<PairSeed> seeds, std::size_t want, bool self) const {
-    for (int round = 0; round < 64 && seeds.size() < want; ++round) {
-      std::vector<PairSeed> next;
-      next.reserve(seeds.size() * 3);
-      bool grew = false;
-      for (const PairSeed& s : seeds) {
-        const Node& ni = node(s.i);
-        if (self && s.i == s.j) {
-          if (ni.is_leaf() || !ni.active) {
-            next.push_back(s);
-            continue;
-          }
-          // pop order of the pushes (c0,c1), (c1,c1), (c0,c0)
-          next.push_back({ni.child[0], ni.child[0], s.pre_bv_tests});
-          next.push_back({ni.child[1], ni.child[1], 0});
-          next.push_back({ni.child[0], ni.child[1], 0});
-          grew = true;
-          continue;
-        }
-        const Node& nj = other.node(s.j);
-        if (!(ni.active | nj.active) || !overlap(ni.box, nj.box) || (ni.is_leaf() && nj.is_leaf())) {
-          next.push_back(s);
-          continue;
-        }
-        // descend() pushes X1 then X0: X0 is popped first
-        const std::uint64_t pre = s.pre_bv_tests + 1;
-        if (nj.is_leaf() || (!ni.is_leaf() && size(ni.box) >= size(nj.box))) {
-          next.push_back({ni.child[0], s.j, pre});
-          next.push_back({ni.child[1], s.j, 0});
-        } else {
-          next.push_back({s.i, nj.child[0], pre});
-          next.push_back({s.i, nj.child[1], 0});
-        }
-        grew = true;
-      }
-      seeds.swap(next);
-      if (!grew) break;
-    }
-    return seeds;
   }
 
   std::int32_t allocate() {
@@ -571,183 +510,7 @@ class DynamicTree {
   std::size_t leaves_ = 0;
   std::size_t changes_ = 0;
   double built_cost_ = 0;
-};
-
-/// The hierarchical broad phase: two DynamicTrees, one over the static objects (tight leaves) and
-/// one over the dynamic ones (fattened leaves, sleeping ones flagged inactive). At update() (the
-/// scene's first query after edits), moved objects are refitted (reinserted only when they leave
-/// their fat box; unmoved ones are not touched). Dynamic–dynamic pairs come from the dynamic tree's
-/// self traversal (larger node first, skipping node pairs without an active object); dynamic–static
-/// pairs from a StaticCandidates cache, as Bullet keeps its pairs: a dynamic object queries the
-/// static tree with its fat box only when that box changed (or a static object near it was added,
-/// removed, moved or refiltered), and otherwise re-tests its candidates against its tight box when
-/// it moved. Unlike the static/dynamic split, static objects can be added, removed or moved
-/// incrementally without a rebuild: such an edit queries the dynamic tree with the static object's
-/// boxes (before and after) and invalidates the candidates of the dynamic objects it finds.
-///
-/// Thread safety: find_pairs, split_pairs and find_pairs_part are const and read only: any number
-/// of threads may run them at once between updates. Edits and update() must not overlap any call.
-template <class S>
-class HierarchicalBroadPhase {
- public:
-  explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : static_(opt), dynamic_(opt) {}
-
-  void insert(std::int32_t slot, const ObjectTable<S>& t) {
-    grow(slot);
-    const auto s = static_cast<std::size_t>(slot);
-    const bool st = t.is_static(slot);
-    leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box(s), t.active(slot), st);
-    if (st) {
-      near_static_changed(t.box(s));
-      return;
-    }
-    cache_.add(slot, t.active(slot));
-  }
-  void remove(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
-    if (t.is_static(slot)) {
-      near_static_changed(static_.box(leaf_[s]));
-      static_.remove(leaf_[s]);
-      leaf_[s] = DynamicTree<S>::null;
-      return;
-    }
-    dynamic_.remove(leaf_[s]);
-    leaf_[s] = DynamicTree<S>::null;
-    cache_.remove(slot);
-  }
-  void moved(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
-    if (t.is_static(slot)) {
-      // The leaf still holds the box of the last update: every box the object had since is
-      // queried when it is set, so the dynamic objects near any of them are invalidated.
-      if (!moved_flag_[s]) near_static_changed(static_.box(leaf_[s]));
-      near_static_changed(t.box(slot));
-    }
-    if (!moved_flag_[s]) {
-      moved_flag_[s] = 1;
-      moved_.push_back(slot);
-    }
-  }
-  void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
-    cache_.set_active(pos_of(slot), t.active(slot));
-    dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
-  }
-  void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
-    if (t.is_static(slot))
-      near_static_changed(t.box(slot));
-    else
-      cache_.invalidate(pos_of(slot));
-  }
-
-  /// Applies the moves since the last update: refits (reinsertions for objects that left their fat
-  /// box) and rebuilds of degraded trees, serial; then the static-tree queries of the dynamic
-  /// objects whose candidates are out of date and the tight-box re-tests of those that moved, on
-  /// `threads` threads.
-  void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
-    flush(t, st);
-    const std::int32_t root = static_.root();
-    const Aabb<S>* bounds = root == DynamicTree<S>::null ? nullptr : &static_.box(root);
-    cache_.update(t, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {
-      static_.query(
-          dynamic_.box(leaf_[static_cast<std::size_t>(a)]),
-          [&](std::int32_t b) {
-            if (t.accepts(a, b))
-              cand.push_back(b);
-            else
-              ++cs.pairs_filtered;
-            return true;
-          },
-          cs);
-    });
-  }
-
-  template <class Visit>
-  bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(0, cache_.size(), visit, st)) return false;
-    return dynamic_.self_pairs(pair_filter(t, visit, st), st);
-  }
-
-  /// Parts of find_pairs (broad_phase.hpp): ranges of the dynamic objects' static pairs, then
-  /// seeds of the dynamic tree's self traversal.
-  std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
-    std::vector<PairTask> tasks;
-    const std::size_t n = cache_.size();
-    const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
-    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
-    for (const auto& seed : dynamic_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
-    return tasks;
-  }
-  template <class Visit>
-  bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(task.begin, task.end, visit, st);
-    return dynamic_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
-  }
-
-  const DynamicTree<S>& static_tree() const { return static_; }
-  const DynamicTree<S>& dynamic_tree() const { return dynamic_; }
-
- private:
-  /// The leaf-pair visitor of the self traversal: rules 1 to 3 of the pair rule, then visit.
-  template <class Visit>
-  static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
-    return [&t, &visit, &st](std::int32_t a, std::int32_t b) {
-      if (!t.active(a) && !t.active(b)) return true;  // an active inner node above two inactive leaves
-      if (!detail::test_pair(t, a, b, st)) return true;
-      ++st.pairs_found;
-      return bool(visit(a, b));
-    };
-  }
-
-  /// A static object with this box was added, removed, moved or refiltered: the dynamic objects
-  /// whose fat boxes overlap it find their candidates again (the others' cannot name it, before or
-  /// after). Counts nothing: an edit has no stats.
-  void near_static_changed(const Aabb<S>& box) {
-    BroadPhaseStats ignored;
-    dynamic_.query(
-        box,
-        [&](std::int32_t a) {
-          cache_.invalidate(pos_of(a));
-          return true;
-        },
-        ignored);
-  }
-
-  /// The position of dynamic object `slot` in cache_.
-  std::size_t pos_of(std::int32_t slot) const { return cache_.pos_of(slot); }
-
-  void grow(std::int32_t slot) {
-    const auto n = static_cast<std::size_t>(slot) + 1;
-    if (n > leaf_.size()) {
-      leaf_.resize(n, DynamicTree<S>::null);
-      moved_flag_.resize(n, 0);
-    }
-  }
-  void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
-    for (const std::int32_t slot : moved_) {
-      moved_flag_[static_cast<std::size_t>(slot)] = 0;
-      const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
-      if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
-      ++st.refits;
-      if (t.is_static(slot)) {
-        if (static_.update(leaf, t.box(slot))) ++st.reinserts;
-        continue;
-      }
-      cache_.moved(pos_of(slot));
-      if (dynamic_.update(leaf, t.box(slot))) {
-        ++st.reinserts;
-        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
-      }
-    }
-    moved_.clear();
-    if (static_.maybe_rebuild()) ++st.rebuilds;
-    if (dynamic_.maybe_rebuild()) ++st.rebuilds;
-  }
-
-  DynamicTree<S> static_, dynamic_;
-  std::vector<std::int32_t> leaf_;      // slot -> leaf in its tree
-  std::vector<std::uint8_t> moved_flag_;
-  std::vector<std::int32_t> moved_;
-  StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
+  std::vector<std::int32_t> fresh_;  // leaves marked fresh since the last fresh_pairs
 };
 
 }  // namespace impact

@@ -34,7 +34,7 @@
 #pragma once
 
 #include "impact/broad/all_pairs.hpp"
-#include "impact/broad/dynamic_tree.hpp"
+#include "impact/broad/hierarchical.hpp"
 #include "impact/broad/narrow_dispatch.hpp"
 #include "impact/broad/static_dynamic.hpp"
 #include "impact/core/error.hpp"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// StaticCandidates: the dynamic-against-static half of a broad phase as a cache, shared by the
-/// static/dynamic split (static_dynamic.hpp) and the hierarchical broad phase (dynamic_tree.hpp).
+/// static/dynamic split (static_dynamic.hpp) and the hierarchical broad phase (hierarchical.hpp).
 /// Per dynamic object it keeps
 ///   - its *candidates*: the static objects the filter accepts whose boxes overlap the object's
 ///     fat box (its leaf box in the dynamic tree), found by one query of the static structure;
@@ -107,6 +107,10 @@ class StaticCandidates {
   /// The position of dynamic object `slot`.
   std::size_t pos_of(std::int32_t slot) const { return static_cast<std::size_t>(pos_[static_cast<std::size_t>(slot)]); }
   std::size_t size() const { return cand_.size(); }
+  /// The slot of the dynamic object at position pos.
+  std::int32_t slot(std::size_t pos) const { return slots_[pos]; }
+  /// Whether the object at position pos is active (awake).
+  bool active(std::size_t pos) const { return active_[pos]; }
   /// The object is active (awake) or not: its pairs are reported, its lists kept up to date.
   void set_active(std::size_t pos, bool active) { active_[pos] = active; }
   /// The object's candidates must be found again (its fat box or filter changed, or a static
@@ -147,7 +151,15 @@ class StaticCandidates {
     stale_list_.clear();
     for (std::size_t p = 0; p < n; ++p)
       if (active_[p] && stale_[p]) stale_list_.push_back(static_cast<std::uint32_t>(p));
-    detail::for_chunks(stale_list_.size(), threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
+    const std::size_t ns = stale_list_.size();
+    detail::for_chunks(ns, threads, st, [&](std::size_t k, BroadPhaseStats& cs) {
+      if (k + 8 < ns) {  // the records of the object 8 ahead, and of the candidates of the one 4 ahead
+        const std::size_t f = stale_list_[k + 8];
+        detail::prefetch(&t.box(slots_[f]));
+        detail::prefetch(cand_[f].data());
+      }
+      if (k + 4 < ns)
+        for (const std::int32_t b : cand_[stale_list_[k + 4]]) detail::prefetch(&t.box(b));
       const std::size_t p = stale_list_[k];
       std::vector<std::int32_t>& hits = hits_[p];
       hits.clear();

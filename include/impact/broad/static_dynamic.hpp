@@ -9,19 +9,22 @@
 ///     candidates are only re-tested against its new tight box. An object that did not move is
 ///     neither refitted, nor queried, nor re-tested: its last static pairs are reported as they are;
 ///   - sleeping objects' static pairs are not reported (nor recomputed until they wake);
-///   - dynamic–dynamic pairs come from the self pair traversal of the dynamic tree, which skips
-///     sleeping–sleeping subtrees.
-/// Static–static pairs are never looked at. O(reinserted * log static + moved * candidates +
-/// dynamic pairs + output) per call instead of O(static * dynamic + dynamic^2). Adding, removing or
-/// moving a static object marks the static tree for a rebuild at the next call, which also
+///   - dynamic–dynamic pairs come from a DynamicPairs cache of the pairs of overlapping fat boxes:
+///     only the objects that were reinserted find theirs again, by a query of the dynamic tree
+///     with the new fat box; every call re-tests the cached pairs of the active objects against
+///     their tight boxes.
+/// Static–static pairs are never looked at. O(reinserted * (log static + log dynamic) + moved *
+/// candidates + cached dynamic pairs + output) per call instead of O(static * dynamic + dynamic^2).
+/// Adding, removing or moving a static object marks the static tree for a rebuild at the next call, which also
 /// re-queries every dynamic object: static objects are meant to stay put.
 ///
-/// Everything cached (refits, static candidates, tight-box hits) is brought up to date by update(),
+/// Everything cached (refits, static candidates, tight-box hits, dynamic pairs) is brought up to date by update(),
 /// which the scene runs once after edits; find_pairs then only reads, so any number of threads may
 /// run it (and split_pairs / find_pairs_part) at once between edits. Edits and update() must not
 /// overlap any other call.
 #pragma once
 
+#include "impact/broad/dynamic_pairs.hpp"
 #include "impact/broad/dynamic_tree.hpp"
 #include "impact/broad/static_candidates.hpp"
 #include "impact/bvh/build_top_down.hpp"
@@ -47,6 +50,8 @@ class StaticDynamicBroadPhase {
     }
     leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
     cache_.add(slot, t.active(slot));
+    pairs_.add();
+    dyn_.mark_fresh(leaf_[s]);
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
     const auto s = static_cast<std::size_t>(slot);
@@ -56,6 +61,7 @@ class StaticDynamicBroadPhase {
     }
     dyn_.remove(leaf_[s]);
     leaf_[s] = DynamicTree<S>::null;
+    pairs_.remove(pos_of(slot));
     cache_.remove(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
@@ -85,6 +91,7 @@ class StaticDynamicBroadPhase {
   /// each object writing only its own candidates) and the tight-box re-tests of those that moved.
   void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
     flush(t, st);
+    pairs_.update(dyn_, cache_, st);
     // Dynamic against static: the static tree is large, so the queries' Morton order is what
     // keeps its nodes in cache.
     const Aabb<S>* bounds = static_tree_.empty() ? nullptr : &static_tree_.root().bv;
@@ -95,40 +102,29 @@ class StaticDynamicBroadPhase {
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
     if (!cache_.pairs(0, cache_.size(), visit, st)) return false;
-    return dyn_.self_pairs(pair_filter(t, visit, st), st);
+    return pairs_.pairs(0, cache_.size(), cache_, t, visit, st);
   }
 
-  /// Parts of find_pairs: ranges of the dynamic objects' static pairs, then seeds of the dynamic
-  /// tree's self traversal.
+  /// Parts of find_pairs: ranges of the dynamic objects' static pairs, then ranges of their
+  /// dynamic pairs.
   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
     std::vector<PairTask> tasks;
     const std::size_t n = cache_.size();
     const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
-    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({0, -1, -1, 0, b, std::min(n, b + chunk)});
-    for (const auto& seed : dyn_.split_self_pairs(want)) tasks.push_back({1, seed.i, seed.j, seed.pre_bv_tests, 0, 0});
+    for (std::uint8_t kind : {0, 1})
+      for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({kind, b, std::min(n, b + chunk)});
     return tasks;
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
     if (task.kind == 0) return cache_.pairs(task.begin, task.end, visit, st);
-    return dyn_.self_pairs_from({task.i, task.j, task.pre_bv_tests}, pair_filter(t, visit, st), st);
+    return pairs_.pairs(task.begin, task.end, cache_, t, visit, st);
   }
 
   const DynamicTree<S>& dynamic_tree() const { return dyn_; }
   const Bvh<Aabb<S>>& static_tree() const { return static_tree_; }
 
  private:
-  /// The dynamic tree's leaf-pair visitor: rules 1 to 3 of the pair rule, then visit.
-  template <class Visit>
-  static auto pair_filter(const ObjectTable<S>& t, Visit& visit, BroadPhaseStats& st) {
-    return [&t, &visit, &st](std::int32_t a, std::int32_t b) {
-      if (!t.active(a) && !t.active(b)) return true;
-      if (!detail::test_pair(t, a, b, st)) return true;
-      ++st.pairs_found;
-      return bool(visit(a, b));
-    };
-  }
-
   /// Static-tree query of dynamic object a with its fat box: its accepted candidates.
   void query_static(const ObjectTable<S>& t, std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& st) const {
     const Aabb<S>& fat = dyn_.box(leaf_[static_cast<std::size_t>(a)]);
@@ -162,7 +158,19 @@ class StaticDynamicBroadPhase {
   }
 
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
-    for (const std::int32_t slot : moved_) {
+    const std::size_t n = moved_.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k + 8 < n) {  // this loop's scattered reads for the object 8 ahead, and its leaf for the one 4 ahead
+        const auto f = static_cast<std::size_t>(moved_[k + 8]);
+        detail::prefetch(&leaf_[f]);
+        detail::prefetch(&moved_flag_[f]);
+        detail::prefetch(&t.box(moved_[k + 8]));
+      }
+      if (k + 4 < n) {
+        const std::int32_t l = leaf_[static_cast<std::size_t>(moved_[k + 4])];
+        if (l != DynamicTree<S>::null) detail::prefetch(&dyn_.box(l));
+      }
+      const std::int32_t slot = moved_[k];
       const auto s = static_cast<std::size_t>(slot);
       moved_flag_[s] = 0;
       const std::int32_t leaf = leaf_[s];
@@ -172,6 +180,8 @@ class StaticDynamicBroadPhase {
       if (dyn_.update(leaf, t.box(s))) {
         ++st.reinserts;
         cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
+        pairs_.drop(pos_of(slot));        // and find its dynamic pairs again
+        dyn_.mark_fresh(leaf);
       }
     }
     moved_.clear();
@@ -213,6 +223,7 @@ class StaticDynamicBroadPhase {
   std::vector<std::uint8_t> moved_flag_;
   std::vector<std::int32_t> moved_;
   StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
+  DynamicPairs<S> pairs_;      // per dynamic object (by its position in cache_), its dynamic pairs of fat boxes
 };
 
 }  // namespace impact

@@ -29,7 +29,11 @@
 ///              pair; triangle_box_contact); distance: GJK
 ///   others     boolean: GJK with margin 0 (stops as soon as a separating plane or a simplex
 ///              within the tolerance is found); distance: GJK (convex/gjk_distance.hpp);
-///              penetration: the own EPA (convex/epa.hpp), certified as convex_penetration's
+///              penetration: the own EPA (convex/epa.hpp), certified as convex_penetration's;
+///              cylinders and cones first try the shortcut of convex/deepest_point.hpp (one point
+///              of the triangle decides, certified by the ball about it: most contacts, no EPA)
+/// GJK and EPA run in the shape's frame (the triangle moved there: three rotations per triangle
+/// instead of two per support call).
 /// The distance query walks nearest node first (traverse_nearest) and skips a node whose lower
 /// bound (the gap between its BV and the shape's boxes: the hull boxes' gap and the face-axis
 /// separations of the two oriented boxes, less the pad) is above the best distance found; it stops
@@ -78,6 +82,7 @@
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
 #include "impact/convex/query.hpp"
+#include "impact/convex/deepest_point.hpp"
 #include "impact/convex/triangle_shape.hpp"
 #include "impact/geometry/obb.hpp"
 #include "impact/narrow/closest_point.hpp"
@@ -100,11 +105,13 @@ struct MeshConvexOptions {
   std::size_t max_contacts = std::numeric_limits<std::size_t>::max();
   /// mesh_convex_contacts, triangles against cylinders, cones and hulls (and capsules whose core
   /// meets the triangle): false (default) runs the own EPA (convex/epa.hpp), certified as
-  /// convex_penetration (the least depth within its tolerance, depth_gap bounding the rest); true
-  /// runs one libccd MPR per triangle (ccdMPRPenetration, as FCL does), settled along MPR's
-  /// direction: translating the shape by depth * normal still leaves them touching, but the depth
-  /// can exceed the least one and is not certified (depth_gap = depth). 1.3-2x faster than EPA on
-  /// the bench's cones and hulls, 2x on cylinders.
+  /// convex_penetration (the least depth within its tolerance, depth_gap bounding the rest), after
+  /// the deepest-point shortcut for cylinders and cones (convex/deepest_point.hpp); true runs one
+  /// libccd MPR per triangle (ccdMPRPenetration, as FCL does), settled along MPR's direction:
+  /// translating the shape by depth * normal still leaves them touching, but the depth can exceed
+  /// the least one and is not certified (depth_gap = depth). About 1.2x faster than the default on
+  /// the bench's hulls; slower on its cylinders and cones (2-3x), where the shortcut answers most
+  /// triangles.
   bool fast_contacts = false;
 };
 
@@ -307,19 +314,63 @@ struct TriangleConvexTests {
   const RigidTransform<S>& pose;
   const ConvexQueryOptions<S>& options;
   S shape_size_;
-  Vec3<S> interior;  // the shape's interior point in the mesh frame
+  RigidTransform<S> to_shape;  // the mesh frame into the shape's: GJK and EPA run there
 
   bool fast = false;  // MeshConvexOptions::fast_contacts
 
   TriangleConvexTests(const Shape& s, const RigidTransform<S>& p, const ConvexQueryOptions<S>& o, bool fast_contacts = false)
-      : shape(s), pose(p), options(o), shape_size_(shape_size(s)), interior(p.apply(interior_point(s))), fast(fast_contacts) {}
+      : shape(s), pose(p), options(o), shape_size_(shape_size(s)), to_shape(p.inverse()), fast(fast_contacts) {}
 
   S tolerance(const TriangleShape<S>& t) const { return options.relative_tolerance * std::max(shape_size_, shape_size(t)); }
 
-  ConvexDistance<S> gjk_pair(const TriangleShape<S>& t, S margin) const {
+  /// The triangle in the shape's frame: three rotations per triangle instead of two per support
+  /// call of the shape in the iterative solvers.
+  TriangleShape<S> in_shape_frame(const Triangle<S>& tri) const {
+    return TriangleShape<S>(to_shape.apply(tri.a), to_shape.apply(tri.b), to_shape.apply(tri.c));
+  }
+
+  /// GJK in the shape's frame; witness points in the mesh frame.
+  ConvexDistance<S> gjk_pair(const Triangle<S>& tri, S margin) const {
+    const TriangleShape<S> t = in_shape_frame(tri);
     const auto sa = [&t](const Vec3<S>& d) { return support(t, d); };
-    const auto sb = [this](const Vec3<S>& d) { return support(shape, pose, d); };
-    return gjk_distance<S>(sa, sb, Vec3<S>(interior_point(t) - interior), tolerance(t), options.max_iterations, margin);
+    const auto sb = [this](const Vec3<S>& d) { return support(shape, d); };
+    ConvexDistance<S> r =
+        gjk_distance<S>(sa, sb, Vec3<S>(interior_point(t) - interior_point(shape)), tolerance(t), options.max_iterations, margin);
+    r.point_a = pose.apply(r.point_a);
+    r.point_b = pose.apply(r.point_b);
+    return r;
+  }
+
+  /// The own EPA in the shape's frame, settled as general_penetration settles it (the point onto
+  /// the mid plane, the depth the overlap along the normal when smaller); false when it met a
+  /// degenerate Minkowski difference. The contact in the mesh frame.
+  bool epa_pair(const Triangle<S>& tri, ConvexContact<S>& c) const {
+    const TriangleShape<S> t = in_shape_frame(tri);
+    const auto sa = [&t](const Vec3<S>& d) { return support(t, d); };
+    const auto sb = [this](const Vec3<S>& d) { return support(shape, d); };
+    const bool refine = options.newton_refinement && !(is_polytope_v<Shape, S>);
+    int shortcut_calls = 0;
+    if constexpr (std::is_same_v<Shape, Cylinder<S>> || std::is_same_v<Shape, Cone<S>>) {  // one point of the triangle decides (convex/deepest_point.hpp)
+      if (triangle_deepest_point_contact(t, shape, options.relative_tolerance * query_scale<S>(t, shape), c)) {
+        c.normal = pose.rotate(c.normal);
+        c.point = pose.apply(c.point);
+        return true;
+      }
+      shortcut_calls = c.iterations;
+    }
+    bool failed = false;
+    c = own_epa_in_frame(sa, sb, interior_point(t), interior_point(shape), query_scale<S>(t, shape), options, refine, failed);
+    c.iterations += shortcut_calls;
+    if (failed) return false;
+    if (c.intersecting) {
+      const S depth = c.depth;
+      const RigidTransform<S> identity;
+      settle_contact(t, identity, shape, identity, c);
+      c.depth = std::min(c.depth, depth);
+      c.normal = pose.rotate(c.normal);
+      c.point = pose.apply(c.point);
+    }
+    return true;
   }
 
   bool intersect(const Triangle<S>& tri, bool& limit) const {
@@ -331,7 +382,7 @@ struct TriangleConvexTests {
     } else if constexpr (std::is_same_v<Shape, Box<S>>) {
       return triangle_box_contact(tri, shape, pose, false).intersecting;
     } else {
-      const ConvexDistance<S> d = gjk_pair(TriangleShape<S>(tri), S(0));
+      const ConvexDistance<S> d = gjk_pair(tri, S(0));
       limit = limit || d.limit_reached;
       return d.intersecting;
     }
@@ -346,7 +397,7 @@ struct TriangleConvexTests {
       const auto q = closest_points_segment_triangle(capsule_segment(shape, pose), tri);
       return triangle_ball_distance(q.on_segment, shape.radius, q.on_triangle, q.squared_distance);
     } else {
-      return gjk_pair(TriangleShape<S>(tri), S(-1));
+      return gjk_pair(tri, S(-1));
     }
   }
 
@@ -376,7 +427,14 @@ struct TriangleConvexTests {
         c.depth_gap = c.depth;
         return c;
       }
-      return penetration_unchecked(t, identity, shape, pose, options);  // a capsule through its core, as the pairwise query
+      if constexpr (pair_method<S, TriangleShape<S>, Shape>() == PairMethod::General) {
+        if (options.libccd_penetration) return penetration_unchecked(t, identity, shape, pose, options);
+        ConvexContact<S> c;
+        if (epa_pair(tri, c)) return c;
+        return epa(t, identity, shape, pose, options);  // a degenerate Minkowski difference: libccd, as the pairwise query
+      } else {
+        return penetration_unchecked(t, identity, shape, pose, options);  // a capsule through its core, as the pairwise query
+      }
     }
   }
 };

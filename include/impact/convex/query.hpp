@@ -19,9 +19,10 @@
 ///                                     and caps
 ///   box – box                         separating axes (boolean, penetration); GJK for distance
 ///   sphere/capsule – other            GJK distance between the core and the other shape, minus
-///                                     the radius (exact up to GJK's tolerance); when the core
-///                                     itself meets the other shape: the own EPA on the core, plus
-///                                     the radius
+///                                     the radius (exact up to GJK's tolerance; a capsule's segment
+///                                     against a cylinder by convex/segment_cylinder.hpp); when the
+///                                     core itself meets the other shape: the own EPA on the core,
+///                                     plus the radius
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
@@ -44,6 +45,7 @@
 #include "impact/convex/epa.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
+#include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/convex/triangle_shape.hpp"
 
@@ -187,13 +189,19 @@ struct PairFrame {
   }
 };
 
-/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()).
+/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()), run in
+/// a's frame (PairFrame: a's support without rotation, b's with one each way); witness points in
+/// the world.
 template <class S, class A, class B>
 ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                       const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
-  const auto sa = [&](const Vec3<S>& d) { return support(a, pa, d); };
-  const auto sb = [&](const Vec3<S>& d) { return support(b, pb, d); };
-  return gjk_distance<S>(sa, sb, Vec3<S>(pa.apply(ia) - pb.apply(ib)), tolerance, max_iterations, margin, stop_within_margin);
+  const PairFrame<S> f(pa, pb);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(ia - f.b_to_a(ib)), tolerance, max_iterations, margin, stop_within_margin);
+  r.point_a = pa.apply(r.point_a);
+  r.point_b = pa.apply(r.point_b);
+  return r;
 }
 
 template <class S>
@@ -284,23 +292,21 @@ template <class T, class S>
 inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_v<T, ConvexHull<S>> || std::is_same_v<T, TriangleShape<S>> ||
                                       std::is_same_v<T, PointCore<S>> || std::is_same_v<T, SegmentCore<S>>;
 
-/// The own EPA (convex/epa.hpp) on a and b, in a's frame (PairFrame) translated to the midpoint of
-/// their interior points (for precision far from the world origin and far from a's centre).
-/// `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
-template <class S, class A, class B>
-ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                         const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed) {
-  const PairFrame<S> f(pa, pb);
-  const Vec3<S> la = ia, lb = f.b_to_a(ib);
+/// The own EPA (convex/epa.hpp) on support functions sa, sb of one frame, from interior points
+/// la of a and lb of b there, translated to their midpoint (for precision far from the frame's
+/// origin). `failed` is set when it meets a degenerate Minkowski difference. Results in that frame.
+template <class S, class SupportA, class SupportB>
+ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& la, const Vec3<S>& lb, S scale,
+                                  const ConvexQueryOptions<S>& o, bool refine, bool& failed) {
   const Vec3<S> origin = (la + lb) / S(2);
-  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support(a, d) - origin); };
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(f.support_b(b, d) - origin); };
+  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support_a(d) - origin); };
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support_b(d) - origin); };
   EpaSettings<S> st;
   st.scale = scale;
   st.tolerance = o.relative_tolerance * scale;
   st.coarse_tolerance = S(1e-3) * scale;
   st.max_iterations = o.max_iterations;
-  st.refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
+  st.refine = refine;
   const EpaPenetration<S> r = epa_penetration(sa, sb, Vec3<S>(la - lb), st);
   ConvexContact<S> c;
   failed = r.failed;
@@ -308,11 +314,27 @@ ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>&
   c.limit_reached = r.limit_reached;
   if (!r.intersecting || r.failed) return c;
   c.intersecting = true;
-  c.normal = pa.rotate(r.normal);
+  c.normal = r.normal;
   c.depth = r.depth;
-  c.point = pa.apply(Vec3<S>((r.point_a + r.point_b) / S(2) + origin));
+  c.point = (r.point_a + r.point_b) / S(2) + origin;
   c.depth_gap = std::max(r.depth - r.lower, S(0));
   c.refined = r.refined;
+  return c;
+}
+
+/// The own EPA on a and b in a's frame (PairFrame: a's support without rotation, b's with one each
+/// way). `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
+template <class S, class A, class B>
+ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
+                         const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed) {
+  const PairFrame<S> f(pa, pb);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
+  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed);
+  if (!c.intersecting) return c;
+  c.normal = pa.rotate(c.normal);
+  c.point = pa.apply(c.point);
   return c;
 }
 
@@ -335,6 +357,19 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
   return epa(a, pa, b, pb, o);
 }
 
+/// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
+/// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
+/// when the segment stays clear of the cylinder (GJK otherwise).
+template <class S, class C, class B>
+ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
+                                int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
+  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
+    ConvexDistance<S> d;
+    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) return d;
+  }
+  return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin);
+}
+
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
 /// core touches b. `flip` swaps the roles back for the caller (b was the round one).
 template <class S, class R, class B>
@@ -346,7 +381,7 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
   const S r = round_radius(a);
   // the radius as margin, stopping only when the core is farther than it (no contact: the common
   // case, decided as cheaply as the boolean); else converged as without a margin
-  const ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations, r, false);
+  const ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations, r, false);
   if (!d.intersecting && d.distance > tol) {
     ConvexContact<S> c;
     c.iterations = d.iterations;
@@ -388,7 +423,7 @@ ConvexDistance<S> round_distance(const R& a, const RigidTransform<S>& pa, const 
                                  const ConvexQueryOptions<S>& o) {
   const auto core = core_of(a);
   const S tol = o.relative_tolerance * query_scale<S>(a, b);
-  ConvexDistance<S> d = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tol, o.max_iterations);
+  ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations);
   const S r = round_radius(a);
   if (d.intersecting || d.distance <= r) {
     d.intersecting = true;

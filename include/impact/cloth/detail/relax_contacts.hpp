@@ -78,7 +78,15 @@ RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vec
           if (idx[q] != c && !pending[idx[q]]) pending[idx[q]] = 1, next.push_back(idx[q]);
       }
     }
-    std::sort(next.begin(), next.end());
+    // In index order: a constraint is pending now iff it is in `next`, so when `next` is a large
+    // share of the set a scan of the flags lists it in order, cheaper than sorting it.
+    if (next.size() * 16 >= m) {
+      next.clear();
+      for (std::size_t c = 0; c < m; ++c)
+        if (pending[c]) next.push_back(static_cast<std::uint32_t>(c));
+    } else {
+      std::sort(next.begin(), next.end());
+    }
     std::swap(cur, next);
   }
   r.converged = cur.empty();

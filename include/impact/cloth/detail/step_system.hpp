@@ -185,8 +185,12 @@ class Stepper {
     // (distances computed in double from coordinates of magnitude <= scale_).
     bound_margin_ = 512 * std::numeric_limits<double>::epsilon() * scale_ + 1e-9 * h_;
     // The envelope's slack: how far a movable vertex's end position may move during the step
-    // without a new gathering (a heuristic: only the cost of re-gathering depends on it).
-    slack_ = static_cast<S>(h_);
+    // without a new gathering (a heuristic: only the cost of re-gathering depends on it). At
+    // h / 2 a resting vertex's envelope grown for the CCD reaches no farther than its start
+    // grown for the proximity pairs (h / 2 + h / 2 = prox / 2 at the default prox = 2 h).
+    slack_ = static_cast<S>(h_ / 2);
+    near_inflate_ = half_up(prox_);
+    ccd_inflate_ = half_up(h_);
     const S inflate_needed = static_cast<S>(prox_ / 2);
     if (!(sys_.has_tree && sys_.tree_faces.rows() == sys_.F.rows() && sys_.tree_faces == sys_.F && sys_.tree_inflate >= inflate_needed)) {
       sys_.tree = SweptMeshBvh<S>::build(motion(), prox_);
@@ -441,11 +445,18 @@ class Stepper {
     own_faces_ = sys_.F;
   }
 
-  /// The box grown by the tree's inflation, rounded outwards: the rounding error of b -/+ g is
-  /// at most half an ulp of |b| + g, and the extra 2 eps (|b| + g) covers it and the rounding of
-  /// the margin's own subtraction (g > 0, so the margin is never zero).
-  Aabb<S> grow(Aabb<S> b) const {
-    const S g = sys_.tree.inflate, e = 2 * std::numeric_limits<S>::epsilon();
+  /// d / 2 in S, rounded up so that twice it is at least d.
+  static S half_up(double d) {
+    S g = static_cast<S>(d / 2);
+    while (2 * static_cast<double>(g) < d) g = std::nextafter(g, std::numeric_limits<S>::infinity());
+    return g;
+  }
+
+  /// The box grown by g > 0, rounded outwards: the rounding error of b -/+ g is at most half an
+  /// ulp of |b| + g, and the extra 2 eps (|b| + g) covers it and the rounding of the margin's own
+  /// subtraction (g > 0, so the margin is never zero).
+  static Aabb<S> grow(Aabb<S> b, S g) {
+    const S e = 2 * std::numeric_limits<S>::epsilon();
     for (int i = 0; i < 3; ++i) {
       b.min[i] = (b.min[i] - g) - e * (std::abs(b.min[i]) + g);
       b.max[i] = (b.max[i] + g) + e * (std::abs(b.max[i]) + g);
@@ -453,12 +464,23 @@ class Stepper {
     return b;
   }
 
+  /// The grown envelope of vertex v (envelope box e): its start grown by half the proximity
+  /// distance and e grown by h / 2. Two primitives closer than the proximity distance at x0 have
+  /// overlapping start boxes grown by its half, and two that come within h during the step have
+  /// overlapping swept boxes grown by h / 2 (their points' offset is under h on every axis), so
+  /// the grown envelopes of every such pair overlap; nothing else needs them.
+  Aabb<S> grown_envelope(std::size_t v, const Aabb<S>& e) const {
+    Aabb<S> b;
+    b.extend(sys_.X0.row(Eigen::Index(v)).transpose());
+    return merge(grow(b, near_inflate_), grow(e, ccd_inflate_));
+  }
+
   /// The candidates of the whole step, gathered once. Each vertex gets an envelope box: its swept
-  /// box x0 -> x1 and, if it can move, a slack of h around it. Every later end position of the
+  /// box x0 -> x1 and, if it can move, a slack of h / 2 around it. Every later end position of the
   /// step that stays inside the envelope has its swept box inside it too, so the pairs gathered
-  /// for the envelopes are a superset of the pairs whose swept boxes (grown by half the proximity
-  /// distance) overlap in any such state: no pair is ever missed, and each CCD pass only re-tests
-  /// candidates with a moved vertex (detect()). The tree is refitted to the envelopes (its
+  /// for the grown envelopes (grown_envelope) are a superset of the pairs closer than the
+  /// proximity distance at x0 and of those that come within h in any such state: no pair is ever
+  /// missed, and each CCD pass only re-tests candidates with a moved vertex (detect()). The tree is refitted to the envelopes (its
   /// topology comes from the first step); overlapping triangle pairs (not both obstacle) give the
   /// vertices and edges each owns (pairs_of), kept only when the primitives' own grown envelopes
   /// overlap; adjacent primitives (sharing a vertex) are skipped. When a vertex leaves its
@@ -474,7 +496,7 @@ class Stepper {
     gbox_.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) {
       ebox_[v] = envelope(v);
-      gbox_[v] = grow(ebox_[v]);
+      gbox_[v] = grown_envelope(v, ebox_[v]);
     }
     tbox_.resize(nf);
     for (std::size_t f = 0; f < nf; ++f) tbox_[f] = triangle_envelope(f);
@@ -525,7 +547,7 @@ class Stepper {
       Aabb<S> b = envelope(v);
       b.extend(ebox_[v]);
       ebox_[v] = b;
-      gbox_[v] = grow(b);
+      gbox_[v] = grown_envelope(v, b);
       for (std::uint32_t k = vtri_off_[v]; k < vtri_off_[v + 1]; ++k)
         if (!grown_tri[std::size_t(vtri_[k])]) grown_tri[std::size_t(vtri_[k])] = 1, tris.push_back(vtri_[k]);
     }
@@ -1079,6 +1101,7 @@ class Stepper {
   bool precise_ = true;  // the CCD with the options as given (start check, zones, fail-safe)
   double bound_margin_ = 0;
   S slack_ = S(0);
+  S near_inflate_ = S(0), ccd_inflate_ = S(0);  // half the proximity distance, h / 2 (rounded up)
   double broad_acc_ = 0;
   std::vector<Prim> cand_, excluded_;
   std::vector<std::uint8_t> own_;
