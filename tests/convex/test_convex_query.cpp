@@ -185,6 +185,64 @@ TEST(ConvexQuery, GeneralPairs) {
   check_pair("cone-cone", z.cone, z.cone, {1e-9, 1e-9}, 36);
 }
 
+// Two cylinders (convex/cylinder_pair.hpp): wherever the candidates certify a contact, its depth
+// is the overlap along its normal, matches the ray/grid oracle and EPA within 1e-9 of the size,
+// and the two certified brackets (ours and EPA's) overlap; every kind of candidate (a cap of either,
+// two rulings, a ruling against a rim point of either) certifies some poses, some poses are left
+// to EPA (rims against rims, deep contacts), and separated pairs are never certified.
+TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
+  const auto& z = zoo();
+  const Cylinder<double>& cyl = z.cylinder;
+  const double scale = shape_size(cyl), tol = 1e-10 * scale;
+  int kinds[5] = {0, 0, 0, 0, 0}, certified = 0, left = 0, separated = 0;
+  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 400, 0.8 * 2 * scale, 47)) {
+    const detail::PairFrame<double> f(pa, pb);
+    ConvexContact<double> c;
+    const bool ok = detail::cylinder_pair_contact(cyl, cyl, f.R, f.t, tol, c);
+    const auto br = test::distance_bracket(cyl, pa, cyl, pb);
+    if (br.lower > 1e-6 * scale) {
+      ++separated;
+      EXPECT_FALSE(ok) << "certified a separated pair";
+      continue;
+    }
+    const auto o = signed_distance_oracle(cyl, pa, cyl, pb);
+    if (o.value > -1e-6 * scale) continue;
+    if (!ok) {
+      ++left;
+      continue;
+    }
+    ++certified;
+    const V3 n = pa.rotate(c.normal);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(overlap_along(cyl, pa, cyl, pb, n), c.depth, 1e-12 * scale) << "depth is not the overlap along the normal";
+    EXPECT_LE(c.depth_gap, tol);
+    const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, cyl, pb, o.normal));
+    EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << "grid " << -o.value;
+    const auto e = detail::general_penetration(cyl, pa, cyl, pb, ConvexQueryOptions<double>{});
+    ASSERT_TRUE(e.intersecting);
+    EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale);
+    EXPECT_LE(c.depth - c.depth_gap, e.depth + 1e-12 * scale) << "our lower bound above EPA's depth";
+    EXPECT_LE(e.depth - e.depth_gap, c.depth + 1e-12 * scale) << "EPA's lower bound above our depth";
+    // the kind: cap of a, cap of b, ruling-ruling, ruling of a, ruling of b
+    const double na = std::abs(c.normal.z()), nb = std::abs(c.normal.dot(f.R.col(2)));
+    const int kind = na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (na < 1e-12 && nb < 1e-12) ? 2 : na < 1e-12 ? 3 : nb < 1e-12 ? 4 : -1;
+    ASSERT_GE(kind, 0) << "a certified normal of no candidate's kind";
+    ++kinds[kind];
+    // the whole query answers the same
+    const auto q = convex_penetration(cyl, pa, cyl, pb);
+    EXPECT_NEAR(q.depth, c.depth, 1e-12 * scale);
+    EXPECT_LT((q.normal - n).norm(), 1e-12);
+  }
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_GT(kinds[k], 0) << "kind " << k;
+  }
+  EXPECT_GT(left, 0);
+  EXPECT_GT(separated, 0);
+  EXPECT_GT(certified, left) << "the candidates certify fewer penetrations than they leave to EPA";
+  std::printf("cylinder pairs: %d certified (caps %d/%d, rulings %d, ruling-rim %d/%d), %d left to EPA, %d separated\n", certified, kinds[0],
+              kinds[1], kinds[2], kinds[3], kinds[4], left, separated);
+}
+
 // The Newton refinement (ConvexQueryOptions::newton_refinement, off by default) keeps the depth
 // within the tolerance where it is accepted, and hands back to EPA where it is not.
 TEST(ConvexQuery, NewtonRefinementKeepsTheDepth) {
@@ -269,6 +327,7 @@ TEST(ConvexQuery, GeneralPenetrationsScaleWithTheShapes) {
         EXPECT_FALSE(c2.limit_reached) << name;
       };
       check(convex_penetration(z.cylinder, pa, z.cone, pb), convex_penetration(cy, qa, co, qb), "cylinder-cone");
+      check(convex_penetration(z.cylinder, pa, z.cylinder, pb), convex_penetration(cy, qa, cy, qb), "cylinder-cylinder");
       check(convex_penetration(z.cone, pa, z.hull, pb), convex_penetration(co, qa, hu, qb), "cone-hull");
       check(convex_penetration(z.hull, pa, z.hull, pb), convex_penetration(hu, qa, hu, qb), "hull-hull");
       check(convex_penetration(z.capsule, pa, z.cylinder, pb), convex_penetration(ca, qa, cy, qb), "capsule-cylinder");
@@ -428,6 +487,13 @@ TEST(ConvexQuery, FloatAgreesWithDouble) {
       EXPECT_NEAR(cf.depth, cd.depth, 2e-5);
     }
     if (std::abs(o.value) > 1e-3) { EXPECT_EQ(convex_intersect(yf, fa, bf, fb), o.value < 0); }
+    // two cylinders (the certified candidates of convex/cylinder_pair.hpp, else EPA)
+    const auto yy = convex_penetration(yd, pa, yd, pb);
+    const auto yyf = convex_penetration(yf, fa, yf, fb);
+    if (yy.depth > 1e-3) {
+      EXPECT_TRUE(yyf.intersecting);
+      EXPECT_NEAR(yyf.depth, yy.depth, 2e-5);
+    }
   }
 }
 
