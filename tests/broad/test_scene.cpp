@@ -460,24 +460,32 @@ TEST(DynamicTree, RandomEditsStayValidAndBalanced) {
 
 // DynamicTree::fresh_pairs: after random edits, the pairs of overlapping fat boxes with at least
 // one fresh leaf (inserted or reinserted since the last call, active or not, including leaves
-// removed and node ids reused in between), each once, as brute force finds them.
+// removed and node ids reused in between), each once, as brute force finds them; and on 2 or 3
+// threads (a second tree under the same edits) the same calls in the same order, the same counts.
 TEST(DynamicTree, FreshPairsAreThePairsOfFreshLeaves) {
   Rng rng(9);
-  DynamicTree<double> tree;
+  DynamicTree<double> tree, twin;  // twin: fresh_pairs on several threads
   const int n = 600;
   std::vector<std::int32_t> leaf(n, -1);
   std::vector<bool> fresh(n, false);
   auto insert = [&](int i) {
     const Eigen::Vector3d c = rng.vec(0, 30), e = rng.vec(0, 1);
     leaf[std::size_t(i)] = tree.insert(i, {c - e, c + e}, i % 3 == 0);
+    ASSERT_EQ(twin.insert(i, {c - e, c + e}, i % 3 == 0), leaf[std::size_t(i)]);
     tree.mark_fresh(leaf[std::size_t(i)]);
+    twin.mark_fresh(leaf[std::size_t(i)]);
     fresh[std::size_t(i)] = true;
   };
   for (int i = 0; i < n; ++i) insert(i);
   for (int round = 0; round < 12; ++round) {
-    std::vector<std::pair<int, int>> got;
-    BroadPhaseStats st;
-    tree.fresh_pairs([&](std::int32_t a, std::int32_t b) { got.push_back({std::min(a, b), std::max(a, b)}); }, st);
+    std::vector<std::pair<int, int>> got, got_twin;
+    BroadPhaseStats st, st_twin;
+    tree.fresh_pairs([&](std::int32_t a, std::int32_t b) { got.push_back({a, b}); }, st);
+    twin.fresh_pairs([&](std::int32_t a, std::int32_t b) { got_twin.push_back({a, b}); }, st_twin, 2 + round % 2);
+    ASSERT_EQ(got_twin, got) << "round " << round;
+    EXPECT_EQ(st_twin.bv_tests, st.bv_tests);
+    for (auto& pr : got)
+      if (pr.first > pr.second) std::swap(pr.first, pr.second);
     std::sort(got.begin(), got.end());
     std::vector<std::pair<int, int>> want;
     for (int a = 0; a < n; ++a)
@@ -488,11 +496,12 @@ TEST(DynamicTree, FreshPairsAreThePairsOfFreshLeaves) {
     EXPECT_FALSE(want.empty());
     ASSERT_EQ(got, want) << "round " << round;
     std::fill(fresh.begin(), fresh.end(), false);
-    for (int k = 0; k < 80; ++k) {
+    for (int k = 0; k < 240; ++k) {
       const std::size_t i = rng.index(std::size_t(n));
       const double u = rng.uniform();
       if (leaf[i] >= 0 && u < 0.25) {  // removed, perhaps after being marked
         tree.remove(leaf[i]);
+        twin.remove(leaf[i]);
         leaf[i] = -1;
         fresh[i] = false;
       } else if (leaf[i] < 0) {
@@ -500,13 +509,17 @@ TEST(DynamicTree, FreshPairsAreThePairsOfFreshLeaves) {
       } else {
         const Eigen::Vector3d d = rng.vec(-1.5, 1.5);
         const Aabb<double> moved{tree.box(leaf[i]).min + d, tree.box(leaf[i]).max + d};
-        if (tree.update(leaf[i], moved)) {
+        const bool reinserted = tree.update(leaf[i], moved);
+        ASSERT_EQ(twin.update(leaf[i], moved), reinserted);
+        if (reinserted) {
           tree.mark_fresh(leaf[i]);
+          twin.mark_fresh(leaf[i]);
           fresh[i] = true;
         }
       }
     }
     tree.maybe_rebuild();
+    twin.maybe_rebuild();
     ASSERT_TRUE(tree.valid());
   }
 }

@@ -53,6 +53,7 @@ TYPED_TEST(MeshCcdThreads, SameContactsForEveryThreadCount) {
   const auto ta = impact::SweptMeshBvh<S>::build(ma, o.min_separation), tb = impact::SweptMeshBvh<S>::build(mb, o.min_separation);
   const auto ref = impact::mesh_ccd(ma, ta, mb, tb, o, 1);
   ASSERT_GT(ref.primitive_tests, 2048u);  // above the serial cut-off
+  ASSERT_GT(ref.triangle_pairs, 1400u);   // candidate lists joined on the threads (sorted_union: over 8,192 entries)
   ASSERT_GT(ref.contacts.size(), 20u);
   for (const int t : {2, 3, 8}) expect_same(impact::mesh_ccd(ma, ta, mb, tb, o, t), ref, t);
 
@@ -62,6 +63,7 @@ TYPED_TEST(MeshCcdThreads, SameContactsForEveryThreadCount) {
   const auto tc = impact::SweptMeshBvh<S>::build(mc, o.min_separation);
   const auto sref = impact::mesh_self_ccd(mc, tc, o, 1);
   ASSERT_GT(sref.primitive_tests, 2048u);
+  ASSERT_GT(sref.triangle_pairs, 1400u);
   ASSERT_GT(sref.contacts.size(), 10u);
   for (const int t : {2, 3, 8}) expect_same(impact::mesh_self_ccd(mc, tc, o, t), sref, t);
 }

@@ -185,6 +185,96 @@ TEST(ConvexQuery, GeneralPairs) {
   check_pair("cone-cone", z.cone, z.cone, {1e-9, 1e-9}, 36);
 }
 
+// A cylinder against a cylinder or cone (convex/cylinder_pair.hpp): wherever the candidates
+// certify a contact, its depth is the overlap along its normal, matches the ray/grid oracle and EPA
+// within 1e-9 of the size, and the two certified brackets (ours and EPA's) overlap; every kind of
+// candidate certifies some poses (`kind` names it from the normal, -1 for none), some poses are
+// left to EPA (rims against rims, deep contacts), separated pairs are never certified, and the
+// whole query (either order) gives the certified answer.
+template <class B, class Contact, class Kind>
+void check_cylinder_candidates(const char* name, const Cylinder<double>& cyl, const B& b, const Contact& contact, const Kind& kind,
+                               int kinds_count) {
+  const double scale = std::max(shape_size(cyl), shape_size(b)), tol = 1e-10 * scale;
+  std::vector<int> kinds(static_cast<std::size_t>(kinds_count), 0);
+  int certified = 0, left = 0, separated = 0;
+  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 400, 0.8 * (shape_size(cyl) + shape_size(b)), 47)) {
+    const detail::PairFrame<double> f(pa, pb);
+    ConvexContact<double> c;
+    const bool ok = contact(f, tol, c);
+    const auto br = test::distance_bracket(cyl, pa, b, pb);
+    if (br.lower > 1e-6 * scale) {
+      ++separated;
+      EXPECT_FALSE(ok) << name << ": certified a separated pair";
+      continue;
+    }
+    const auto o = signed_distance_oracle(cyl, pa, b, pb);
+    if (o.value > -1e-6 * scale) continue;
+    if (!ok) {
+      ++left;
+      continue;
+    }
+    ++certified;
+    const V3 n = pa.rotate(c.normal);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-12) << name;
+    EXPECT_NEAR(overlap_along(cyl, pa, b, pb, n), c.depth, 1e-12 * scale) << name << ": depth is not the overlap along the normal";
+    EXPECT_LE(c.depth_gap, tol) << name;
+    const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, b, pb, o.normal));
+    EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << name << ": grid " << -o.value;
+    const auto e = detail::general_penetration(cyl, pa, b, pb, ConvexQueryOptions<double>{});
+    ASSERT_TRUE(e.intersecting) << name;
+    EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale) << name;
+    EXPECT_LE(c.depth - c.depth_gap, e.depth + 1e-12 * scale) << name << ": our lower bound above EPA's depth";
+    EXPECT_LE(e.depth - e.depth_gap, c.depth + 1e-12 * scale) << name << ": EPA's lower bound above our depth";
+    const int k = kind(f, c.normal);
+    ASSERT_GE(k, 0) << name << ": a certified normal of no candidate's kind";
+    ++kinds[static_cast<std::size_t>(k)];
+    const auto q = convex_penetration(cyl, pa, b, pb);
+    EXPECT_NEAR(q.depth, c.depth, 1e-12 * scale) << name;
+    EXPECT_LT((q.normal - n).norm(), 1e-12) << name;
+    const auto r = convex_penetration(b, pb, cyl, pa);  // the other order: the same contact, normal reversed
+    EXPECT_NEAR(r.depth, c.depth, 1e-12 * scale) << name;
+    EXPECT_LT((r.normal + n).norm(), 1e-12) << name;
+  }
+  for (int k = 0; k < kinds_count; ++k) {
+    EXPECT_GT(kinds[static_cast<std::size_t>(k)], 0) << name << ": kind " << k;
+  }
+  EXPECT_GT(left, 0) << name;
+  EXPECT_GT(separated, 0) << name;
+  std::printf("%-17s %d certified (by kind:", name, certified);
+  for (const int k : kinds) std::printf(" %d", k);
+  std::printf("), %d left to EPA, %d separated\n", left, separated);
+}
+
+TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
+  const auto& z = zoo();
+  const Cylinder<double>& cyl = z.cylinder;
+  const Cone<double>& cone = z.cone;
+  // kinds: cap of a, cap of b, ruling-ruling, ruling of a (b's rim), ruling of b (a's rim)
+  check_cylinder_candidates(
+      "cylinder-cylinder", cyl, cyl,
+      [&](const detail::PairFrame<double>& f, double tol, ConvexContact<double>& c) {
+        return detail::cylinder_pair_contact(cyl, cyl, f.R, f.t, tol, c);
+      },
+      [](const detail::PairFrame<double>& f, const V3& n) {
+        const double na = std::abs(n.z()), nb = std::abs(n.dot(f.R.col(2)));
+        return na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (na < 1e-12 && nb < 1e-12) ? 2 : na < 1e-12 ? 3 : nb < 1e-12 ? 4 : -1;
+      },
+      5);
+  // kinds: cap of a, base of b, ruling-ruling, ruling of a (apex or base rim), side of b (a's rim)
+  const double side = -cone.radius / std::sqrt(4 * cone.half_length * cone.half_length + cone.radius * cone.radius);
+  check_cylinder_candidates(
+      "cylinder-cone", cyl, cone,
+      [&](const detail::PairFrame<double>& f, double tol, ConvexContact<double>& c) {
+        return detail::cylinder_cone_contact(cyl, cone, f.R, f.t, tol, c);
+      },
+      [&](const detail::PairFrame<double>& f, const V3& n) {
+        const double na = std::abs(n.z()), nb = n.dot(f.R.col(2));
+        const bool ruling_a = na < 1e-12, side_b = std::abs(nb - side) < 1e-12;
+        return na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (ruling_a && side_b) ? 2 : ruling_a ? 3 : side_b ? 4 : -1;
+      },
+      5);
+}
+
 // The Newton refinement (ConvexQueryOptions::newton_refinement, off by default) keeps the depth
 // within the tolerance where it is accepted, and hands back to EPA where it is not.
 TEST(ConvexQuery, NewtonRefinementKeepsTheDepth) {
@@ -269,6 +359,7 @@ TEST(ConvexQuery, GeneralPenetrationsScaleWithTheShapes) {
         EXPECT_FALSE(c2.limit_reached) << name;
       };
       check(convex_penetration(z.cylinder, pa, z.cone, pb), convex_penetration(cy, qa, co, qb), "cylinder-cone");
+      check(convex_penetration(z.cylinder, pa, z.cylinder, pb), convex_penetration(cy, qa, cy, qb), "cylinder-cylinder");
       check(convex_penetration(z.cone, pa, z.hull, pb), convex_penetration(co, qa, hu, qb), "cone-hull");
       check(convex_penetration(z.hull, pa, z.hull, pb), convex_penetration(hu, qa, hu, qb), "hull-hull");
       check(convex_penetration(z.capsule, pa, z.cylinder, pb), convex_penetration(ca, qa, cy, qb), "capsule-cylinder");
@@ -428,6 +519,13 @@ TEST(ConvexQuery, FloatAgreesWithDouble) {
       EXPECT_NEAR(cf.depth, cd.depth, 2e-5);
     }
     if (std::abs(o.value) > 1e-3) { EXPECT_EQ(convex_intersect(yf, fa, bf, fb), o.value < 0); }
+    // two cylinders (the certified candidates of convex/cylinder_pair.hpp, else EPA)
+    const auto yy = convex_penetration(yd, pa, yd, pb);
+    const auto yyf = convex_penetration(yf, fa, yf, fb);
+    if (yy.depth > 1e-3) {
+      EXPECT_TRUE(yyf.intersecting);
+      EXPECT_NEAR(yyf.depth, yy.depth, 2e-5);
+    }
   }
 }
 

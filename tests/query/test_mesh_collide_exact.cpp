@@ -6,7 +6,9 @@
 // scales and translations (all exact), float and double, sphere and AABB trees, with identity poses
 // (the reported case), with both meshes under the same random pose (B moved into A's frame by a
 // rounded near-identity transform, so the culls must cover the transform's rounding), and with the
-// big triangle in either mesh (the leaf-versus-node cull runs on both sides).
+// big triangle in either mesh (the leaf-versus-node cull runs on both sides). Also every tree type
+// (sphere, AABB, oriented box) under poses stretched or sheared up to validate_pose's tolerance.
+#include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "support/brute_force.hpp"
 #include "support/exact_triangle.hpp"
@@ -238,3 +240,62 @@ template <class S> void run_tangent_spheres(std::uint64_t seed, int n, int max_e
 
 TEST(SphereMayTouchTriangle, TangentSpheresKeptDouble) { run_tangent_spheres<double>(12011, 4000, 60); }
 TEST(SphereMayTouchTriangle, TangentSpheresKeptFloat) { run_tangent_spheres<float>(12012, 4000, 30); }
+
+// validate_pose accepts rotations off orthonormal by up to rotation_tolerance (a rotation rounded
+// to float passes in double), and the narrow phase moves B's triangles by that very matrix, so the
+// node tests must bound B's image under it, not under the nearest rotation. B's pose is a rotation
+// (the identity, a quarter turn, a random one) times a stretch I + sigma or a shear I + sigma S (S
+// symmetric, zero diagonal), at 0.4 of the tolerance, and B is moved along each axis, from either
+// side, until its image overlaps A's face by a quarter of the stretch. Every hierarchy must agree
+// with the exact brute force over all triangle pairs (an oriented-box test that took B's axes for
+// unit vectors called the roots of two stretched boxes apart).
+namespace {
+template <class BV> void run_nearly_rigid_poses() {
+  using S = typename BvTraits<BV>::Scalar;
+  const Vec3<S> half_a(S(1), S(0.5), S(0.25));
+  const TriangleMesh<S> box_a = make_box<S>(half_a);
+  const MeshBvh<BV> a(box_a);
+  const S delta = S(0.4) * rotation_tolerance<S>();
+  Mat3<S> quarter_turn;  // 90 degrees about z, exact
+  quarter_turn << S(0), S(-1), S(0), S(1), S(0), S(0), S(0), S(0), S(1);
+  const Mat3<S> tilted = Eigen::AngleAxis<S>(S(0.7), Vec3<S>(S(1), S(2), S(3)).normalized()).toRotationMatrix();
+  Mat3<S> shear;
+  shear << S(0), S(1), S(-1), S(1), S(0), S(1), S(-1), S(1), S(0);
+  int colliding = 0, poses = 0;
+  for (const S size : {S(1), S(0.3)}) {
+    const TriangleMesh<S> box_b = make_box<S>(Vec3<S>(half_a * size));
+    const MeshBvh<BV> b(box_b);
+    for (const Mat3<S>& q : {Mat3<S>(Mat3<S>::Identity()), quarter_turn, tilted})
+      for (const Mat3<S>& defect : {Mat3<S>(Mat3<S>::Identity() * delta), Mat3<S>(Mat3<S>::Identity() * -delta), Mat3<S>(shear * (delta / S(2)))})
+        for (int axis = 0; axis < 3; ++axis)
+          for (const S side : {S(1), S(-1)}) {
+            const Mat3<S> r = q * (Mat3<S>::Identity() + defect);
+            S extent = 0;  // B's image's half extent along the axis
+            for (int v = 0; v < box_b.num_vertices(); ++v) extent = std::max(extent, std::abs((r * box_b.vertex(v))[axis]));
+            Vec3<S> t = Vec3<S>::Zero();
+            t[axis] = side * (half_a[axis] + extent * (S(1) - delta / S(4)));
+            const RigidTransform<S> pose(r, t);
+            ASSERT_NO_THROW(validate_pose(pose, "test"));
+            const auto expected = brute_force_pairs(box_a, RigidTransform<S>{}, box_b, pose);
+            colliding += !expected.empty();
+            ++poses;
+            CollideOptions all;
+            all.all_pairs = true;
+            EXPECT_EQ(collides(a, RigidTransform<S>{}, b, pose), !expected.empty()) << BvTraits<BV>::name << " size " << size << " axis " << axis;
+            EXPECT_EQ(sorted(collide(a, RigidTransform<S>{}, b, pose, all).pairs), expected) << BvTraits<BV>::name << " axis " << axis;
+          }
+  }
+  // a tilted full-size B can reach past A's face sideways and miss it; the rest overlap by a quarter
+  // of the stretch, far above rounding, and must collide
+  EXPECT_GE(colliding, poses * 3 / 4);
+}
+}  // namespace
+
+TEST(MeshCollideExact, NearlyRigidPosesKeepEveryContact) {
+  run_nearly_rigid_poses<Sphere<double>>();
+  run_nearly_rigid_poses<Aabb<double>>();
+  run_nearly_rigid_poses<Obb<double>>();
+  run_nearly_rigid_poses<Sphere<float>>();
+  run_nearly_rigid_poses<Aabb<float>>();
+  run_nearly_rigid_poses<Obb<float>>();
+}

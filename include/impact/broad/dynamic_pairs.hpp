@@ -54,8 +54,9 @@ class DynamicPairs {
     near_[pos].clear();
   }
   /// Adds the pairs of the tree's fresh leaves (whose objects were dropped or added since the
-  /// last update), which unmarks them. `cand` gives the objects' positions.
-  void update(DynamicTree<S>& tree, const StaticCandidates<S>& cand, BroadPhaseStats& st) {
+  /// last update), which unmarks them. `cand` gives the objects' positions. The tree's queries
+  /// run on `threads` threads; the pairs are added in the same order for every count.
+  void update(DynamicTree<S>& tree, const StaticCandidates<S>& cand, BroadPhaseStats& st, int threads = 1) {
     tree.fresh_pairs(
         [&](std::int32_t a, std::int32_t b) {
           const auto pa = static_cast<std::int32_t>(cand.pos_of(a)), pb = static_cast<std::int32_t>(cand.pos_of(b));
@@ -63,7 +64,7 @@ class DynamicPairs {
           near_[std::size_t(pb)].push_back(pa);
           return true;
         },
-        st);
+        st, threads);
   }
 
   /// Reports, for the active objects at positions [begin, end), their cached pairs that the

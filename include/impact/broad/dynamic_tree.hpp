@@ -29,6 +29,7 @@
 
 #include "impact/broad/broad_phase.hpp"
 #include "impact/bvh/traversal_stack.hpp"
+#include "impact/core/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -228,30 +229,36 @@ class DynamicTree {
   /// overlap and of which at least one is fresh, active or not; then unmarks the fresh leaves.
   /// Each fresh leaf walks up to the root and queries, at every ancestor, the subtree on the
   /// other side with its box: about one node test per level where a query from the root takes
-  /// two, and the pairs of two fresh leaves come from the one with the smaller id.
+  /// two, and the pairs of two fresh leaves come from the one with the smaller id. The queries
+  /// only read the tree, so on `threads` threads ranges of fresh leaves collect their pairs apart
+  /// and visit then gets them all in the serial order: the same calls for every thread count.
   template <class Visit>
-  void fresh_pairs(Visit&& visit, BroadPhaseStats& st) {
+  void fresh_pairs(Visit&& visit, BroadPhaseStats& st, int threads = 1) {
     std::sort(fresh_.begin(), fresh_.end());  // a removed fresh leaf's node may have been reused
     fresh_.erase(std::unique(fresh_.begin(), fresh_.end()), fresh_.end());
-    detail::TraversalStack<std::int32_t> stack;
-    for (const std::int32_t leaf : fresh_) {
-      const Node& nl = node(leaf);
-      if (nl.height != 0 || !nl.fresh) continue;  // removed since it was marked
-      for (std::int32_t c = leaf, p = nl.parent; p != null; c = p, p = node(p).parent) {
-        const Node& np = node(p);
-        stack.push(np.child[np.child[0] == c ? 1 : 0]);
-        while (!stack.empty()) {
-          const std::int32_t i = stack.pop();
-          const Node& n = node(i);
-          ++st.bv_tests;
-          if (!overlap(n.box, nl.box)) continue;
-          if (!n.is_leaf()) {
-            stack.push(n.child[1]);
-            stack.push(n.child[0]);
-          } else if (!n.fresh || leaf < i) {
-            visit(nl.object(), n.object());
-          }
-        }
+    constexpr std::size_t grain = 32;
+    const std::size_t n = fresh_.size();
+    if (threads == 1 || n < 2 * grain) {
+      detail::TraversalStack<std::int32_t> stack;
+      for (const std::int32_t leaf : fresh_) fresh_leaf_pairs(leaf, stack, visit, st);
+    } else {
+      struct Part {
+        std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+        BroadPhaseStats stats;
+      };
+      std::vector<Part> parts((n + grain - 1) / grain);
+      parallel_for_ranges(n, grain, threads, [&](std::size_t b, std::size_t e) {
+        Part& part = parts[b / grain];
+        detail::TraversalStack<std::int32_t> stack;
+        auto collect = [&part](std::int32_t x, std::int32_t y) {
+          part.pairs.emplace_back(x, y);
+          return true;
+        };
+        for (std::size_t k = b; k < e; ++k) fresh_leaf_pairs(fresh_[k], stack, collect, part.stats);
+      });
+      for (const Part& part : parts) {
+        st += part.stats;
+        for (const auto& pr : part.pairs) visit(pr.first, pr.second);
       }
     }
     for (const std::int32_t leaf : fresh_) node(leaf).fresh = 0;
@@ -363,6 +370,29 @@ class DynamicTree {
     n.box = merge(a.box, b.box);
     n.height = static_cast<std::int16_t>(1 + std::max(a.height, b.height));
     n.active = a.active | b.active;
+  }
+
+  /// The pairs of one fresh leaf for fresh_pairs (reads only).
+  template <class Visit>
+  void fresh_leaf_pairs(std::int32_t leaf, detail::TraversalStack<std::int32_t>& stack, Visit& visit, BroadPhaseStats& st) const {
+    const Node& nl = node(leaf);
+    if (nl.height != 0 || !nl.fresh) return;  // removed since it was marked
+    for (std::int32_t c = leaf, p = nl.parent; p != null; c = p, p = node(p).parent) {
+      const Node& np = node(p);
+      stack.push(np.child[np.child[0] == c ? 1 : 0]);
+      while (!stack.empty()) {
+        const std::int32_t i = stack.pop();
+        const Node& n = node(i);
+        ++st.bv_tests;
+        if (!overlap(n.box, nl.box)) continue;
+        if (!n.is_leaf()) {
+          stack.push(n.child[1]);
+          stack.push(n.child[0]);
+        } else if (!n.fresh || leaf < i) {
+          visit(nl.object(), n.object());
+        }
+      }
+    }
   }
 
   void insert_leaf(std::int32_t leaf) {

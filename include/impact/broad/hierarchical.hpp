@@ -92,7 +92,7 @@ class HierarchicalBroadPhase {
   /// `threads` threads.
   void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
     flush(t, st);
-    pairs_.update(dynamic_, cache_, st);
+    pairs_.update(dynamic_, cache_, st, threads);
     const std::int32_t root = static_.root();
     const Aabb<S>* bounds = root == DynamicTree<S>::null ? nullptr : &static_.box(root);
     cache_.update(t, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {

@@ -91,7 +91,7 @@ class StaticDynamicBroadPhase {
   /// each object writing only its own candidates) and the tight-box re-tests of those that moved.
   void update(const ObjectTable<S>& t, BroadPhaseStats& st, int threads) {
     flush(t, st);
-    pairs_.update(dyn_, cache_, st);
+    pairs_.update(dyn_, cache_, st, threads);
     // Dynamic against static: the static tree is large, so the queries' Morton order is what
     // keeps its nodes in cache.
     const Aabb<S>* bounds = static_tree_.empty() ? nullptr : &static_tree_.root().bv;

@@ -22,6 +22,7 @@
 #include "impact/ccd/swept_volume.hpp"
 #include "impact/ccd/vertex_face.hpp"
 #include "impact/core/parallel.hpp"
+#include "impact/core/sorted_union.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
 
 #include <algorithm>
@@ -191,8 +192,9 @@ struct MeshCcdCandidates {
 /// adjacent primitives skipped) on `threads` threads; returns the number of triangle pairs. On one
 /// thread, one traversal. On more, the node pairs near the roots are split breadth first, as the
 /// traversal splits them, until there are 16 per thread (or nothing is left to split); each is
-/// then walked into its own candidate lists, joined afterwards. finish() sorts and deduplicates
-/// them, so the candidates, hence every answer, are the same for every thread count.
+/// then walked into its own candidate lists, and the lists are joined sorted and deduplicated
+/// on the threads too (sorted_union; on one thread, finish()): the candidates, hence every
+/// answer, are the same for every thread count.
 template <bool Self, class S>
 std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const Faces& fa, const Faces& fb,
                               MeshCcdCandidates& c, int threads) {
@@ -211,7 +213,11 @@ std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, co
     return pairs;
   };
   const int t = resolve_threads(threads);
-  if (t <= 1 || ta.empty() || tb.empty()) return walk(0, 0, c);
+  if (t <= 1 || ta.empty() || tb.empty()) {
+    const std::size_t pairs = walk(0, 0, c);
+    c.finish();
+    return pairs;
+  }
   std::vector<std::pair<std::int32_t, std::int32_t>> tasks{{0, 0}}, next;
   const std::size_t want = 16 * static_cast<std::size_t>(t);
   for (bool split = true; split && tasks.size() < want;) {
@@ -249,18 +255,16 @@ std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, co
   std::vector<MeshCcdCandidates> parts(tasks.size());
   std::vector<std::size_t> pairs(tasks.size(), 0);
   parallel_for(tasks.size(), t, [&](std::size_t k) { pairs[k] = walk(tasks[k].first, tasks[k].second, parts[k]); });
-  std::size_t total = 0, nvf = c.vf.size(), nee = c.ee.size();
+  std::size_t total = 0;
+  std::vector<std::vector<std::array<std::int32_t, 3>>> vf(parts.size());
+  std::vector<std::vector<std::array<std::int32_t, 4>>> ee(parts.size());
   for (std::size_t k = 0; k < parts.size(); ++k) {
     total += pairs[k];
-    nvf += parts[k].vf.size();
-    nee += parts[k].ee.size();
+    vf[k].swap(parts[k].vf);
+    ee[k].swap(parts[k].ee);
   }
-  c.vf.reserve(nvf);
-  c.ee.reserve(nee);
-  for (const auto& p : parts) {
-    c.vf.insert(c.vf.end(), p.vf.begin(), p.vf.end());
-    c.ee.insert(c.ee.end(), p.ee.begin(), p.ee.end());
-  }
+  c.vf = sorted_union(vf, t);
+  c.ee = sorted_union(ee, t);
   return total;
 }
 
@@ -270,7 +274,6 @@ std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, co
 template <class S>
 MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt,
                               int threads) {
-  c.finish();
   const std::size_t nvf = c.vf.size(), n = nvf + c.ee.size();
   // test k (vertex-face k for k < nvf, else edge-edge k - nvf); appends a hit to out
   const auto test = [&](std::size_t k, std::vector<MeshCcdContact<S>>& out) {

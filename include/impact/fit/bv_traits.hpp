@@ -17,6 +17,7 @@
 #include "impact/fit/obb_fit.hpp"
 #include "impact/geometry/aabb.hpp"
 #include "impact/geometry/obb.hpp"
+#include "impact/geometry/obb_pair_frame.hpp"
 #include "impact/geometry/sphere.hpp"
 #include "impact/geometry/transform.hpp"
 
@@ -110,20 +111,14 @@ template <class S_> struct BvTraits<Obb<S_>> {
   }
   static S size(const Obb<S>& a) { return a.half.norm(); }
   static Vec3<S> center(const Obb<S>& a) { return a.center; }
-  static bool overlap(const Obb<S>& a, const Obb<S>& b) { return overlap(a, b, RigidTransform<S>{}); }
-  /// Separating-axis test (15 axes) of a and xf(b) in a's frame. Conservative: every quantity of
-  /// the test is computed to within a few ulps of the magnitudes it involves (coordinates of the
-  /// centres and the translation, M; centre offset and extents, E), so 64 ulps of 3 M + E added to
-  /// every axis's radii covers the rounding of R, of the offset and the axes' departure from
-  /// orthonormality.
+  static bool overlap(const Obb<S>& a, const Obb<S>& b) {
+    return ObbPairFrame<S>().overlaps(a, b);
+  }
+  /// Separating-axis test (15 axes) of a and xf(b) in a's frame. Conservative under rounding and
+  /// for an xf.R that is a rotation only within rotation_tolerance (see ObbPairFrame, which pair
+  /// traversals use directly to reuse a's frame across tests).
   static bool overlap(const Obb<S>& a, const Obb<S>& b, const RigidTransform<S>& xf) {
-    const Vec3<S> cb = xf.apply(b.center);
-    const Mat3<S> R = a.axes.transpose() * (xf.R * b.axes);
-    const Vec3<S> t = a.axes.transpose() * (cb - a.center);
-    const S M = a.center.cwiseAbs().maxCoeff() + cb.cwiseAbs().maxCoeff() + xf.t.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
-    const S E = t.cwiseAbs().sum() + a.half.sum() + b.half.sum();
-    const S slack = S(64) * std::numeric_limits<S>::epsilon() * (S(3) * M + E) + std::numeric_limits<S>::denorm_min();
-    return obb_overlap<S>(a.half, R, t, b.half, slack);
+    return ObbPairFrame<S>(xf).overlaps(a, b);
   }
   static Obb<S> transformed(const Obb<S>& a, const RigidTransform<S>& xf) {
     Obb<S> o{xf.apply(a.center), xf.R * a.axes, a.half};

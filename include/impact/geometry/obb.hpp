@@ -26,11 +26,13 @@ template <class S> struct Obb {
 /// touching or overlapping boxes (it may accept boxes that are apart by a few ulps).
 /// `slack` >= 0 is added to every axis's sum of projected radii: callers pass a bound of the
 /// rounding in R and tb (see BvTraits<Obb>::overlap), which makes the test conservative for
-/// boxes far from the origin too. Complexity: at most 15 axis tests.
+/// boxes far from the origin too. `axis_pad` >= 0 is added to every |R_ij|: callers whose R is
+/// off its true value by up to that much per entry pass it (ObbPairFrame). Complexity: at most 15
+/// axis tests.
 template <class S>
-inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, const Vec3<S>& eb, S slack = S(0)) {
+inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, const Vec3<S>& eb, S slack = S(0), S axis_pad = S(0)) {
   // Everything in A's local frame: B's axes are the columns of R, its centre is tb.
-  const S pad = S(64) * std::numeric_limits<S>::epsilon();
+  const S pad = S(64) * std::numeric_limits<S>::epsilon() + axis_pad;
   Mat3<S> absR = R.cwiseAbs().array() + pad;
   // A's face axes
   for (int i = 0; i < 3; ++i)

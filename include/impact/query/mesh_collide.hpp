@@ -14,6 +14,8 @@
 
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse_pair.hpp"
+#include "impact/geometry/obb_pair_frame.hpp"
+#include "impact/geometry/rotation_defect.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/triangle_triangle.hpp"
 
@@ -187,8 +189,7 @@ template <class S> struct PosePad {
     if (identity) return;
     constexpr S u = std::numeric_limits<S>::epsilon() / S(2);
     const S up = S(1) + S(4) * u;
-    const Mat3<S> G = M.transpose() * M - Mat3<S>::Identity();
-    const S g = G.cwiseAbs().sum() * (S(1) + S(16) * u) + S(16) * u * (M.squaredNorm() + S(3));
+    const S g = rotation_defect_bound(M);
     const S m_inf = M.cwiseAbs().rowwise().sum().maxCoeff(), m_one = M.cwiseAbs().colwise().sum().maxCoeff();
     const S t_inf = x.t.cwiseAbs().maxCoeff();
     const S sqrt3 = S(1.7320508075688773) * up;
@@ -216,16 +217,22 @@ template <class S> struct PosePad {
 /// which the narrow phase would find a pair (see PosePad and sphere_may_touch_triangle).
 template <class BV> struct MeshNodeOverlap {
   using S = typename BvTraits<BV>::Scalar;
+  static constexpr bool kSphere = std::is_same_v<BV, Sphere<S>>;
+  static constexpr bool kObb = std::is_same_v<BV, Obb<S>>;
+  struct NoFrame {
+    explicit NoFrame(const RigidTransform<S>&) {}
+  };
   const MeshBvh<BV>& a;
   const MeshBvh<BV>& b;
   RigidTransform<S> b_to_a, a_to_b;
   std::uint64_t* tests;
   PosePad<S> pad;
+  std::conditional_t<kObb, ObbPairFrame<S>, NoFrame> frame;  ///< oriented boxes: X's defect, bounded once
 
   MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
-      : a(a_), b(b_), b_to_a(x), a_to_b(x.inverse()), tests(counter) {
-    // oriented boxes bound the rounding of the transform in their own overlap test
-    if constexpr (std::is_same_v<BV, Sphere<S>> || std::is_same_v<BV, Aabb<S>>) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
+      : a(a_), b(b_), b_to_a(x), a_to_b(kSphere ? x.inverse() : RigidTransform<S>{}), tests(counter), frame(x) {
+    // oriented boxes bound the rounding and the defect of the transform in their own test
+    if constexpr (kSphere || std::is_same_v<BV, Aabb<S>>) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
   }
 
   bool leaf_touches(const MeshBvh<BV>& m, const BvhNode<BV>& leaf, const Vec3<S>& c, S r) const {
@@ -256,6 +263,8 @@ template <class BV> struct MeshNodeOverlap {
       const Vec3<S> eb = eb0 + Vec3<S>::Constant(pad.box_b + pad.box_g * eb0.sum());
       const Vec3<S> tb = b_to_a.apply(nb.bv.center()) - na.bv.center();
       return obb_overlap<S>(ea, b_to_a.R, tb, eb);
+    } else if constexpr (kObb) {
+      return frame.overlaps(na.bv, nb.bv);
     } else {
       return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }
