@@ -139,8 +139,10 @@ struct ClothStepStats {
   std::size_t impulse_relax_impulses = 0;  ///< impulses of the relaxations after the CCD impulse passes
   std::size_t candidates_vf = 0, candidates_ee = 0;  ///< primitive pairs after the first gathering
   std::size_t ccd_tests = 0;                         ///< primitive CCD tests run (all stages)
-  /// Candidate tests settled without a CCD: the pair's distance at x0 minus its largest relative
-  /// vertex displacement stays above h (a proof that it never comes within h).
+  /// Candidate tests settled without a CCD search: a lower bound on the pair's distance over the
+  /// step stays above h (a proof that it never comes within h): its distance at x0 minus its
+  /// largest relative vertex displacement, the bound from both ends, a fixed separating direction,
+  /// or its distance sampled along the step with the relative motion between samples.
   std::size_t ccd_skipped = 0;
   /// Candidate re-tests avoided after a vertex moved: the pair's proof from an earlier pass of the
   /// step (ccd_skipped) still holds, since its vertices' end positions moved by less than its
