@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> rows;
   std::vector<double> dyn_ms, coll_ms, coll_cpu_ms;
   double stage_ms[5] = {0, 0, 0, 0, 0};
-  std::size_t candidates_total = 0, ccd_total = 0, skipped_total = 0, gatherings_total = 0;
+  std::size_t candidates_total = 0, ccd_total = 0, skipped_total = 0, kept_total = 0, gatherings_total = 0;
   std::size_t max_inter = 0, total_inter_steps = 0, failsafe_steps = 0, collisions_total = 0, zones_total = 0, largest_zone = 0;
   double min_sep = std::numeric_limits<double>::infinity(), energy_removed = 0, worst_dp = 0, zone_dp = 0, zone_dl = 0;
   ScriptedVertices<double> script;
@@ -239,6 +239,7 @@ int main(int argc, char** argv) {
     candidates_total += st.candidates_vf + st.candidates_ee;
     ccd_total += st.ccd_tests;
     skipped_total += st.ccd_skipped;
+    kept_total += st.ccd_kept;
     gatherings_total += static_cast<std::size_t>(st.broad.passes);
     zones_total += st.zone_count;
     largest_zone = std::max(largest_zone, st.largest_zone);
@@ -255,7 +256,7 @@ int main(int argc, char** argv) {
     row.add("step", step).add("dynamics_ms", dms).add("collision_ms", cms).add("collision_cpu_ms", ccpu).add("collisions", collisions).add("zones", st.zone_count)
         .add("largest_zone", st.largest_zone).add("failsafe", st.failsafe_used).add("intersections", rep.intersections)
         .add("gatherings", st.broad.passes).add("proximity_rounds", st.proximity.passes).add("proximity_converged", st.proximity_converged).add("candidates", st.candidates_vf + st.candidates_ee).add("ccd_tests", st.ccd_tests)
-        .raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed)
+        .add("ccd_skipped", st.ccd_skipped).add("ccd_kept", st.ccd_kept).raw("min_separation", num(rep.min_distance)).add("energy_removed", e_removed)
         .add("zone_momentum_error", st.zone_momentum_error).add("zone_angular_momentum_error", st.zone_angular_momentum_error);
     rows.push_back(row.str());
   }
@@ -274,8 +275,9 @@ int main(int argc, char** argv) {
               energy_removed, worst_dp);
   std::printf("totals: zones' momentum error (largest, relative): linear %.3g, angular about x0 %.3g\n", zone_dp, zone_dl);
   std::printf("totals: broad phase per step: %.1f candidate pairs, %.2f gatherings; %.1f CCD tests, %.1f candidate tests settled by the "
-              "distance bound\n",
-              double(candidates_total) / a.steps, double(gatherings_total) / a.steps, double(ccd_total) / a.steps, double(skipped_total) / a.steps);
+              "distance bound, %.1f re-tests avoided by a proof kept from an earlier pass\n",
+              double(candidates_total) / a.steps, double(gatherings_total) / a.steps, double(ccd_total) / a.steps, double(skipped_total) / a.steps,
+              double(kept_total) / a.steps);
 
   if (!a.json.empty()) {
     JsonObject totals;

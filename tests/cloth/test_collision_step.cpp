@@ -293,4 +293,30 @@ TYPED_TEST(ClothStep, SlidingSheetsAreProvedSeparatedWithoutCcd) {
   EXPECT_EQ(cloth_test::all_pairs_ccd_hits(combine(sh.F, sh.x0, poke, ClothObstacles<S>{}), h), 0);
 }
 
+// Proofs kept across passes: sheet B lands on sheet A at rest (2.5 h above it, moving down by
+// 2 h), so the impulse passes move vertices of both sheets by a fraction of h, and the next
+// passes list every candidate through them again, the pairs within each sheet among them (a cell
+// apart, proved with a large margin in the first pass). Those keep their proof (ccd_kept) instead
+// of being tested again; the step ends collision-free by the all-pairs oracles.
+TYPED_TEST(ClothStep, ProofsAreKeptAcrossPasses) {
+  using S = TypeParam;
+  const double h = 0.02;
+  const TwoSheets<S> sh(2.5 * h);
+  Vertices<S> x1 = sh.x0;
+  x1.bottomRows(sh.nb).col(2).array() -= S(2 * h);
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(sh.x0.rows());
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(h);
+  opt.proximity = false;
+  ASSERT_GT(cloth_test::all_pairs_ccd_hits(combine(sh.F, sh.x0, x1, ClothObstacles<S>{}), h), 0);
+  const auto st = cloth_collision_step(sh.F, w, sh.x0, x1, ClothObstacles<S>{}, opt);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_FALSE(st.failsafe_used);
+  EXPECT_GT(st.impulses.collisions, 0u);
+  EXPECT_GT(st.ccd_kept, 0u);
+  const auto c = combine(sh.F, sh.x0, x1, ClothObstacles<S>{});
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, h), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c), h * 0.999);
+}
+
 }  // namespace

@@ -185,27 +185,29 @@ TEST(ConvexQuery, GeneralPairs) {
   check_pair("cone-cone", z.cone, z.cone, {1e-9, 1e-9}, 36);
 }
 
-// Two cylinders (convex/cylinder_pair.hpp): wherever the candidates certify a contact, its depth
-// is the overlap along its normal, matches the ray/grid oracle and EPA within 1e-9 of the size,
-// and the two certified brackets (ours and EPA's) overlap; every kind of candidate (a cap of either,
-// two rulings, a ruling against a rim point of either) certifies some poses, some poses are left
-// to EPA (rims against rims, deep contacts), and separated pairs are never certified.
-TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
-  const auto& z = zoo();
-  const Cylinder<double>& cyl = z.cylinder;
-  const double scale = shape_size(cyl), tol = 1e-10 * scale;
-  int kinds[5] = {0, 0, 0, 0, 0}, certified = 0, left = 0, separated = 0;
-  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 400, 0.8 * 2 * scale, 47)) {
+// A cylinder against a cylinder or cone (convex/cylinder_pair.hpp): wherever the candidates
+// certify a contact, its depth is the overlap along its normal, matches the ray/grid oracle and EPA
+// within 1e-9 of the size, and the two certified brackets (ours and EPA's) overlap; every kind of
+// candidate certifies some poses (`kind` names it from the normal, -1 for none), some poses are
+// left to EPA (rims against rims, deep contacts), separated pairs are never certified, and the
+// whole query (either order) gives the certified answer.
+template <class B, class Contact, class Kind>
+void check_cylinder_candidates(const char* name, const Cylinder<double>& cyl, const B& b, const Contact& contact, const Kind& kind,
+                               int kinds_count) {
+  const double scale = std::max(shape_size(cyl), shape_size(b)), tol = 1e-10 * scale;
+  std::vector<int> kinds(static_cast<std::size_t>(kinds_count), 0);
+  int certified = 0, left = 0, separated = 0;
+  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 400, 0.8 * (shape_size(cyl) + shape_size(b)), 47)) {
     const detail::PairFrame<double> f(pa, pb);
     ConvexContact<double> c;
-    const bool ok = detail::cylinder_pair_contact(cyl, cyl, f.R, f.t, tol, c);
-    const auto br = test::distance_bracket(cyl, pa, cyl, pb);
+    const bool ok = contact(f, tol, c);
+    const auto br = test::distance_bracket(cyl, pa, b, pb);
     if (br.lower > 1e-6 * scale) {
       ++separated;
-      EXPECT_FALSE(ok) << "certified a separated pair";
+      EXPECT_FALSE(ok) << name << ": certified a separated pair";
       continue;
     }
-    const auto o = signed_distance_oracle(cyl, pa, cyl, pb);
+    const auto o = signed_distance_oracle(cyl, pa, b, pb);
     if (o.value > -1e-6 * scale) continue;
     if (!ok) {
       ++left;
@@ -213,34 +215,64 @@ TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
     }
     ++certified;
     const V3 n = pa.rotate(c.normal);
-    EXPECT_NEAR(n.norm(), 1.0, 1e-12);
-    EXPECT_NEAR(overlap_along(cyl, pa, cyl, pb, n), c.depth, 1e-12 * scale) << "depth is not the overlap along the normal";
-    EXPECT_LE(c.depth_gap, tol);
-    const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, cyl, pb, o.normal));
-    EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << "grid " << -o.value;
-    const auto e = detail::general_penetration(cyl, pa, cyl, pb, ConvexQueryOptions<double>{});
-    ASSERT_TRUE(e.intersecting);
-    EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale);
-    EXPECT_LE(c.depth - c.depth_gap, e.depth + 1e-12 * scale) << "our lower bound above EPA's depth";
-    EXPECT_LE(e.depth - e.depth_gap, c.depth + 1e-12 * scale) << "EPA's lower bound above our depth";
-    // the kind: cap of a, cap of b, ruling-ruling, ruling of a, ruling of b
-    const double na = std::abs(c.normal.z()), nb = std::abs(c.normal.dot(f.R.col(2)));
-    const int kind = na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (na < 1e-12 && nb < 1e-12) ? 2 : na < 1e-12 ? 3 : nb < 1e-12 ? 4 : -1;
-    ASSERT_GE(kind, 0) << "a certified normal of no candidate's kind";
-    ++kinds[kind];
-    // the whole query answers the same
-    const auto q = convex_penetration(cyl, pa, cyl, pb);
-    EXPECT_NEAR(q.depth, c.depth, 1e-12 * scale);
-    EXPECT_LT((q.normal - n).norm(), 1e-12);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-12) << name;
+    EXPECT_NEAR(overlap_along(cyl, pa, b, pb, n), c.depth, 1e-12 * scale) << name << ": depth is not the overlap along the normal";
+    EXPECT_LE(c.depth_gap, tol) << name;
+    const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, b, pb, o.normal));
+    EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << name << ": grid " << -o.value;
+    const auto e = detail::general_penetration(cyl, pa, b, pb, ConvexQueryOptions<double>{});
+    ASSERT_TRUE(e.intersecting) << name;
+    EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale) << name;
+    EXPECT_LE(c.depth - c.depth_gap, e.depth + 1e-12 * scale) << name << ": our lower bound above EPA's depth";
+    EXPECT_LE(e.depth - e.depth_gap, c.depth + 1e-12 * scale) << name << ": EPA's lower bound above our depth";
+    const int k = kind(f, c.normal);
+    ASSERT_GE(k, 0) << name << ": a certified normal of no candidate's kind";
+    ++kinds[static_cast<std::size_t>(k)];
+    const auto q = convex_penetration(cyl, pa, b, pb);
+    EXPECT_NEAR(q.depth, c.depth, 1e-12 * scale) << name;
+    EXPECT_LT((q.normal - n).norm(), 1e-12) << name;
+    const auto r = convex_penetration(b, pb, cyl, pa);  // the other order: the same contact, normal reversed
+    EXPECT_NEAR(r.depth, c.depth, 1e-12 * scale) << name;
+    EXPECT_LT((r.normal + n).norm(), 1e-12) << name;
   }
-  for (int k = 0; k < 5; ++k) {
-    EXPECT_GT(kinds[k], 0) << "kind " << k;
+  for (int k = 0; k < kinds_count; ++k) {
+    EXPECT_GT(kinds[static_cast<std::size_t>(k)], 0) << name << ": kind " << k;
   }
-  EXPECT_GT(left, 0);
-  EXPECT_GT(separated, 0);
-  EXPECT_GT(certified, left) << "the candidates certify fewer penetrations than they leave to EPA";
-  std::printf("cylinder pairs: %d certified (caps %d/%d, rulings %d, ruling-rim %d/%d), %d left to EPA, %d separated\n", certified, kinds[0],
-              kinds[1], kinds[2], kinds[3], kinds[4], left, separated);
+  EXPECT_GT(left, 0) << name;
+  EXPECT_GT(separated, 0) << name;
+  std::printf("%-17s %d certified (by kind:", name, certified);
+  for (const int k : kinds) std::printf(" %d", k);
+  std::printf("), %d left to EPA, %d separated\n", left, separated);
+}
+
+TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
+  const auto& z = zoo();
+  const Cylinder<double>& cyl = z.cylinder;
+  const Cone<double>& cone = z.cone;
+  // kinds: cap of a, cap of b, ruling-ruling, ruling of a (b's rim), ruling of b (a's rim)
+  check_cylinder_candidates(
+      "cylinder-cylinder", cyl, cyl,
+      [&](const detail::PairFrame<double>& f, double tol, ConvexContact<double>& c) {
+        return detail::cylinder_pair_contact(cyl, cyl, f.R, f.t, tol, c);
+      },
+      [](const detail::PairFrame<double>& f, const V3& n) {
+        const double na = std::abs(n.z()), nb = std::abs(n.dot(f.R.col(2)));
+        return na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (na < 1e-12 && nb < 1e-12) ? 2 : na < 1e-12 ? 3 : nb < 1e-12 ? 4 : -1;
+      },
+      5);
+  // kinds: cap of a, base of b, ruling-ruling, ruling of a (apex or base rim), side of b (a's rim)
+  const double side = -cone.radius / std::sqrt(4 * cone.half_length * cone.half_length + cone.radius * cone.radius);
+  check_cylinder_candidates(
+      "cylinder-cone", cyl, cone,
+      [&](const detail::PairFrame<double>& f, double tol, ConvexContact<double>& c) {
+        return detail::cylinder_cone_contact(cyl, cone, f.R, f.t, tol, c);
+      },
+      [&](const detail::PairFrame<double>& f, const V3& n) {
+        const double na = std::abs(n.z()), nb = n.dot(f.R.col(2));
+        const bool ruling_a = na < 1e-12, side_b = std::abs(nb - side) < 1e-12;
+        return na > 1 - 1e-12 ? 0 : nb > 1 - 1e-12 ? 1 : (ruling_a && side_b) ? 2 : ruling_a ? 3 : side_b ? 4 : -1;
+      },
+      5);
 }
 
 // The Newton refinement (ConvexQueryOptions::newton_refinement, off by default) keeps the depth

@@ -32,8 +32,9 @@
 /// Guarantee: on return, ClothStepStats::collision_free says that no pair of x0 -> x1' comes
 /// within h: every pair that could (its primitives' envelopes overlap; the envelopes hold every
 /// position of the step, and a vertex leaving its envelope makes the step gather again) was either
-/// proved safe by the distance bound (its distance at x0 minus the largest difference of its
-/// vertices' displacements stays above h, with a rounding margin) or cleared by the final
+/// proved safe by a distance bound (e.g. its distance at x0 minus the largest difference of its
+/// vertices' displacements stays above h, with a rounding margin; a bound from an earlier pass
+/// counts while its margin covers the vertices' moves since) or cleared by the final
 /// conservative CCD (minimum separation h, no false negatives), excluding only pairs whose every
 /// vertex has infinite mass (obstacle against obstacle is never tested; pinned-only cloth pairs
 /// are counted in `unresolved`, since nothing can move them). It is false only when a scripted

@@ -142,6 +142,10 @@ struct ClothStepStats {
   /// Candidate tests settled without a CCD: the pair's distance at x0 minus its largest relative
   /// vertex displacement stays above h (a proof that it never comes within h).
   std::size_t ccd_skipped = 0;
+  /// Candidate re-tests avoided after a vertex moved: the pair's proof from an earlier pass of the
+  /// step (ccd_skipped) still holds, since its vertices' end positions moved by less than its
+  /// lower bound's excess over h in all.
+  std::size_t ccd_kept = 0;
   std::size_t zone_count = 0;                        ///< zones resolved (summed over rounds)
   std::size_t largest_zone = 0;                      ///< vertices of the largest zone
   std::size_t rigid_zones = 0;                       ///< zones resolved rigidly (method or fallback)

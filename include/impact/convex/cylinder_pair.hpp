@@ -1,24 +1,29 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// A certified shortcut for the penetration of two intersecting cylinders (convex/query.hpp runs it
-/// before EPA). With f(n) = h_A(n) + h_B(-n), the overlap along a unit direction n (translating b
-/// by f(n) n separates them; the depth is min_n f(n), as for EPA in convex/epa.hpp), each candidate
-/// below gives an upper bound f(n) at its direction and a lower bound from balls inside the shapes:
-/// for balls A' (centre c_a, radius rho_a) inside A and B' (c_b, rho_b) inside B, f >= f_{A',B'}
-/// everywhere, so depth >= rho_a + rho_b - |c_a - c_b| (a ball of radius 0 is a point). A
-/// cylinder's support along n is a cap disc (n along the axis), a ruling (n normal to the axis) or
-/// a rim point; the candidates are the contacts where at most one side is a rim point:
-///   cap of a (n = +-a's axis) against b's deepest point across it, and the same with a, b swapped:
-///       the point x, the ball about it of radius dist(x, boundary) inside the other shape;
-///   ruling against ruling (n normal to both axes): the closest points of the two rulings, each
-///       with the largest ball inside its cylinder tangent there;
-///   ruling of a against a rim point of b: the point x of b's rims nearest a's axis (the distance
-///       of a circle to a line: 8 samples of the angle, then Newton), n a's radial direction
-///       through x, the ball about x inside a; and the same with a, b swapped.
+/// A certified shortcut for the penetration of an intersecting cylinder and cylinder or cone
+/// (convex/query.hpp runs it before EPA). With f(n) = h_A(n) + h_B(-n), the overlap along a unit
+/// direction n (translating b by f(n) n separates them; the depth is min_n f(n), as for EPA in
+/// convex/epa.hpp), each candidate below gives an upper bound f(n) at its direction and a lower
+/// bound from balls inside the shapes: for balls A' (centre c_a, radius rho_a) inside A and B'
+/// (c_b, rho_b) inside B, f >= f_{A',B'} everywhere, so depth >= rho_a + rho_b - |c_a - c_b| (a
+/// ball of radius 0 is a point), and a ball B' against the whole of A gives depth >= rho_b +
+/// dist(c_b, boundary of A). A cylinder's support along n is a cap disc (n along the axis), a
+/// ruling (n normal to the axis) or a rim point; a cone's its base disc, a side ruling, the apex or
+/// a base rim point. The candidates are the contacts where at most one side is a corner (rim point,
+/// apex):
+///   a cap (or the cone's base) against the other shape's deepest point x across it: the ball
+///       about x of radius dist(x, boundary) inside the capped shape;
+///   ruling against ruling (n normal to both axes; for a cone, normal to the cylinder's axis and a
+///       side normal of the cone): the closest points of the two rulings, each with the largest
+///       ball inside its shape tangent there;
+///   a cylinder's ruling against the other's rim point nearest its axis (the distance of a circle to
+///       a line: 8 samples of the angle, then Newton) or the cone's apex, n the radial direction
+///       through it; the cone's side against the cylinder's rim point deepest below it (the same
+///       minimisation of 2h rho + R z over the rim).
 /// At the true contact of these kinds the two bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance, the answer is certified as EPA's
-/// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, shallow
-/// balls, nearly parallel axes) the caller runs EPA.
+/// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
+/// contacts whose balls are too small, nearly parallel axes) the caller runs EPA.
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.
@@ -36,32 +41,44 @@
 namespace impact::detail {
 
 /// The angle's cosine and sine of the point of the circle c + cos(phi) u + sin(phi) v (u, v
-/// orthogonal, of the circle's radius) nearest the z axis, i.e. minimising g = x^2 + y^2 of the
-/// point: the best of 8 samples, then Newton on g(phi) (a trigonometric polynomial of degree 2: at
-/// most two minima, 45 degrees of sampling apart at least in practice; the certificate checks the
-/// answer anyway). Only the x, y components of c, u, v matter.
+/// orthogonal, of the circle's radius) minimising q = alpha rho + beta z, rho the point's distance
+/// to the z axis: alpha = 1, beta = 0 gives the point nearest the axis; alpha = 2h, beta = R the
+/// point deepest below the side of a cone of base radius R and half length h about the axis. The
+/// best of 8 samples with z in [-zmax, zmax] (of all 8 if none is), then Newton on q(phi) (the
+/// certificate that uses the point checks it anyway).
 template <class S>
-inline void circle_nearest_z_axis(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v, S& cos_phi, S& sin_phi) {
-  const S qx = c.x(), qy = c.y(), ux = u.x(), uy = u.y(), vx = v.x(), vy = v.y();
+inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v, S alpha, S beta, S zmax, S& cos_phi,
+                            S& sin_phi) {
   static constexpr S k = S(0.7071067811865476);
   static constexpr S cs[8][2] = {{S(1), S(0)}, {k, k}, {S(0), S(1)}, {-k, k}, {S(-1), S(0)}, {-k, -k}, {S(0), S(-1)}, {k, -k}};
   int best = 0;
-  S gbest = std::numeric_limits<S>::infinity();
+  S qbest = std::numeric_limits<S>::infinity();
+  bool inside = false;  // whether the best sample so far has |z| <= zmax
   for (int i = 0; i < 8; ++i) {
-    const S wx = qx + cs[i][0] * ux + cs[i][1] * vx, wy = qy + cs[i][0] * uy + cs[i][1] * vy;
-    const S g = wx * wx + wy * wy;
-    if (g < gbest) {
-      gbest = g;
+    const Vec3<S> w = c + cs[i][0] * u + cs[i][1] * v;
+    const S g = w.x() * w.x() + w.y() * w.y();
+    const S q = beta != S(0) ? alpha * std::sqrt(g) + beta * w.z() : g;
+    const bool in = std::abs(w.z()) <= zmax;
+    if ((in && !inside) || (in == inside && q < qbest)) {
+      qbest = q;
       best = i;
+      inside = in;
     }
   }
   S co = cs[best][0], si = cs[best][1];
   for (int it = 0; it < 16; ++it) {
-    const S px = co * ux + si * vx, py = co * uy + si * vy;                                // the circle's offset from c
-    const S wx = qx + px, wy = qy + py, tx = -si * ux + co * vx, ty = -si * uy + co * vy;  // point, derivative
-    const S g1 = wx * tx + wy * ty;                                                        // g' / 2
-    const S g2 = tx * tx + ty * ty - (wx * px + wy * py);                                  // g'' / 2
-    S step = g2 > S(0) ? -g1 / g2 : (g1 > S(0) ? S(-0.2) : S(0.2));
+    const Vec3<S> p = co * u + si * v, w = c + p, d = -si * u + co * v;  // offset from c, point, derivative (w'' = -p)
+    const S g = w.x() * w.x() + w.y() * w.y();
+    const S g1 = w.x() * d.x() + w.y() * d.y(),
+            g2 = d.x() * d.x() + d.y() * d.y() - (w.x() * p.x() + w.y() * p.y());  // g'/2, g''/2
+    S q1 = g1, q2 = g2;  // beta = 0: Newton on g (the same minimiser as rho)
+    if (beta != S(0)) {
+      if (!(g > S(0))) break;
+      const S rho = std::sqrt(g), r1 = g1 / rho, r2 = (g2 - r1 * r1) / rho;  // rho', rho''
+      q1 = alpha * r1 + beta * d.z();
+      q2 = alpha * r2 - beta * p.z();
+    }
+    S step = q2 > S(0) ? -q1 / q2 : (q1 > S(0) ? S(-0.2) : S(0.2));
     step = std::clamp(step, S(-0.4), S(0.4));
     // rotate (co, si) by the step: Taylor series for small steps (error below 1e-16 under 1e-2)
     S cs_step, sn_step;
@@ -83,6 +100,55 @@ inline void circle_nearest_z_axis(const Vec3<S>& c, const Vec3<S>& u, const Vec3
   sin_phi = si;
 }
 
+/// The bounds the candidates give: the least overlap with its direction and point, the largest
+/// certified lower bound.
+template <class S>
+struct CandidateBounds {
+  S upper = std::numeric_limits<S>::infinity(), lower = S(0);
+  Vec3<S> normal = Vec3<S>::UnitZ(), point = Vec3<S>::Zero();
+  int calls = 0;
+  void offer(const Vec3<S>& n, S f, const Vec3<S>& x, S lb) {
+    ++calls;
+    lower = std::max(lower, lb);
+    if (f < upper) {
+      upper = f;
+      normal = n;
+      point = x;
+    }
+  }
+  /// Certified within `tolerance`: `out` set as the contact functions below say.
+  bool finish(S tolerance, ConvexContact<S>& out) const {
+    out.iterations = calls;
+    out.normal = normal;
+    out.depth = upper;
+    if (!(lower > S(0) && upper - lower <= tolerance)) return false;
+    out.intersecting = true;
+    out.depth = std::max(upper, S(0));
+    out.depth_gap = std::max(upper - lower, S(0));
+    out.point = point;
+    return true;
+  }
+};
+
+/// The radius of the largest ball inside cylinder c tangent to its side on a ruling at height z
+/// (its frame): min(radius, half_length - |z|), < 0 beyond the caps.
+template <class S>
+inline S cylinder_ball_at_ruling(const Cylinder<S>& c, S z) {
+  return std::min(c.radius, c.half_length - std::abs(z));
+}
+
+/// The lower bound of two balls, each inside its shape (a's ball: centre ca, radius ra; b's: cb,
+/// rb; all in a's frame): the balls' depth, and each ball against the whole other shape (its radius
+/// plus its centre's distance to that shape's boundary); `in_b` maps a's frame to b's.
+template <class S, class A, class B, class InB>
+S two_balls_lower(const A& a, const B& b, const InB& in_b, const Vec3<S>& ca, S ra, const Vec3<S>& cb, S rb) {
+  S lb = ra + rb - (ca - cb).norm();
+  const InsideBall<S> whole_a = inside_ball(a, cb), whole_b = inside_ball(b, in_b(ca));
+  if (whole_a.rho >= S(0)) lb = std::max(lb, rb + whole_a.rho);
+  if (whole_b.rho >= S(0)) lb = std::max(lb, ra + whole_b.rho);
+  return lb;
+}
+
 /// The certified contact of cylinders a and b when one of the candidates of the file comment
 /// decides it within `tolerance`, in a's frame (b placed by R, t there): true and `out` set
 /// (normal from a towards b, depth, depth_gap, a point of the contact (the caller moves it onto the
@@ -94,23 +160,10 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
                            ConvexContact<S>& out) {
   const Vec3<S> bz = R.col(2);
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
-  int calls = 0;
-  const auto overlap = [&](const Vec3<S>& n) {
-    ++calls;
-    return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n)));
-  };
-  S upper = std::numeric_limits<S>::infinity(), lower = S(0);
-  Vec3<S> best_n = Vec3<S>::UnitZ(), best_x = Vec3<S>::Zero();
-  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lb) {
-    lower = std::max(lower, lb);
-    const S f = overlap(n);
-    if (f < upper) {
-      upper = f;
-      best_n = n;
-      best_x = x;
-    }
-  };
+  const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
   const auto in_b = [&](const Vec3<S>& x) { return Vec3<S>(R.transpose() * (x - t)); };
+  CandidateBounds<S> k;
+  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lb) { k.offer(n, overlap(n), x, lb); };
   // caps of a: b's deepest point across each
   for (const S s : {S(1), S(-1)}) {
     const Vec3<S> n(S(0), S(0), s);
@@ -125,36 +178,26 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
     const InsideBall<S> ball = inside_ball(b, in_b(x));
     if (ball.rho > S(0)) offer(n, x, ball.rho);
   }
-  const auto decided = [&] { return upper - lower <= tolerance; };
   const auto rulings = [&] {  // ruling against ruling: n normal to both axes, towards b
     const S m = std::sqrt(bz.x() * bz.x() + bz.y() * bz.y());
-    if (m > S(1e-6)) {
-      Vec3<S> n(-bz.y() / m, bz.x() / m, S(0));
-      if (n.dot(t) < S(0)) n = -n;
-      const Vec3<S> tp = t - n.dot(t) * n;
-      const S cb = bz.z(), w = S(1) - cb * cb;
-      const S s2 = (cb * tp.z() - bz.dot(tp)) / w, s1 = tp.z() + cb * s2;  // s1 e_z - s2 bz = tp
-      const S rho_a = std::min(a.radius, a.half_length - std::abs(s1)), rho_b = std::min(b.radius, b.half_length - std::abs(s2));
-      if (rho_a >= S(0) && rho_b >= S(0)) {
-        const Vec3<S> ca = (a.radius - rho_a) * n + Vec3<S>(S(0), S(0), s1);
-        const Vec3<S> cbc = t - (b.radius - rho_b) * n + s2 * bz;
-        // the two balls; and each ball against the whole other cylinder (a ball and a cylinder:
-        // the ball's radius plus its centre's distance to the boundary), which holds deeper contacts
-        S lb = rho_a + rho_b - (ca - cbc).norm();
-        const InsideBall<S> in_a = inside_ball(a, cbc), in_b_ = inside_ball(b, in_b(ca));
-        if (in_a.rho >= S(0)) lb = std::max(lb, rho_b + in_a.rho);
-        if (in_b_.rho >= S(0)) lb = std::max(lb, rho_a + in_b_.rho);
-        const Vec3<S> pa = a.radius * n + Vec3<S>(S(0), S(0), s1), pb = t - b.radius * n + s2 * bz;
-        offer(n, Vec3<S>((pa + pb) / S(2)), lb);
-      }
-    }
+    if (!(m > S(1e-6))) return;
+    Vec3<S> n(-bz.y() / m, bz.x() / m, S(0));
+    if (n.dot(t) < S(0)) n = -n;
+    const Vec3<S> tp = t - n.dot(t) * n;
+    const S cb = bz.z(), w = S(1) - cb * cb;
+    const S s2 = (cb * tp.z() - bz.dot(tp)) / w, s1 = tp.z() + cb * s2;  // s1 e_z - s2 bz = tp
+    const S rho_a = cylinder_ball_at_ruling(a, s1), rho_b = cylinder_ball_at_ruling(b, s2);
+    if (!(rho_a >= S(0) && rho_b >= S(0))) return;
+    const Vec3<S> pa = a.radius * n + Vec3<S>(S(0), S(0), s1), pb = t - b.radius * n + s2 * bz;
+    const S lb = two_balls_lower(a, b, in_b, Vec3<S>(pa - rho_a * n), rho_a, Vec3<S>(pb + rho_b * n), rho_b);
+    offer(n, Vec3<S>((pa + pb) / S(2)), lb);
   };
   // ruling of a against b's rims: the rim point nearest a's axis, pushed out radially
   const auto rims_of_b = [&] {
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> c = t + s * b.half_length * bz, u = b.radius * R.col(0), v = b.radius * R.col(1);
       S co, si;
-      circle_nearest_z_axis(c, u, v, co, si);
+      circle_minimise(c, u, v, S(1), S(0), a.half_length, co, si);
       const Vec3<S> x = c + co * u + si * v;
       const S rxy = std::sqrt(x.x() * x.x() + x.y() * x.y());
       const InsideBall<S> ball = inside_ball(a, x);
@@ -167,7 +210,7 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
       const Vec3<S> c = in_b(Vec3<S>(S(0), S(0), s * a.half_length));
       const Vec3<S> u = a.radius * R.row(0).transpose(), v = a.radius * R.row(1).transpose();
       S co, si;
-      circle_nearest_z_axis(c, u, v, co, si);
+      circle_minimise(c, u, v, S(1), S(0), b.half_length, co, si);
       const Vec3<S> xb = c + co * u + si * v;
       const S rxy = std::sqrt(xb.x() * xb.x() + xb.y() * xb.y());
       const InsideBall<S> ball = inside_ball(b, xb);
@@ -177,19 +220,103 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
       }
     }
   };
+  const auto decided = [&] { return k.upper - k.lower <= tolerance; };
   if (!decided()) rulings();
   if (!decided()) rims_of_b();
   if (!decided()) rims_of_a();
-  out.iterations = calls;
-  out.normal = best_n;
-  out.depth = upper;
-  if (!(lower > S(0) && upper - lower <= tolerance)) return false;
-  out.intersecting = true;
-  out.normal = best_n;
-  out.depth = std::max(upper, S(0));
-  out.depth_gap = std::max(upper - lower, S(0));
-  out.point = best_x;
-  return true;
+  return k.finish(tolerance, out);
+}
+
+/// The same for cylinder a and cone b (base of radius R at -h along its axis, apex at +h; side
+/// normals (2h u + R axis) / L, L = sqrt(4h^2 + R^2), u radial): a's caps against b's deepest point,
+/// b's base against a's, b's apex and base rim against a's rulings, a ruling of each (n normal to
+/// a's axis and a side normal of b: up to two directions), and b's side against the point of a's
+/// rims deepest below it.
+template <class S>
+bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
+                           ConvexContact<S>& out) {
+  const Vec3<S> bz = R.col(2);
+  const S rc = b.radius, hc = b.half_length, len = std::sqrt(S(4) * hc * hc + rc * rc);
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
+  const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
+  const auto in_b = [&](const Vec3<S>& x) { return Vec3<S>(R.transpose() * (x - t)); };
+  CandidateBounds<S> k;
+  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lb) { k.offer(n, overlap(n), x, lb); };
+  const auto radial_push = [&](const Vec3<S>& x) {  // a point of b inside a, pushed out through a's side
+    const S rxy = std::sqrt(x.x() * x.x() + x.y() * x.y());
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (rxy > S(0) && ball.rho > S(0)) offer(Vec3<S>(x.x() / rxy, x.y() / rxy, S(0)), x, ball.rho);
+  };
+  // caps of a: b's deepest point across each
+  for (const S s : {S(1), S(-1)}) {
+    const Vec3<S> n(S(0), S(0), s);
+    const Vec3<S> x = sb(Vec3<S>(-n));
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (ball.rho > S(0)) offer(n, x, ball.rho);
+  }
+  {  // b's base (outward normal -axis): a's deepest point across it
+    const Vec3<S> x = support(a, bz);
+    const InsideBall<S> ball = inside_ball(b, in_b(x));
+    if (ball.rho > S(0)) offer(bz, x, ball.rho);
+  }
+  radial_push(Vec3<S>(t + hc * bz));  // b's apex against a's side
+  const auto rulings = [&] {          // n normal to a's axis and -n a side normal of b: u.z = -R bz.z / (2h)
+    const Vec3<S> e1 = R.col(0), e2 = R.col(1);
+    const S rho = std::sqrt(e1.z() * e1.z() + e2.z() * e2.z()), tau = -rc * bz.z() / (S(2) * hc);
+    if (!(rho > S(1e-6) && std::abs(tau) < rho)) return;
+    const S base = std::atan2(e2.z(), e1.z()), spread = std::acos(tau / rho);
+    for (const S psi : {base + spread, base - spread}) {
+      const Vec3<S> u = std::cos(psi) * e1 + std::sin(psi) * e2;
+      Vec3<S> n = -(S(2) * hc * u + rc * bz) / len;
+      n.z() = S(0);
+      n.normalize();
+      // the closest points of a's ruling r_a n + s e_z and b's from its apex p0 along dir (both normal to n)
+      const Vec3<S> p0 = t + hc * bz, dir = t - hc * bz + rc * u - p0;
+      const Vec3<S> w = p0 - n.dot(p0) * n;
+      const S zd = dir.z(), dd = dir.squaredNorm(), det = zd * zd - dd;  // [1, -zd; zd, -dd] [s; l] = [w.z; dir.w]
+      if (!(std::abs(det) > S(1e-12) * dd)) continue;
+      const S l = (dir.dot(w) - zd * w.z()) / det, s = w.z() + zd * l;
+      if (!(l >= S(0) && l <= S(1))) continue;
+      const S rho_a = cylinder_ball_at_ruling(a, s);
+      if (!(rho_a >= S(0))) continue;
+      const Vec3<S> pa = a.radius * n + Vec3<S>(S(0), S(0), s), pb = p0 + l * dir;
+      // b's ball tangent at pb, its centre along n: above the base and not across the axis
+      const Vec3<S> pbb = in_b(pb);
+      S rho_b =
+          std::min((pbb.z() + hc) / (S(1) + rc / len), std::sqrt(pbb.x() * pbb.x() + pbb.y() * pbb.y()) * len / (S(2) * hc));
+      const Vec3<S> cb = pb + rho_b * n;
+      rho_b = std::min(rho_b, inside_ball(b, in_b(cb)).rho);
+      if (!(rho_b >= S(0))) continue;
+      const S lb = two_balls_lower(a, b, in_b, Vec3<S>(pa - rho_a * n), rho_a, cb, rho_b);
+      offer(n, Vec3<S>((pa + pb) / S(2)), lb);
+    }
+  };
+  const auto base_rim = [&] {  // b's base rim against a's ruling: the rim point nearest a's axis
+    const Vec3<S> c = t - hc * bz, u = rc * R.col(0), v = rc * R.col(1);
+    S co, si;
+    circle_minimise(c, u, v, S(1), S(0), a.half_length, co, si);
+    radial_push(Vec3<S>(c + co * u + si * v));
+  };
+  const auto rims_of_a = [&] {  // b's side against a's rims: the rim point deepest below it
+    for (const S s : {S(1), S(-1)}) {
+      const Vec3<S> c = in_b(Vec3<S>(S(0), S(0), s * a.half_length));
+      const Vec3<S> u = a.radius * R.row(0).transpose(), v = a.radius * R.row(1).transpose();
+      S co, si;
+      circle_minimise(c, u, v, S(2) * hc, rc, hc, co, si);
+      const Vec3<S> xb = c + co * u + si * v;
+      const S rxy = std::sqrt(xb.x() * xb.x() + xb.y() * xb.y());
+      const InsideBall<S> ball = inside_ball(b, xb);
+      if (rxy > S(0) && ball.rho > S(0)) {
+        const Vec3<S> m(S(2) * hc * xb.x() / (rxy * len), S(2) * hc * xb.y() / (rxy * len), rc / len);  // b's side normal there
+        offer(Vec3<S>(-(R * m)), Vec3<S>(co * a.radius, si * a.radius, s * a.half_length), ball.rho);
+      }
+    }
+  };
+  const auto decided = [&] { return k.upper - k.lower <= tolerance; };
+  if (!decided()) rulings();
+  if (!decided()) base_rim();
+  if (!decided()) rims_of_a();
+  return k.finish(tolerance, out);
 }
 
 }  // namespace impact::detail

@@ -24,7 +24,9 @@
 ///                                     core itself meets the other shape: the own EPA on the core,
 ///                                     plus the radius
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
-///                                     (gjk_distance.hpp); penetration: the own EPA (convex/epa.hpp;
+///                                     (gjk_distance.hpp); penetration: cylinder against cylinder
+///                                     or cone first through the certified candidates of
+///                                     convex/cylinder_pair.hpp, else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
@@ -358,12 +360,12 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
   return epa(a, pa, b, pb, o);
 }
 
-/// Two cylinders: GJK until it encloses the origin or separates them (no contact), then the
-/// certified candidates of convex/cylinder_pair.hpp (caps, rulings, a ruling against a rim point:
-/// 94 % of the bench's penetrations), else the general penetration (EPA).
-template <class S>
-ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const Cylinder<S>& b,
-                                           const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
+/// A cylinder and a cylinder or cone: GJK until it encloses the origin or separates them (no
+/// contact), then the certified candidates of convex/cylinder_pair.hpp (caps, rulings, a ruling or
+/// a side against a rim point), else the general penetration (EPA).
+template <class S, class B>
+ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                                           const ConvexQueryOptions<S>& o) {
   const PairFrame<S> f(pa, pb);
   const S scale = query_scale<S>(a, b);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
@@ -371,14 +373,20 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   SimplexPoint<S> simplex[4];
   int its = 0;
   bool limit = false, failed = false;
-  if (!gjk_enclose(sa, sb, Vec3<S>(-f.t), scale, o.max_iterations, simplex, its, limit, failed)) {
+  if (!gjk_enclose(sa, sb, Vec3<S>(-f.b_to_a(interior_point(b))), scale, o.max_iterations, simplex, its, limit, failed)) {
     if (limit || failed) return general_penetration(a, pa, b, pb, o);
     ConvexContact<S> c;
     c.iterations = its;
     return c;
   }
   ConvexContact<S> c;
-  if (cylinder_pair_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) {
+  bool certified;
+  if constexpr (std::is_same_v<B, Cone<S>>) {
+    certified = cylinder_cone_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
+  } else {
+    certified = cylinder_pair_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
+  }
+  if (certified) {
     c.iterations += its;
     c.normal = pa.rotate(c.normal);
     c.point = pa.apply(c.point);
@@ -511,8 +519,10 @@ ConvexContact<S> penetration_unchecked(const A& a, const RigidTransform<S>& pose
   } else if constexpr (method == PairMethod::OtherRound) {
     return round_contact(b, pose_b, a, pose_a, options, true);
   } else {
-    if constexpr (std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, Cylinder<S>>) {
+    if constexpr (std::is_same_v<A, Cylinder<S>> && (std::is_same_v<B, Cylinder<S>> || std::is_same_v<B, Cone<S>>)) {
       if (!options.libccd_penetration) return cylinder_pair_penetration(a, pose_a, b, pose_b, options);
+    } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Cylinder<S>>) {
+      if (!options.libccd_penetration) return swapped(cylinder_pair_penetration(b, pose_b, a, pose_a, options));
     }
     return general_penetration(a, pose_a, b, pose_b, options);
   }

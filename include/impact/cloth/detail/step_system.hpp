@@ -179,6 +179,9 @@ class Stepper {
     check_coords(sys_.X0, "cloth_collision_step: rigid obstacle at pose0");
     check_coords(sys_.X1, "cloth_collision_step: rigid obstacle at pose1");
     changed_.assign(static_cast<std::size_t>(nv), 1);
+    path_.assign(static_cast<std::size_t>(nv), 0.0);
+    x1_seen_ = sys_.X1;
+    moves_noted_ = 0;
     // Coordinate scale, for the rounding margin of distances computed in double.
     scale_ = std::max(sys_.X0.cwiseAbs().maxCoeff(), sys_.X1.cwiseAbs().maxCoeff());
     // Conservative rounding margin of the distance bound that lets a candidate skip its CCD
@@ -514,10 +517,12 @@ class Stepper {
     // the vertex -> candidate index is built when first needed.
     d0_.assign(cand_.size(), std::numeric_limits<double>::quiet_NaN());
     d0_exact_.assign(cand_.size(), 0);
+    key_.assign(cand_.size(), -1.0);
     stamp_.assign(cand_.size(), 0);
     stamp_now_ = 0;
     inc_off_.clear();
     inc_.clear();
+    inc_n_ = 0;
     last_hits_.clear();  // their candidates are re-tested anyway: every vertex counts as moved
     std::fill(changed_.begin(), changed_.end(), 1);
     const double ms = ms_since(t0);
@@ -579,9 +584,10 @@ class Stepper {
     if (added) {
       d0_.resize(cand_.size(), std::numeric_limits<double>::quiet_NaN());
       d0_exact_.resize(cand_.size(), 0);
+      key_.resize(cand_.size(), -1.0);
       stamp_.resize(cand_.size(), 0);
-      inc_off_.clear();  // rebuilt when next needed
-      inc_.clear();
+      // the vertex -> candidate index keeps covering the first inc_n_ candidates; the new ones
+      // are scanned (test_changed) until it is rebuilt
     }
     // The new candidates each have a grown vertex, which is marked as moved: the next pass tests them.
     const double ms = ms_since(t0);
@@ -697,43 +703,47 @@ class Stepper {
     return m;
   }
 
-  /// True when the pair provably stays farther apart than h over the whole step, so its CCD can
-  /// be skipped. With m the pair's relative motion (relative_motion: for fixed barycentric
-  /// weights the points' offset changes by t times a convex combination of vertex-pair
-  /// displacement differences, at most m long), the distance at time t is at least
-  /// d(0) - t m and at least d(1) - (1 - t) m, so at least their mean (d(0) + d(1) - m) / 2 over
-  /// the whole step. First the start bound alone (d(0) - m, the start distance cached per
-  /// candidate: a box bound, then the exact one), then both ends. A margin covers rounding.
-  /// Thread-safe per index.
-  bool separated(std::size_t i) {
+  /// A lower bound on the pair's distance over the whole step, returned when it exceeds
+  /// need = h + bound_margin_ (the pair provably stays farther apart than h, so its CCD can be
+  /// skipped); -infinity when no bound proves that. With m the pair's relative motion
+  /// (relative_motion: for fixed barycentric weights the points' offset changes by t times a
+  /// convex combination of vertex-pair displacement differences, at most m long), the distance at
+  /// time t is at least d(0) - t m and at least d(1) - (1 - t) m, so at least their mean
+  /// (d(0) + d(1) - m) / 2 over the whole step. First the start bound alone (d(0) - m, the start
+  /// distance cached per candidate: a box bound, then the exact one), then both ends. A margin
+  /// covers rounding. Thread-safe per index.
+  double separation_bound(std::size_t i) {
     const Prim& p = cand_[i];
-    const double m = relative_motion(p), need = h_ + bound_margin_;
+    const double m = relative_motion(p), need = h_ + bound_margin_, none = -std::numeric_limits<double>::infinity();
     if (std::isnan(d0_[i])) d0_[i] = start_box_distance(p);
-    if (d0_[i] > need + m) return true;
+    if (d0_[i] > need + m) return d0_[i] - m;
     if (!d0_exact_[i]) {
       d0_[i] = closest(p, /*start=*/true).dist;
       d0_exact_[i] = 1;
-      if (d0_[i] > need + m) return true;
+      if (d0_[i] > need + m) return d0_[i] - m;
     }
-    if (d0_[i] <= need) return false;  // nothing below can help: each bound is <= d(0)
+    if (d0_[i] <= need) return none;  // nothing below can help: each bound is <= d(0)
     const Contact c1 = closest(p, /*start=*/false);
-    if (0.5 * (d0_[i] + c1.dist - m) > need) return true;
+    const double both = 0.5 * (d0_[i] + c1.dist - m);
+    if (both > need) return both;
     // Sliding pairs (a large relative motion along the contact, as in resting contact) fail the
-    // bounds above; a separating direction fixed over the step proves them (hull_separated).
-    return hull_separated(p, need);
+    // bounds above; a separating direction fixed over the step proves them (hull_bound).
+    return hull_bound(p, need);
   }
 
-  /// True when the convex hull of the pair's vertex offsets x_i - x_j (i of the first primitive,
+  /// Whether the convex hull of the pair's vertex offsets x_i - x_j (i of the first primitive,
   /// j of the second) at the start and at the end of the step stays farther than `need` from the
   /// origin. Every offset between a point of the first primitive and a point of the second at any
   /// time t is a convex combination of those (positions are linear in t, points are convex
   /// combinations of vertices), so the pair's distance stays above `need` over the whole step.
   /// The hull's distance from the origin is approached from both sides by Gilbert's algorithm
   /// (a point x of the hull: |x| bounds it from above; for n = x / |x|, min_k n . o_k from
-  /// below): it stops with true once the lower bound exceeds `need`, with false once |x| does not
-  /// (no fixed direction can separate by `need` then), or after a bounded number of steps.
-  /// Rounding (|n| = 1 up to an ulp, the dot products) is covered by the margin in `need`.
-  bool hull_separated(const Prim& p, double need) const {
+  /// below): it stops with that lower bound (a lower bound on the pair's distance over the step)
+  /// once it exceeds `need`, with -infinity once |x| does not (no fixed direction can separate by
+  /// `need` then) or after a bounded number of steps. Rounding (|n| = 1 up to an ulp, the dot
+  /// products) is covered by the margin in `need`.
+  double hull_bound(const Prim& p, double need) const {
+    const double none = -std::numeric_limits<double>::infinity();
     const int split = p.ee ? 2 : 1;
     Vec3<double> o[8];
     int k = 0;
@@ -747,7 +757,7 @@ class Stepper {
       if (o[q].squaredNorm() < x.squaredNorm()) x = o[q];
     for (int it = 0; it < 24; ++it) {
       const double len = x.norm();
-      if (!(len > need)) return false;
+      if (!(len > need)) return none;
       const Vec3<double> n = x / len;
       int best = 0;
       double lb = n.dot(o[0]);
@@ -755,37 +765,62 @@ class Stepper {
         const double d = n.dot(o[q]);
         if (d < lb) lb = d, best = q;
       }
-      if (lb > need) return true;
+      if (lb > need) return lb;
       // the hull's point nearest the origin on the segment from x to the offset found
       const Vec3<double> d = o[best] - x;
       const double dd = d.squaredNorm();
-      if (!(dd > 0)) return false;
+      if (!(dd > 0)) return none;
       x += std::clamp(-x.dot(d) / dd, 0.0, 1.0) * d;
     }
-    return false;
+    return none;
   }
 
-  /// A shortcut for clear hits in the impulse passes and the zones, where a hit only gives a
-  /// constraint (the step's guarantee rests on the misses, which this never reports). With m the
-  /// pair's relative motion (relative_motion: its distance changes by at most m over the step),
-  /// the distance is sampled at n + 1 evenly spaced times, n = ceil(4 m / h) (so it changes by at
-  /// most h / 4 between samples; pairs with m > 32 h are left to the search). At the first sample
-  /// closer than h (a contact, up to the rounding margin), the time just before the distance falls
-  /// to h + band_ / 2 is bisected between it and the sample before; the pair was farther than
-  /// 3 h / 4 before it (the samples are h / 4 apart in distance), so it had not crossed, and the
-  /// closest points there give the normal, as at the search's time of impact. A pair with no
-  /// sample closer than h goes to the search (misses are proved only there). Thread-safe.
-  bool sampled_hit(const Prim& p, CcdResult<S>& r) const {
+  /// What sample_pair found.
+  enum class Sampled { hit, miss, unknown };
+
+  /// Clear hits and clear misses without the CCD's search, in every stage. A hit only gives a
+  /// constraint (the step's guarantee rests on the misses); a miss is proved. With m the pair's
+  /// relative motion (relative_motion: the distance changes by at most (t' - t) m between times t
+  /// and t'), the distance is sampled (exact closest points, in double) at n + 1 evenly spaced
+  /// times, n = ceil(4 m / h) (so it changes by at most h / 4 between samples; pairs with
+  /// m > 32 h are left to the search).
+  /// Hit: at the first sample closer than h (a contact, up to the rounding margin), the time just
+  /// before the distance falls to h + band_ / 2 is bisected between it and the sample before; the
+  /// pair was farther than 3 h / 4 before it (the samples are h / 4 apart in distance), so it had
+  /// not crossed, and the closest points there give the normal, as at the search's time of impact.
+  /// Miss: between two samples at t < t' with distances d, d' the distance is at least
+  /// max(d - (s - t) m, d' - (t' - s) m) >= (d + d' - (t' - t) m) / 2 at every time s; when that
+  /// exceeds need = h + bound_margin_ on every interval (an interval that fails it is halved, up
+  /// to three times, at a new sample), the smallest such bound (a lower bound on the distance over
+  /// the step) is `bound`. The margin covers the rounding of the samples' positions and distances
+  /// (computed in double from coordinates of magnitude <= scale_, as the other bounds').
+  /// Unknown (the search decides): everything else, and pairs closer than h at the start.
+  /// Thread-safe.
+  Sampled sample_pair(const Prim& p, CcdResult<S>& r, double& bound) const {
     const double m = relative_motion(p);
-    if (!(m <= 32 * h_)) return false;
+    if (!(m <= 32 * h_)) return Sampled::unknown;
     const int n = std::max(2, static_cast<int>(std::ceil(4 * m / h_)));
     auto dist = [&](double t) {
       auto X = [&](int j) { return Vec3<double>((1 - t) * p0(p.v[j]) + t * p1(p.v[j])); };
       return closest_at(p, X).dist;
     };
-    const double inside = h_ - bound_margin_, aim = h_ + 0.5 * band_;
+    const double inside = h_ - bound_margin_, aim = h_ + 0.5 * band_, need = h_ + bound_margin_;
+    double lb = std::numeric_limits<double>::infinity();
+    // whether the distance stays above need on [a, b] (distances da, db there), halving up to depth times
+    auto prove = [&](auto& self, double a, double b, double da, double db, int depth) -> bool {
+      const double l = 0.5 * (da + db - (b - a) * m);
+      if (l > need) {
+        lb = std::min(lb, l);
+        return true;
+      }
+      if (depth == 0) return false;
+      const double mid = 0.5 * (a + b), dm = dist(mid);
+      if (!(dm > need)) return false;
+      return self(self, a, mid, da, dm, depth - 1) && self(self, mid, b, dm, db, depth - 1);
+    };
     double prev = dist(0.0);
-    if (prev < inside) return false;  // closer than h at the start: the search decides
+    if (prev < inside) return Sampled::unknown;  // closer than h at the start: the search decides
+    bool proved = true;
     for (int k = 1; k <= n; ++k) {
       const double t = double(k) / n, d = dist(t);
       if (d < inside) {
@@ -798,11 +833,14 @@ class Stepper {
         r = CcdResult<S>();
         r.hit = true;
         r.toi = static_cast<decltype(r.toi)>(lo);
-        return true;
+        return Sampled::hit;
       }
+      proved = proved && prove(prove, double(k - 1) / n, t, prev, d, 3);
       prev = d;
     }
-    return false;
+    if (!proved) return Sampled::unknown;
+    bound = lb;
+    return Sampled::miss;
   }
 
   CcdResult<S> ccd(const Prim& p, bool static_start) {
@@ -842,11 +880,14 @@ class Stepper {
   /// envelope, then tests the candidates with a vertex moved since the last pass and the previous
   /// hits.
   std::vector<Hit> detect() {
+    note_moves();
     if (escaped()) regather();
     return test_changed();
   }
 
-  /// The vertex -> candidate index (CSR), built once per gathering when a pass needs it.
+  /// The vertex -> candidate index (CSR) over the first inc_n_ candidates, built when a pass
+  /// needs it: once per gathering, and again after re-gatherings only once the candidates they
+  /// appended (scanned by test_changed meanwhile) exceed a quarter of those it covers.
   void build_incidence() {
     const std::size_t nv = sys_.w.size();
     inc_off_.assign(nv + 1, 0);
@@ -854,15 +895,52 @@ class Stepper {
       for (int k = 0; k < 4; ++k) ++inc_off_[std::size_t(p.v[k]) + 1];
     for (std::size_t v = 0; v < nv; ++v) inc_off_[v + 1] += inc_off_[v];
     inc_.resize(inc_off_[nv]);
-    std::vector<std::uint32_t> fill(inc_off_.begin(), inc_off_.end() - 1);
+    inc_fill_.assign(inc_off_.begin(), inc_off_.end() - 1);
     for (std::size_t c = 0; c < cand_.size(); ++c)
-      for (int k = 0; k < 4; ++k) inc_[fill[std::size_t(cand_[c].v[k])]++] = static_cast<std::uint32_t>(c);
+      for (int k = 0; k < 4; ++k) inc_[inc_fill_[std::size_t(cand_[c].v[k])]++] = static_cast<std::uint32_t>(c);
+    inc_n_ = cand_.size();
   }
 
+  /// Notes the end positions' moves since the last call: a vertex whose end position changed
+  /// counts as moved (changed_) and its path length grows by the distance moved. Every write to
+  /// the end positions is seen here, whichever stage made it.
+  void note_moves() {
+    ++moves_noted_;
+    const std::size_t nv = sys_.w.size();
+    for (std::size_t v = 0; v < nv; ++v) {
+      const Eigen::Index r = Eigen::Index(v);
+      if (sys_.X1.row(r) == x1_seen_.row(r)) continue;
+      path_[v] += (sys_.X1.row(r).template cast<double>() - x1_seen_.row(r).template cast<double>()).norm();
+      x1_seen_.row(r) = sys_.X1.row(r);
+      changed_[v] = 1;
+    }
+  }
+
+  /// The sum of the path lengths of the pair's vertices (note_moves).
+  double path_sum(const Prim& p) const {
+    return path_[std::size_t(p.v[0])] + path_[std::size_t(p.v[1])] + path_[std::size_t(p.v[2])] + path_[std::size_t(p.v[3])];
+  }
+
+  /// The key of a candidate just proved farther than need = h + bound_margin_ over the step by a
+  /// lower bound L on its distance (separation_bound): while the end positions of its vertices
+  /// move by e_k in all since, a point of either primitive moves by at most t times a convex
+  /// combination of the e_k at time t, so the pair's distance stays above L - sum e_k over the
+  /// whole step, and the proof holds while sum e_k <= L - need. Each e_k is at most the growth of
+  /// the vertex's path length (triangle inequality over the noted moves), so the proof holds while
+  /// the sum of the four path lengths stays at most the key: that sum now plus L - need. The
+  /// factors 1 -/+ 1e-12 cover the rounding of the path lengths (a sum of at most moves_cap_
+  /// norms each, relative error under 1e-12; kept() stops keeping proofs beyond that).
+  double key_of(const Prim& p, double bound) const { return path_sum(p) * (1 - 1e-12) + (bound - (h_ + bound_margin_)); }
+  /// Whether candidate c's last proof still holds (key_of).
+  bool kept(std::size_t c) const { return moves_noted_ <= moves_cap_ && path_sum(cand_[c]) * (1 + 1e-12) <= key_[c]; }
+
   std::vector<Hit> test_changed() {
+    note_moves();
     // The candidates to test, in increasing index order: those with a moved vertex (by a scan
-    // when many vertices moved, through the incidence index otherwise) and the last hits.
-    std::vector<std::uint32_t> todo;
+    // when many vertices moved, through the incidence index otherwise) and the last hits, less
+    // those whose proof from an earlier pass still holds (kept).
+    std::vector<std::uint32_t>& todo = todo_;
+    todo.clear();
     std::size_t moved = 0;
     for (auto c : changed_) moved += c;
     if (++stamp_now_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), stamp_now_ = 1;
@@ -873,11 +951,17 @@ class Stepper {
           todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
       }
     } else if (moved > 0) {
-      if (inc_off_.empty()) build_incidence();
+      if (inc_off_.empty() || 4 * (cand_.size() - inc_n_) > inc_n_) build_incidence();
       for (std::size_t v = 0; v < changed_.size(); ++v) {
         if (!changed_[v]) continue;
         for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
           if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, todo.push_back(inc_[k]);
+      }
+      for (std::size_t c = inc_n_; c < cand_.size(); ++c) {
+        const Prim& p = cand_[c];
+        if (stamp_[c] != stamp_now_ &&
+            (changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])]))
+          todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
       }
     }
     for (const auto& h : last_hits_)
@@ -890,14 +974,31 @@ class Stepper {
     } else {
       std::sort(todo.begin(), todo.end());
     }
-    std::vector<CcdResult<S>> res(todo.size());
+    const std::size_t listed = todo.size();
+    todo.erase(std::remove_if(todo.begin(), todo.end(), [&](std::uint32_t c) { return kept(c); }), todo.end());
+    stats_.ccd_kept += listed - todo.size();
+    // Results only for the pairs that ran a test (ran[i]); the buffer is kept between passes.
+    if (res_.size() < todo.size()) res_.resize(todo.size());
+    CcdResult<S>* res = res_.data();
     std::vector<std::uint8_t> ran(todo.size(), 0);
     parallel_for(todo.size(), opt_.threads, [&](std::size_t i) {
       const std::size_t c = todo[i];
-      if (is_excluded(cand_[c]) || separated(c)) return;
-      // A clear hit needs no search (sampled_hit); every other pair gets the CCD, which alone
-      // proves misses (coarse in the impulse passes, as given in the zones and the fail-safe).
-      if (!sampled_hit(cand_[c], res[i])) res[i] = ccd_at(cand_[c], false, /*coarse=*/!precise_);
+      if (is_excluded(cand_[c])) return;
+      const double bound = separation_bound(c);
+      if (bound > -std::numeric_limits<double>::infinity()) {
+        key_[c] = key_of(cand_[c], bound);
+        return;
+      }
+      key_[c] = -1;
+      // Clear hits and misses need no search (sample_pair); every other pair gets the CCD (coarse
+      // in the impulse passes, as given in the zones and the fail-safe).
+      double sampled_bound = 0;
+      const Sampled sp = sample_pair(cand_[c], res[i], sampled_bound);
+      if (sp == Sampled::miss) {
+        key_[c] = key_of(cand_[c], sampled_bound);
+        return;
+      }
+      if (sp == Sampled::unknown) res[i] = ccd_at(cand_[c], false, /*coarse=*/!precise_);
       ran[i] = 1;
     });
     std::size_t tested = 0;
@@ -906,7 +1007,7 @@ class Stepper {
     stats_.ccd_skipped += todo.size() - tested;
     std::vector<Hit> hits;
     for (std::size_t i = 0; i < todo.size(); ++i)
-      if (res[i].hit) hits.push_back({cand_[todo[i]], res[i], todo[i]});
+      if (ran[i] && res[i].hit) hits.push_back({cand_[todo[i]], res[i], todo[i]});
     std::fill(changed_.begin(), changed_.end(), 0);
     std::stable_sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi < y.r.toi; });
     last_hits_ = hits;
@@ -1112,13 +1213,25 @@ class Stepper {
   std::vector<Aabb<S>> old_gbox_, old_tbox_;  // gbox_, tbox_ before the current re-gathering
   std::vector<double> d0_;                   // per candidate: a lower bound on its distance at x0
   std::vector<std::uint8_t> d0_exact_;       // ... which is the exact distance (in double)
-  std::vector<std::uint32_t> stamp_, inc_off_, inc_;
+  std::vector<std::uint32_t> stamp_, inc_off_, inc_, inc_fill_;
+  std::size_t inc_n_ = 0;  // candidates covered by the vertex -> candidate index
   std::uint32_t stamp_now_ = 0;
   std::vector<Near> near_;
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
   std::vector<Hit> last_hits_;
+  std::vector<CcdResult<S>> res_;  // test_changed's buffers, kept between passes
+  std::vector<std::uint32_t> todo_;
   std::vector<std::uint8_t> changed_;
+  // Proofs kept across the passes of a step (note_moves, kept): per vertex, the path length of its
+  // end position over the step's passes and the end positions at the last pass; per candidate,
+  // the key below which the sum of its vertices' path lengths keeps its last proof valid (< 0:
+  // none).
+  std::vector<double> path_;
+  Vertices<S> x1_seen_;
+  std::vector<double> key_;
+  int moves_noted_ = 0;
+  static constexpr int moves_cap_ = 1000;
 };
 
 }  // namespace impact::detail::cloth
