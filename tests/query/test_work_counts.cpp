@@ -6,7 +6,9 @@
 // did 12.7x more BV tests on the bunny, every other test green) or a weaker cull fails here; an
 // improvement beyond the factor fails too, on purpose: record the new counts then (run with
 // IMPACT_PRINT_COUNTS=1 to print them). Generated meshes run everywhere, the data meshes when
-// IMPACT_DATA_DIR is set (required in CI).
+// IMPACT_DATA_DIR is set (required in CI). The boolean counts were recorded again when the boolean
+// queries started walking the nearer child first past their first node tests (up to 33 % fewer BV
+// tests and 3-61 % fewer triangle tests); the all-pairs counts did not change.
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "support/data.hpp"
@@ -67,21 +69,21 @@ void check(const char* name, const Work& got, const Work& recorded) {
 
 TEST(WorkCounts, GeneratedTorusIcosphere) {
   const auto A = make_torus<double>(1.0, 0.35, 96, 48), B = make_icosphere<double>(0.6, 4);
-  check("torus/icosphere sphere", measure<Sphere<double>>(A, B, 200, 1201), {53656, 1605, 977668, 111250});
-  check("torus/icosphere aabb", measure<Aabb<double>>(A, B, 200, 1201), {25654, 739, 573382, 75822});
+  check("torus/icosphere sphere", measure<Sphere<double>>(A, B, 200, 1201), {42661, 1055, 977668, 111250});
+  check("torus/icosphere aabb", measure<Aabb<double>>(A, B, 200, 1201), {20772, 329, 573382, 75822});
 }
 
 TEST(WorkCounts, Bunny) {
   IMPACT_REQUIRE_DATA(path, "meshes/stanford-bunny.obj");
   const auto m = read_obj<double>(path);
-  check("bunny/bunny sphere", measure<Sphere<double>>(m, m, 100, 1202), {16072, 414, 1265782, 135658});
-  check("bunny/bunny aabb", measure<Aabb<double>>(m, m, 100, 1202), {7278, 340, 680788, 92897});
+  check("bunny/bunny sphere", measure<Sphere<double>>(m, m, 100, 1202), {10757, 163, 1265782, 135658});
+  check("bunny/bunny aabb", measure<Aabb<double>>(m, m, 100, 1202), {5549, 146, 680788, 92897});
 }
 
 TEST(WorkCounts, EnvRob) {
   IMPACT_REQUIRE_DATA(env, "meshes/env.obj");
   IMPACT_REQUIRE_DATA(rob, "meshes/rob.obj");
   const auto A = read_obj<double>(env), B = read_obj<double>(rob);
-  check("env/rob sphere", measure<Sphere<double>>(A, B, 200, 1203), {56261, 12734, 244740, 85355});
-  check("env/rob aabb", measure<Aabb<double>>(A, B, 200, 1203), {19981, 2961, 104656, 27681});
+  check("env/rob sphere", measure<Sphere<double>>(A, B, 200, 1203), {54493, 12379, 244740, 85355});
+  check("env/rob aabb", measure<Aabb<double>>(A, B, 200, 1203), {19604, 2751, 104656, 27681});
 }

@@ -4,20 +4,39 @@
 /// BV type. Where two nodes' BVs overlap, the larger node (BvTraits::size) is split first, or the
 /// inner one when the other is a leaf; leaf pairs go to the visitor. The overlap callable carries
 /// any relative transform, so neither tree is rebuilt or copied to move one mesh against another.
+/// A query that stops at its first hit can pass an order (traverse_pair_nodes' last argument)
+/// that says which of the two children to walk first; every other walk keeps the tree's order.
 #pragma once
 
 #include "impact/bvh/bvh.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 
+#include <utility>
+
 namespace impact {
 
 
 namespace detail {
+/// The tree's order: the left child first.
+struct TreeOrder {
+  template <class X, class Y>
+  bool right_first_a(const X&, const X&, const Y&) const {
+    return false;
+  }
+  template <class X, class Y>
+  bool right_first_b(const X&, const Y&, const Y&) const {
+    return false;
+  }
+};
+
 /// One step of pair traversal for nodes i (tree a) and j (tree b) that passed the node test: hand
 /// a leaf pair to the visitor, or push the children of the larger node (the inner one if the
 /// other is a leaf). Returns false when the visitor stopped the walk.
-template <class BVA, class BVB, class Stack, class Visit>
-bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::int32_t j, Stack& stack, Visit& visit) {
+/// `order` picks which child is walked first (right_first_a(left, right, other) for a split of
+/// node i, right_first_b(other, left, right) for one of node j).
+template <class BVA, class BVB, class Stack, class Visit, class Order = TreeOrder>
+bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::int32_t j, Stack& stack, Visit& visit,
+                    const Order& order = {}) {
   const auto& na = a.nodes[static_cast<std::size_t>(i)];
   const auto& nb = b.nodes[static_cast<std::size_t>(j)];
   const bool la = na.is_leaf(), lb = nb.is_leaf();
@@ -26,11 +45,17 @@ bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::i
       for (std::int32_t q = nb.first; q < nb.first + nb.count; ++q)
         if (!visit(a.primitives[static_cast<std::size_t>(p)], b.primitives[static_cast<std::size_t>(q)])) return false;
   } else if (lb || (!la && BvTraits<BVA>::size(na.bv) >= BvTraits<BVB>::size(nb.bv))) {
-    stack.push({na.right(), j});
-    stack.push({na.left(), j});
+    std::int32_t first = na.left(), second = na.right();
+    if (order.right_first_a(a.nodes[static_cast<std::size_t>(first)].bv, a.nodes[static_cast<std::size_t>(second)].bv, nb.bv))
+      std::swap(first, second);
+    stack.push({second, j});
+    stack.push({first, j});
   } else {
-    stack.push({i, nb.right()});
-    stack.push({i, nb.left()});
+    std::int32_t first = nb.left(), second = nb.right();
+    if (order.right_first_b(na.bv, b.nodes[static_cast<std::size_t>(first)].bv, b.nodes[static_cast<std::size_t>(second)].bv))
+      std::swap(first, second);
+    stack.push({i, second});
+    stack.push({i, first});
   }
   return true;
 }
@@ -41,10 +66,12 @@ bool visit_or_split(const Bvh<BVA>& a, const Bvh<BVB>& b, std::int32_t i, std::i
 /// can test a leaf's primitives directly instead of its BV; it must be conservative (never false
 /// when the primitives below the two nodes can touch). `visit(std::int32_t id_a, std::int32_t id_b)
 /// -> bool` returns false to stop. Returns false when the visitor stopped the walk. `start_a`,
-/// `start_b` (the roots by default) restrict the walk to the pairs below those two nodes.
-template <class BVA, class BVB, class NodeOverlap, class Visit>
+/// `start_b` (the roots by default) restrict the walk to the pairs below those two nodes. `order`
+/// (see detail::TreeOrder) chooses which child of a split node is walked first: it changes which
+/// pair a stopped walk reaches first, never the set of pairs a full walk visits.
+template <class BVA, class BVB, class NodeOverlap, class Visit, class Order = detail::TreeOrder>
 bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& overlap, Visit&& visit, std::int32_t start_a = 0,
-                         std::int32_t start_b = 0) {
+                         std::int32_t start_b = 0, const Order& order = {}) {
   if (a.empty() || b.empty()) return true;
   detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
   stack.push({start_a, start_b});
@@ -53,7 +80,7 @@ bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& ove
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
     const auto& nb = b.nodes[static_cast<std::size_t>(j)];
     if (!overlap(na, nb)) continue;
-    if (!detail::visit_or_split(a, b, i, j, stack, visit)) return false;
+    if (!detail::visit_or_split(a, b, i, j, stack, visit, order)) return false;
   }
   return true;
 }

@@ -271,6 +271,29 @@ template <class BV> struct MeshNodeOverlap {
   }
 };
 
+/// The walk order of the boolean queries: of two children, the one whose centre is nearer the
+/// other node's centre first (compared in mesh a's frame). A stopped walk reaches a colliding pair
+/// sooner on average (the bunny against itself, SAH OBB trees, 1,000 random poses: 192 -> 95 node
+/// tests for the colliding ones); a walk that finds nothing visits the same node pairs either way.
+/// The first `kFree` node tests keep the tree's order: most queries are decided within a few (the
+/// poses far apart), and they would only pay for the comparisons.
+template <class BV> struct NearestChildFirst {
+  using S = typename BvTraits<BV>::Scalar;
+  static constexpr std::uint64_t kFree = 8;
+  const RigidTransform<S>& b_to_a;
+  const std::uint64_t& tests;  // the query's node tests so far
+  bool right_first_a(const BV& left, const BV& right, const BV& other_b) const {
+    if (tests < kFree) return false;
+    const Vec3<S> c = b_to_a.apply(BvTraits<BV>::center(other_b));
+    return (BvTraits<BV>::center(right) - c).squaredNorm() < (BvTraits<BV>::center(left) - c).squaredNorm();
+  }
+  bool right_first_b(const BV& other_a, const BV& left, const BV& right) const {
+    if (tests < kFree) return false;
+    const Vec3<S> c = BvTraits<BV>::center(other_a);
+    return (b_to_a.apply(BvTraits<BV>::center(right)) - c).squaredNorm() < (b_to_a.apply(BvTraits<BV>::center(left)) - c).squaredNorm();
+  }
+};
+
 template <class S> MeshContact<S> make_contact(const Triangle<S>& ta, const Triangle<S>& tb_in_a, const RigidTransform<S>& pose_a,
                                               std::int32_t ia, std::int32_t ib) {
   MeshContact<S> c;
@@ -310,7 +333,10 @@ CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const
     if (options.contacts) result.contacts.push_back(detail::make_contact(ta, tb_a, pose_a, a.triangle_id(p), b.triangle_id(q)));
     return options.all_pairs && result.pairs.size() < options.max_pairs;  // boolean mode stops here
   };
-  traverse_pair_nodes(a.tree(), b.tree(), overlap, visit);
+  if (options.all_pairs)
+    traverse_pair_nodes(a.tree(), b.tree(), overlap, visit);
+  else
+    traverse_pair_nodes(a.tree(), b.tree(), overlap, visit, 0, 0, detail::NearestChildFirst<BV>{b_to_a, result.stats.bv_tests});
   return result;
 }
 
@@ -333,7 +359,8 @@ bool collides(const MeshBvh<BV>& a, const RigidTransform<typename BvTraits<BV>::
         const Triangle<S>& tb = b.triangle(q);
         hit = triangles_intersect(a.triangle(p), Triangle<S>(b_to_a.apply(tb.a), b_to_a.apply(tb.b), b_to_a.apply(tb.c)));
         return !hit;
-      });
+      },
+      0, 0, detail::NearestChildFirst<BV>{b_to_a, st.bv_tests});
   if (stats) *stats = st;
   return hit;
 }
