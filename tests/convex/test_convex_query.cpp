@@ -190,14 +190,15 @@ TEST(ConvexQuery, GeneralPairs) {
 // within 1e-9 of the size, and the two certified brackets (ours and EPA's) overlap; every kind of
 // candidate certifies some poses (`kind` names it from the normal, -1 for none), some poses are
 // left to EPA (rims against rims, deep contacts), separated pairs are never certified, and the
-// whole query (either order) gives the certified answer.
+// whole query (either order) gives the certified answer. The same 400 poses under sanitizers: with
+// fewer, a kind can go unreached (40 reached no cylinder-cone contact of kind 1).
 template <class B, class Contact, class Kind>
 void check_cylinder_candidates(const char* name, const Cylinder<double>& cyl, const B& b, const Contact& contact, const Kind& kind,
                                int kinds_count) {
   const double scale = std::max(shape_size(cyl), shape_size(b)), tol = 1e-10 * scale;
   std::vector<int> kinds(static_cast<std::size_t>(kinds_count), 0);
   int certified = 0, left = 0, separated = 0;
-  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 400, 0.8 * (shape_size(cyl) + shape_size(b)), 47)) {
+  for (const auto& [pa, pb] : convex_poses(400, 0.8 * (shape_size(cyl) + shape_size(b)), 47)) {
     const detail::PairFrame<double> f(pa, pb);
     ConvexContact<double> c;
     const bool ok = contact(f, tol, c);
