@@ -31,23 +31,31 @@ template <class S> struct Obb {
 /// axis tests.
 template <class S>
 inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, const Vec3<S>& eb, S slack = S(0), S axis_pad = S(0)) {
-  // Everything in A's local frame: B's axes are the columns of R, its centre is tb.
+  // Everything in A's local frame: B's axes are the columns of R, its centre is tb. Plain scalar
+  // arithmetic on copies: Eigen's packets on 3-vectors cost more than they save here.
   const S pad = S(64) * std::numeric_limits<S>::epsilon() + axis_pad;
-  Mat3<S> absR = R.cwiseAbs().array() + pad;
+  const S a[3] = {ea[0], ea[1], ea[2]}, b[3] = {eb[0], eb[1], eb[2]}, t[3] = {tb[0], tb[1], tb[2]};
+  S r[3][3], q[3][3];  // R and |R| + pad
   // A's face axes
-  for (int i = 0; i < 3; ++i)
-    if (std::abs(tb[i]) > ea[i] + absR.row(i).dot(eb) + slack) return false;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      r[i][j] = R(i, j);
+      q[i][j] = std::abs(r[i][j]) + pad;
+    }
+    if (std::abs(t[i]) > a[i] + (q[i][0] * b[0] + q[i][1] * b[1] + q[i][2] * b[2]) + slack) return false;
+  }
   // B's face axes
   for (int j = 0; j < 3; ++j)
-    if (std::abs(R.col(j).dot(tb)) > absR.col(j).dot(ea) + eb[j] + slack) return false;
+    if (std::abs(r[0][j] * t[0] + r[1][j] * t[1] + r[2][j] * t[2]) > (q[0][j] * a[0] + q[1][j] * a[1] + q[2][j] * a[2]) + b[j] + slack)
+      return false;
   // edge-edge axes a_i x b_j
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      const S ra = ea[i1] * absR(i2, j) + ea[i2] * absR(i1, j);
-      const S rb = eb[j1] * absR(i, j2) + eb[j2] * absR(i, j1);
-      const S d = tb[i2] * R(i1, j) - tb[i1] * R(i2, j);
+      const S ra = a[i1] * q[i2][j] + a[i2] * q[i1][j];
+      const S rb = b[j1] * q[i][j2] + b[j2] * q[i][j1];
+      const S d = t[i2] * r[i1][j] - t[i1] * r[i2][j];
       if (std::abs(d) > ra + rb + slack) return false;
     }
   }

@@ -37,13 +37,33 @@ template <class S> class ObbPairFrame {
   explicit ObbPairFrame(const RigidTransform<S>& b_to_a)
       : x_(b_to_a.R), t_(b_to_a.t), defect_(rotation_defect_bound(b_to_a.R) * (S(1) + S(8) * std::numeric_limits<S>::epsilon())) {}
 
+  /// What the test needs of box b (of B's frame) whatever box a is: its axes and centre moved by
+  /// X and t, and its part of the rounding bound. A traversal that tests one box b against
+  /// several boxes of A in a row computes it once (MeshNodeOverlap does).
+  struct Image {
+    Mat3<S> axes;   ///< fl(X B)
+    Vec3<S> center; ///< fl(X c_b + t)
+    Vec3<S> half;   ///< b's half extents
+    S m = 0;        ///< |X c_b + t| + |t| + |c_b| (max norms)
+  };
+  Image image(const Obb<S>& b) const {
+    Image im;
+    im.axes = x_ * b.axes;
+    im.center = x_ * b.center + t_;
+    im.half = b.half;
+    im.m = im.center.cwiseAbs().maxCoeff() + t_.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
+    return im;
+  }
+
   /// May box a (of A's frame) and the image of box b (of B's frame) share a point?
-  bool overlaps(const Obb<S>& a, const Obb<S>& b) const {
+  bool overlaps(const Obb<S>& a, const Obb<S>& b) const { return overlaps(a, image(b)); }
+
+  /// The same test with b's image computed beforehand (image(b)).
+  bool overlaps(const Obb<S>& a, const Image& b) const {
     constexpr S eps = std::numeric_limits<S>::epsilon();
-    const Vec3<S> cb = x_ * b.center + t_;
-    const Mat3<S> R = a.axes.transpose() * (x_ * b.axes);
-    const Vec3<S> tb = a.axes.transpose() * (cb - a.center);
-    const S M = a.center.cwiseAbs().maxCoeff() + cb.cwiseAbs().maxCoeff() + t_.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
+    const Mat3<S> R = a.axes.transpose() * b.axes;
+    const Vec3<S> tb = a.axes.transpose() * (b.center - a.center);
+    const S M = a.center.cwiseAbs().maxCoeff() + b.m;
     const S E = tb.cwiseAbs().sum() + a.half.sum() + b.half.sum();
     const S slack = S(64) * eps * (S(3) * M + E) + S(2) * defect_ * E + std::numeric_limits<S>::denorm_min();
     return obb_overlap<S>(a.half, R, tb, b.half, slack, defect_);

@@ -228,6 +228,11 @@ template <class BV> struct MeshNodeOverlap {
   std::uint64_t* tests;
   PosePad<S> pad;
   std::conditional_t<kObb, ObbPairFrame<S>, NoFrame> frame;  ///< oriented boxes: X's defect, bounded once
+  struct NoImage {};
+  /// oriented boxes: the image of the last node of B tested, reused while the walk splits A's
+  /// nodes against it (a query's own object: never shared between threads)
+  mutable std::conditional_t<kObb, typename ObbPairFrame<S>::Image, NoImage> image_b{};
+  mutable const BvhNode<BV>* imaged_b = nullptr;
 
   MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
       : a(a_), b(b_), b_to_a(x), a_to_b(kSphere ? x.inverse() : RigidTransform<S>{}), tests(counter), frame(x) {
@@ -264,7 +269,11 @@ template <class BV> struct MeshNodeOverlap {
       const Vec3<S> tb = b_to_a.apply(nb.bv.center()) - na.bv.center();
       return obb_overlap<S>(ea, b_to_a.R, tb, eb);
     } else if constexpr (kObb) {
-      return frame.overlaps(na.bv, nb.bv);
+      if (imaged_b != &nb) {
+        image_b = frame.image(nb.bv);
+        imaged_b = &nb;
+      }
+      return frame.overlaps(na.bv, image_b);
     } else {
       return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }
