@@ -1,27 +1,34 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// First-hit ray (or segment) casts through a WideBvh (bvh/wide_bvh.hpp): nearest-first, the
-/// four children of a node tested at once (AVX when compiled with it, else SSE2, else a scalar
-/// loop; all three compute the same IEEE operations in the same order, so they give the same
-/// answers bit for bit), the nearest entered child descended at once and the others kept on a
-/// stack with their entry parameter.
+/// four children of a node tested at once (SSE when compiled with it, else a scalar loop of the
+/// same IEEE operations in the same order: the same answers bit for bit), the nearest entered
+/// child descended at once and the others kept on a stack with their entry parameter. The node
+/// test runs in float (WideFloatSlab: the boxes are floats; its entry is lowered and its exit
+/// raised by a bound on its rounding, so it enters every box the double slab test WideSlab enters,
+/// never later), or in S through WideSlab for rays it cannot take (magnitudes beyond 2^60, a zero
+/// direction component). The triangles of a leaf stored as floats go four at a time through a
+/// certified float filter (LeafFilter) that skips only triangles the watertight test is certain
+/// to reject; the others, and every triangle of a tree stored in S, go to the test itself.
 ///
 /// Numerical contract: that of query/ray_mesh.hpp. Every crossing is decided by the same
 /// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: a
 /// ray through a shared edge or vertex of a closed mesh hits a triangle around it, never none;
-/// the t = 0 tie rule). The node tests are conservative: the slab test runs in S on the float
-/// boxes (rounded outward, exact in S), and the exit parameter is padded (PBRT's robust slab
-/// test), so no triangle the ray crosses is pruned by rounding. Ties as in ray_mesh_first_hit:
-/// after a hit, nodes entered at exactly its t are pruned; a triangle's t is never below the
-/// entry into its own box (detail::ray_mesh_triangle_hit), which the float boxes hold, and the
-/// slab test is monotone in the box, so that pruning is exact: the t returned is the smallest of a
-/// loop over every triangle.
+/// the t = 0 tie rule). The node tests are conservative: the double slab test runs in S on the
+/// float boxes (rounded outward, exact in S) with its exit parameter padded (PBRT's robust slab
+/// test), and the float one widens that, so no triangle the ray crosses is pruned by rounding.
+/// Ties as in ray_mesh_first_hit: after a hit, nodes entered at or after its t are pruned; a
+/// triangle's t is never below the entry into its own box (detail::ray_mesh_triangle_hit), which
+/// the float boxes hold, the slab test is monotone in the box and the float key is never above
+/// it, so that pruning is exact: the t returned is the smallest of a loop over every triangle
+/// (which triangle among equal ones depends on the visiting order).
 #pragma once
 
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/wide_bvh.hpp"
 #include "impact/query/ray_mesh.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -116,6 +123,218 @@ template <class S> class WideSlab {
   S o_[3], inv_[3];
 };
 
+/// The slab test of a ray against the four children of a WideBvhNode in float, for a ray whose
+/// inverse direction is in [2^-60, 2^60] in magnitude and whose origin and the tree's coordinates
+/// are at most 2^60 (no float overflow or underflow to zero; `usable`): a conservative version of WideSlab's double keys at a quarter of the work.
+/// The boxes are floats already; the origin and the inverse direction are rounded to float once
+/// per ray. Each plane's parameter then differs from WideSlab's by at most 8 u |t| + E (u = 2^-24,
+/// E the origin's rounding times |1 / d| on the worst axis, plus 2^-120 for underflow), so the
+/// entry max(0, near planes) is lowered and the exit min(t_max, far planes) raised by that much
+/// once per box: a key is never above WideSlab's entry for the same box (so pruning nodes whose key
+/// exceeds the best t stays exact) and a box is reported missed only when WideSlab misses it.
+/// SSE when compiled with it, else a scalar loop of the same IEEE operations in the same order
+/// (the same keys bit for bit).
+template <class S> class WideFloatSlab {
+ public:
+  WideFloatSlab(const Vec3<S>& o, const Vec3<S>& inv, S coordinate_bound) {
+    usable_ = coordinate_bound <= S(0x1p60);
+    double e = 0;
+    for (int i = 0; i < 3; ++i) {
+      usable_ = usable_ && std::abs(o[i]) <= S(0x1p60) && std::abs(inv[i]) <= S(0x1p60) && std::abs(inv[i]) >= S(0x1p-60);
+      near_[i] = 2 * i + (inv[i] < S(0) ? 1 : 0);
+      far_[i] = 2 * i + (inv[i] < S(0) ? 0 : 1);
+      o_[i] = static_cast<float>(o[i]);
+      inv_[i] = static_cast<float>(inv[i]);
+      e = std::max(e, std::abs(double(o[i]) - double(o_[i])) * std::abs(double(inv[i])));
+    }
+    e_ = round_up(e * (1.0 + 0x1p-20) + 0x1p-120);
+  }
+  /// False when some magnitude exceeds 2^60: use WideSlab.
+  bool usable() const { return usable_; }
+  /// The absolute part of the bound on a key's rounding (the relative part is 2^-21).
+  float absolute_error() const { return e_; }
+  /// The children entered before `bound` (a float <= the bound of the cast): bit c set when
+  /// keys[c] <= bound and the box is not missed, keys[c] the lowered entry (the others anything);
+  /// `t_max_up` a float >= t_max. Empty slots are never set.
+  int entered(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4], bool use_simd = true) const {
+    constexpr float pad = 0x1p-21f;
+#if defined(__SSE2__)
+    if (use_simd) {
+      __m128 t0 = _mm_setzero_ps(), t1 = _mm_set1_ps(t_max_up);
+      for (int i = 0; i < 3; ++i) {
+        const __m128 o = _mm_set1_ps(o_[i]), inv = _mm_set1_ps(inv_[i]);
+        const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[near_[i]]), o), inv);
+        const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[far_[i]]), o), inv);
+        t0 = _mm_max_ps(a, t0);
+        t1 = _mm_min_ps(b, t1);
+      }
+      const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+      const __m128 vpad = _mm_set1_ps(pad), ve = _mm_set1_ps(e_);
+      t0 = _mm_sub_ps(t0, _mm_add_ps(_mm_mul_ps(_mm_and_ps(t0, abs_mask), vpad), ve));
+      t1 = _mm_add_ps(t1, _mm_add_ps(_mm_mul_ps(_mm_and_ps(t1, abs_mask), vpad), ve));
+      _mm_storeu_ps(keys, t0);
+      const __m128 in = _mm_and_ps(_mm_cmple_ps(t0, t1), _mm_cmple_ps(t0, _mm_set1_ps(bound)));
+      const __m128i used = _mm_cmpgt_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(n.count)), _mm_set1_epi32(-1));
+      return _mm_movemask_ps(_mm_and_ps(in, _mm_castsi128_ps(used)));
+    }
+#endif
+    float t0[4] = {0.0f, 0.0f, 0.0f, 0.0f}, t1[4] = {t_max_up, t_max_up, t_max_up, t_max_up};
+    for (int i = 0; i < 3; ++i)
+      for (int c = 0; c < 4; ++c) {
+        const float a = (n.bounds[near_[i]][c] - o_[i]) * inv_[i];
+        const float b = (n.bounds[far_[i]][c] - o_[i]) * inv_[i];
+        t0[c] = a > t0[c] ? a : t0[c];  // maxps / minps: the second operand unless the first wins
+        t1[c] = b < t1[c] ? b : t1[c];
+      }
+    int m = 0;
+    for (int c = 0; c < 4; ++c) {
+      const float lo = t0[c] - (std::abs(t0[c]) * pad + e_), hi = t1[c] + (std::abs(t1[c]) * pad + e_);
+      keys[c] = lo;
+      m |= (lo <= hi && lo <= bound && n.count[c] >= 0 ? 1 : 0) << c;
+    }
+    return m;
+  }
+  /// The smallest float >= x (x >= 0, not NaN; +infinity above the float range).
+  static float round_up(double x) {
+    float f = static_cast<float>(x);
+    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+  }
+  /// The largest float <= x (not NaN; -infinity below the float range).
+  static float round_down(double x) {
+    float f = static_cast<float>(x);
+    if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    return f;
+  }
+
+ private:
+  bool usable_ = false;
+  int near_[3], far_[3];
+  float o_[3], inv_[3], e_ = 0.0f;
+};
+
+#if defined(__SSE2__)
+/// A certified float filter of the watertight test over four leaf-order triangles at once (SSE),
+/// for a WideBvh whose triangles are floats. The test (intersect_ray_triangle, in S, on the
+/// triangle's own coordinates) rejects a triangle when two of its edge functions have opposite
+/// strict signs, or when its hit parameter lies outside [0, t_max]. The filter computes the same
+/// shear and edge functions in float (origin and shear rounded to float) together with a forward
+/// bound on their distance to the values the test computes:
+///  - a sheared coordinate p (x or y) of a vertex P - o: |p_float - p_test| <= 2 e_o + 8 u L + tiny,
+///    where e_o bounds the origin's rounding to float, u = 2^-24, L = max |P - o| (componentwise,
+///    in float) and tiny = 2^-120 covers underflow; the shear factors are in [-1, 1];
+///  - an edge function e = x_c y_b - y_c x_b: |e_float - e_test| <= 2.1 (X_c d_b + X_b d_c + d_b d_c)
+///    + 5 u X_b X_c + tiny, with X the larger |sheared coordinate| of a vertex and d its bound
+///    (the test's own rounding, in double or in float, is within the slack of the constants);
+///  - a sheared depth z = s_z (P_z - o_z): |z_float - z_test| <= |s_z| (e_o + 6 u max|P_z|) + tiny.
+/// A triangle is skipped only when the test is certain to reject it: two edge functions beyond
+/// their bounds with opposite signs, or (S = double) all three beyond twice their bounds with one
+/// sign (the hit parameter is then a convex combination of the depths) and every depth beyond its
+/// bound below 0 or above t_max (1 + 2^-20) (the test's rounding of its parameter and of t_max
+/// times the determinant is within 2^-20; in float, products of tiny values could underflow, so
+/// the float test's depths are left to the test). Every other triangle goes to the test itself, so the answers are
+/// the test's, bit for bit; infinities and NaNs (overflow in float) compare false and keep the
+/// triangle. Set up once per ray.
+template <class S> class LeafFilter {
+ public:
+  LeafFilter() = default;  // set() before candidates()
+  explicit LeafFilter(const PreparedRay<S>& pr) { set(pr); }
+  void set(const PreparedRay<S>& pr) {
+    k_[0] = pr.kx, k_[1] = pr.ky, k_[2] = pr.kz;
+    float eo = 0.0f;
+    for (int i = 0; i < 3; ++i) {
+      const float f = static_cast<float>(pr.ray.origin[i]);
+      o_[i] = _mm_set1_ps(f);
+      eo = std::max(eo, round_up(std::abs(double(pr.ray.origin[i]) - double(f))));
+    }
+    sx_ = _mm_set1_ps(static_cast<float>(pr.sx));
+    sy_ = _mm_set1_ps(static_cast<float>(pr.sy));
+    const float sz = static_cast<float>(pr.sz);
+    sz_ = _mm_set1_ps(sz);
+    constexpr float u = 0x1p-24f, tiny = 0x1p-120f;
+    d0_ = _mm_set1_ps(round_up(2.0 * double(eo) + double(tiny)));
+    d1_ = _mm_set1_ps(8 * u);
+    e0_ = _mm_set1_ps(2.1f);
+    e1_ = _mm_set1_ps(5 * u);
+    tiny_ = _mm_set1_ps(tiny);
+    z0_ = _mm_set1_ps(round_up(double(std::abs(sz)) * double(eo) + double(tiny)));
+    z1_ = _mm_set1_ps(std::abs(sz) * (6 * u));
+  }
+
+  /// Bit c set when the triangle at leaf-order position c of `p` (9 floats a triangle, readable
+  /// 37 floats from p) may be hit by the ray with t_max = `t_max`: the test must decide it. Bits
+  /// at and above `count` (<= 4) are clear.
+  int candidates(const float* p, int count, S t_max) const {
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    __m128 px[3], py[3], pz[3], x[3], d[3];  // by vertex: sheared coordinates, their size, bound
+    __m128 lz = _mm_setzero_ps();
+    for (int v = 0; v < 3; ++v) {
+      // rows (x, y, z, next) of vertex v of the four triangles, transposed to x, y, z by triangle
+      const __m128 r0 = _mm_loadu_ps(p + 3 * v), r1 = _mm_loadu_ps(p + 9 + 3 * v);
+      const __m128 r2 = _mm_loadu_ps(p + 18 + 3 * v), r3 = _mm_loadu_ps(p + 27 + 3 * v);
+      const __m128 lo01 = _mm_unpacklo_ps(r0, r1), lo23 = _mm_unpacklo_ps(r2, r3);  // x0 x1 y0 y1, x2 x3 y2 y3
+      const __m128 hi01 = _mm_unpackhi_ps(r0, r1), hi23 = _mm_unpackhi_ps(r2, r3);  // z0 z1 . ., z2 z3 . .
+      __m128 c[3];
+      c[0] = _mm_movelh_ps(lo01, lo23);
+      c[1] = _mm_movehl_ps(lo23, lo01);
+      c[2] = _mm_movelh_ps(hi01, hi23);
+      const __m128 qx = _mm_sub_ps(c[k_[0]], o_[k_[0]]), qy = _mm_sub_ps(c[k_[1]], o_[k_[1]]), qz = _mm_sub_ps(c[k_[2]], o_[k_[2]]);
+      px[v] = _mm_sub_ps(qx, _mm_mul_ps(sx_, qz));
+      py[v] = _mm_sub_ps(qy, _mm_mul_ps(sy_, qz));
+      pz[v] = _mm_mul_ps(sz_, qz);
+      const __m128 aqz = _mm_and_ps(qz, abs_mask);
+      const __m128 l = _mm_max_ps(_mm_max_ps(_mm_and_ps(qx, abs_mask), _mm_and_ps(qy, abs_mask)), aqz);
+      d[v] = _mm_add_ps(d0_, _mm_mul_ps(d1_, l));
+      x[v] = _mm_max_ps(_mm_and_ps(px[v], abs_mask), _mm_and_ps(py[v], abs_mask));
+      lz = _mm_max_ps(lz, aqz);
+    }
+    // edge functions (the test's order: e_u of b and c, e_v of c and a, e_w of a and b)
+    const __m128 eu = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
+    const __m128 ev = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
+    const __m128 ew = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
+    const __m128 bu = bound(x[1], d[1], x[2], d[2]), bv = bound(x[2], d[2], x[0], d[0]), bw = bound(x[0], d[0], x[1], d[1]);
+    const __m128 pu = _mm_cmpgt_ps(eu, bu), pv = _mm_cmpgt_ps(ev, bv), pw = _mm_cmpgt_ps(ew, bw);
+    const __m128 nu = _mm_cmplt_ps(_mm_add_ps(eu, bu), _mm_setzero_ps()), nv = _mm_cmplt_ps(_mm_add_ps(ev, bv), _mm_setzero_ps()),
+                 nw = _mm_cmplt_ps(_mm_add_ps(ew, bw), _mm_setzero_ps());
+    const __m128 miss = _mm_and_ps(_mm_or_ps(_mm_or_ps(pu, pv), pw), _mm_or_ps(_mm_or_ps(nu, nv), nw));
+    __m128 skip = miss;
+    if constexpr (std::is_same_v<S, double>) {
+      // all three edge functions beyond twice their bounds with one sign (the test's are then
+      // beyond the bound, 2^-120, so its products with the depths are normal doubles), and every
+      // depth below 0 or above t_max
+      const __m128 zero = _mm_setzero_ps();
+      const __m128 su = _mm_add_ps(bu, bu), sv = _mm_add_ps(bv, bv), sw = _mm_add_ps(bw, bw);
+      const __m128 all_pos = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(eu, su), _mm_cmpgt_ps(ev, sv)), _mm_cmpgt_ps(ew, sw));
+      const __m128 all_neg = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(_mm_add_ps(eu, su), zero), _mm_cmplt_ps(_mm_add_ps(ev, sv), zero)),
+                                        _mm_cmplt_ps(_mm_add_ps(ew, sw), zero));
+      const __m128 ez = _mm_add_ps(z0_, _mm_mul_ps(z1_, lz));
+      const __m128 zmin = _mm_min_ps(_mm_min_ps(pz[0], pz[1]), pz[2]), zmax = _mm_max_ps(_mm_max_ps(pz[0], pz[1]), pz[2]);
+      const __m128 tf = _mm_set1_ps(round_up(double(t_max) * (1.0 + 0x1p-19)));
+      const __m128 out = _mm_or_ps(_mm_cmpgt_ps(_mm_sub_ps(zmin, ez), tf), _mm_cmplt_ps(_mm_add_ps(zmax, ez), zero));
+      skip = _mm_or_ps(skip, _mm_and_ps(_mm_or_ps(all_pos, all_neg), out));
+    } else {
+      (void)t_max;
+      (void)lz;
+    }
+    return ~_mm_movemask_ps(skip) & ((1 << count) - 1);
+  }
+
+ private:
+  /// The smallest float >= x (x >= 0, not NaN; +infinity above the float range).
+  static float round_up(double x) {
+    float f = static_cast<float>(x);
+    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+  }
+  __m128 bound(__m128 xb, __m128 db, __m128 xc, __m128 dc) const {
+    const __m128 cross = _mm_add_ps(_mm_add_ps(_mm_mul_ps(xc, db), _mm_mul_ps(xb, dc)), _mm_mul_ps(db, dc));
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0_, cross), _mm_mul_ps(e1_, _mm_mul_ps(xb, xc))), tiny_);
+  }
+  int k_[3];
+  __m128 o_[3], sx_, sy_, sz_, d0_, d1_, e0_, e1_, tiny_, z0_, z1_;
+};
+#endif
+
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
 /// own frame. `use_simd` false forces the scalar node test (for the tests that compare the two).
 template <class S>
@@ -126,7 +345,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   const Vec3<S> d = pose ? Vec3<S>(pose->R.transpose() * ray.direction) : ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
   const Vec3<S> inv = safe_inverse(d);
-  PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
+  PreparedRay<S> pr;  // set up at the first leaf (most short casts reach none)
   S best = ray.t_max;
   std::int32_t best_k = -1;
   Vec3<S> best_bary = Vec3<S>::Zero();
@@ -135,6 +354,12 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   auto bound = [&]() { return limit; };
   const bool finite = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
   const WideSlab<S> slab(o, inv);
+  const WideFloatSlab<S> float_slab(o, inv, wide.coordinate_bound());
+  const bool in_float = finite && float_slab.usable();
+  // the float node test's exit bound (a float >= best) and entry bound (a float <= limit)
+  float exit_f = WideFloatSlab<S>::round_up(double(best)), bound_f = WideFloatSlab<S>::round_down(double(limit));
+  // after a hit: float keys at or above tie_f may be within rounding of the hit (see below)
+  float tie_f = std::numeric_limits<float>::infinity();
   auto keys_of = [&](const WideBvhNode& n, S (&keys)[4]) {
     if (finite) {
       slab.keys(n, best, keys, use_simd);
@@ -147,6 +372,21 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
       keys[c] = t ? *t : std::numeric_limits<S>::quiet_NaN();
     }
   };
+#if defined(__SSE2__)
+  // the certified float filter over four triangles at a time, when the triangles are floats
+  const float* packed = wide.packed_data();
+  const bool filtered = use_simd && packed;  // (d is not zero: pr.valid)
+  LeafFilter<S> filter;  // set up at the first leaf
+#endif
+  bool leaf_seen = false;
+#if defined(__SSE2__)
+  const bool repeats = wide.has_repeats();
+  auto ctz = [](int m) {
+    int c = 0;
+    while (!(m & 1)) m >>= 1, ++c;
+    return c;
+  };
+#endif
   struct Entry {
     S key;
     std::int32_t first, count;
@@ -157,9 +397,14 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   std::size_t node_tests = 0, triangle_tests = 0;
   for (;;) {
     if (count > 0) {
-      for (std::int32_t k = first; k < first + count; ++k) {
-        if (wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
-        ++triangle_tests;
+      if (!leaf_seen) {
+        pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
+#if defined(__SSE2__)
+        if (filtered) filter.set(pr);
+#endif
+        leaf_seen = true;
+      }
+      auto test = [&](std::int32_t k) {
         pr.ray.t_max = best;
         const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));
         if (h && (best_k < 0 || h->t < best)) {
@@ -167,19 +412,92 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
           best_k = k;
           best_bary = Vec3<S>(h->u, h->v, h->w);
           limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+          exit_f = WideFloatSlab<S>::round_up(double(best));
+          bound_f = WideFloatSlab<S>::round_down(double(limit));
+          const double slack = 4.0 * (std::abs(double(best)) * 0x1p-21 + double(float_slab.absolute_error()));
+          tie_f = WideFloatSlab<S>::round_down(double(best) - slack);
+        }
+      };
+#if defined(__SSE2__)
+      if (filtered) {
+        for (std::int32_t g = first; g < first + count; g += 4) {  // four triangles at a time
+          const int lanes = static_cast<int>(std::min<std::int32_t>(4, first + count - g));
+          int todo = filter.candidates(packed + 9 * static_cast<std::size_t>(g), lanes, best);
+          if (repeats) {
+            for (int c = 0; c < lanes; ++c) {
+              if (wide.repeats_previous(g + c)) todo &= ~(1 << c);  // the triangle just tested, again
+              else ++triangle_tests;
+            }
+          } else {
+            triangle_tests += static_cast<std::size_t>(lanes);
+          }
+          while (todo) {
+            const int c = ctz(todo);
+            todo &= todo - 1;
+            test(g + c);
+          }
+        }
+      } else
+#endif
+      {
+        for (std::int32_t k = first; k < first + count; ++k) {
+          if (wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
+          ++triangle_tests;
+          test(k);
         }
       }
     } else {
       const WideBvhNode& n = nodes[first];
+      node_tests += 4;
+      if (in_float) {
+        float f[4];
+        int mask = float_slab.entered(n, exit_f, bound_f, f, use_simd);
+        S fk[4] = {S(f[0]), S(f[1]), S(f[2]), S(f[3])};
+        if (mask & ((f[0] >= tie_f) | (f[1] >= tie_f) << 1 | (f[2] >= tie_f) << 2 | (f[3] >= tie_f) << 3)) {
+          // a child entered within the float keys' rounding of the best hit: the double keys
+          // decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through a
+          // vertex would otherwise open every leaf around it)
+          slab.keys(n, best, fk, use_simd);
+          const S b = bound();
+          mask = 0;
+          for (int c = 0; c < 4; ++c) mask |= (fk[c] <= b && n.count[c] >= 0 ? 1 : 0) << c;
+        }
+        if (mask) {
+          // the entered children, gathered without branches (which are entered is unpredictable),
+          // then nearest first (insertion sort, stable)
+          int order[4], m = 0;
+          for (int c = 0; c < 4; ++c) {
+            order[m] = c;
+            m += (mask >> c) & 1;
+          }
+          for (int i = 1; i < m; ++i) {
+            const int c = order[i];
+            int j = i;
+            while (j > 0 && fk[order[j - 1]] > fk[c]) {
+              order[j] = order[j - 1];
+              --j;
+            }
+            order[j] = c;
+          }
+          for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
+          first = n.first[order[0]];
+          count = n.count[order[0]];
+          continue;
+        }
+      } else {
       S keys[4];
       keys_of(n, keys);
-      node_tests += 4;
       const S b = bound();
-      // the entered children, nearest first (insertion sort of at most four)
+      // the entered children (gathered without branches: which are entered is unpredictable),
+      // nearest first (insertion sort of at most four, stable)
       int order[4], m = 0;
       for (int c = 0; c < 4; ++c) {
-        if (!(keys[c] <= b) || n.count[c] < 0) continue;
-        int j = m++;
+        order[m] = c;
+        m += static_cast<int>(keys[c] <= b) & static_cast<int>(n.count[c] >= 0);
+      }
+      for (int i = 1; i < m; ++i) {
+        const int c = order[i];
+        int j = i;
         while (j > 0 && keys[order[j - 1]] > keys[c]) {
           order[j] = order[j - 1];
           --j;
@@ -191,6 +509,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
         first = n.first[order[0]];
         count = n.count[order[0]];
         continue;
+      }
       }
     }
     // the nearest pending child still below the bound
