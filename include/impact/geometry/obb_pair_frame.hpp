@@ -61,8 +61,16 @@ template <class S> class ObbPairFrame {
   /// The same test with b's image computed beforehand (image(b)).
   bool overlaps(const Obb<S>& a, const Image& b) const {
     constexpr S eps = std::numeric_limits<S>::epsilon();
-    const Mat3<S> R = a.axes.transpose() * b.axes;
-    const Vec3<S> tb = a.axes.transpose() * (b.center - a.center);
+    // R = A^T (X B) and tb = A^T (X c_b + t - c_a), written out (fewer instructions than Eigen's
+    // packets on 3-vectors)
+    Mat3<S> R;
+    Vec3<S> tb;
+    const Vec3<S> d = b.center - a.center;
+    for (int i = 0; i < 3; ++i) {
+      const S u = a.axes(0, i), v = a.axes(1, i), w = a.axes(2, i);
+      for (int j = 0; j < 3; ++j) R(i, j) = u * b.axes(0, j) + v * b.axes(1, j) + w * b.axes(2, j);
+      tb[i] = u * d[0] + v * d[1] + w * d[2];
+    }
     const S M = a.center.cwiseAbs().maxCoeff() + b.m;
     const S E = tb.cwiseAbs().sum() + a.half.sum() + b.half.sum();
     const S slack = S(64) * eps * (S(3) * M + E) + S(2) * defect_ * E + std::numeric_limits<S>::denorm_min();
