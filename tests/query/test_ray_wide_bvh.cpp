@@ -469,6 +469,102 @@ TYPED_TEST(WideBvhTest, LeafFilterNeverSkipsAHit) {
 }
 #endif
 
+// The float slab at large magnitudes: origins up to 2^59, off the float grid by up to 2^35,
+// boxes near them
+// (the absolute part e of the padding up to 2^39), directions from 2^-20 to 2^20: still
+// conservative against WideSlab, and never entering an empty slot (no count check: the inverted
+// box must give an empty interval however large e is while the ray is usable).
+TYPED_TEST(WideBvhTest, FloatSlabAtLargeMagnitudes) {
+  using S = TypeParam;
+  test::Rng rng(53);
+  int entered = 0, usable = 0;
+  for (int i = 0; i < 4000 / kWideSamples; ++i) {
+    const double scale = std::ldexp(1.0, 20 + int(rng.integer(40)));  // 2^20 .. 2^59
+    const Vec3<S> o = (rng.vec(-1, 1) * scale).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * std::ldexp(1.0, int(rng.integer(41)) - 20) * scale).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    const detail::WideFloatSlab<S> fs(o, inv, S(2 * scale));
+    if (!fs.usable()) continue;
+    ++usable;
+    WideBvhNode n;  // slots 2 and 3 stay empty
+    for (int c = 0; c < 2; ++c) {  // boxes near the origin at every scale down to 2^-24 of it (its rounding matters)
+      const double near = std::ldexp(scale, -int(rng.integer(25)));
+      const Eigen::Vector3d m = o.template cast<double>() + rng.vec(-1, 1) * near, h = rng.vec(0.0, 0.5) * near;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 2 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 4);
+    float simd[4], scalar[4];
+    const int ms = fs.entered(n, detail::float_round_up(double(t_max)), std::numeric_limits<float>::infinity(), simd, true);
+    const int mc = fs.entered(n, detail::float_round_up(double(t_max)), std::numeric_limits<float>::infinity(), scalar, false);
+    ASSERT_EQ(ms, mc) << i;
+    EXPECT_EQ(mc & 12, 0) << "empty slot entered " << i;
+    S exact[4];
+    detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
+    for (int c = 0; c < 2; ++c) {
+      if (exact[c] <= t_max) {
+        ++entered;
+        ASSERT_TRUE((mc >> c) & 1) << i << " " << c;
+        EXPECT_LE(S(scalar[c]), exact[c]) << i << " " << c;
+      }
+    }
+  }
+  EXPECT_GT(usable, 2000 / kWideSamples);
+  EXPECT_GT(entered, 200 / kWideSamples);
+}
+
+// float_round_up / float_round_down (the float node test's bounds) against a reference by
+// nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends.
+TEST(WideBvh, FloatRoundingHelpers) {
+  test::Rng rng(59);
+  auto up = [](double x) {
+    float f = static_cast<float>(x);
+    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+  };
+  std::vector<double> xs = {0.0, -0.0, 1.0, -1.0, 0x1p-149, -0x1p-149, 0x1p-150, -0x1p-150, 0x1p-160, -0x1p-160, double(FLT_MAX),
+                            -double(FLT_MAX), 1e300, -1e300, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                            1.0 + 0x1p-30, 1.0 - 0x1p-30, -1.0 + 0x1p-30, 0x1.fffffffp127, -0x1.fffffffp127};
+  for (int i = 0; i < 20000; ++i) xs.push_back(std::ldexp(rng.uniform(-1, 1), int(rng.integer(320)) - 160));
+  for (const double x : xs) {
+    const float u = detail::float_round_up(x), dn = detail::float_round_down(x);
+    const float ru = up(x), rd = -up(-x);
+    EXPECT_TRUE(u == ru && std::signbit(u) == std::signbit(ru)) << x;
+    EXPECT_TRUE(dn == rd && std::signbit(dn) == std::signbit(rd)) << x;
+    EXPECT_GE(double(u), x) << x;
+    EXPECT_LE(double(dn), x) << x;
+  }
+}
+
+// The casts' quick argument check (detail::ray_in_range) accepts exactly the rays validate_ray
+// accepts: finite, within CoordinateRange, the direction not too short, t_max >= 0 or +inf.
+TYPED_TEST(WideBvhTest, RayInRangeIsValidateRay) {
+  using S = TypeParam;
+  test::Rng rng(61);
+  const S specials[] = {S(0), -S(0), S(1), S(-3), std::numeric_limits<S>::infinity(), -std::numeric_limits<S>::infinity(),
+                        std::numeric_limits<S>::quiet_NaN(), CoordinateRange<S>::max, -CoordinateRange<S>::max,
+                        S(2) * CoordinateRange<S>::max, CoordinateRange<S>::min_scale, CoordinateRange<S>::min_scale / S(2),
+                        -CoordinateRange<S>::min_scale, std::numeric_limits<S>::denorm_min()};
+  const int ns = static_cast<int>(sizeof(specials) / sizeof(specials[0]));
+  int accepted = 0, rejected = 0;
+  for (int i = 0; i < 20000; ++i) {
+    auto value = [&] { return rng.index(3) == 0 ? specials[rng.index(static_cast<std::uint64_t>(ns))] : S(rng.uniform(-2, 2)); };
+    Ray<S> ray(Vec3<S>(value(), value(), value()), Vec3<S>(value(), value(), value()), value());
+    if (i % 2 == 0) ray.origin = Vec3<S>(S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), value());
+    if (i % 3 == 0) ray.t_max = S(rng.uniform(0, 2));
+    bool throws = false;
+    try {
+      validate_ray(ray, "test");
+    } catch (const InvalidInput&) {
+      throws = true;
+    }
+    EXPECT_EQ(detail::ray_in_range(ray), !throws) << i;
+    ++(throws ? rejected : accepted);
+  }
+  EXPECT_GT(accepted, 1000);
+  EXPECT_GT(rejected, 1000);
+}
+
 TEST(WideBvh, InvalidInput) {
   const TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 8, 4);
   WideBvhConfig bad;

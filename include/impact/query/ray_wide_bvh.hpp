@@ -123,94 +123,179 @@ template <class S> class WideSlab {
   S o_[3], inv_[3];
 };
 
-/// The slab test of a ray against the four children of a WideBvhNode in float, for a ray whose
-/// inverse direction is in [2^-60, 2^60] in magnitude and whose origin and the tree's coordinates
-/// are at most 2^60 (no float overflow or underflow to zero; `usable`): a conservative version of WideSlab's double keys at a quarter of the work.
-/// The boxes are floats already; the origin and the inverse direction are rounded to float once
-/// per ray. Each plane's parameter then differs from WideSlab's by at most 8 u |t| + E (u = 2^-24,
-/// E the origin's rounding times |1 / d| on the worst axis, plus 2^-120 for underflow), so the
-/// entry max(0, near planes) is lowered and the exit min(t_max, far planes) raised by that much
-/// once per box: a key is never above WideSlab's entry for the same box (so pruning nodes whose key
-/// exceeds the best t stays exact) and a box is reported missed only when WideSlab misses it.
-/// SSE when compiled with it, else a scalar loop of the same IEEE operations in the same order
-/// (the same keys bit for bit).
+/// The smallest float >= x (x not NaN; +infinity above the float range), without libm.
+inline float float_round_up(double x) {
+  const float f = static_cast<float>(x);
+  if (!(double(f) < x)) return f;
+  // the next float up: one more unit in the last place of |f| (f >= 0) or one less (f < 0)
+  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
+  std::uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  b = f > 0.0f ? b + 1 : b - 1;
+  float g;
+  std::memcpy(&g, &b, sizeof g);
+  return g;
+}
+/// The largest float <= x (x not NaN; -infinity below the float range), without libm.
+inline float float_round_down(double x) { return -float_round_up(-x); }
+
+/// The slab test of a ray against the four children of a WideBvhNode in float: a conservative
+/// version of WideSlab's keys (in S on the same float boxes) at a quarter of the work, for a ray
+/// whose inverse direction is in [2^-60, 2^60] in magnitude, whose origin and the tree's
+/// coordinates are at most 2^60 and whose origin is within 2^40 / |1 / d| of a float on every
+/// axis (`usable`; no float overflow, no underflow to zero, no NaN).
+///
+/// The origin and the inverse direction are rounded to float once per ray; the boxes are floats.
+/// A plane's parameter (b - o) / d computed so differs from WideSlab's by at most 4 u |t| + E
+/// (u = 2^-24: the float subtraction, the rounding of 1 / d and the product, and WideSlab's own
+/// rounding and exit padding; E = max over the axes of |o - float(o)| |1 / d|, zero when the
+/// origin is a float, and 2^-100 for underflow). The entry t0 = max(0, near planes) is therefore
+/// lowered to lo = t0 (1 - 2^-19) - e and the exit t1 = min(float t_max rounded up, far planes)
+/// raised to hi = t1 (1 + 2^-19) + e, with e = E (1 + 2^-16) + 2^-100 rounded up, each a product
+/// and a sum in float. Then (see the proof in the tests' comment, FloatSlabIsConservative):
+///  - lo <= WideSlab's entry (32 u of slack against 4 u, after the float roundings of the two
+///    operations), so pruning a child whose lo exceeds the best t stays exact;
+///  - when WideSlab enters a box (its entry <= its exit, the entry >= 0), lo <= hi: for t1 >= 0
+///    hi is above WideSlab's exit; for t1 < 0 (WideSlab's exit can still be >= 0 only when
+///    |t1| <= E (1 + 8 u)), lo <= t0 - e (1 - u) and hi >= e (1 - u) - |t1| (1 + 34 u), and the
+///    margin 2^-16 of e covers the rest.
+/// Empty slots (lower plane FLT_MAX, upper -FLT_MAX) give lo >= 2^67 (1 - 2^-19) - 2^41 > 0 > hi
+/// on every axis and are never entered (no count check). SSE when compiled with it, else a
+/// scalar loop of the same IEEE operations in the same order (the same keys and mask bit for bit).
 template <class S> class WideFloatSlab {
  public:
   WideFloatSlab(const Vec3<S>& o, const Vec3<S>& inv, S coordinate_bound) {
-    usable_ = coordinate_bound <= S(0x1p60);
-    double e = 0;
-    for (int i = 0; i < 3; ++i) {
-      usable_ = usable_ && std::abs(o[i]) <= S(0x1p60) && std::abs(inv[i]) <= S(0x1p60) && std::abs(inv[i]) >= S(0x1p-60);
-      near_[i] = 2 * i + (inv[i] < S(0) ? 1 : 0);
-      far_[i] = 2 * i + (inv[i] < S(0) ? 0 : 1);
-      o_[i] = static_cast<float>(o[i]);
-      inv_[i] = static_cast<float>(inv[i]);
-      e = std::max(e, std::abs(double(o[i]) - double(o_[i])) * std::abs(double(inv[i])));
-    }
-    e_ = round_up(e * (1.0 + 0x1p-20) + 0x1p-120);
-  }
-  /// False when some magnitude exceeds 2^60: use WideSlab.
-  bool usable() const { return usable_; }
-  /// The absolute part of the bound on a key's rounding (the relative part is 2^-21).
-  float absolute_error() const { return e_; }
-  /// The children entered before `bound` (a float <= the bound of the cast): bit c set when
-  /// keys[c] <= bound and the box is not missed, keys[c] the lowered entry (the others anything);
-  /// `t_max_up` a float >= t_max. Empty slots are never set.
-  int entered(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4], bool use_simd = true) const {
-    constexpr float pad = 0x1p-21f;
 #if defined(__SSE2__)
-    if (use_simd) {
-      __m128 t0 = _mm_setzero_ps(), t1 = _mm_set1_ps(t_max_up);
+    if constexpr (std::is_same_v<S, double>) {
+      // two axes a register: the checks, the rounding to float and its error, the plane offsets
+      const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+      const __m128d big = _mm_set1_pd(0x1p60), small = _mm_set1_pd(0x1p-60);
+      const __m128d o01 = _mm_loadu_pd(o.data()), o22 = _mm_set1_pd(o[2]);
+      const __m128d i01 = _mm_loadu_pd(inv.data()), i22 = _mm_set1_pd(inv[2]);
+      const __m128d ai01 = _mm_and_pd(i01, abs_mask), ai22 = _mm_and_pd(i22, abs_mask);
+      const __m128d in01 = _mm_and_pd(_mm_and_pd(_mm_cmple_pd(_mm_and_pd(o01, abs_mask), big), _mm_cmple_pd(ai01, big)), _mm_cmpge_pd(ai01, small));
+      const __m128d in22 = _mm_and_pd(_mm_and_pd(_mm_cmple_pd(_mm_and_pd(o22, abs_mask), big), _mm_cmple_pd(ai22, big)), _mm_cmpge_pd(ai22, small));
+      const __m128 of01 = _mm_cvtpd_ps(o01), of22 = _mm_cvtpd_ps(o22), if01 = _mm_cvtpd_ps(i01), if22 = _mm_cvtpd_ps(i22);
+      const __m128d e01 = _mm_mul_pd(_mm_and_pd(_mm_sub_pd(o01, _mm_cvtps_pd(of01)), abs_mask), ai01);
+      const __m128d e22 = _mm_mul_pd(_mm_and_pd(_mm_sub_pd(o22, _mm_cvtps_pd(of22)), abs_mask), ai22);
+      const __m128d e2 = _mm_max_pd(e01, e22);
+      const double e = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
+      const int sign = _mm_movemask_pd(i01) | (_mm_movemask_pd(i22) & 1) << 2;
+      usable_ = (_mm_movemask_pd(_mm_and_pd(in01, in22)) == 3) & (coordinate_bound <= S(0x1p60)) & (e <= 0x1p40);
       for (int i = 0; i < 3; ++i) {
-        const __m128 o = _mm_set1_ps(o_[i]), inv = _mm_set1_ps(inv_[i]);
-        const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[near_[i]]), o), inv);
-        const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[far_[i]]), o), inv);
-        t0 = _mm_max_ps(a, t0);
-        t1 = _mm_min_ps(b, t1);
+        near_[i] = static_cast<int>(sizeof(float[4])) * (2 * i + ((sign >> i) & 1));  // byte offsets of the planes
+        far_[i] = near_[i] ^ static_cast<int>(sizeof(float[4]));
       }
-      const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-      const __m128 vpad = _mm_set1_ps(pad), ve = _mm_set1_ps(e_);
-      t0 = _mm_sub_ps(t0, _mm_add_ps(_mm_mul_ps(_mm_and_ps(t0, abs_mask), vpad), ve));
-      t1 = _mm_add_ps(t1, _mm_add_ps(_mm_mul_ps(_mm_and_ps(t1, abs_mask), vpad), ve));
-      _mm_storeu_ps(keys, t0);
-      const __m128 in = _mm_and_ps(_mm_cmple_ps(t0, t1), _mm_cmple_ps(t0, _mm_set1_ps(bound)));
-      const __m128i used = _mm_cmpgt_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(n.count)), _mm_set1_epi32(-1));
-      return _mm_movemask_ps(_mm_and_ps(in, _mm_castsi128_ps(used)));
+      vo_[0] = _mm_shuffle_ps(of01, of01, 0x00), vo_[1] = _mm_shuffle_ps(of01, of01, 0x55), vo_[2] = _mm_shuffle_ps(of22, of22, 0x00);
+      vinv_[0] = _mm_shuffle_ps(if01, if01, 0x00), vinv_[1] = _mm_shuffle_ps(if01, if01, 0x55), vinv_[2] = _mm_shuffle_ps(if22, if22, 0x00);
+      e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
+      ve_ = _mm_set1_ps(e_);
+      return;
     }
 #endif
+    bool ok = coordinate_bound <= S(0x1p60);
+    double e = 0;
+    for (int i = 0; i < 3; ++i) {
+      const S a = std::abs(inv[i]);
+      ok = ok & (std::abs(o[i]) <= S(0x1p60)) & (a <= S(0x1p60)) & (a >= S(0x1p-60));  // false for NaN
+      const bool neg = inv[i] < S(0);
+      near_[i] = static_cast<int>(sizeof(float[4])) * (2 * i + (neg ? 1 : 0));  // byte offsets of the planes
+      far_[i] = near_[i] ^ static_cast<int>(sizeof(float[4]));
+      const float of = static_cast<float>(o[i]), invf = static_cast<float>(inv[i]);
+#if defined(__SSE2__)
+      vo_[i] = _mm_set1_ps(of), vinv_[i] = _mm_set1_ps(invf);
+#else
+      o_[i] = of, inv_[i] = invf;
+#endif
+      e = std::max(e, std::abs(double(o[i]) - double(of)) * double(a));
+    }
+    usable_ = ok && e <= 0x1p40;
+    e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
+#if defined(__SSE2__)
+    ve_ = _mm_set1_ps(e_);
+#endif
+  }
+  /// False when some magnitude is out of range (see the class comment): use WideSlab.
+  bool usable() const { return usable_; }
+  /// e: the absolute part of the keys' lowering (the relative part is 2^-19).
+  float absolute_error() const { return e_; }
+  static constexpr float kLow = 1.0f - 0x1p-19f, kHigh = 1.0f + 0x1p-19f;
+
+  /// The children entered before `bound` (a float <= the cast's bound): bit c set when lo[c] <=
+  /// hi[c] and lo[c] <= bound; keys[c] = lo[c] (the others anything); `t_max_up` a float >= t_max.
+  int entered(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4], bool use_simd = true) const {
+#if defined(__SSE2__)
+    if (use_simd) {
+      __m128 lo;
+      const int m = entered(n, _mm_set1_ps(t_max_up), _mm_set1_ps(bound), lo);
+      _mm_storeu_ps(keys, lo);
+      return m;
+    }
+#endif
+    return entered_scalar(n, t_max_up, bound, keys);
+  }
+
+#if defined(__SSE2__)
+  /// entered() with the bounds broadcast and the keys left in a register.
+  int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const {
+    const char* p = reinterpret_cast<const char*>(n.bounds);
+    __m128 t0 = _mm_setzero_ps(), t1 = t_max_up;
+    for (int i = 0; i < 3; ++i) {
+      const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + near_[i])), vo_[i]), vinv_[i]);
+      const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + far_[i])), vo_[i]), vinv_[i]);
+      t0 = _mm_max_ps(a, t0);
+      t1 = _mm_min_ps(b, t1);
+    }
+    const __m128 lo = _mm_sub_ps(_mm_mul_ps(t0, _mm_set1_ps(kLow)), ve_);
+    const __m128 hi = _mm_add_ps(_mm_mul_ps(t1, _mm_set1_ps(kHigh)), ve_);
+    keys = lo;
+    return _mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmple_ps(lo, bound)));
+  }
+#endif
+
+  /// entered() by a scalar loop of the same IEEE operations in the same order.
+  int entered_scalar(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4]) const {
+    const char* p = reinterpret_cast<const char*>(n.bounds);
     float t0[4] = {0.0f, 0.0f, 0.0f, 0.0f}, t1[4] = {t_max_up, t_max_up, t_max_up, t_max_up};
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < 3; ++i) {
+      const float* near = reinterpret_cast<const float*>(p + near_[i]);
+      const float* far = reinterpret_cast<const float*>(p + far_[i]);
       for (int c = 0; c < 4; ++c) {
-        const float a = (n.bounds[near_[i]][c] - o_[i]) * inv_[i];
-        const float b = (n.bounds[far_[i]][c] - o_[i]) * inv_[i];
+        const float a = (near[c] - origin(i)) * inverse(i);
+        const float b = (far[c] - origin(i)) * inverse(i);
         t0[c] = a > t0[c] ? a : t0[c];  // maxps / minps: the second operand unless the first wins
         t1[c] = b < t1[c] ? b : t1[c];
       }
+    }
     int m = 0;
     for (int c = 0; c < 4; ++c) {
-      const float lo = t0[c] - (std::abs(t0[c]) * pad + e_), hi = t1[c] + (std::abs(t1[c]) * pad + e_);
+      const float lo = t0[c] * kLow - e_, hi = t1[c] * kHigh + e_;
       keys[c] = lo;
-      m |= (lo <= hi && lo <= bound && n.count[c] >= 0 ? 1 : 0) << c;
+      m |= (lo <= hi && lo <= bound ? 1 : 0) << c;
     }
     return m;
   }
   /// The smallest float >= x (x >= 0, not NaN; +infinity above the float range).
-  static float round_up(double x) {
-    float f = static_cast<float>(x);
-    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-    return f;
-  }
+  static float round_up(double x) { return float_round_up(x); }
   /// The largest float <= x (not NaN; -infinity below the float range).
-  static float round_down(double x) {
-    float f = static_cast<float>(x);
-    if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
-  }
+  static float round_down(double x) { return float_round_down(x); }
 
  private:
+#if defined(__SSE2__)
+  float origin(int i) const { return _mm_cvtss_f32(vo_[i]); }
+  float inverse(int i) const { return _mm_cvtss_f32(vinv_[i]); }
+#else
+  float origin(int i) const { return o_[i]; }
+  float inverse(int i) const { return inv_[i]; }
+#endif
   bool usable_ = false;
-  int near_[3], far_[3];
-  float o_[3], inv_[3], e_ = 0.0f;
+  int near_[3], far_[3];  // byte offsets of the near and far planes of each axis in a node
+  float e_ = 0.0f;
+#if defined(__SSE2__)
+  __m128 vo_[3], vinv_[3], ve_;  // origin and inverse direction rounded to float, e, broadcast
+#else
+  float o_[3], inv_[3];
+#endif
 };
 
 #if defined(__SSE2__)
@@ -335,8 +420,278 @@ template <class S> class LeafFilter {
 };
 #endif
 
+/// The children entered at a node, nearest first: writes the entered slots of `mask` ordered by
+/// key (ties: the lower slot first), returns how many. Shared by every node test, so that a cast
+/// visits the same nodes in the same order whichever computed the keys.
+template <class K> inline int order_children(int mask, const K (&keys)[4], int (&order)[4]) {
+  int m = 0;
+  for (int c = 0; c < 4; ++c) {
+    order[m] = c;
+    m += (mask >> c) & 1;
+  }
+  for (int i = 1; i < m; ++i) {
+    const int c = order[i];
+    int j = i;
+    while (j > 0 && keys[order[j - 1]] > keys[c]) {
+      order[j] = order[j - 1];
+      --j;
+    }
+    order[j] = c;
+  }
+  return m;
+}
+
+/// The index of the lowest set bit of m (m != 0).
+inline int lowest_bit(int m) {
+#if defined(__GNUC__) || defined(__clang__)
+  return __builtin_ctz(static_cast<unsigned>(m));
+#else
+  int c = 0;
+  while (!(m & 1)) m >>= 1, ++c;
+  return c;
+#endif
+}
+
+/// True when the ray passes validate_ray's checks (finite origin and direction within
+/// CoordinateRange, the direction's largest component at least min_scale, t_max >= 0 or +inf):
+/// the same rule in a few comparisons (NaN fails them all); validate_ray throws for the others.
+template <class S> inline bool ray_in_range(const Ray<S>& ray) {
+  constexpr S hi = CoordinateRange<S>::max;
+  bool ok = ray.t_max >= S(0);
+  S dmax = S(0);
+  for (int i = 0; i < 3; ++i) {
+    const S ad = std::abs(ray.direction[i]);
+    ok = ok & (std::abs(ray.origin[i]) <= hi) & (ad <= hi);
+    dmax = ad > dmax ? ad : dmax;
+  }
+  return ok && dmax >= CoordinateRange<S>::min_scale;
+}
+
+/// A pending child of a wide cast: a lower bound of its entry in S (its float key, or the key in S
+/// rounded down) and its reference.
+struct WideEntry {
+  float key;
+  std::int32_t first, count;
+};
+
+/// The state of one cast through a WideBvh (ray_wide_first_hit_unchecked), shared by its node
+/// loop and its leaves: the best hit so far and the bounds derived from it, the ray prepared for
+/// the triangle test (at the first leaf: most short casts reach none).
+template <class S> struct WideCast {
+  const WideBvh<S>& wide;
+  const Vec3<S>& o;  // the ray in the mesh's frame (the caller's: it outlives the cast)
+  const Vec3<S>& d;
+  const Vec3<S> inv;
+  const S t_max;
+  const bool use_simd;
+  const WideFloatSlab<S> float_slab;
+  S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
+  std::int32_t best_k = -1;
+  Vec3<S> best_bary = Vec3<S>::Zero();
+  float exit_f, bound_f;  // the float node test's exit bound (a float >= best) and entry bound (<= limit)
+  // after a hit: float keys at or above tie_f may be within rounding of the hit (redecide)
+  float tie_f = std::numeric_limits<float>::infinity();
+  PreparedRay<S> pr;
+  bool leaf_seen = false;
+  std::optional<WideSlab<S>> slab;  // in S: set up when first needed
+#if defined(__SSE2__)
+  LeafFilter<S> filter;  // set up at the first leaf
+#endif
+  std::size_t node_tests = 0, triangle_tests = 0;
+
+  /// `o_` and `d_` must outlive the cast.
+  WideCast(const WideBvh<S>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd)
+      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), float_slab(o_, inv, w.coordinate_bound()),
+        best(t_max_), limit(t_max_), exit_f(float_round_up(double(t_max_))), bound_f(float_round_down(double(t_max_))) {}
+
+  /// The keys in S of a node's children (WideSlab, or the box test for a zero direction component).
+  void double_keys(const WideBvhNode& n, S (&keys)[4]) {
+    if (!slab) slab.emplace(o, inv);
+    if (std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2])) {
+      slab->keys(n, best, keys, use_simd);
+      return;
+    }
+    for (int c = 0; c < 4; ++c) {
+      const Aabb<S> box(Vec3<S>(S(n.bounds[0][c]), S(n.bounds[2][c]), S(n.bounds[4][c])),
+                        Vec3<S>(S(n.bounds[1][c]), S(n.bounds[3][c]), S(n.bounds[5][c])));
+      const auto t = n.count[c] < 0 ? std::nullopt : ray_box_entry(o, inv, box, best);
+      keys[c] = t ? *t : std::numeric_limits<S>::quiet_NaN();
+    }
+  }
+  /// The children entered by the test in S (before limit), with their keys rounded down to float.
+  int double_mask(const WideBvhNode& n, float (&fk)[4]) {
+    S keys[4];
+    double_keys(n, keys);
+    int mask = 0;
+    for (int c = 0; c < 4; ++c) {
+      const bool in = keys[c] <= limit && n.count[c] >= 0;
+      mask |= (in ? 1 : 0) << c;
+      fk[c] = in ? float_round_down(double(keys[c])) : 0.0f;
+    }
+    return mask;
+  }
+  /// The triangle at leaf-order position k by the narrow-phase rule; a strictly earlier hit
+  /// replaces the best one.
+  void test(std::int32_t k) {
+    pr.ray.t_max = best;
+    const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));
+    if (h && (best_k < 0 || h->t < best)) {
+      best = h->t;
+      best_k = k;
+      best_bary = Vec3<S>(h->u, h->v, h->w);
+      limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+      exit_f = float_round_up(double(best));
+      bound_f = float_round_down(double(limit));
+      const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(float_slab.absolute_error()));
+      tie_f = float_round_down(double(best) - slack);
+    }
+  }
+  /// The triangles of a leaf: four at a time through the certified float filter when they are
+  /// stored as floats (SSE), else each by the test.
+  IMPACT_NOINLINE void leaf(std::int32_t first, std::int32_t count) {
+    if (!leaf_seen) {
+      pr = PreparedRay<S>(Ray<S>(o, d, t_max));
+#if defined(__SSE2__)
+      if (use_simd && wide.packed()) filter.set(pr);
+#endif
+      leaf_seen = true;
+    }
+    const bool repeats = wide.has_repeats();
+#if defined(__SSE2__)
+    if (use_simd && wide.packed()) {
+      const float* packed = wide.packed_data();
+      for (std::int32_t g = first; g < first + count; g += 4) {
+        const int lanes = static_cast<int>(std::min<std::int32_t>(4, first + count - g));
+        int todo = filter.candidates(packed + 9 * static_cast<std::size_t>(g), lanes, best);
+        if (repeats) {
+          for (int c = 0; c < lanes; ++c) {
+            if (wide.repeats_previous(g + c)) todo &= ~(1 << c);  // the triangle just tested, again
+            else ++triangle_tests;
+          }
+        } else {
+          triangle_tests += static_cast<std::size_t>(lanes);
+        }
+        while (todo) {
+          const int c = lowest_bit(todo);
+          todo &= todo - 1;
+          test(g + c);
+        }
+      }
+      return;
+    }
+#endif
+    for (std::int32_t k = first; k < first + count; ++k) {
+      if (repeats && wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
+      ++triangle_tests;
+      test(k);
+    }
+  }
+  /// After a hit, at a node whose float keys of entered children are within rounding of it: the
+  /// keys in S decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through
+  /// a vertex would otherwise open every leaf around it).
+  IMPACT_NOINLINE int redecide(const WideBvhNode& n, float (&fk)[4]) { return double_mask(n, fk); }
+
+  /// Descends to the nearest entered child of `mask` (keys fk), pushing the others farthest first.
+  template <class Stack> void descend(const WideBvhNode& n, int mask, const float (&fk)[4], Stack& stack, std::int32_t& first, std::int32_t& count) {
+    const int c0 = lowest_bit(mask);
+    const int rest = mask & (mask - 1);
+    if (!rest) {  // one child (the common case)
+      first = n.first[c0];
+      count = n.count[c0];
+      return;
+    }
+    const int c1 = lowest_bit(rest);
+    if (!(rest & (rest - 1))) {  // two: the nearer first (ties: the lower slot)
+      const bool swap = fk[c0] > fk[c1];
+      const int near = swap ? c1 : c0, far = swap ? c0 : c1;
+      stack.push({fk[far], n.first[far], n.count[far]});
+      first = n.first[near];
+      count = n.count[near];
+      return;
+    }
+    int order[4];
+    const int m = order_children(mask, fk, order);
+    for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
+    first = n.first[order[0]];
+    count = n.count[order[0]];
+  }
+
+  /// The traversal: nearest child first, the others on the stack with their keys.
+  void run() {
+    TraversalStack<WideEntry, 128> stack;
+    const WideBvhNode* nodes = wide.nodes().data();
+    std::int32_t first = 0, count = 0;  // the root: an inner node
+    const bool in_float = float_slab.usable();  // (false for an infinite 1 / d)
+    auto pop = [&](float bound) {  // the nearest pending child still below the bound
+      while (!stack.empty()) {
+        const WideEntry e = stack.pop();
+        if (e.key <= bound) {
+          first = e.first;
+          count = e.count;
+          return true;
+        }
+      }
+      return false;
+    };
+#if defined(__SSE2__)
+    if (in_float && use_simd) {
+      for (;;) {
+        // the bounds as of the last leaf, in registers for the node loop
+        const __m128 exit_v = _mm_set1_ps(exit_f), bound_v = _mm_set1_ps(bound_f), tie_v = _mm_set1_ps(tie_f);
+        const float bound = bound_f;
+        while (count == 0) {
+          const WideBvhNode& n = nodes[first];
+          ++node_tests;
+          __m128 lo;
+          int mask = float_slab.entered(n, exit_v, bound_v, lo);
+          if (mask) {
+            float fk[4];
+            _mm_storeu_ps(fk, lo);
+            if (IMPACT_UNLIKELY(_mm_movemask_ps(_mm_cmpge_ps(lo, tie_v)) & mask)) {
+              mask = redecide(n, fk);
+              if (!mask) {
+                if (!pop(bound)) return;
+                continue;
+              }
+            }
+            descend(n, mask, fk, stack, first, count);
+            continue;
+          }
+          if (!pop(bound)) return;
+        }
+        leaf(first, count);
+        if (!pop(bound_f)) return;
+      }
+    }
+#endif
+    for (;;) {
+      if (count > 0) {
+        leaf(first, count);
+      } else {
+        const WideBvhNode& n = nodes[first];
+        ++node_tests;
+        float fk[4];
+        int mask;
+        if (in_float) {
+          mask = float_slab.entered_scalar(n, exit_f, bound_f, fk);
+          if (IMPACT_UNLIKELY((mask & ((fk[0] >= tie_f) | (fk[1] >= tie_f) << 1 | (fk[2] >= tie_f) << 2 | (fk[3] >= tie_f) << 3))))
+            mask = redecide(n, fk);
+        } else {
+          mask = double_mask(n, fk);
+        }
+        if (mask) {
+          descend(n, mask, fk, stack, first, count);
+          continue;
+        }
+      }
+      if (!pop(bound_f)) return;
+    }
+  }
+};
+
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
-/// own frame. `use_simd` false forces the scalar node test (for the tests that compare the two).
+/// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
+/// compare the two: the same answers, triangle included).
 template <class S>
 std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
                                                           RayMeshStats* stats, bool use_simd = true) {
@@ -344,199 +699,20 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   const Vec3<S> o = pose ? Vec3<S>(pose->R.transpose() * (ray.origin - pose->t)) : ray.origin;
   const Vec3<S> d = pose ? Vec3<S>(pose->R.transpose() * ray.direction) : ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  const Vec3<S> inv = safe_inverse(d);
-  PreparedRay<S> pr;  // set up at the first leaf (most short casts reach none)
-  S best = ray.t_max;
-  std::int32_t best_k = -1;
-  Vec3<S> best_bary = Vec3<S>::Zero();
-  // after a hit only a strictly earlier one replaces it, so nodes entered at best are pruned
-  S limit = best;
-  auto bound = [&]() { return limit; };
-  const bool finite = std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2]);
-  const WideSlab<S> slab(o, inv);
-  const WideFloatSlab<S> float_slab(o, inv, wide.coordinate_bound());
-  const bool in_float = finite && float_slab.usable();
-  // the float node test's exit bound (a float >= best) and entry bound (a float <= limit)
-  float exit_f = WideFloatSlab<S>::round_up(double(best)), bound_f = WideFloatSlab<S>::round_down(double(limit));
-  // after a hit: float keys at or above tie_f may be within rounding of the hit (see below)
-  float tie_f = std::numeric_limits<float>::infinity();
-  auto keys_of = [&](const WideBvhNode& n, S (&keys)[4]) {
-    if (finite) {
-      slab.keys(n, best, keys, use_simd);
-      return;
-    }
-    for (int c = 0; c < 4; ++c) {  // a zero direction component: the box test that handles it
-      const Aabb<S> box(Vec3<S>(S(n.bounds[0][c]), S(n.bounds[2][c]), S(n.bounds[4][c])),
-                        Vec3<S>(S(n.bounds[1][c]), S(n.bounds[3][c]), S(n.bounds[5][c])));
-      const auto t = n.count[c] < 0 ? std::nullopt : ray_box_entry(o, inv, box, best);
-      keys[c] = t ? *t : std::numeric_limits<S>::quiet_NaN();
-    }
-  };
-#if defined(__SSE2__)
-  // the certified float filter over four triangles at a time, when the triangles are floats
-  const float* packed = wide.packed_data();
-  const bool filtered = use_simd && packed;  // (d is not zero: pr.valid)
-  LeafFilter<S> filter;  // set up at the first leaf
-#endif
-  bool leaf_seen = false;
-#if defined(__SSE2__)
-  const bool repeats = wide.has_repeats();
-  auto ctz = [](int m) {
-    int c = 0;
-    while (!(m & 1)) m >>= 1, ++c;
-    return c;
-  };
-#endif
-  struct Entry {
-    S key;
-    std::int32_t first, count;
-  };
-  TraversalStack<Entry, 128> stack;
-  const WideBvhNode* nodes = wide.nodes().data();
-  std::int32_t first = 0, count = 0;  // the root: an inner node
-  std::size_t node_tests = 0, triangle_tests = 0;
-  for (;;) {
-    if (count > 0) {
-      if (!leaf_seen) {
-        pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
-#if defined(__SSE2__)
-        if (filtered) filter.set(pr);
-#endif
-        leaf_seen = true;
-      }
-      auto test = [&](std::int32_t k) {
-        pr.ray.t_max = best;
-        const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));
-        if (h && (best_k < 0 || h->t < best)) {
-          best = h->t;
-          best_k = k;
-          best_bary = Vec3<S>(h->u, h->v, h->w);
-          limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
-          exit_f = WideFloatSlab<S>::round_up(double(best));
-          bound_f = WideFloatSlab<S>::round_down(double(limit));
-          const double slack = 4.0 * (std::abs(double(best)) * 0x1p-21 + double(float_slab.absolute_error()));
-          tie_f = WideFloatSlab<S>::round_down(double(best) - slack);
-        }
-      };
-#if defined(__SSE2__)
-      if (filtered) {
-        for (std::int32_t g = first; g < first + count; g += 4) {  // four triangles at a time
-          const int lanes = static_cast<int>(std::min<std::int32_t>(4, first + count - g));
-          int todo = filter.candidates(packed + 9 * static_cast<std::size_t>(g), lanes, best);
-          if (repeats) {
-            for (int c = 0; c < lanes; ++c) {
-              if (wide.repeats_previous(g + c)) todo &= ~(1 << c);  // the triangle just tested, again
-              else ++triangle_tests;
-            }
-          } else {
-            triangle_tests += static_cast<std::size_t>(lanes);
-          }
-          while (todo) {
-            const int c = ctz(todo);
-            todo &= todo - 1;
-            test(g + c);
-          }
-        }
-      } else
-#endif
-      {
-        for (std::int32_t k = first; k < first + count; ++k) {
-          if (wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
-          ++triangle_tests;
-          test(k);
-        }
-      }
-    } else {
-      const WideBvhNode& n = nodes[first];
-      node_tests += 4;
-      if (in_float) {
-        float f[4];
-        int mask = float_slab.entered(n, exit_f, bound_f, f, use_simd);
-        S fk[4] = {S(f[0]), S(f[1]), S(f[2]), S(f[3])};
-        if (mask & ((f[0] >= tie_f) | (f[1] >= tie_f) << 1 | (f[2] >= tie_f) << 2 | (f[3] >= tie_f) << 3)) {
-          // a child entered within the float keys' rounding of the best hit: the double keys
-          // decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through a
-          // vertex would otherwise open every leaf around it)
-          slab.keys(n, best, fk, use_simd);
-          const S b = bound();
-          mask = 0;
-          for (int c = 0; c < 4; ++c) mask |= (fk[c] <= b && n.count[c] >= 0 ? 1 : 0) << c;
-        }
-        if (mask) {
-          // the entered children, gathered without branches (which are entered is unpredictable),
-          // then nearest first (insertion sort, stable)
-          int order[4], m = 0;
-          for (int c = 0; c < 4; ++c) {
-            order[m] = c;
-            m += (mask >> c) & 1;
-          }
-          for (int i = 1; i < m; ++i) {
-            const int c = order[i];
-            int j = i;
-            while (j > 0 && fk[order[j - 1]] > fk[c]) {
-              order[j] = order[j - 1];
-              --j;
-            }
-            order[j] = c;
-          }
-          for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
-          first = n.first[order[0]];
-          count = n.count[order[0]];
-          continue;
-        }
-      } else {
-      S keys[4];
-      keys_of(n, keys);
-      const S b = bound();
-      // the entered children (gathered without branches: which are entered is unpredictable),
-      // nearest first (insertion sort of at most four, stable)
-      int order[4], m = 0;
-      for (int c = 0; c < 4; ++c) {
-        order[m] = c;
-        m += static_cast<int>(keys[c] <= b) & static_cast<int>(n.count[c] >= 0);
-      }
-      for (int i = 1; i < m; ++i) {
-        const int c = order[i];
-        int j = i;
-        while (j > 0 && keys[order[j - 1]] > keys[c]) {
-          order[j] = order[j - 1];
-          --j;
-        }
-        order[j] = c;
-      }
-      if (m > 0) {
-        for (int j = m - 1; j > 0; --j) stack.push({keys[order[j]], n.first[order[j]], n.count[order[j]]});
-        first = n.first[order[0]];
-        count = n.count[order[0]];
-        continue;
-      }
-      }
-    }
-    // the nearest pending child still below the bound
-    bool found = false;
-    while (!stack.empty()) {
-      const Entry e = stack.pop();
-      if (e.key <= bound()) {
-        first = e.first;
-        count = e.count;
-        found = true;
-        break;
-      }
-    }
-    if (!found) break;
-  }
+  WideCast<S> cast(wide, o, d, ray.t_max, use_simd);
+  cast.run();
   if (stats) {
-    stats->node_tests += node_tests;
-    stats->triangle_tests += triangle_tests;
+    stats->node_tests += 4 * cast.node_tests;
+    stats->triangle_tests += cast.triangle_tests;
   }
-  if (best_k < 0) return std::nullopt;
+  if (cast.best_k < 0) return std::nullopt;
   RayMeshHit<S> hit;
-  hit.t = best;
-  hit.leaf_index = best_k;
-  hit.triangle = wide.triangle_id(best_k);
-  hit.barycentric = best_bary;
-  hit.point = ray.origin + best * ray.direction;
-  const Vec3<S> nrm = wide.triangle(best_k).normal();
+  hit.t = cast.best;
+  hit.leaf_index = cast.best_k;
+  hit.triangle = wide.triangle_id(cast.best_k);
+  hit.barycentric = cast.best_bary;
+  hit.point = ray.origin + cast.best * ray.direction;
+  const Vec3<S> nrm = wide.triangle(cast.best_k).normal();
   hit.normal = pose ? Vec3<S>(pose->R * nrm) : nrm;
   hit.front_face = d.dot(nrm) < S(0);
   return hit;
@@ -552,14 +728,14 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
 template <class S>
 std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S>& wide, const Ray<S>& ray, const RigidTransform<S>& pose,
                                                 RayMeshStats* stats = nullptr) {
-  validate_ray(ray, "ray_mesh_first_hit");
+  if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
   validate_pose(pose, "ray_mesh_first_hit");
   return detail::ray_wide_first_hit_unchecked(wide, ray, &pose, stats);
 }
 
 /// The same first hit with the ray in the mesh's own frame (no pose to check or apply).
 template <class S> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S>& wide, const Ray<S>& ray) {
-  validate_ray(ray, "ray_mesh_first_hit");
+  if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
   return detail::ray_wide_first_hit_unchecked(wide, ray, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
 }
 
