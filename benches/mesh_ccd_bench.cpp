@@ -138,6 +138,10 @@ Key key_of(const MeshCcdContact<double>& c) {
 
 struct OracleCheck {
   std::size_t missed = 0, extra = 0, hits = 0, tests = 0;
+  OracleCheck& operator+=(const OracleCheck& o) {
+    missed += o.missed, extra += o.extra, hits += o.hits, tests += o.tests;
+    return *this;
+  }
 };
 
 /// Compares a query's contacts with the sweep oracle's (see the file comment). `b` is null for
@@ -251,12 +255,49 @@ void finish(Row& r) {
     *v /= double(r.steps);
 }
 
-Row run_pair(const TriangleMesh<double>& mesh, const Args& args, int threads, const CcdOptions& opt) {
-  Row r;
-  r.scene = "pair";
-  r.steps = args.steps;
+Aabb<double> bounds_of(const TriangleMesh<double>& mesh) {
   Aabb<double> box;
   for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) box.extend(Vec3<double>(mesh.V.row(i).transpose()));
+  return box;
+}
+
+/// The step loop of both scenes. The moving mesh has `mesh`'s faces and, at the boundary of
+/// steps s - 1 and s, the vertices `place(s, out)` writes. Its swept tree is built once and
+/// refitted (timed) every step; `query(motion, tree, threads)` runs on one thread and on T
+/// (time_step), and over the first C steps `check(motion, result)` compares it with the oracle.
+template <class Place, class Query, class Check>
+Row run_scene(const char* name, const TriangleMesh<double>& mesh, const Args& args, int threads, const CcdOptions& opt,
+              Place&& place, Query&& query, Check&& check) {
+  Row r;
+  r.scene = name;
+  r.steps = args.steps;
+  Vertices<double> x0, x1;
+  place(0, x0);
+  place(1, x1);
+  MeshMotion<double> m = make_mesh_motion(x0, x1, mesh.F);
+  SweptMeshBvh<double> tree = SweptMeshBvh<double>::build(m, opt.min_separation);
+  for (int s = 0; s < args.steps; ++s) {
+    if (s > 0) {
+      x0 = x1;
+      place(s + 1, x1);
+      m = make_mesh_motion(x0, x1, mesh.F);
+      const double t0 = bench::thread_seconds();
+      tree.refit(m);
+      r.refit_ms += (bench::thread_seconds() - t0) * 1e3;
+    }
+    const MeshCcdResult<double> res = time_step([&](int t) { return query(m, tree, t); }, threads, r);
+    if (s < args.check_steps) {
+      r.oracle += check(m, res);
+      ++r.checked;
+    }
+  }
+  finish(r);
+  return r;
+}
+
+/// pair: the mesh at rest against a turned copy sinking into it (mesh_ccd).
+Row run_pair(const TriangleMesh<double>& mesh, const Args& args, int threads, const CcdOptions& opt) {
+  const Aabb<double> box = bounds_of(mesh);
   const double diag = (box.max - box.min).norm();
   const Vec3<double> c = box.center();
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
@@ -267,39 +308,17 @@ Row run_pair(const TriangleMesh<double>& mesh, const Args& args, int threads, co
     out.resize(mesh.V.rows(), 3);
     for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) out.row(i) = (R * (mesh.V.row(i).transpose() - c) + c + lift).transpose();
   };
-  Vertices<double> b0, b1;
-  place(0, b0);
-  place(1, b1);
-  const auto ma = make_mesh_motion(mesh.V, mesh.V, mesh.F);
-  auto mb = make_mesh_motion(b0, b1, mesh.F);
+  const MeshMotion<double> ma = make_mesh_motion(mesh.V, mesh.V, mesh.F);
   const SweptMeshBvh<double> ta = SweptMeshBvh<double>::build(ma, opt.min_separation);
-  SweptMeshBvh<double> tb = SweptMeshBvh<double>::build(mb, opt.min_separation);
-  for (int s = 0; s < args.steps; ++s) {
-    if (s > 0) {
-      b0 = b1;
-      place(s + 1, b1);
-      mb = make_mesh_motion(b0, b1, mesh.F);
-      const double t0 = bench::thread_seconds();
-      tb.refit(mb);
-      r.refit_ms += (bench::thread_seconds() - t0) * 1e3;
-    }
-    const auto res = time_step([&](int t) { return mesh_ccd(ma, ta, mb, tb, opt, t); }, threads, r);
-    if (s < args.check_steps) {
-      const OracleCheck o = check_against_oracle(ma, &mb, opt, res);
-      r.oracle.missed += o.missed, r.oracle.extra += o.extra, r.oracle.hits += o.hits, r.oracle.tests += o.tests;
-      ++r.checked;
-    }
-  }
-  finish(r);
-  return r;
+  return run_scene(
+      "pair", mesh, args, threads, opt, place,
+      [&](const MeshMotion<double>& mb, const SweptMeshBvh<double>& tb, int t) { return mesh_ccd(ma, ta, mb, tb, opt, t); },
+      [&](const MeshMotion<double>& mb, const MeshCcdResult<double>& res) { return check_against_oracle(ma, &mb, opt, res); });
 }
 
+/// self: the mesh folding under a travelling wave (mesh_self_ccd).
 Row run_self(const TriangleMesh<double>& mesh, const Args& args, int threads, const CcdOptions& opt) {
-  Row r;
-  r.scene = "self";
-  r.steps = args.steps;
-  Aabb<double> box;
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) box.extend(Vec3<double>(mesh.V.row(i).transpose()));
+  const Aabb<double> box = bounds_of(mesh);
   const double diag = (box.max - box.min).norm();
   const double k = 2 * 3.14159265358979 * 16 / diag;  // 16 waves across the diagonal: folds where amplitude * k > 1
   const auto shape = [&](int s, Vertices<double>& out) {
@@ -311,29 +330,10 @@ Row run_self(const TriangleMesh<double>& mesh, const Args& args, int threads, co
       out.row(i) = (p + 0.012 * diag * d).transpose();
     }
   };
-  Vertices<double> x0, x1;
-  shape(0, x0);
-  shape(1, x1);
-  auto m = make_mesh_motion(x0, x1, mesh.F);
-  SweptMeshBvh<double> t = SweptMeshBvh<double>::build(m, opt.min_separation);
-  for (int s = 0; s < args.steps; ++s) {
-    if (s > 0) {
-      x0 = x1;
-      shape(s + 1, x1);
-      m = make_mesh_motion(x0, x1, mesh.F);
-      const double t0 = bench::thread_seconds();
-      t.refit(m);
-      r.refit_ms += (bench::thread_seconds() - t0) * 1e3;
-    }
-    const auto res = time_step([&](int th) { return mesh_self_ccd(m, t, opt, th); }, threads, r);
-    if (s < args.check_steps) {
-      const OracleCheck o = check_against_oracle(m, nullptr, opt, res);
-      r.oracle.missed += o.missed, r.oracle.extra += o.extra, r.oracle.hits += o.hits, r.oracle.tests += o.tests;
-      ++r.checked;
-    }
-  }
-  finish(r);
-  return r;
+  return run_scene(
+      "self", mesh, args, threads, opt, shape,
+      [&](const MeshMotion<double>& m, const SweptMeshBvh<double>& t, int th) { return mesh_self_ccd(m, t, opt, th); },
+      [&](const MeshMotion<double>& m, const MeshCcdResult<double>& res) { return check_against_oracle(m, nullptr, opt, res); });
 }
 
 }  // namespace

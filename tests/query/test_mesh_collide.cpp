@@ -134,3 +134,45 @@ TEST(MeshCollide, LargeCoordinateOffsets) {
   // translating both by 1e6 perturbs B's relative pose by ~1e-10: only near-touching poses may flip
   EXPECT_GE(agree, total - 1);
 }
+
+// The boolean queries walk the child nearer the other node first (detail::NearestChildFirst).
+// The walk order may change which colliding pair is found and how soon, never the answer. A walk
+// that finds nothing visits the same node pairs in any order, so its node tests must be equal.
+// On colliding poses the nearer-first walk should reach a colliding pair with clearly fewer node
+// tests than the tree's order. A reversed comparison (the farther child first) fails this.
+template <class BV> void expect_nearest_first_saves_work() {
+  const auto A = make_torus<double>(1.0, 0.3, 96, 48), B = make_icosphere<double>(0.6, 4);
+  const MeshBvh<BV> a(A), b(B);
+  std::uint64_t nearest_hit = 0, tree_hit = 0;
+  int hits = 0, misses = 0;
+  for (const auto& p : random_poses_around(A, B, 300, 17)) {
+    QueryStats st;
+    const bool hit = collides(a, RigidTransform<double>{}, b, p, &st);
+    std::uint64_t tree_tests = 0;
+    bool tree_found = false;
+    const detail::MeshNodeOverlap<BV> overlap(a, b, p, &tree_tests);
+    traverse_pair_nodes(a.tree(), b.tree(), overlap, [&](std::int32_t i, std::int32_t j) {
+      const Triangle<double>& tb = b.triangle(j);
+      tree_found = triangles_intersect(a.triangle(i), Triangle<double>(p.apply(tb.a), p.apply(tb.b), p.apply(tb.c)));
+      return !tree_found;
+    });
+    ASSERT_EQ(hit, tree_found);
+    if (hit) {
+      nearest_hit += st.bv_tests;
+      tree_hit += tree_tests;
+      ++hits;
+    } else {
+      EXPECT_EQ(st.bv_tests, tree_tests);
+      ++misses;
+    }
+  }
+  ASSERT_GT(hits, 30);
+  ASSERT_GT(misses, 30);
+  EXPECT_LT(double(nearest_hit), 0.8 * double(tree_hit)) << "node tests on " << hits << " colliding poses";
+}
+
+TEST(MeshCollide, NearestChildFirstReachesCollisionsSooner) {
+  expect_nearest_first_saves_work<Aabb<double>>();
+  expect_nearest_first_saves_work<Obb<double>>();
+  expect_nearest_first_saves_work<Sphere<double>>();
+}

@@ -16,6 +16,8 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <cmath>
+#include <type_traits>
 #include <limits>
 #include <vector>
 
@@ -334,6 +336,233 @@ TYPED_TEST(WideBvhTest, SimdSlabIsTheScalarSlab) {
   }
   EXPECT_GT(hits, 500 / kWideSamples);
   EXPECT_GT(misses, 500 / kWideSamples);
+}
+
+// The float node test (detail::WideFloatSlab): SIMD and scalar give the same keys and entered
+// children bit for bit; a child is entered whenever the double slab test (WideSlab, exact against
+// ray_box_entry) enters it before the bound, and its key is never above the double entry (the
+// traversal's pruning stays exact). Origins off the float grid, short and long segments, boxes
+// at several scales.
+TYPED_TEST(WideBvhTest, FloatSlabIsConservative) {
+  using S = TypeParam;
+  test::Rng rng(43);
+  int entered = 0, missed = 0;
+  for (int i = 0; i < 8000 / kWideSamples; ++i) {
+    const double scale = std::ldexp(1.0, int(rng.integer(40)));
+    const Vec3<S> o = (rng.vec(-1, 1) * scale).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0 * scale).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    const detail::WideFloatSlab<S> fs(o, inv, S(4 * scale));
+    if (!fs.usable()) continue;
+    WideBvhNode n;
+    const int used = 1 + int(rng.index(4));
+    for (int c = 0; c < used; ++c) {
+      const Eigen::Vector3d m = rng.vec(-1.5, 1.5) * scale, h = rng.vec(0.0, i % 5 == 0 ? 1e-6 : 0.8) * scale;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 2);
+    const float bound = i % 2 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 1.5);
+    const float exit = detail::WideFloatSlab<S>::round_up(double(t_max));
+    float simd[4], scalar[4];
+    const int ms = fs.entered(n, exit, bound, simd, true), mc = fs.entered(n, exit, bound, scalar, false);
+    ASSERT_EQ(ms, mc) << i;
+    S exact[4];
+    detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
+    for (int c = 0; c < 4; ++c) {
+      if ((mc >> c) & 1) {
+        EXPECT_EQ(simd[c], scalar[c]) << i << " " << c;
+      }
+      if (c >= used) {
+        EXPECT_FALSE((mc >> c) & 1) << "empty slot entered " << i;
+        continue;
+      }
+      if (exact[c] <= S(bound)) {  // WideSlab enters before the bound: so must the float test, no later
+        ++entered;
+        ASSERT_TRUE((mc >> c) & 1) << i << " " << c;
+        EXPECT_LE(S(scalar[c]), exact[c]) << i << " " << c;
+      } else {
+        missed += (mc >> c) & 1 ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_GT(entered, 500 / kWideSamples);
+  EXPECT_GT(missed, 500 / kWideSamples);  // it prunes too
+}
+
+#if defined(__SSE2__)
+/// Triangles with float coordinates (9 a triangle, padded for the filter's loads) and a ray.
+template <class S> struct FilterCase {
+  std::vector<float> tri;
+  Ray<S> ray{Vec3<S>::Zero(), Vec3<S>::UnitX(), S(1)};
+};
+
+/// The leaf filter against the watertight test: a triangle it skips is never hit by the test
+/// (the test run on every triangle, in S on the float coordinates). Returns the skipped count.
+template <class S> int check_filter(const FilterCase<S>& fc, int count) {
+  const PreparedRay<S> pr(fc.ray);
+  const detail::LeafFilter<S> f(pr);
+  const int todo = f.candidates(fc.tri.data(), count, fc.ray.t_max);
+  int skipped = 0;
+  for (int c = 0; c < count; ++c) {
+    const float* p = fc.tri.data() + 9 * c;
+    const Triangle<S> t{Vec3<S>(S(p[0]), S(p[1]), S(p[2])), Vec3<S>(S(p[3]), S(p[4]), S(p[5])), Vec3<S>(S(p[6]), S(p[7]), S(p[8]))};
+    if ((todo >> c) & 1) continue;
+    ++skipped;
+    EXPECT_FALSE(intersect_ray_triangle(pr, t).has_value()) << "skipped a hit, lane " << c;
+  }
+  EXPECT_EQ(todo >> count, 0);
+  return skipped;
+}
+
+// The certified float filter of a leaf's triangles never skips a triangle the watertight test
+// hits: random triangles around the ray, rays through a vertex or an edge point of a triangle
+// (exactly, on a float grid), rays nearly parallel to a triangle's plane or grazing it, origins
+// off the float grid (double), hits near t_max and behind the origin, at coordinates from 1e-30
+// to 1e30 (float products overflow or underflow there: the filter must give up, not guess).
+TYPED_TEST(WideBvhTest, LeafFilterNeverSkipsAHit) {
+  using S = TypeParam;
+  test::Rng rng(47);
+  int skipped = 0, lanes = 0;
+  for (int i = 0; i < 20000 / kWideSamples; ++i) {
+    const double scale = i % 10 == 9 ? (i % 20 == 9 ? 1e-30 : 1e30) : std::ldexp(1.0, int(rng.integer(20)));
+    const double grid = std::ldexp(scale, -12);
+    auto snap = [&](double x) { return double(float(std::nearbyint(x / grid) * grid)); };
+    FilterCase<S> fc;
+    fc.tri.assign(36 + 4, 0.0f);
+    const int count = 1 + int(rng.index(4));
+    Eigen::Vector3d first[3];
+    for (int c = 0; c < count; ++c) {
+      const Eigen::Vector3d centre = rng.vec(-1, 1) * scale;
+      for (int v = 0; v < 3; ++v) {
+        const Eigen::Vector3d p = centre + rng.vec(-0.5, 0.5) * scale * (i % 7 == 0 ? 1e-3 : 1.0);
+        for (int k = 0; k < 3; ++k) fc.tri[std::size_t(9 * c + 3 * v + k)] = float(snap(p[k]));
+        if (c == 0) first[v] = Eigen::Vector3d(fc.tri[std::size_t(3 * v)], fc.tri[std::size_t(3 * v + 1)], fc.tri[std::size_t(3 * v + 2)]);
+      }
+    }
+    // the target: a vertex, an edge point on the grid, an inner point of the first triangle
+    const int kind = int(rng.index(4));
+    Eigen::Vector3d target = first[0];
+    if (kind == 1) {
+      for (int k = 0; k < 3; ++k) target[k] = snap(first[0][k] + 0.5 * (first[1][k] - first[0][k]));
+    } else if (kind >= 2) {
+      target = (first[0] + first[1] + first[2]) / 3.0;
+    }
+    Eigen::Vector3d o = target + rng.vec(-2, 2) * scale;
+    if (i % 11 == 0) {  // nearly in the first triangle's plane
+      const Eigen::Vector3d nrm = (first[1] - first[0]).cross(first[2] - first[0]);
+      const Eigen::Vector3d e = first[1] - first[0];
+      if (nrm.squaredNorm() > 0) o = target - 2.0 * e + nrm.normalized() * (1e-6 * scale * rng.uniform(-1, 1));
+    }
+    if (std::is_same_v<S, float> || i % 3 != 0) {
+      for (int k = 0; k < 3; ++k) o[k] = snap(o[k]);  // on the grid (double: also off it)
+    }
+    const Eigen::Vector3d d = target - o;
+    if (d.squaredNorm() == 0 || !std::isfinite(d.squaredNorm())) continue;
+    const double t_max = i % 5 == 0 ? rng.uniform(0.99, 1.01) : i % 5 == 1 ? std::numeric_limits<double>::infinity() : 2.0;
+    fc.ray = Ray<S>(o.template cast<S>(), d.template cast<S>(), S(t_max));
+    if (fc.ray.direction.squaredNorm() == S(0)) continue;
+    skipped += check_filter(fc, count);
+    lanes += count;
+  }
+  EXPECT_GT(skipped, lanes / 4);  // the filter does reject the clear misses
+}
+#endif
+
+// The float slab at large magnitudes: origins up to 2^59, off the float grid by up to 2^35,
+// boxes near them
+// (the absolute part e of the padding up to 2^39), directions from 2^-20 to 2^20: still
+// conservative against WideSlab, and never entering an empty slot (no count check: the inverted
+// box must give an empty interval however large e is while the ray is usable).
+TYPED_TEST(WideBvhTest, FloatSlabAtLargeMagnitudes) {
+  using S = TypeParam;
+  test::Rng rng(53);
+  int entered = 0, usable = 0;
+  for (int i = 0; i < 4000 / kWideSamples; ++i) {
+    const double scale = std::ldexp(1.0, 20 + int(rng.integer(40)));  // 2^20 .. 2^59
+    const Vec3<S> o = (rng.vec(-1, 1) * scale).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * std::ldexp(1.0, int(rng.integer(41)) - 20) * scale).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    const detail::WideFloatSlab<S> fs(o, inv, S(2 * scale));
+    if (!fs.usable()) continue;
+    ++usable;
+    WideBvhNode n;  // slots 2 and 3 stay empty
+    for (int c = 0; c < 2; ++c) {  // boxes near the origin at every scale down to 2^-24 of it (its rounding matters)
+      const double near = std::ldexp(scale, -int(rng.integer(25)));
+      const Eigen::Vector3d m = o.template cast<double>() + rng.vec(-1, 1) * near, h = rng.vec(0.0, 0.5) * near;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 2 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 4);
+    float simd[4], scalar[4];
+    const int ms = fs.entered(n, detail::float_round_up(double(t_max)), std::numeric_limits<float>::infinity(), simd, true);
+    const int mc = fs.entered(n, detail::float_round_up(double(t_max)), std::numeric_limits<float>::infinity(), scalar, false);
+    ASSERT_EQ(ms, mc) << i;
+    EXPECT_EQ(mc & 12, 0) << "empty slot entered " << i;
+    S exact[4];
+    detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
+    for (int c = 0; c < 2; ++c) {
+      if (exact[c] <= t_max) {
+        ++entered;
+        ASSERT_TRUE((mc >> c) & 1) << i << " " << c;
+        EXPECT_LE(S(scalar[c]), exact[c]) << i << " " << c;
+      }
+    }
+  }
+  EXPECT_GT(usable, 2000 / kWideSamples);
+  EXPECT_GT(entered, 200 / kWideSamples);
+}
+
+// float_round_up / float_round_down (the float node test's bounds) against a reference by
+// nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends.
+TEST(WideBvh, FloatRoundingHelpers) {
+  test::Rng rng(59);
+  auto up = [](double x) {
+    float f = static_cast<float>(x);
+    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+  };
+  std::vector<double> xs = {0.0, -0.0, 1.0, -1.0, 0x1p-149, -0x1p-149, 0x1p-150, -0x1p-150, 0x1p-160, -0x1p-160, double(FLT_MAX),
+                            -double(FLT_MAX), 1e300, -1e300, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                            1.0 + 0x1p-30, 1.0 - 0x1p-30, -1.0 + 0x1p-30, 0x1.fffffffp127, -0x1.fffffffp127};
+  for (int i = 0; i < 20000; ++i) xs.push_back(std::ldexp(rng.uniform(-1, 1), int(rng.integer(320)) - 160));
+  for (const double x : xs) {
+    const float u = detail::float_round_up(x), dn = detail::float_round_down(x);
+    const float ru = up(x), rd = -up(-x);
+    EXPECT_TRUE(u == ru && std::signbit(u) == std::signbit(ru)) << x;
+    EXPECT_TRUE(dn == rd && std::signbit(dn) == std::signbit(rd)) << x;
+    EXPECT_GE(double(u), x) << x;
+    EXPECT_LE(double(dn), x) << x;
+  }
+}
+
+// The casts' quick argument check (detail::ray_in_range) accepts exactly the rays validate_ray
+// accepts: finite, within CoordinateRange, the direction not too short, t_max >= 0 or +inf.
+TYPED_TEST(WideBvhTest, RayInRangeIsValidateRay) {
+  using S = TypeParam;
+  test::Rng rng(61);
+  const S specials[] = {S(0), -S(0), S(1), S(-3), std::numeric_limits<S>::infinity(), -std::numeric_limits<S>::infinity(),
+                        std::numeric_limits<S>::quiet_NaN(), CoordinateRange<S>::max, -CoordinateRange<S>::max,
+                        S(2) * CoordinateRange<S>::max, CoordinateRange<S>::min_scale, CoordinateRange<S>::min_scale / S(2),
+                        -CoordinateRange<S>::min_scale, std::numeric_limits<S>::denorm_min()};
+  const int ns = static_cast<int>(sizeof(specials) / sizeof(specials[0]));
+  int accepted = 0, rejected = 0;
+  for (int i = 0; i < 20000; ++i) {
+    auto value = [&] { return rng.index(3) == 0 ? specials[rng.index(static_cast<std::uint64_t>(ns))] : S(rng.uniform(-2, 2)); };
+    Ray<S> ray(Vec3<S>(value(), value(), value()), Vec3<S>(value(), value(), value()), value());
+    if (i % 2 == 0) ray.origin = Vec3<S>(S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), value());
+    if (i % 3 == 0) ray.t_max = S(rng.uniform(0, 2));
+    bool throws = false;
+    try {
+      validate_ray(ray, "test");
+    } catch (const InvalidInput&) {
+      throws = true;
+    }
+    EXPECT_EQ(detail::ray_in_range(ray), !throws) << i;
+    ++(throws ? rejected : accepted);
+  }
+  EXPECT_GT(accepted, 1000);
+  EXPECT_GT(rejected, 1000);
 }
 
 TEST(WideBvh, InvalidInput) {

@@ -107,6 +107,13 @@ template <class S> class WideBvh {
   /// included (MeshBvh::repeats_previous of the source tree, whose leaves a wide leaf never
   /// splits): a cast that has just tested k - 1 may skip k. False on meshes without copies.
   bool repeats_previous(std::int32_t k) const { return !repeats_.empty() && repeats_[static_cast<std::size_t>(k)]; }
+  /// True when some triangle repeats_previous().
+  bool has_repeats() const { return !repeats_.empty(); }
+  /// The leaf-order float coordinates when packed() (9 a triangle: a, b, c), else null. Readable
+  /// kPackedPadding floats past the last triangle (zeros), so a cast may load four triangles'
+  /// rows, and one float more, from any position.
+  const float* packed_data() const { return packed() ? packed_.data() : nullptr; }
+  static constexpr int kPackedPadding = 28;
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
   /// An upper bound of |x|_inf over the vertices (the scale of the casts' rounding).
   S coordinate_bound() const { return coordinate_bound_; }
@@ -139,7 +146,11 @@ template <class S> class WideBvh {
       coordinate_bound_ = std::max({coordinate_bound_, t.a.cwiseAbs().maxCoeff(), t.b.cwiseAbs().maxCoeff(), t.c.cwiseAbs().maxCoeff()});
     }
     if (floats) {
-      packed_.assign(full.begin(), full.end());  // exact: every value is a float
+      if (n > 0) {
+        packed_.reserve(full.size() + kPackedPadding);
+        packed_.assign(full.begin(), full.end());  // exact: every value is a float
+        packed_.resize(packed_.size() + kPackedPadding, 0.0f);
+      }
     } else {
       full_ = std::move(full);
     }
