@@ -276,6 +276,140 @@ TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
       5);
 }
 
+// EPA started from GJK's tetrahedron (epa_penetration_from_simplex, as cylinder_pair_penetration
+// hands it over) against EPA that runs its own GJK: the same certified bracket (each run's depth
+// within the other's [depth - gap, depth] up to the tolerance), the support calls of the
+// tetrahedron counted, the deepest points on their supporting planes. Then axis-aligned boxes far
+// from the origin touching face to face, where the deepest points come from EPA's last face (a
+// combination of its vertices' a and b parts) and must lie in their boxes: a tetrahedron whose a
+// and b parts were not moved into EPA's frame (centred between the shapes) puts 16 of these 40
+// off their boxes.
+TEST(ConvexQuery, EpaFromGjkTetrahedronAgreesWithItsOwnGjk) {
+  const auto& z = zoo();
+  int compared = 0;
+  const auto handed_over = [](const auto& a, const RigidTransform<double>& pa, const auto& b, const RigidTransform<double>& pb, bool& enclosed) {
+    const double scale = std::max(shape_size(a), shape_size(b));
+    const ConvexQueryOptions<double> o;
+    const detail::PairFrame<double> f(pa, pb);
+    const auto sa = [&](const V3& d) { return support(a, d); };
+    const auto sb = [&](const V3& d) { return f.support_b(b, d); };
+    detail::SimplexPoint<double> simplex[4];
+    int its = 0;
+    bool limit = false, failed = false;
+    enclosed = detail::gjk_enclose(sa, sb, V3(-f.t), scale, o.max_iterations, simplex, its, limit, failed);
+    ConvexContact<double> c;
+    if (enclosed) {
+      c = detail::general_penetration(a, pa, b, pb, o, simplex, its);
+      EXPECT_GE(c.iterations, its) << "the tetrahedron's support calls are not counted";
+    }
+    return c;
+  };
+  const auto run = [&](const char* name, const auto& a, const auto& b, std::uint64_t seed) {
+    const double scale = std::max(shape_size(a), shape_size(b)), tol = 1e-10 * scale;
+    for (const auto& pose : convex_poses(IMPACT_TEST_SANITIZED ? 10 : 80, 0.5 * (shape_size(a) + shape_size(b)), seed)) {
+      const RigidTransform<double>& pa = pose.first;
+      const RigidTransform<double>& pb = pose.second;
+      bool enclosed = false;
+      const auto handed = handed_over(a, pa, b, pb, enclosed);
+      if (!enclosed) continue;
+      const auto fresh = detail::general_penetration(a, pa, b, pb, ConvexQueryOptions<double>());
+      ASSERT_TRUE(fresh.intersecting && handed.intersecting) << name;
+      ++compared;
+      EXPECT_LE(handed.depth_gap, tol) << name;
+      EXPECT_LE(handed.depth, fresh.depth + tol) << name;
+      EXPECT_GE(handed.depth, fresh.depth - fresh.depth_gap - tol) << name;
+      EXPECT_NEAR(overlap_along(a, pa, b, pb, handed.normal), handed.depth, 1e-12 * scale) << name;
+      EXPECT_NEAR(handed.normal.dot(handed.point_a()), handed.normal.dot(support(a, pa, handed.normal)), 1e-9 * scale) << name;
+      EXPECT_NEAR(handed.normal.dot(handed.point_b()), handed.normal.dot(support(b, pb, V3(-handed.normal))), 1e-9 * scale) << name;
+    }
+  };
+  run("cylinder-cylinder", z.cylinder, z.cylinder, 71);
+  run("cylinder-cone", z.cylinder, z.cone, 72);
+  run("box-box", z.box, z.box, 73);
+  run("box-hull", z.box, z.hull, 74);
+  EXPECT_GE(compared, IMPACT_TEST_SANITIZED ? 8 : 100);
+  test::Rng rng(5);
+  int aligned = 0;
+  for (int i = 0; i < 40; ++i) {
+    const RigidTransform<double> pa{Eigen::Matrix3d::Identity(), V3(10, -4, 3)};
+    const RigidTransform<double> pb{Eigen::Matrix3d::Identity(),
+                                    pa.t + V3(rng.uniform(-0.7, 0.7), rng.uniform(-0.5, 0.5), rng.uniform(-0.9, 0.9))};
+    bool enclosed = false;
+    const auto c = handed_over(z.box, pa, z.box, pb, enclosed);
+    if (!enclosed) continue;
+    ++aligned;
+    for (const V3& m : {V3(1, 0, 0), V3(0, 1, 0), V3(0, 0, 1), V3(-1, 0, 0), V3(0, -1, 0), V3(0, 0, -1)}) {
+      EXPECT_LE(m.dot(c.point_a()), m.dot(support(z.box, pa, m)) + 1e-9) << "point_a outside a, pose " << i;
+      EXPECT_LE(m.dot(c.point_b()), m.dot(support(z.box, pb, m)) + 1e-9) << "point_b outside b, pose " << i;
+    }
+  }
+  EXPECT_EQ(aligned, 40);
+  std::printf("EPA from GJK's tetrahedron: %d penetrations compared, %d aligned boxes\n", compared, aligned);
+}
+
+// cylinder_pair_penetration's first test: the overlap along the line between the centres. A pair
+// separated along it ends there (one support call of each shape, no GJK); a pair touching along
+// it (a cap on a cap, a cone's base on a cap, exactly or within rounding) or overlapping by 1e-12
+// intersects, one 1e-12 apart does not.
+TEST(ConvexQuery, CylinderPairsSeparatedAlongTheCentreLine) {
+  const auto& z = zoo();
+  const RigidTransform<double> pa{Eigen::Matrix3d::Identity(), V3(0.25, -0.5, 1.0)};
+  const auto above = [&](double centre_z) { return RigidTransform<double>{Eigen::Matrix3d::Identity(), V3(0.25, -0.5, centre_z)}; };
+  const double cyl_top = 1.0 + z.cylinder.half_length;
+  for (const double gap : {0.0, -1e-12, 1e-12, 0.3}) {
+    const auto cc = convex_penetration(z.cylinder, pa, z.cylinder, above(cyl_top + z.cylinder.half_length + gap));
+    const auto ck = convex_penetration(z.cylinder, pa, z.cone, above(cyl_top + z.cone.half_length + gap));
+    const auto kc = convex_penetration(z.cone, above(cyl_top + z.cone.half_length + gap), z.cylinder, pa);
+    EXPECT_EQ(cc.intersecting, gap <= 0) << "gap " << gap;
+    EXPECT_EQ(ck.intersecting, gap <= 0) << "gap " << gap;
+    EXPECT_EQ(kc.intersecting, gap <= 0) << "gap " << gap;
+    if (gap > 0) {
+      EXPECT_EQ(cc.iterations, 1);
+      EXPECT_EQ(ck.iterations, 1);
+    } else {
+      EXPECT_NEAR(cc.depth, -gap, 1e-15);
+      EXPECT_NEAR(ck.depth, -gap, 1e-15);
+      EXPECT_NEAR(cc.normal.z(), 1.0, 1e-9);
+    }
+  }
+  const RigidTransform<double> far{Eigen::AngleAxisd(0.7, V3(1, 2, 3).normalized()).toRotationMatrix(), V3(2.0, 0.3, -0.4)};
+  const auto c = convex_penetration(z.cylinder, pa, z.cylinder, far);
+  EXPECT_FALSE(c.intersecting);
+  EXPECT_EQ(c.iterations, 1);
+}
+
+// The closest-face scan of EPA (the SSE2 path for double, the scalar one for float) against a plain
+// scan: the first index of the least key, -1 when every key is +infinity, NaN keys never chosen.
+TEST(ConvexQuery, EpaClosestFaceScan) {
+  test::Rng rng(91);
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int n = int(rng.index(20));
+    double key[24];
+    float keyf[24];
+    for (int i = 0; i < n; ++i) {
+      const double u = rng.uniform(0, 1);
+      key[i] = u < 0.3 ? inf : u < 0.35 ? std::numeric_limits<double>::quiet_NaN() : double(int(rng.uniform(0, 8)));  // ties
+      keyf[i] = float(key[i]);
+    }
+    int want = -1;
+    double best = inf;
+    for (int i = 0; i < n; ++i)
+      if (key[i] < best) {
+        best = key[i];
+        want = i;
+      }
+    double dmin = 0;
+    float dminf = 0;
+    ASSERT_EQ(detail::epa_closest_face(key, n, dmin), want) << "n " << n;
+    ASSERT_EQ(detail::epa_closest_face(keyf, n, dminf), want) << "n " << n;
+    if (want >= 0) {
+      ASSERT_EQ(dmin, best);
+      ASSERT_EQ(dminf, float(best));
+    }
+  }
+}
+
 // The Newton refinement (ConvexQueryOptions::newton_refinement, off by default) keeps the depth
 // within the tolerance where it is accepted, and hands back to EPA where it is not.
 TEST(ConvexQuery, NewtonRefinementKeepsTheDepth) {

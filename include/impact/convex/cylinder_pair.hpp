@@ -80,16 +80,10 @@ inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v
     }
     S step = q2 > S(0) ? -q1 / q2 : (q1 > S(0) ? S(-0.2) : S(0.2));
     step = std::clamp(step, S(-0.4), S(0.4));
-    // rotate (co, si) by the step: Taylor series for small steps (error below 1e-16 under 1e-2)
-    S cs_step, sn_step;
-    if (std::abs(step) < S(1e-2)) {
-      const S s2 = step * step;
-      cs_step = S(1) - s2 / S(2) * (S(1) - s2 / S(12));
-      sn_step = step * (S(1) - s2 / S(6) * (S(1) - s2 / S(20)));
-    } else {
-      cs_step = std::cos(step);
-      sn_step = std::sin(step);
-    }
+    // rotate (co, si) by 2 atan(step / 2) = step - step^3 / 12 + ... (the Cayley transform: a
+    // rotation without sin and cos; Newton's next error is then O(step^3), as fast as Newton's own)
+    const S q = step * step / S(4), den = S(1) / (S(1) + q);
+    const S cs_step = (S(1) - q) * den, sn_step = step * den;
     const S c2 = co * cs_step - si * sn_step, s2n = si * cs_step + co * sn_step;
     const S norm = S(1) / std::sqrt(c2 * c2 + s2n * s2n);
     co = c2 * norm;
