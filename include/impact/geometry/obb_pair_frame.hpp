@@ -41,10 +41,10 @@ template <class S> class ObbPairFrame {
   /// X and t, and its part of the rounding bound. A traversal that tests one box b against
   /// several boxes of A in a row computes it once (MeshNodeOverlap does).
   struct Image {
-    Mat3<S> axes;   ///< fl(X B)
-    Vec3<S> center; ///< fl(X c_b + t)
-    Vec3<S> half;   ///< b's half extents
-    S m = 0;        ///< |X c_b + t| + |t| + |c_b| (max norms)
+    Mat3<S> axes = Mat3<S>::Zero();    ///< fl(X B)
+    Vec3<S> center = Vec3<S>::Zero();  ///< fl(X c_b + t)
+    Vec3<S> half = Vec3<S>::Zero();    ///< b's half extents
+    S m = 0;                           ///< |X c_b + t| + |t| + |c_b| (max norms)
   };
   Image image(const Obb<S>& b) const {
     Image im;
