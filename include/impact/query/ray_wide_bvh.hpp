@@ -7,9 +7,11 @@
 /// test (query/wide_slab.hpp) runs in float (WideFloatSlab: the boxes are floats; its entry is lowered and its exit
 /// raised by a bound on its rounding, so it enters every box the double slab test WideSlab enters,
 /// never later), or in S through WideSlab for rays it cannot take (magnitudes beyond 2^60, a zero
-/// direction component). The triangles of a leaf stored as floats go four at a time through a
-/// certified float filter (LeafFilter, query/wide_leaf_filter.hpp) that skips only triangles the watertight test is certain
-/// to reject; the others, and every triangle of a tree stored in S, go to the test itself.
+/// direction component). The triangles of a leaf, stored in blocks of four coordinate by
+/// coordinate (WideTriangleBlock), go four at a time through the watertight test's own operations
+/// in SIMD (BlockTest, query/wide_leaf_filter.hpp: SSE2, or AVX when the CPU has it), which passes
+/// exactly the triangles the scalar test hits (in float, also those with an edge function equal to
+/// zero); those go to the scalar test itself, which decides.
 ///
 /// Numerical contract: that of query/ray_mesh.hpp. Every crossing is decided by the same
 /// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: a
@@ -82,7 +84,9 @@ template <class S> struct WideCast {
   const bool use_simd;
   const WideFloatSlab<S> float_slab;
   S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
-  std::int32_t best_k = -1;
+  std::int32_t best_k = -1;     // leaf-order position of the best hit
+  std::int32_t best_block = -1;  // its block and lane
+  int best_lane = 0;
   Vec3<S> best_bary = Vec3<S>::Zero();
   float exit_f, bound_f;  // the float node test's exit bound (a float >= best) and entry bound (<= limit)
   // after a hit: float keys at or above tie_f may be within rounding of the hit (redecide)
@@ -90,9 +94,7 @@ template <class S> struct WideCast {
   PreparedRay<S> pr;
   bool leaf_seen = false;
   std::optional<WideSlab<S>> slab;  // in S: set up when first needed
-#if defined(__SSE2__)
-  LeafFilter<S> filter;  // set up at the first leaf
-#endif
+  BlockTest<S> block_test;  // set up at the first leaf
   std::size_t node_tests = 0, triangle_tests = 0;
 
   /// `o_` and `d_` must outlive the cast.
@@ -126,60 +128,56 @@ template <class S> struct WideCast {
     }
     return mask;
   }
-  /// The triangle at leaf-order position k by the narrow-phase rule; a strictly earlier hit
-  /// replaces the best one.
-  void test(std::int32_t k) {
+  /// The triangle in lane c of block b by the narrow-phase rule; a strictly earlier hit replaces
+  /// the best one.
+  void test(std::int32_t b, int c) {
     pr.ray.t_max = best;
-    const auto h = ray_mesh_triangle_hit(pr, inv, wide.triangle(k));
+    const auto h = ray_mesh_triangle_hit(pr, inv, wide.block_triangle(b, c));
     if (h && (best_k < 0 || h->t < best)) {
       best = h->t;
-      best_k = k;
+      best_k = wide.block_first(b) + c;
+      best_block = b;
+      best_lane = c;
       best_bary = Vec3<S>(h->u, h->v, h->w);
-      limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+      limit = next_below(best);
       exit_f = float_round_up(double(best));
       bound_f = float_round_down(double(limit));
       const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(float_slab.absolute_error()));
       tie_f = float_round_down(double(best) - slack);
     }
   }
-  /// The triangles of a leaf: four at a time through the certified float filter when they are
-  /// stored as floats (SSE), else each by the test.
-  IMPACT_NOINLINE void leaf(std::int32_t first, std::int32_t count) {
+  /// The triangles of a leaf (its blocks from `block`): four at a time through the block test
+  /// (the scalar test's decisions, SIMD), the candidates by the scalar test; without SIMD each by
+  /// the scalar test.
+  IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
     if (!leaf_seen) {
       pr = PreparedRay<S>(Ray<S>(o, d, t_max));
-#if defined(__SSE2__)
-      if (use_simd && wide.packed()) filter.set(pr);
-#endif
+      block_test.set(pr);
       leaf_seen = true;
     }
     const bool repeats = wide.has_repeats();
-#if defined(__SSE2__)
-    if (use_simd && wide.packed()) {
-      const float* packed = wide.packed_data();
-      for (std::int32_t g = first; g < first + count; g += 4) {
-        const int lanes = static_cast<int>(std::min<std::int32_t>(4, first + count - g));
-        int todo = filter.candidates(packed + 9 * static_cast<std::size_t>(g), lanes, best);
-        if (repeats) {
-          for (int c = 0; c < lanes; ++c) {
-            if (wide.repeats_previous(g + c)) todo &= ~(1 << c);  // the triangle just tested, again
-            else ++triangle_tests;
-          }
-        } else {
-          triangle_tests += static_cast<std::size_t>(lanes);
-        }
-        while (todo) {
-          const int c = lowest_bit(todo);
-          todo &= todo - 1;
-          test(g + c);
-        }
+    const std::int32_t first = wide.block_first(block);
+    for (std::int32_t q = 0; q < count; q += 4, ++block) {
+      const int lanes = static_cast<int>(std::min<std::int32_t>(4, count - q));
+      int todo = (1 << lanes) - 1;
+      if (use_simd) {
+        const int m = wide.packed() ? block_test.candidates(wide.packed_blocks()[static_cast<std::size_t>(block)], lanes, best)
+                                    : block_test.candidates(wide.full_blocks()[static_cast<std::size_t>(block)], lanes, best);
+        todo &= m;
       }
-      return;
-    }
-#endif
-    for (std::int32_t k = first; k < first + count; ++k) {
-      if (repeats && wide.repeats_previous(k)) continue;  // the triangle just tested, again (coincident copies)
-      ++triangle_tests;
-      test(k);
+      if (repeats) {
+        for (int c = 0; c < lanes; ++c) {
+          if (wide.repeats_previous(first + q + c)) todo &= ~(1 << c);  // the triangle just tested, again (coincident copies)
+          else ++triangle_tests;
+        }
+      } else {
+        triangle_tests += static_cast<std::size_t>(lanes);
+      }
+      while (todo) {
+        const int c = lowest_bit(todo);
+        todo &= todo - 1;
+        test(block, c);
+      }
     }
   }
   /// After a hit, at a node whose float keys of entered children are within rounding of it: the
@@ -308,7 +306,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   hit.triangle = wide.triangle_id(cast.best_k);
   hit.barycentric = cast.best_bary;
   hit.point = ray.origin + cast.best * ray.direction;
-  const Vec3<S> nrm = wide.triangle(cast.best_k).normal();
+  const Vec3<S> nrm = wide.block_triangle(cast.best_block, cast.best_lane).normal();
   hit.normal = pose ? Vec3<S>(pose->R * nrm) : nrm;
   hit.front_face = d.dot(nrm) < S(0);
   return hit;

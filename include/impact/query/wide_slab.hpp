@@ -122,6 +122,20 @@ inline float float_round_up(double x) {
 /// The largest float <= x (x not NaN; -infinity below the float range), without libm.
 inline float float_round_down(double x) { return -float_round_up(-x); }
 
+/// The largest S below x (x not NaN): std::nextafter(x, -infinity) without libm (the bound of a
+/// cast after a hit).
+template <class S> inline S next_below(S x) {
+  using U = std::conditional_t<std::is_same_v<S, float>, std::uint32_t, std::uint64_t>;
+  if (x == S(0)) return -std::numeric_limits<S>::denorm_min();
+  if (x == -std::numeric_limits<S>::infinity()) return x;
+  U b;
+  std::memcpy(&b, &x, sizeof b);
+  b = x > S(0) ? b - 1 : b + 1;
+  S y;
+  std::memcpy(&y, &b, sizeof y);
+  return y;
+}
+
 /// The slab test of a ray against the four children of a WideBvhNode in float: a conservative
 /// version of WideSlab's keys (in S on the same float boxes) at a quarter of the work, for a ray
 /// whose inverse direction is in [2^-60, 2^60] in magnitude, whose origin and the tree's
@@ -214,6 +228,8 @@ template <class S> class WideFloatSlab {
       _mm_storeu_ps(keys, lo);
       return m;
     }
+#else
+    (void)use_simd;
 #endif
     return entered_scalar(n, t_max_up, bound, keys);
   }
