@@ -88,11 +88,26 @@ template <class S> void check_structure(const TriangleMesh<S>& m, const WideBvh<
       Item child{n.first[c], {}, {}};
       for (int k = 0; k < 3; ++k) child.lo[k] = n.bounds[2 * k][c], child.hi[k] = n.bounds[2 * k + 1][c];
       if (n.count[c] > 0) {
+        // a leaf's blocks: its triangles lane by lane in leaf order, zeros in the unused lanes
+        const std::int32_t block = n.first[c], first = w.block_first(block), blocks = (n.count[c] + 3) / 4;
+        ASSERT_GE(block, 0);
+        ASSERT_LE(block + blocks, w.num_blocks());
+        for (std::int32_t q = 0; q < 4 * blocks; ++q) {
+          const Triangle<S> t = w.block_triangle(block + q / 4, q % 4);
+          if (q % 4 == 0) {
+            ASSERT_EQ(w.block_first(block + q / 4), first + q);
+          }
+          if (q < n.count[c]) {
+            ASSERT_TRUE(t.a == w.triangle(first + q).a && t.b == w.triangle(first + q).b && t.c == w.triangle(first + q).c) << q;
+          } else {
+            ASSERT_TRUE(t.a.isZero() && t.b.isZero() && t.c.isZero()) << q;
+          }
+        }
         // larger leaves hold copies of one triangle only (a leaf of the source tree)
-        for (std::int32_t k = n.first[c] + 1; n.count[c] > leaf_size && k < n.first[c] + n.count[c]; ++k)
-          ASSERT_TRUE(test::same_shape(w.triangle(k), w.triangle(n.first[c])));
-        ASSERT_FALSE(w.repeats_previous(n.first[c]));  // marks stay within a leaf
-        for (std::int32_t k = n.first[c]; k < n.first[c] + n.count[c]; ++k) {
+        for (std::int32_t k = first + 1; n.count[c] > leaf_size && k < first + n.count[c]; ++k)
+          ASSERT_TRUE(test::same_shape(w.triangle(k), w.triangle(first)));
+        ASSERT_FALSE(w.repeats_previous(first));  // marks stay within a leaf
+        for (std::int32_t k = first; k < first + n.count[c]; ++k) {
           if (w.repeats_previous(k)) {
             ASSERT_EQ(w.triangle(k).a, w.triangle(k - 1).a);
             ASSERT_EQ(w.triangle(k).b, w.triangle(k - 1).b);
@@ -391,36 +406,40 @@ TYPED_TEST(WideBvhTest, FloatSlabIsConservative) {
 }
 
 #if defined(__SSE2__)
-/// Triangles with float coordinates (9 a triangle, padded for the filter's loads) and a ray.
-template <class S> struct FilterCase {
-  std::vector<float> tri;
-  Ray<S> ray{Vec3<S>::Zero(), Vec3<S>::UnitX(), S(1)};
-};
-
-/// The leaf filter against the watertight test: a triangle it skips is never hit by the test
-/// (the test run on every triangle, in S on the float coordinates). Returns the skipped count.
-template <class S> int check_filter(const FilterCase<S>& fc, int count) {
-  const PreparedRay<S> pr(fc.ray);
-  const detail::LeafFilter<S> f(pr);
-  const int todo = f.candidates(fc.tri.data(), count, fc.ray.t_max);
+/// The block test of a leaf against the watertight test on each lane's triangle: in double the
+/// lanes it passes are exactly the triangles the test hits; in float a superset (an edge function
+/// equal to zero is left to the test); with AVX (when the CPU has it) as with SSE2. Returns the
+/// lanes it rejects.
+template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const Ray<S>& ray, int count) {
+  const PreparedRay<S> pr(ray);
+  detail::BlockTest<S> bt, sse;
+  bt.set(pr);  // AVX when the CPU has it (double)
+  sse.set(pr, false);
+  const int todo = bt.candidates(b, count, ray.t_max);
+  EXPECT_EQ(todo, sse.candidates(b, count, ray.t_max));  // the same bits
   int skipped = 0;
   for (int c = 0; c < count; ++c) {
-    const float* p = fc.tri.data() + 9 * c;
-    const Triangle<S> t{Vec3<S>(S(p[0]), S(p[1]), S(p[2])), Vec3<S>(S(p[3]), S(p[4]), S(p[5])), Vec3<S>(S(p[6]), S(p[7]), S(p[8]))};
-    if ((todo >> c) & 1) continue;
-    ++skipped;
-    EXPECT_FALSE(intersect_ray_triangle(pr, t).has_value()) << "skipped a hit, lane " << c;
+    auto at = [&](int v) { return Vec3<S>(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c])); };
+    const Triangle<S> t{at(0), at(1), at(2)};
+    const bool hit = intersect_ray_triangle(pr, t).has_value(), passed = (todo >> c) & 1;
+    if (std::is_same_v<S, double>) {
+      EXPECT_EQ(passed, hit) << "lane " << c;
+    } else if (!passed) {
+      EXPECT_FALSE(hit) << "skipped a hit, lane " << c;
+    }
+    skipped += passed ? 0 : 1;
   }
   EXPECT_EQ(todo >> count, 0);
   return skipped;
 }
 
-// The certified float filter of a leaf's triangles never skips a triangle the watertight test
-// hits: random triangles around the ray, rays through a vertex or an edge point of a triangle
-// (exactly, on a float grid), rays nearly parallel to a triangle's plane or grazing it, origins
-// off the float grid (double), hits near t_max and behind the origin, at coordinates from 1e-30
-// to 1e30 (float products overflow or underflow there: the filter must give up, not guess).
-TYPED_TEST(WideBvhTest, LeafFilterNeverSkipsAHit) {
+// The block test of a leaf's four triangles gives the watertight test's decisions (double: exactly;
+// float: never skipping a hit): random triangles around the ray, degenerate ones (a repeated
+// vertex, collinear vertices), rays through a vertex or an edge point of a triangle (exactly, on a
+// float grid), rays nearly parallel to a triangle's plane or grazing it, origins off the float grid
+// and (double) coordinates off it, hits near t_max and behind the origin, at coordinates from
+// 1e-30 to 1e30 (products overflow or underflow there in float).
+TYPED_TEST(WideBvhTest, BlockTestDecidesAsTheScalarTest) {
   using S = TypeParam;
   test::Rng rng(47);
   int skipped = 0, lanes = 0;
@@ -428,17 +447,23 @@ TYPED_TEST(WideBvhTest, LeafFilterNeverSkipsAHit) {
     const double scale = i % 10 == 9 ? (i % 20 == 9 ? 1e-30 : 1e30) : std::ldexp(1.0, int(rng.integer(20)));
     const double grid = std::ldexp(scale, -12);
     auto snap = [&](double x) { return double(float(std::nearbyint(x / grid) * grid)); };
-    FilterCase<S> fc;
-    fc.tri.assign(36 + 4, 0.0f);
+    WideTriangleBlock<float> packed{};
+    WideTriangleBlock<S> full{};  // S: off the float grid when i % 3 == 0
+    const bool off_grid = std::is_same_v<S, double> && i % 3 == 0;
     const int count = 1 + int(rng.index(4));
     Eigen::Vector3d first[3];
     for (int c = 0; c < count; ++c) {
       const Eigen::Vector3d centre = rng.vec(-1, 1) * scale;
-      for (int v = 0; v < 3; ++v) {
-        const Eigen::Vector3d p = centre + rng.vec(-0.5, 0.5) * scale * (i % 7 == 0 ? 1e-3 : 1.0);
-        for (int k = 0; k < 3; ++k) fc.tri[std::size_t(9 * c + 3 * v + k)] = float(snap(p[k]));
-        if (c == 0) first[v] = Eigen::Vector3d(fc.tri[std::size_t(3 * v)], fc.tri[std::size_t(3 * v + 1)], fc.tri[std::size_t(3 * v + 2)]);
-      }
+      Eigen::Vector3d p[3];
+      for (int v = 0; v < 3; ++v) p[v] = centre + rng.vec(-0.5, 0.5) * scale * (i % 7 == 0 ? 1e-3 : 1.0);
+      if (i % 13 == 0 && c == count - 1) p[2] = i % 26 == 0 ? p[0] : Eigen::Vector3d((p[0] + p[1]) / 2.0);  // degenerate
+      for (int v = 0; v < 3; ++v)
+        for (int k = 0; k < 3; ++k) {
+          packed.v[3 * v + k][c] = float(snap(p[v][k]));
+          full.v[3 * v + k][c] = off_grid ? S(p[v][k]) : S(packed.v[3 * v + k][c]);
+        }
+      if (c == 0)
+        for (int v = 0; v < 3; ++v) first[v] = Eigen::Vector3d(double(full.v[3 * v][0]), double(full.v[3 * v + 1][0]), double(full.v[3 * v + 2][0]));
     }
     // the target: a vertex, an edge point on the grid, an inner point of the first triangle
     const int kind = int(rng.index(4));
@@ -460,12 +485,13 @@ TYPED_TEST(WideBvhTest, LeafFilterNeverSkipsAHit) {
     const Eigen::Vector3d d = target - o;
     if (d.squaredNorm() == 0 || !std::isfinite(d.squaredNorm())) continue;
     const double t_max = i % 5 == 0 ? rng.uniform(0.99, 1.01) : i % 5 == 1 ? std::numeric_limits<double>::infinity() : 2.0;
-    fc.ray = Ray<S>(o.template cast<S>(), d.template cast<S>(), S(t_max));
-    if (fc.ray.direction.squaredNorm() == S(0)) continue;
-    skipped += check_filter(fc, count);
-    lanes += count;
+    const Ray<S> ray(o.template cast<S>(), d.template cast<S>(), S(t_max));
+    if (ray.direction.squaredNorm() == S(0)) continue;
+    skipped += check_block(packed, ray, count);
+    if (std::is_same_v<S, double>) skipped += check_block(full, ray, count);
+    lanes += std::is_same_v<S, double> ? 2 * count : count;
   }
-  EXPECT_GT(skipped, lanes / 4);  // the filter does reject the clear misses
+  EXPECT_GT(skipped, lanes / 4);  // the clear misses are rejected
 }
 #endif
 
@@ -514,7 +540,8 @@ TYPED_TEST(WideBvhTest, FloatSlabAtLargeMagnitudes) {
 }
 
 // float_round_up / float_round_down (the float node test's bounds) against a reference by
-// nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends.
+// nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends;
+// next_below against std::nextafter.
 TEST(WideBvh, FloatRoundingHelpers) {
   test::Rng rng(59);
   auto up = [](double x) {
@@ -533,6 +560,12 @@ TEST(WideBvh, FloatRoundingHelpers) {
     EXPECT_TRUE(dn == rd && std::signbit(dn) == std::signbit(rd)) << x;
     EXPECT_GE(double(u), x) << x;
     EXPECT_LE(double(dn), x) << x;
+    // next_below (the bound after a hit) is std::nextafter toward -infinity, in double and float
+    const double nd = detail::next_below(x), rnd = std::nextafter(x, -std::numeric_limits<double>::infinity());
+    EXPECT_TRUE(nd == rnd && std::signbit(nd) == std::signbit(rnd)) << x;
+    const float xf = static_cast<float>(x);
+    const float nf = detail::next_below(xf), rnf = std::nextafter(xf, -std::numeric_limits<float>::infinity());
+    EXPECT_TRUE(nf == rnf && std::signbit(nf) == std::signbit(rnf)) << x;
   }
 }
 

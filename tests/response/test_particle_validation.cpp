@@ -103,6 +103,20 @@ TYPED_TEST(ParticleValidation, BadParticlesThrowBeforeAnyMoves) {
   expect_step_rejects(bad([&](Particle<S>& p) { p.radius = nan; }), sc.colliders, dt, opt, {"particle 199 radius"});
   expect_step_rejects(bad([&](Particle<S>& p) { p.free_radius = nan; }), sc.colliders, dt, opt, {"particle 199 free_radius"});
   expect_step_rejects(bad([&](Particle<S>& p) { p.free_center.x() = nan; }), sc.colliders, dt, opt, {"particle 199 free_center"});
+  // finite but beyond CoordinateRange, and infinite: the fast check and the named ones agree
+  const S lim = CoordinateRange<S>::max;
+  expect_step_rejects(bad([&](Particle<S>& p) { p.position.x() = S(2) * lim; }), sc.colliders, dt, opt, {"particle 199 position"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.position.y() = -inf; }), sc.colliders, dt, opt, {"particle 199 position"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.free_center.y() = S(-2) * lim; }), sc.colliders, dt, opt, {"particle 199 free_center"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.free_center.z() = inf; }), sc.colliders, dt, opt, {"particle 199 free_center"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.radius = S(2) * lim; }), sc.colliders, dt, opt, {"particle 199 radius"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.radius = inf; }), sc.colliders, dt, opt, {"particle 199 radius"});
+  expect_step_rejects(bad([&](Particle<S>& p) { p.velocity.z() = S(4) * (lim / dt); }), sc.colliders, dt, opt, {"particle 199 velocity"});
+  {  // with dt = 0 an infinite velocity is still rejected (inf * 0 is NaN), a finite one of any size is not
+    expect_step_rejects(bad([&](Particle<S>& p) { p.velocity.x() = -inf; }), sc.colliders, S(0), opt, {"particle 199 velocity"});
+    auto ps = bad([&](Particle<S>& p) { p.velocity.z() = S(4) * (lim / dt); });
+    EXPECT_NO_THROW(step_particles(ps, sc.colliders, S(0), opt));
+  }
 }
 
 TYPED_TEST(ParticleValidation, BadStepArgumentsThrow) {

@@ -7,9 +7,11 @@
 /// subtree of at most `leaf_size` triangles becomes one leaf. A node is two cache lines: its four
 /// children's float boxes (rounded outward) stored plane by plane, so one pass of SIMD arithmetic
 /// tests all four (AVX, SSE2 or a scalar loop giving the same answers), and their references. The
-/// triangles are copied in leaf order (a leaf reads one contiguous run of coordinates, no index
-/// indirection), with their rows of F, as floats when every coordinate is one (exact, half the
-/// bytes: meshes read from single-precision files), else in S.
+/// triangles are copied in leaf order into blocks of four, coordinate by coordinate (a block holds
+/// a[x][4], a[y][4], ..., c[z][4]: one aligned load per coordinate of four triangles, no
+/// transposes; each leaf starts a block, a leaf of more than four triangles takes consecutive
+/// blocks, unused lanes are zero), as floats when every coordinate is one (exact, half the bytes:
+/// meshes read from single-precision files), else in S.
 ///
 /// Contract: every float box contains the triangles below it (lower corner rounded down, upper
 /// corner rounded up, from the exact boxes of the source tree), every triangle is in exactly one
@@ -30,6 +32,7 @@
 #include <cfloat>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -46,7 +49,7 @@ struct alignas(64) WideBvhNode {
   /// bounds[2 * axis][child] is the lower, bounds[2 * axis + 1][child] the upper plane. Empty
   /// slots hold an inverted box (lower FLT_MAX, upper -FLT_MAX) that no ray enters.
   float bounds[6][4];
-  std::int32_t first[4];  ///< inner child: node index; leaf: offset into the leaf-order triangles
+  std::int32_t first[4];  ///< inner child: node index; leaf: its first triangle block (WideBvh::block_first)
   std::int32_t count[4];  ///< 0: inner child; > 0: leaf of that many triangles; -1: empty slot
 
   WideBvhNode() {
@@ -58,6 +61,12 @@ struct alignas(64) WideBvhNode {
   }
 };
 static_assert(sizeof(WideBvhNode) == 128, "WideBvhNode: two cache lines");
+
+/// Four triangles of a WideBvh leaf, coordinate by coordinate: v[3 * vertex + axis][lane] (vertex
+/// 0, 1, 2 = the triangle's a, b, c). Unused lanes hold zeros.
+template <class T> struct alignas(4 * sizeof(T)) WideTriangleBlock {
+  T v[9][4];
+};
 
 template <class S> class WideBvh {
  public:
@@ -88,19 +97,34 @@ template <class S> class WideBvh {
   bool empty() const { return ids_.empty(); }
   /// Nodes; nodes()[0] is the root (absent for an empty mesh).
   const std::vector<WideBvhNode>& nodes() const { return nodes_; }
-  /// Triangle at leaf-order position k (the mesh's coordinates, exactly).
+  /// Triangle at leaf-order position k (the mesh's coordinates, exactly). O(log leaves).
   Triangle<S> triangle(std::int32_t k) const {
-    if (!full_.empty()) {
-      const S* p = full_.data() + 9 * static_cast<std::size_t>(k);
-      return Triangle<S>(Vec3<S>(p[0], p[1], p[2]), Vec3<S>(p[3], p[4], p[5]), Vec3<S>(p[6], p[7], p[8]));
-    }
-    const float* p = packed_.data() + 9 * static_cast<std::size_t>(k);
-    return Triangle<S>(Vec3<S>(S(p[0]), S(p[1]), S(p[2])), Vec3<S>(S(p[3]), S(p[4]), S(p[5])), Vec3<S>(S(p[6]), S(p[7]), S(p[8])));
+    const auto it = std::upper_bound(block_first_.begin(), block_first_.end(), k);
+    const std::int32_t b = static_cast<std::int32_t>(it - block_first_.begin()) - 1;
+    return block_triangle(b, k - block_first_[static_cast<std::size_t>(b)]);
+  }
+  /// Triangle in lane `lane` of block b (the leaf-order position block_first(b) + lane).
+  Triangle<S> block_triangle(std::int32_t b, int lane) const {
+    auto get = [&](const auto& blocks) {
+      const auto& v = blocks[static_cast<std::size_t>(b)].v;
+      auto at = [&](int vertex) { return Vec3<S>(S(v[3 * vertex][lane]), S(v[3 * vertex + 1][lane]), S(v[3 * vertex + 2][lane])); };
+      return Triangle<S>(at(0), at(1), at(2));
+    };
+    return packed() ? get(packed_) : get(full_);
   }
   /// True when the triangles are kept as floats: every coordinate of the mesh is a float (always
   /// for S = float; for double, e.g. meshes read from files in single precision), so the copy is
   /// exact at half the bytes.
-  bool packed() const { return full_.empty() && !packed_.empty(); }
+  bool packed() const { return !packed_.empty(); }
+  /// The triangle blocks when packed(), else empty.
+  const std::vector<WideTriangleBlock<float>>& packed_blocks() const { return packed_; }
+  /// The triangle blocks in S when not packed(), else empty.
+  const std::vector<WideTriangleBlock<S>>& full_blocks() const { return full_; }
+  /// Leaf-order position of lane 0 of block b (the positions of a block's lanes are consecutive,
+  /// and so are those of a leaf's blocks: a leaf of n triangles from block b holds positions
+  /// block_first(b) .. block_first(b) + n - 1).
+  std::int32_t block_first(std::int32_t b) const { return block_first_[static_cast<std::size_t>(b)]; }
+  std::int32_t num_blocks() const { return static_cast<std::int32_t>(block_first_.size()); }
   /// Row of F of the triangle at leaf-order position k.
   std::int32_t triangle_id(std::int32_t k) const { return ids_[static_cast<std::size_t>(k)]; }
   /// True when the triangle at position k repeats the one at k - 1 in the same leaf, vertex order
@@ -109,18 +133,17 @@ template <class S> class WideBvh {
   bool repeats_previous(std::int32_t k) const { return !repeats_.empty() && repeats_[static_cast<std::size_t>(k)]; }
   /// True when some triangle repeats_previous().
   bool has_repeats() const { return !repeats_.empty(); }
-  /// The leaf-order float coordinates when packed() (9 a triangle: a, b, c), else null. Readable
-  /// kPackedPadding floats past the last triangle (zeros), so a cast may load four triangles'
-  /// rows, and one float more, from any position.
-  const float* packed_data() const { return packed() ? packed_.data() : nullptr; }
-  static constexpr int kPackedPadding = 28;
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
+  /// Levels of inner nodes on the longest path from the root (0 for an empty tree): a
+  /// nearest-first walk keeps at most 3 depth() children pending.
+  int depth() const { return depth_; }
   /// An upper bound of |x|_inf over the vertices (the scale of the casts' rounding).
   S coordinate_bound() const { return coordinate_bound_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(WideBvhNode) + full_.capacity() * sizeof(S) + packed_.capacity() * sizeof(float) +
-           ids_.capacity() * sizeof(std::int32_t) + repeats_.capacity() / 8;
+    return nodes_.capacity() * sizeof(WideBvhNode) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
+           packed_.capacity() * sizeof(WideTriangleBlock<float>) + (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
+           repeats_.capacity() / 8;
   }
 
  private:
@@ -145,15 +168,6 @@ template <class S> class WideBvh {
       for (int c = 0; c < 9; ++c) floats = floats && S(static_cast<float>(p[c])) == p[c];
       coordinate_bound_ = std::max({coordinate_bound_, t.a.cwiseAbs().maxCoeff(), t.b.cwiseAbs().maxCoeff(), t.c.cwiseAbs().maxCoeff()});
     }
-    if (floats) {
-      if (n > 0) {
-        packed_.reserve(full.size() + kPackedPadding);
-        packed_.assign(full.begin(), full.end());  // exact: every value is a float
-        packed_.resize(packed_.size() + kPackedPadding, 0.0f);
-      }
-    } else {
-      full_ = std::move(full);
-    }
     if (tree.empty() || n == 0) return;
     const std::size_t m = tree.nodes.size();
     std::vector<std::int32_t> size(m), begin(m);  // triangles of each subtree and its first position
@@ -175,6 +189,8 @@ template <class S> class WideBvh {
     };
     nodes_.reserve(m / 3 + 1);
     nodes_.emplace_back();
+    std::vector<int> level{1};  // of each wide node: the root is on level 1
+    depth_ = 1;
     std::vector<std::pair<std::int32_t, std::int32_t>> work{{0, 0}};  // (binary node, wide node)
     while (!work.empty()) {
       const auto [src, dst] = work.back();
@@ -211,19 +227,52 @@ template <class S> class WideBvh {
           node.count[c] = 0;
           work.push_back({kids[c], node.first[c]});
           nodes_.emplace_back();
+          level.push_back(level[static_cast<std::size_t>(dst)] + 1);
+          depth_ = std::max(depth_, level.back());
         }
       }
       nodes_[static_cast<std::size_t>(dst)] = node;
     }
     nodes_.shrink_to_fit();
+    // the blocks: each leaf from a new block, in leaf order; the leaves' references become blocks
+    struct LeafRef {
+      std::int32_t pos, count;
+      std::size_t node;
+      int slot;
+      bool operator<(const LeafRef& r) const { return pos < r.pos; }
+    };
+    std::vector<LeafRef> leaves;
+    for (std::size_t j = 0; j < nodes_.size(); ++j)
+      for (int c = 0; c < 4; ++c)
+        if (nodes_[j].count[c] > 0) leaves.push_back({nodes_[j].first[c], nodes_[j].count[c], j, c});
+    std::sort(leaves.begin(), leaves.end());
+    for (const LeafRef& l : leaves) {
+      nodes_[l.node].first[l.slot] = static_cast<std::int32_t>(block_first_.size());
+      for (std::int32_t q = 0; q < l.count; q += 4) block_first_.push_back(l.pos + q);
+    }
+    auto fill = [&](auto& blocks) {
+      using T = std::remove_reference_t<decltype(blocks[0].v[0][0])>;
+      blocks.resize(block_first_.size());  // zeros in the unused lanes
+      for (const LeafRef& l : leaves) {
+        const std::size_t b = static_cast<std::size_t>(nodes_[l.node].first[l.slot]);
+        for (std::int32_t q = 0; q < l.count; ++q) {
+          const S* p = full.data() + 9 * static_cast<std::size_t>(l.pos + q);
+          for (int c = 0; c < 9; ++c) blocks[b + static_cast<std::size_t>(q / 4)].v[c][q % 4] = static_cast<T>(p[c]);  // exact when packed
+        }
+      }
+    };
+    if (floats) fill(packed_);
+    else fill(full_);
   }
 
   std::vector<WideBvhNode> nodes_;
-  std::vector<float> packed_;  // 9 coordinates a triangle, leaf order, when all are floats
-  std::vector<S> full_;        // 9 coordinates a triangle, leaf order, otherwise
+  std::vector<WideTriangleBlock<float>> packed_;  // the triangle blocks when every coordinate is a float
+  std::vector<WideTriangleBlock<S>> full_;        // otherwise
+  std::vector<std::int32_t> block_first_;         // leaf-order position of each block's lane 0
   std::vector<std::int32_t> ids_;
   std::vector<bool> repeats_;  // repeats_previous() by leaf-order position; empty when none repeats
   S coordinate_bound_ = S(0);
+  int depth_ = 0;
 };
 
 }  // namespace impact
