@@ -181,6 +181,36 @@ TYPED_TEST(WideBvhTest, TorusStructureAndFirstHits) {
   EXPECT_GT(check_casts(torus, from_tree, 500 / kWideSamples, 0.1, 99), 50 / kWideSamples);
 }
 
+// A tree deeper than the cast's fixed stack bounds (WideCast::kFixedDepth levels): triangles
+// shrinking geometrically toward a point, which the SAH tree peels off one a level. The cast then
+// uses the stack with a heap overflow; the answers are brute force's, SIMD and scalar alike.
+TEST(WideBvh, DeepTreeCastsLikeBruteForce) {
+  const int n = 500;
+  Vertices<double> V(3 * n, 3);
+  Faces F(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const double x = std::pow(0.8, i), s = 0.3 * x;
+    V.row(3 * i) << x, 0, 0;
+    V.row(3 * i + 1) << x, s, 0;
+    V.row(3 * i + 2) << x, 0, s;
+    F.row(i) << 3 * i, 3 * i + 1, 3 * i + 2;
+  }
+  const TriangleMesh<double> m(V, F);
+  const WideBvh<double> w(m);
+  ASSERT_GT(w.depth(), detail::WideCast<double>::kFixedDepth);
+  check_structure(m, w, 4);
+  EXPECT_GT(check_casts(m, w, 400 / kWideSamples, 0.5, 17), 0);  // (few: most triangles are tiny)
+  // along the chain: the nearest triangle first, through every level
+  for (int i = 0; i < 40; ++i) {
+    const double y = std::pow(0.8, 5 * i) * 0.01;
+    const Ray<double> ray(Vec3<double>(-1.0, y, y), Vec3<double>(1.0, 0.0, 0.0), 3.0);
+    const auto ref = brute_first_t(m, ray);
+    const auto fast = ray_mesh_first_hit(w, ray);
+    ASSERT_TRUE(ref.has_value() && fast.has_value()) << i;
+    EXPECT_EQ(*ref, fast->t) << i;
+  }
+}
+
 // A double mesh whose coordinates are all floats keeps its triangles as floats (exactly: the
 // structure check compares every coordinate), in fewer bytes, with the same casts.
 TEST(WideBvh, FloatCoordinatesArePackedExactly) {

@@ -36,6 +36,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <new>
 #include <optional>
 #include <type_traits>
 
@@ -210,11 +211,39 @@ template <class S> struct WideCast {
     count = n.count[order[0]];
   }
 
-  /// The traversal: nearest child first, the others on the stack with their keys.
+  /// The traversal: nearest child first, the others on the stack with their keys (a fixed array
+  /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
-    TraversalStack<WideEntry, 128> stack;
+    if (wide.depth() <= kFixedDepth) {
+      FixedStack<3 * kFixedDepth> stack;
+      run(stack);
+    } else {
+      TraversalStack<WideEntry, 128> stack;
+      run(stack);
+    }
+  }
+  static constexpr int kFixedDepth = 40;
+  /// A stack of at most N entries (unchecked: the caller bounds it), slots uninitialised.
+  template <int N> class FixedStack {
+   public:
+    FixedStack() {}  // NOLINT(modernize-use-equals-default): the slots stay uninitialised
+    void push(const WideEntry& e) { new (&slots_[top_++].value) WideEntry(e); }
+    bool empty() const { return top_ == 0; }
+    WideEntry pop() { return slots_[--top_].value; }
+
+   private:
+    union Slot {
+      Slot() {}  // NOLINT(modernize-use-equals-default): no initialisation
+      WideEntry value;
+    };
+    Slot slots_[N];
+    int top_ = 0;
+  };
+
+  template <class Stack> void run(Stack& stack) {
     const WideBvhNode* nodes = wide.nodes().data();
     std::int32_t first = 0, count = 0;  // the root: an inner node
+    std::size_t tests = 0;
     const bool in_float = float_slab.usable();  // (false for an infinite 1 / d)
     auto pop = [&](float bound) {  // the nearest pending child still below the bound
       while (!stack.empty()) {
@@ -229,32 +258,42 @@ template <class S> struct WideCast {
     };
 #if defined(__SSE2__)
     if (in_float && use_simd) {
+      const typename WideFloatSlab<S>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
       for (;;) {
         // the bounds as of the last leaf, in registers for the node loop
         const __m128 exit_v = _mm_set1_ps(exit_f), bound_v = _mm_set1_ps(bound_f), tie_v = _mm_set1_ps(tie_f);
         const float bound = bound_f;
         while (count == 0) {
           const WideBvhNode& n = nodes[first];
-          ++node_tests;
+          ++tests;
           __m128 lo;
-          int mask = float_slab.entered(n, exit_v, bound_v, lo);
+          int mask = fs.entered(n, exit_v, bound_v, lo);
           if (mask) {
             float fk[4];
             _mm_storeu_ps(fk, lo);
             if (IMPACT_UNLIKELY(_mm_movemask_ps(_mm_cmpge_ps(lo, tie_v)) & mask)) {
               mask = redecide(n, fk);
               if (!mask) {
-                if (!pop(bound)) return;
+                if (!pop(bound)) {
+                  node_tests += tests;
+                  return;
+                }
                 continue;
               }
             }
             descend(n, mask, fk, stack, first, count);
             continue;
           }
-          if (!pop(bound)) return;
+          if (!pop(bound)) {
+            node_tests += tests;
+            return;
+          }
         }
         leaf(first, count);
-        if (!pop(bound_f)) return;
+        if (!pop(bound_f)) {
+          node_tests += tests;
+          return;
+        }
       }
     }
 #endif
@@ -263,7 +302,7 @@ template <class S> struct WideCast {
         leaf(first, count);
       } else {
         const WideBvhNode& n = nodes[first];
-        ++node_tests;
+        ++tests;
         float fk[4];
         int mask;
         if (in_float) {
@@ -278,8 +317,9 @@ template <class S> struct WideCast {
           continue;
         }
       }
-      if (!pop(bound_f)) return;
+      if (!pop(bound_f)) break;
     }
+    node_tests += tests;
   }
 };
 

@@ -179,14 +179,11 @@ template <class S> class WideFloatSlab {
       const double e = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
       const int sign = _mm_movemask_pd(i01) | (_mm_movemask_pd(i22) & 1) << 2;
       usable_ = (_mm_movemask_pd(_mm_and_pd(in01, in22)) == 3) & (coordinate_bound <= S(0x1p60)) & (e <= 0x1p40);
-      for (int i = 0; i < 3; ++i) {
-        near_[i] = static_cast<int>(sizeof(float[4])) * (2 * i + ((sign >> i) & 1));  // byte offsets of the planes
-        far_[i] = near_[i] ^ static_cast<int>(sizeof(float[4]));
-      }
-      vo_[0] = _mm_shuffle_ps(of01, of01, 0x00), vo_[1] = _mm_shuffle_ps(of01, of01, 0x55), vo_[2] = _mm_shuffle_ps(of22, of22, 0x00);
-      vinv_[0] = _mm_shuffle_ps(if01, if01, 0x00), vinv_[1] = _mm_shuffle_ps(if01, if01, 0x55), vinv_[2] = _mm_shuffle_ps(if22, if22, 0x00);
+      std::memcpy(sse_.planes, kPlanes[sign], sizeof sse_.planes);
+      sse_.o[0] = _mm_shuffle_ps(of01, of01, 0x00), sse_.o[1] = _mm_shuffle_ps(of01, of01, 0x55), sse_.o[2] = _mm_shuffle_ps(of22, of22, 0x00);
+      sse_.inv[0] = _mm_shuffle_ps(if01, if01, 0x00), sse_.inv[1] = _mm_shuffle_ps(if01, if01, 0x55), sse_.inv[2] = _mm_shuffle_ps(if22, if22, 0x00);
       e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
-      ve_ = _mm_set1_ps(e_);
+      sse_.e = _mm_set1_ps(e_);
       return;
     }
 #endif
@@ -196,11 +193,11 @@ template <class S> class WideFloatSlab {
       const S a = std::abs(inv[i]);
       ok = ok & (std::abs(o[i]) <= S(0x1p60)) & (a <= S(0x1p60)) & (a >= S(0x1p-60));  // false for NaN
       const bool neg = inv[i] < S(0);
-      near_[i] = static_cast<int>(sizeof(float[4])) * (2 * i + (neg ? 1 : 0));  // byte offsets of the planes
-      far_[i] = near_[i] ^ static_cast<int>(sizeof(float[4]));
+      planes()[i] = static_cast<int>(sizeof(float[4])) * (2 * i + (neg ? 1 : 0));  // byte offsets of the planes
+      planes()[3 + i] = planes()[i] ^ static_cast<int>(sizeof(float[4]));
       const float of = static_cast<float>(o[i]), invf = static_cast<float>(inv[i]);
 #if defined(__SSE2__)
-      vo_[i] = _mm_set1_ps(of), vinv_[i] = _mm_set1_ps(invf);
+      sse_.o[i] = _mm_set1_ps(of), sse_.inv[i] = _mm_set1_ps(invf);
 #else
       o_[i] = of, inv_[i] = invf;
 #endif
@@ -209,7 +206,7 @@ template <class S> class WideFloatSlab {
     usable_ = ok && e <= 0x1p40;
     e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
 #if defined(__SSE2__)
-    ve_ = _mm_set1_ps(e_);
+    sse_.e = _mm_set1_ps(e_);
 #endif
   }
   /// False when some magnitude is out of range (see the class comment): use WideSlab.
@@ -235,21 +232,29 @@ template <class S> class WideFloatSlab {
   }
 
 #if defined(__SSE2__)
-  /// entered() with the bounds broadcast and the keys left in a register.
-  int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const {
-    const char* p = reinterpret_cast<const char*>(n.bounds);
-    __m128 t0 = _mm_setzero_ps(), t1 = t_max_up;
-    for (int i = 0; i < 3; ++i) {
-      const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + near_[i])), vo_[i]), vinv_[i]);
-      const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + far_[i])), vo_[i]), vinv_[i]);
-      t0 = _mm_max_ps(a, t0);
-      t1 = _mm_min_ps(b, t1);
+  /// The per-ray state of the SSE test, by value (a cast copies it into registers).
+  struct Sse {
+    __m128 o[3], inv[3], e;  // origin and inverse direction rounded to float, e, broadcast
+    int planes[6];           // byte offsets in a node of the near planes of x, y, z, then of the far ones
+    /// entered() with the bounds broadcast and the keys left in a register.
+    int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const {
+      const char* p = reinterpret_cast<const char*>(n.bounds);
+      __m128 t0 = _mm_setzero_ps(), t1 = t_max_up;
+      for (int i = 0; i < 3; ++i) {
+        const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + planes[i])), o[i]), inv[i]);
+        const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + planes[3 + i])), o[i]), inv[i]);
+        t0 = _mm_max_ps(a, t0);
+        t1 = _mm_min_ps(b, t1);
+      }
+      const __m128 lo = _mm_sub_ps(_mm_mul_ps(t0, _mm_set1_ps(kLow)), e);
+      const __m128 hi = _mm_add_ps(_mm_mul_ps(t1, _mm_set1_ps(kHigh)), e);
+      keys = lo;
+      return _mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmple_ps(lo, bound)));
     }
-    const __m128 lo = _mm_sub_ps(_mm_mul_ps(t0, _mm_set1_ps(kLow)), ve_);
-    const __m128 hi = _mm_add_ps(_mm_mul_ps(t1, _mm_set1_ps(kHigh)), ve_);
-    keys = lo;
-    return _mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmple_ps(lo, bound)));
-  }
+  };
+  const Sse& sse() const { return sse_; }
+  /// entered() with the bounds broadcast and the keys left in a register.
+  int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const { return sse_.entered(n, t_max_up, bound, keys); }
 #endif
 
   /// entered() by a scalar loop of the same IEEE operations in the same order.
@@ -257,8 +262,8 @@ template <class S> class WideFloatSlab {
     const char* p = reinterpret_cast<const char*>(n.bounds);
     float t0[4] = {0.0f, 0.0f, 0.0f, 0.0f}, t1[4] = {t_max_up, t_max_up, t_max_up, t_max_up};
     for (int i = 0; i < 3; ++i) {
-      const float* near = reinterpret_cast<const float*>(p + near_[i]);
-      const float* far = reinterpret_cast<const float*>(p + far_[i]);
+      const float* near = reinterpret_cast<const float*>(p + planes()[i]);
+      const float* far = reinterpret_cast<const float*>(p + planes()[3 + i]);
       for (int c = 0; c < 4; ++c) {
         const float a = (near[c] - origin(i)) * inverse(i);
         const float b = (far[c] - origin(i)) * inverse(i);
@@ -281,18 +286,27 @@ template <class S> class WideFloatSlab {
 
  private:
 #if defined(__SSE2__)
-  float origin(int i) const { return _mm_cvtss_f32(vo_[i]); }
-  float inverse(int i) const { return _mm_cvtss_f32(vinv_[i]); }
+  int* planes() { return sse_.planes; }
+  const int* planes() const { return sse_.planes; }
+  float origin(int i) const { return _mm_cvtss_f32(sse_.o[i]); }
+  float inverse(int i) const { return _mm_cvtss_f32(sse_.inv[i]); }
 #else
+  int* planes() { return planes_; }
+  const int* planes() const { return planes_; }
   float origin(int i) const { return o_[i]; }
   float inverse(int i) const { return inv_[i]; }
 #endif
+  /// kPlanes[sign]: the byte offsets in a node of the near planes of x, y, z then the far ones,
+  /// for the direction's sign bits (bit i: component i negative).
+  static constexpr int kPlanes[8][6] = {{0, 32, 64, 16, 48, 80}, {16, 32, 64, 0, 48, 80}, {0, 48, 64, 16, 32, 80},
+                                        {16, 48, 64, 0, 32, 80}, {0, 32, 80, 16, 48, 64}, {16, 32, 80, 0, 48, 64},
+                                        {0, 48, 80, 16, 32, 64}, {16, 48, 80, 0, 32, 64}};
   bool usable_ = false;
-  int near_[3], far_[3];  // byte offsets of the near and far planes of each axis in a node
   float e_ = 0.0f;
 #if defined(__SSE2__)
-  __m128 vo_[3], vinv_[3], ve_;  // origin and inverse direction rounded to float, e, broadcast
+  Sse sse_;
 #else
+  int planes_[6];  // byte offsets in a node of the near planes of x, y, z, then of the far ones
   float o_[3], inv_[3];
 #endif
 };
