@@ -42,6 +42,7 @@
 #pragma once
 
 #include "impact/convex/gjk_distance.hpp"
+#include "impact/convex/local_certificate.hpp"
 #include "impact/core/types.hpp"
 
 #include <algorithm>
@@ -62,6 +63,7 @@ struct EpaPenetration {
   bool failed = false;        ///< degenerate polytope (flat Minkowski difference): no answer, use another solver
   bool limit_reached = false; ///< an iteration or capacity bound ended the query before its tolerance
   bool refined = false;       ///< the Newton refinement gave the answer (depth is then below `lower` + the EPA gap)
+  bool local_certificate = false;  ///< epa_penetration_local's certificate gave `lower` (EPA stopped early)
   S depth = S(0);             ///< f(normal): overlap of the supports along the normal
   S lower = S(0);             ///< certified lower bound of the depth (EPA's polytope)
   Vec3<S> normal = Vec3<S>::UnitZ();  ///< unit, from A towards B
@@ -295,9 +297,41 @@ bool gjk_enclose(const SupportA& support_a, const SupportB& support_b, Vec3<S> f
 
 }  // namespace detail
 
+namespace detail {
+/// No local certificate (epa_penetration_local's default).
+struct NoLocalCertificate {};
+
+/// Whether every face of P nearer than cert.lower lies in cert's cap in the sense of
+/// convex/local_certificate.hpp: angle(m_F, normal) + acos(d_F / lower) <= cap (then no unit
+/// direction overlaps less than cert.lower): -1; else the nearest face that does not (EPA expands
+/// it next). fi is P's nearest face, at distance dmin.
+template <class S>
+int epa_face_outside_cap(const EpaPolytope<S>& P, int fi, S dmin, const LocalCertificate<S>& cert) {
+  const S rho = cert.lower;
+  if (dmin < rho * cert.cos_cap) return fi;  // the nearest face alone fails
+  const S margin = S(64) * std::numeric_limits<S>::epsilon();
+  int worst = -1;
+  S worst_d = std::numeric_limits<S>::infinity();
+  for (int i = 0; i < P.nf; ++i) {
+    const S d = P.key[i];
+    if (!(d < rho) || d >= worst_d) continue;  // removed faces are +infinity
+    const S ca = d / rho, cb = P.face[i].n.dot(cert.normal);
+    // cos(alpha + beta) >= cos(cap), alpha = acos(ca), beta = acos(cb), both below pi / 2
+    const S sa = std::sqrt(std::max(S(1) - ca * ca, S(0))), sb = std::sqrt(std::max(S(1) - cb * cb, S(0)));
+    if (ca > S(0) && cb > S(0) && ca * cb - sa * sb >= cert.cos_cap + margin) continue;
+    worst = i;
+    worst_d = d;
+  }
+  return worst;
+}
+}  // namespace detail
+
 template <class S, class SupportA, class SupportB>
 EpaPenetration<S> epa_penetration_from_simplex(const SupportA& support_a, const SupportB& support_b, const detail::SimplexPoint<S>* start,
                                                int iterations, const EpaSettings<S>& st);
+template <class S, class SupportA, class SupportB, class Local>
+EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const SupportB& support_b, const detail::SimplexPoint<S>* start,
+                                        int iterations, const EpaSettings<S>& st, const Local& local);
 
 /// Penetration of A and B from world support functions support_a(d), support_b(d) (points
 /// maximising the dot product with d) and a first direction (e.g. interior_a - interior_b).
@@ -323,7 +357,20 @@ EpaPenetration<S> epa_penetration(const SupportA& support_a, const SupportB& sup
 template <class S, class SupportA, class SupportB>
 EpaPenetration<S> epa_penetration_from_simplex(const SupportA& support_a, const SupportB& support_b, const detail::SimplexPoint<S>* start,
                                                int iterations, const EpaSettings<S>& st) {
+  return epa_penetration_local(support_a, support_b, start, iterations, st, detail::NoLocalCertificate{});
+}
+
+/// EPA from a tetrahedron as epa_penetration_from_simplex, with a local certificate:
+/// local(n) (a detail::LocalCertificate<S> from a direction n, convex/local_certificate.hpp) is
+/// called once EPA's gap is below 0.05 of the scale (again below 1e-4 if it failed), from EPA's
+/// best normal; when it succeeds with upper - lower within the tolerance (upper: f at its normal,
+/// from the supports), EPA stops as soon as every face nearer than its lower bound lies in its cap
+/// (detail::epa_faces_in_cap). Otherwise EPA runs as without it.
+template <class S, class SupportA, class SupportB, class Local>
+EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const SupportB& support_b, const detail::SimplexPoint<S>* start,
+                                        int iterations, const EpaSettings<S>& st, const Local& local) {
   using detail::SimplexPoint;
+  constexpr bool has_local = !std::is_same_v<Local, detail::NoLocalCertificate>;
   EpaPenetration<S> out;
   const int max_it = st.max_iterations;
   int its = iterations;
@@ -367,6 +414,31 @@ EpaPenetration<S> epa_penetration_from_simplex(const SupportA& support_a, const 
   bool best_on_face = false;  // the best normal is a face's whose support lies on it
   SimplexPoint<S> best_face[3];
   Vec3<S> best_foot = Vec3<S>::Zero();
+  detail::LocalCertificate<S> cert;
+  int cert_tries = 0;
+  // the local certificate (has_local): tried at gaps below 0.05 and 1e-4 of the scale
+  const auto try_local = [&](S stop_gap) {
+    if constexpr (has_local) {
+      const S trigger = cert_tries == 0 ? S(0.05) * st.scale : S(1e-4) * st.scale;
+      if (cert_tries >= 2 || upper - lower > trigger || its >= max_it) return;
+      ++cert_tries;
+      cert = local(best_n);
+      if (!cert.ok) return;
+      const SimplexPoint<S> p = supp(cert.normal);
+      const S up = cert.normal.dot(p.w);
+      if (up < upper) {
+        upper = up;
+        best_n = cert.normal;
+        best_a = p.a;
+        best_b = p.b;
+        best_on_face = false;
+      }
+      // a local minimum above an overlap already seen (cert.lower > upper) is not the global one
+      if (!(upper - cert.lower <= stop_gap && cert.lower <= upper)) cert.ok = false;
+    } else {
+      (void)stop_gap;
+    }
+  };
 
   // EPA until upper - lower <= stop_gap; returns false when it ended without reaching it (bound,
   // capacity or a degenerate step: `limit` / `failed` say which; no progress possible counts as reached).
@@ -380,11 +452,26 @@ EpaPenetration<S> epa_penetration_from_simplex(const SupportA& support_a, const 
       }
       lower = std::max(lower, dmin);
       if (upper - lower <= stop_gap) return true;
+      int fx = fi;  // the face to expand
+      if constexpr (has_local) {
+        // an overlap below the certificate's bound, seen since: its minimum is local, not global
+        if (cert.ok && !(cert.lower <= upper)) cert.ok = false;
+        if (!cert.ok) try_local(stop_gap);
+        if (cert.ok) {
+          fx = detail::epa_face_outside_cap(P, fi, dmin, cert);
+          if (fx < 0) {
+            lower = std::max(lower, cert.lower);
+            out.local_certificate = true;
+            return true;
+          }
+        }
+      }
       if (its >= max_it || P.nv >= detail::kEpaMaxVertices) {
         limit = true;
         return false;
       }
-      const Vec3<S> n = P.face[fi].n;
+      const Vec3<S> n = P.face[fx].n;
+      const S dx = P.key[fx];
       const SimplexPoint<S> p = supp(n);
       const S up = n.dot(p.w);
       if (up < upper) {
@@ -392,24 +479,28 @@ EpaPenetration<S> epa_penetration_from_simplex(const SupportA& support_a, const 
         best_n = n;
         best_a = p.a;  // the supports are the deepest points,
         best_b = p.b;
-        best_on_face = up - dmin <= st.tolerance;
+        best_on_face = up - dx <= st.tolerance;
         if (best_on_face) {  // unless on a face of D: the face's point of the contact region (at the end)
-          const detail::EpaFace<S>& f = P.face[fi];
+          const detail::EpaFace<S>& f = P.face[fx];
           best_foot = f.dist * f.n;
           for (int i = 0; i < 3; ++i) best_face[i] = P.vtx[f.v[i]];
         }
       }
       if (upper - lower <= stop_gap) return true;
-      if (!(up - dmin > no_progress)) return true;  // the support is on the face within rounding
+      if (!(up - dx > no_progress)) {  // the support is on the face within rounding
+        if (fx == fi) return true;
+        cert.ok = false;  // a face of D inside the certified bound: rounding; EPA alone from here
+        continue;
+      }
       // expand the polytope by p: remove the faces p sees, cone the horizon to p
       const int vi = P.nv++;
       P.vtx[vi] = p;
       P.nh = 0;
       P.ndead = 0;
-      P.face[fi].alive = false;
-      P.key[fi] = std::numeric_limits<S>::infinity();
-      P.dead[P.ndead++] = fi;
-      const detail::EpaFace<S> f0 = P.face[fi];
+      P.face[fx].alive = false;
+      P.key[fx] = std::numeric_limits<S>::infinity();
+      P.dead[P.ndead++] = fx;
+      const detail::EpaFace<S> f0 = P.face[fx];
       for (int e = 0; e < 3; ++e) P.silhouette(f0.adj[e], f0.adj_edge[e], p.w, 0);
       int created[detail::kEpaMaxFaces];
       bool bad = P.nh < 3;

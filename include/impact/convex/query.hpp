@@ -48,6 +48,7 @@
 #include "impact/convex/epa.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
+#include "impact/convex/local_certificate.hpp"
 #include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/convex/triangle_shape.hpp"
@@ -79,6 +80,11 @@ struct ConvexQueryOptions {
   /// poses (verified on 10 of 130 cylinder–cylinder penetrations), so it cost more support calls
   /// than it saved (38.9 against 31.5 per query there), while EPA alone closes its gap to 1e-10.
   bool newton_refinement = false;
+  /// Cylinder against cylinder or cone: stop EPA early with the local certificate of
+  /// convex/local_certificate.hpp (Newton on the closed-form overlap, a certified quadratic lower
+  /// bound on a cap of directions about its minimiser, EPA's polytope for the rest); off: EPA to
+  /// relative_tolerance alone (the answers agree within relative_tolerance; tested).
+  bool local_certificate = true;
 };
 
 namespace detail {
@@ -300,10 +306,10 @@ inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_
 /// origin). `failed` is set when it meets a degenerate Minkowski difference. Results in that frame.
 /// With `simplex` (a tetrahedron of support points of these functions holding the origin, from
 /// gjk_enclose, which took `simplex_calls` support calls) EPA starts from it instead of running GJK.
-template <class S, class SupportA, class SupportB>
+template <class S, class SupportA, class SupportB, class Local = NoLocalCertificate>
 ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& la, const Vec3<S>& lb, S scale,
                                   const ConvexQueryOptions<S>& o, bool refine, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                                  int simplex_calls = 0) {
+                                  int simplex_calls = 0, const Local& local = Local{}) {
   const Vec3<S> origin = (la + lb) / S(2);
   const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support_a(d) - origin); };
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support_b(d) - origin); };
@@ -317,7 +323,7 @@ ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& sup
   if (simplex) {
     SimplexPoint<S> moved[4];  // into the frame centred at `origin` (w = a - b is unchanged)
     for (int i = 0; i < 4; ++i) moved[i] = SimplexPoint<S>{simplex[i].w, Vec3<S>(simplex[i].a - origin), Vec3<S>(simplex[i].b - origin)};
-    r = epa_penetration_from_simplex(sa, sb, moved, simplex_calls, st);
+    r = epa_penetration_local(sa, sb, moved, simplex_calls, st, local);
   } else {
     r = epa_penetration(sa, sb, Vec3<S>(la - lb), st);
   }
@@ -338,15 +344,15 @@ ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& sup
 /// The own EPA on a and b in a's frame (PairFrame: a's support without rotation, b's with one each
 /// way). `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
 /// `simplex` as for own_epa_in_frame, in a's frame (PairFrame's support functions).
-template <class S, class A, class B>
+template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                          const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                         int simplex_calls = 0) {
+                         int simplex_calls = 0, const Local& local = Local{}) {
   const PairFrame<S> f(pa, pb);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
-  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed, simplex, simplex_calls);
+  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed, simplex, simplex_calls, local);
   if (!c.intersecting) return c;
   c.normal = pa.rotate(c.normal);
   c.point = pa.apply(c.point);
@@ -355,13 +361,14 @@ ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>&
 
 /// The general penetration: the own EPA unless options.libccd_penetration, libccd when it fails.
 /// `simplex` as for own_epa (a's frame), when the caller's GJK enclosed the origin already.
-template <class S, class A, class B>
+template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
-                                     const ConvexQueryOptions<S>& o, const SimplexPoint<S>* simplex = nullptr, int simplex_calls = 0) {
+                                     const ConvexQueryOptions<S>& o, const SimplexPoint<S>* simplex = nullptr, int simplex_calls = 0,
+                                     const Local& local = Local{}) {
   if (!o.libccd_penetration) {
     bool failed = false;
     ConvexContact<S> c =
-        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls);
+        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local);
     if (!failed) {
       if (c.intersecting) {
         const S depth = c.depth;
@@ -426,8 +433,47 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
     none.iterations = its + 1 + c.iterations;
     return none;
   }
-  // EPA from GJK's tetrahedron (its support calls counted once, in g.iterations)
-  ConvexContact<S> g = general_penetration(a, pa, b, pb, o, simplex, its);
+  // EPA from GJK's tetrahedron (its support calls counted once, in g.iterations), stopped early by
+  // the local certificate of convex/local_certificate.hpp where it holds
+  const auto local = [&](const Vec3<S>& n) {
+    if constexpr (std::is_same_v<B, Cone<S>>) {
+      // a bound through the cone's branch or a body inside it is exact only where that branch or
+      // body touches the contact: accepted when the true overlap at the certified normal is within
+      // the tolerance of the bound
+      const S tol = o.relative_tolerance * scale;
+      const auto exact = [&](const LocalCertificate<S>& lc) {
+        const Vec3<S>& k = lc.normal;
+        return lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol;
+      };
+      OverlapTerms<S> terms;
+      if (cylinder_cone_terms(a, b, f.R, f.t, n, terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, n);
+        if (exact(lc)) return lc;
+      }
+      // the cone's side: the minimiser along b's side normals (Newton on the azimuth), then the
+      // body inside b along that ruling (its overlap is exact there)
+      Vec3<S> m = n;
+      if (cone_side_newton(a, b, f.R, f.t, m) && cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, m);
+        if (exact(lc)) return lc;
+      }
+      // else (a's rim or ruling against b's side) the body moved to the ruling of the minimiser
+      // found, round by round (each moves about half-way)
+      m = n;
+      for (int round = 0; round < 8; ++round) {
+        if (!cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) break;
+        const LocalCertificate<S> lc = local_certificate(terms, m);
+        if (!lc.ok) break;
+        if (exact(lc)) return lc;
+        m = lc.normal;
+      }
+      return LocalCertificate<S>();
+    } else {
+      return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
+    }
+  };
+  ConvexContact<S> g =
+      o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local) : general_penetration(a, pa, b, pb, o, simplex, its);
   g.iterations += 1 + c.iterations;
   return g;
 }
