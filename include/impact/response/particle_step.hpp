@@ -566,9 +566,10 @@ template <class S> inline void validate_particle(const Particle<S>& p, std::size
   // The rule of reject_particle's checks in branch-free comparisons, each false for NaN: |x| <= lim
   // holds only for finite x within the range, and |v| dt <= lim only for finite v (an infinite v
   // gives infinity, or NaN when dt = 0). It runs for every particle on every step_particles call.
-  bool ok = (p.radius >= S(0)) & (p.radius <= lim) & (p.free_radius == p.free_radius);
+  // (ints, not bools: & on bools is what clang's -Wbitwise-instead-of-logical rejects)
+  int ok = int(p.radius >= S(0)) & int(p.radius <= lim) & int(p.free_radius == p.free_radius);
   for (int k = 0; k < 3; ++k)
-    ok = ok & (std::abs(p.position[k]) <= lim) & (std::abs(p.free_center[k]) <= lim) & (std::abs(p.velocity[k]) * dt <= lim);
+    ok &= int(std::abs(p.position[k]) <= lim) & int(std::abs(p.free_center[k]) <= lim) & int(std::abs(p.velocity[k]) * dt <= lim);
   if (IMPACT_UNLIKELY(!ok)) reject_particle(p, index, dt, where);
 }
 /// The checks of validate_particle one by one, throwing for the first that fails.
