@@ -199,7 +199,8 @@ TEST(WideBvh, DeepTreeCastsLikeBruteForce) {
   const WideBvh<double> w(m);
   ASSERT_GT(w.depth(), detail::WideCast<double>::kFixedDepth);
   check_structure(m, w, 4);
-  EXPECT_GT(check_casts(m, w, 400 / kWideSamples, 0.5, 17), 0);  // (few: most triangles are tiny)
+  // all 400 rays under the sanitizers too: fewer (100) hit no triangle at all (most are tiny)
+  EXPECT_GT(check_casts(m, w, 400, 0.5, 17), 0);
   // along the chain: the nearest triangle first, through every level
   for (int i = 0; i < 40; ++i) {
     const double y = std::pow(0.8, 5 * i) * 0.01;
