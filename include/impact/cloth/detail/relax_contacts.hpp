@@ -35,56 +35,118 @@ struct RelaxStats {
 };
 
 /// Relaxes `set` (constraints over vertices 0..w.size()-1; `w` the inverse masses, 0 = never
-/// moved). `gap(k)` is the constraint's current sum_j a_j n . x1_j; `apply(k)` applies its impulse
-/// and returns whether it moved anything. A constraint gets an impulse when b - gap > tolerance;
-/// at most `max_rounds` rounds. `acted` (optional, set.size() entries) marks the constraints that
-/// got an impulse. Cost: O(w.size() + set.size()) to index, then per round the constraints visited.
+/// moved). `gap(k)` is the constraint's current sum_j a_j n . x1_j; `apply(k, dl, denom)` moves
+/// the constraint's movable vertices by w_j a_j dl n (plus friction when dl > 0; `denom` is
+/// sum_j a_j^2 w_j) and returns whether it moved anything.
+/// Without `lambda`: a constraint whose gap falls short of b by more than `tolerance` gets
+/// dl = (b - gap) / denom, which meets it exactly (one-sided: nothing is ever pulled back).
+/// With `lambda` (one accumulated multiplier per constraint, >= 0, kept by the caller across
+/// calls; missing entries start at 0): projected successive over-relaxation, dl = omega (b - gap)
+/// / denom clamped so that lambda + dl >= 0: a constraint short of b by more than `tolerance`
+/// pushes, one past b by more than `tolerance` with lambda > 0 gives some of its push back. The
+/// constraints' normals and weights are fixed, so this is projected SOR on a linear
+/// complementarity problem with a symmetric positive semidefinite matrix, convergent for omega in
+/// (0, 2); converged, every gap is >= b - tolerance and every constraint with lambda > 0 has
+/// gap <= b + tolerance. In a stack of K sheets on a floor plain Gauss-Seidel needs O(K^2)
+/// rounds, over-relaxation about O(K).
+/// At most `max_rounds` rounds. `acted` (optional, set.size() entries) marks the constraints that
+/// got an impulse. Cost: O(w.size() + set.size()) to index, then per round the constraints visited
+/// and the listing of the next round's: a scan of every constraint when the vertices the round
+/// moved lie on many of them, else their constraints through the vertex -> constraint index,
+/// once per moved vertex (not once per impulse: in a resting stack a vertex lies on tens of
+/// constraints and most of them act in a round).
 template <class Gap, class Apply>
 RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vector<double>& w, double tolerance, int max_rounds, Gap&& gap,
-                          Apply&& apply, std::vector<std::uint8_t>* acted = nullptr) {
+                          Apply&& apply, std::vector<std::uint8_t>* acted = nullptr, std::vector<double>* lambda = nullptr,
+                          double omega = 1) {
   RelaxStats r;
   const std::size_t m = set.size(), nv = w.size();
   if (m == 0 || max_rounds <= 0) return r;
+  if (lambda && lambda->size() < m) lambda->resize(m, 0.0);
   auto movable = [&](std::int32_t v) { return w[static_cast<std::size_t>(v)] > 0; };
-  // vertex -> constraints through it (movable vertices only), CSR
+  // Times count constraint visits. moved_at[v]: the visit whose impulse last moved vertex v;
+  // visited_at[c]: constraint c's last visit. A constraint is checked again iff one of its movable
+  // vertices was moved after its last visit: by a constraint visited later in the same round (its
+  // own impulse moves them at its own visit's time, which does not count), or in a round it was
+  // not visited in. Listing the next round's constraints by these stamps once per round, not
+  // through the constraints of every vertex at every impulse, gives the same lists.
+  std::vector<std::uint64_t> moved_at(nv, 0), visited_at(m, 0);
+  std::uint64_t now = 0;
+  // vertex -> constraints through it (movable vertices only), CSR: the counts now, the entries
+  // when a round first lists its successors through them
   std::vector<std::uint32_t> off(nv + 1, 0), idx;
   for (const auto& k : set)
     for (int j = 0; j < k.count; ++j)
       if (movable(k.v[j])) ++off[static_cast<std::size_t>(k.v[j]) + 1];
   for (std::size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
-  idx.resize(off[nv]);
-  {
+  auto index = [&]() {
+    if (!idx.empty() || off[nv] == 0) return;
+    idx.resize(off[nv]);
     std::vector<std::uint32_t> fill(off.begin(), off.end() - 1);
     for (std::size_t c = 0; c < m; ++c)
       for (int j = 0; j < set[c].count; ++j)
         if (movable(set[c].v[j])) idx[fill[static_cast<std::size_t>(set[c].v[j])]++] = static_cast<std::uint32_t>(c);
-  }
-  std::vector<std::uint32_t> cur(m), next;
+  };
+  // Over-relaxed (omega != 1), a constraint's own impulse does not meet it exactly (it overshoots
+  // by (omega - 1) times its shortfall): it is checked again in the next round, as if moved.
+  const bool over = lambda != nullptr && omega != 1;
+  std::vector<std::uint8_t> self(over ? m : 0, 0);
+  auto stale = [&](std::size_t c) {
+    if (over && self[c]) return true;
+    const ZoneConstraint& k = set[c];
+    for (int j = 0; j < k.count; ++j)
+      if (moved_at[static_cast<std::size_t>(k.v[j])] > visited_at[c]) return true;  // immovable vertices keep 0
+    return false;
+  };
+  std::vector<std::uint32_t> cur(m), next, moved;
   std::iota(cur.begin(), cur.end(), 0u);
-  std::vector<std::uint8_t> pending(m, 1);  // in this round's list (not visited yet) or the next's
+  std::vector<std::uint32_t> listed;  // round in which a constraint was last listed (incidence path)
   while (r.rounds < max_rounds && !cur.empty()) {
     ++r.rounds;
-    next.clear();
+    const std::uint64_t round_start = now + 1;
+    moved.clear();
+    std::size_t reach = 0;  // entries of the incidence lists of the moved vertices
     for (const auto c : cur) {
-      pending[c] = 0;
+      visited_at[c] = ++now;
+      if (over) self[c] = 0;
       const ZoneConstraint& k = set[c];
-      if (k.b - gap(k) <= tolerance || !apply(k)) continue;
+      const double short_by = k.b - gap(k);
+      double* lam = lambda ? &(*lambda)[c] : nullptr;
+      if (short_by <= tolerance && !(lam && *lam > 0 && short_by < -tolerance)) continue;
+      double denom = 0;
+      for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * w[static_cast<std::size_t>(k.v[j])];
+      if (!(denom > 0)) continue;
+      double dl = short_by / denom;
+      if (lam) {
+        dl = std::max(omega * dl, -*lam);
+        *lam += dl;
+      }
+      if (!apply(k, dl, denom)) continue;
+      if (over) self[c] = 1;
       ++r.impulses;
       if (acted) (*acted)[c] = 1;
       for (int j = 0; j < k.count; ++j) {
         if (!movable(k.v[j])) continue;
         const std::size_t v = static_cast<std::size_t>(k.v[j]);
-        for (std::uint32_t q = off[v]; q < off[v + 1]; ++q)
-          if (idx[q] != c && !pending[idx[q]]) pending[idx[q]] = 1, next.push_back(idx[q]);
+        if (moved_at[v] < round_start) moved.push_back(static_cast<std::uint32_t>(v)), reach += off[v + 1] - off[v];
+        moved_at[v] = now;
       }
     }
-    // In index order: a constraint is pending now iff it is in `next`, so when `next` is a large
-    // share of the set a scan of the flags lists it in order, cheaper than sorting it.
-    if (next.size() * 16 >= m) {
-      next.clear();
+    // The next round's list, in index order: by a scan of every constraint when the moved
+    // vertices reach many of them, else through their incidence lists (then sorted).
+    next.clear();
+    if (2 * reach >= m) {
       for (std::size_t c = 0; c < m; ++c)
-        if (pending[c]) next.push_back(static_cast<std::uint32_t>(c));
+        if (stale(c)) next.push_back(static_cast<std::uint32_t>(c));
     } else {
+      index();
+      if (listed.empty()) listed.assign(m, 0);
+      const auto mark = static_cast<std::uint32_t>(r.rounds);
+      for (const auto v : moved)
+        for (std::uint32_t q = off[v]; q < off[v + 1]; ++q) {
+          const std::uint32_t c = idx[q];
+          if (listed[c] != mark && stale(c)) listed[c] = mark, next.push_back(c);
+        }
       std::sort(next.begin(), next.end());
     }
     std::swap(cur, next);

@@ -117,6 +117,7 @@ void validate_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm
     throw InvalidInput(fn + "negative pass or iteration count");
   if (o.impulse_relax_rounds < 0) throw InvalidInput(fn + "impulse_relax_rounds must be >= 0");
   if (o.proximity_rounds < 1) throw InvalidInput(fn + "proximity_rounds must be >= 1");
+  if (!(o.relaxation_factor > S(0) && o.relaxation_factor < S(2))) throw InvalidInput(fn + "relaxation_factor must be in (0, 2)");
   if (!(o.proximity_tolerance > S(0)) || !std::isfinite(double(o.proximity_tolerance)))
     throw InvalidInput(fn + "proximity_tolerance must be positive and finite");
   if (!(o.projection_tolerance > S(0)) || !std::isfinite(double(o.projection_tolerance)))
@@ -1066,11 +1067,14 @@ class Stepper {
     return constraint_of(p, c.a, n, target_);
   }
 
-  /// Relaxes the contact set contacts_ (relax_contacts) with the proximity tolerance.
+  /// Relaxes the contact set contacts_ (relax_contacts) with the proximity tolerance: projected
+  /// over-relaxation with the multipliers lam_ accumulated over the step (one per contact; the
+  /// impulses a CCD hit got in its pass are its own, not counted in them, so never given back).
   RelaxStats relax(int rounds, std::vector<std::uint8_t>* acted) {
+    const double omega = static_cast<double>(opt_.relaxation_factor);
     return relax_contacts(
         contacts_, sys_.w, static_cast<double>(opt_.proximity_tolerance) * h_, rounds, [&](const ZoneConstraint& k) { return gap(k); },
-        [&](const ZoneConstraint& k) { return apply_impulse(k); }, acted);
+        [&](const ZoneConstraint& k, double dl, double denom) { return push(k, dl, denom); }, acted, omega == 1 ? nullptr : &lam_, omega);
   }
 
   double gap(const ZoneConstraint& k) const {
@@ -1088,15 +1092,22 @@ class Stepper {
     double denom = 0;
     for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * sys_.w[static_cast<std::size_t>(k.v[j])];
     if (!(denom > 0)) return false;
-    const double dn = k.b - g;
-    const double lam = dn / denom;
+    return push(k, (k.b - g) / denom, denom);
+  }
+
+  /// Moves the constraint's movable vertices by w_j a_j dl n (its gap changes by dl denom, denom =
+  /// sum_j a_j^2 w_j > 0) and, when dl > 0, applies Coulomb friction: the tangential relative
+  /// displacement over the step shrinks by at most friction times the normal change dl denom.
+  bool push(const ZoneConstraint& k, double dl, double denom) {
+    if (!(denom > 0)) return false;
+    const double dn = dl * denom;
     Vec3<double> rel = Vec3<double>::Zero();
     for (int j = 0; j < k.count; ++j) rel += k.a[j] * (p1(k.v[j]) - p0(k.v[j]));
     Vec3<double> tang = rel - k.n.dot(rel) * k.n;
     const double tl = tang.norm();
     const double mu = static_cast<double>(opt_.friction);
-    Vec3<double> push = lam * k.n;
-    if (tl > 0 && mu > 0) push -= (std::min(tl, mu * dn) / denom) * (tang / tl);
+    Vec3<double> push = dl * k.n;
+    if (dn > 0 && tl > 0 && mu > 0) push -= (std::min(tl, mu * dn) / denom) * (tang / tl);
     for (int j = 0; j < k.count; ++j) {
       const double w = sys_.w[static_cast<std::size_t>(k.v[j])];
       if (!(w > 0)) continue;
@@ -1219,6 +1230,7 @@ class Stepper {
   std::vector<Near> near_;
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
+  std::vector<double> lam_;  // their accumulated multipliers (relax)
   std::vector<Hit> last_hits_;
   std::vector<CcdResult<S>> res_;  // test_changed's buffers, kept between passes
   std::vector<std::uint32_t> todo_;
