@@ -36,7 +36,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <new>
 #include <optional>
 #include <type_traits>
 
@@ -215,7 +214,7 @@ template <class S> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
     if (wide.depth() <= kFixedDepth) {
-      FixedStack<3 * kFixedDepth> stack;
+      TraversalStack<WideEntry, 3 * kFixedDepth, StackOverflow::None> stack;  // 3 entries a level at most
       run(stack);
     } else {
       TraversalStack<WideEntry, 128> stack;
@@ -223,22 +222,6 @@ template <class S> struct WideCast {
     }
   }
   static constexpr int kFixedDepth = 40;
-  /// A stack of at most N entries (unchecked: the caller bounds it), slots uninitialised.
-  template <int N> class FixedStack {
-   public:
-    FixedStack() {}  // NOLINT(modernize-use-equals-default): the slots stay uninitialised
-    void push(const WideEntry& e) { new (&slots_[top_++].value) WideEntry(e); }
-    bool empty() const { return top_ == 0; }
-    WideEntry pop() { return slots_[--top_].value; }
-
-   private:
-    union Slot {
-      Slot() {}  // NOLINT(modernize-use-equals-default): no initialisation
-      WideEntry value;
-    };
-    Slot slots_[N];
-    int top_ = 0;
-  };
 
   template <class Stack> void run(Stack& stack) {
     const WideBvhNode* nodes = wide.nodes().data();
