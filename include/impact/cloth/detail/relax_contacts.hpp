@@ -35,9 +35,9 @@ struct RelaxStats {
 };
 
 /// Relaxes `set` (constraints over vertices 0..w.size()-1; `w` the inverse masses, 0 = never
-/// moved). `gap(k)` is the constraint's current sum_j a_j n . x1_j; `apply(k, dl, denom)` moves
-/// the constraint's movable vertices by w_j a_j dl n (plus friction when dl > 0; `denom` is
-/// sum_j a_j^2 w_j) and returns whether it moved anything.
+/// moved). `gap(k)` is the constraint's current sum_j a_j n . x1_j; `apply(k, dl, dn)` moves the
+/// constraint's movable vertices by w_j a_j dl n, which changes its gap by dn = dl sum_j a_j^2 w_j
+/// (> 0: a push, which may add friction), and returns whether it moved anything.
 /// Without `lambda`: a constraint whose gap falls short of b by more than `tolerance` gets
 /// dl = (b - gap) / denom, which meets it exactly (one-sided: nothing is ever pulled back).
 /// With `lambda` (one accumulated multiplier per constraint, >= 0, kept by the caller across
@@ -116,12 +116,13 @@ RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vec
       double denom = 0;
       for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * w[static_cast<std::size_t>(k.v[j])];
       if (!(denom > 0)) continue;
-      double dl = short_by / denom;
+      double dl = short_by / denom, dn = short_by;
       if (lam) {
         dl = std::max(omega * dl, -*lam);
+        dn = dl * denom;
         *lam += dl;
       }
-      if (!apply(k, dl, denom)) continue;
+      if (!apply(k, dl, dn)) continue;
       if (over) self[c] = 1;
       ++r.impulses;
       if (acted) (*acted)[c] = 1;

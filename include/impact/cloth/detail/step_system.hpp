@@ -1074,7 +1074,7 @@ class Stepper {
     const double omega = static_cast<double>(opt_.relaxation_factor);
     return relax_contacts(
         contacts_, sys_.w, static_cast<double>(opt_.proximity_tolerance) * h_, rounds, [&](const ZoneConstraint& k) { return gap(k); },
-        [&](const ZoneConstraint& k, double dl, double denom) { return push(k, dl, denom); }, acted, omega == 1 ? nullptr : &lam_, omega);
+        [&](const ZoneConstraint& k, double dl, double dn) { return push(k, dl, dn); }, acted, omega == 1 ? nullptr : &lam_, omega);
   }
 
   double gap(const ZoneConstraint& k) const {
@@ -1092,15 +1092,17 @@ class Stepper {
     double denom = 0;
     for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * sys_.w[static_cast<std::size_t>(k.v[j])];
     if (!(denom > 0)) return false;
-    return push(k, (k.b - g) / denom, denom);
+    const double dn = k.b - g;
+    return push(k, dn / denom, dn);
   }
 
-  /// Moves the constraint's movable vertices by w_j a_j dl n (its gap changes by dl denom, denom =
-  /// sum_j a_j^2 w_j > 0) and, when dl > 0, applies Coulomb friction: the tangential relative
-  /// displacement over the step shrinks by at most friction times the normal change dl denom.
-  bool push(const ZoneConstraint& k, double dl, double denom) {
-    if (!(denom > 0)) return false;
-    const double dn = dl * denom;
+  /// Moves the constraint's movable vertices by w_j a_j dl n, which changes its gap by dn = dl
+  /// sum_j a_j^2 w_j, and, when dn > 0, applies Coulomb friction: the tangential relative
+  /// displacement over the step shrinks by at most friction times dn. The caller has checked
+  /// that some vertex is movable (sum_j a_j^2 w_j > 0).
+  bool push(const ZoneConstraint& k, double dl, double dn) {
+    double denom = 0;
+    for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * sys_.w[static_cast<std::size_t>(k.v[j])];
     Vec3<double> rel = Vec3<double>::Zero();
     for (int j = 0; j < k.count; ++j) rel += k.a[j] * (p1(k.v[j]) - p0(k.v[j]));
     Vec3<double> tang = rel - k.n.dot(rel) * k.n;
