@@ -322,6 +322,24 @@ TEST(TraversalStack, LifoAcrossTheOverflow) {
   }
 }
 
+// Without an overflow (StackOverflow::None, the wide ray cast's stack) the stack is LIFO over
+// its N slots, filled to the last one, through repeated fill and drain.
+TEST(TraversalStack, FixedModeIsLifoToItsCapacity) {
+  detail::TraversalStack<std::pair<float, std::int32_t>, 6, detail::StackOverflow::None> stack;
+  for (int round = 0; round < 3; ++round) {
+    EXPECT_TRUE(stack.empty());
+    const int n = 2 + 2 * round;  // 2, 4, 6 = every slot
+    for (int i = 0; i < n; ++i) stack.push({0.25f * float(i), 10 * i + round});
+    for (int i = n - 1; i >= 0; --i) {
+      ASSERT_FALSE(stack.empty());
+      const auto [key, value] = stack.pop();
+      EXPECT_EQ(value, 10 * i + round);
+      EXPECT_EQ(key, 0.25f * float(i));
+    }
+    EXPECT_TRUE(stack.empty());
+  }
+}
+
 // D14: a mesh's tree keeps nothing of its build (the fitting scratch is a local) and the sphere and
 // AABB trees stay within 120 bytes per triangle beyond the mesh's own arrays (nodes, primitive
 // permutation and triangle ids; the triangles are read from the mesh), before and after a refit.

@@ -111,6 +111,29 @@ TYPED_TEST(ObbFitTest, AxesFollowALongThinSet) {
   EXPECT_LT(double(b.half.prod()) * 8, 0.2 * double(box.extent().prod()));
 }
 
+TYPED_TEST(ObbFitTest, KeepsTheCoordinateAxesWhenTheirBoxIsClearlySmaller) {
+  using S = TypeParam;
+  // The corners of a unit box, two opposite vertical edges (x = y) sampled densely: the covariance's
+  // main axis is the diagonal (1, 1, 0), whose box is twice the axis-aligned box (2 against 1).
+  // The fit keeps the coordinate axes: the box is the unit box, up to the rounding pad.
+  std::vector<Vec3<S>> pts;
+  for (int x = 0; x < 2; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 2; ++z) pts.emplace_back(S(x), S(y), S(z));
+  for (int k = 0; k <= 20; ++k) {
+    pts.emplace_back(S(0), S(0), S(k / 20.0));
+    pts.emplace_back(S(1), S(1), S(k / 20.0));
+  }
+  const Obb<S> b = fit_obb(pts.data(), pts.size(), ObbFit::Points);
+  expect_holds(b, pts);
+  EXPECT_NEAR(double(b.half.prod()) * 8, 1.0, 1e-5);
+  // moved off the origin and turned by a quarter turn about z (still axis-aligned): the same box
+  for (auto& p : pts) p = Vec3<S>(S(1e3) - p.y(), S(-2e3) + p.x(), p.z());
+  const Obb<S> moved = fit_obb(pts.data(), pts.size(), ObbFit::Points);
+  expect_holds(moved, pts);
+  EXPECT_NEAR(double(moved.half.prod()) * 8, 1.0, sizeof(S) == 4 ? 1e-2 : 1e-5);  // float: the pad for rounding at 2e3
+}
+
 TYPED_TEST(ObbFitTest, TriangleAreaIgnoresVertexDensity) {
   using S = TypeParam;
   // A 4 x 1 rectangle tessellated finely at one end only: the vertex covariance's main axis is

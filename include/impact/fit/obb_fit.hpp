@@ -2,7 +2,12 @@
 /// \file
 /// Oriented bounding boxes of point sets and triangle sets: the axes are the eigenvectors of a
 /// covariance matrix (Gottschalk, Lin, Manocha 1996, "OBBTree"), the extents the range of the
-/// points' projections on them.
+/// points' projections on them. Where the coordinate axes give a clearly smaller box (volume
+/// below 3/4 of the covariance box's), fit_obb keeps them instead: the covariance of a box-shaped
+/// set (the walls and floor of a room, an axis-aligned crate) can point its main axis along a
+/// diagonal and fit a box much larger than the axis-aligned one. On env/rob (1,000 poses of
+/// impact-collide-bench) this takes the boolean query from 89.5 to 66.9 node tests on average and
+/// the all-pairs query from 499 to 450; on bunny/bunny from 44.9 to 40.5 and 3,686 to 3,654.
 ///  - TriangleArea (default for meshes): the covariance of the triangles' surfaces, each triangle
 ///    weighted by its area (the continuous second moment). Vertices packed densely on one side of
 ///    a mesh do not pull the axes towards them, as they do with the vertex covariance.
@@ -101,24 +106,15 @@ template <class S> bool triangle_covariance(const Vec3<S>* pts, std::size_t n, E
 
 }  // namespace detail
 
-/// The box with the given axes (columns, orthonormal to rounding) that holds the n points, its
-/// centre in the middle of the points' projections. Contains every point exactly (see the file
-/// comment). n == 0 gives an empty box (negative extents).
-template <class S> Obb<S> fit_obb_with_axes(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes) {
+namespace detail {
+/// fit_obb_with_axes once the range [lo, hi] of the points' projections A^T (p - ref) on the axes
+/// is known (ref: the first point; n > 0).
+template <class S>
+Obb<S> fit_obb_in_range(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   Obb<S> box;
   box.axes = axes;
-  if (n == 0) {
-    box.half = Vec3<S>::Constant(S(-1));
-    return box;
-  }
   const Eigen::Matrix3d A = axes.template cast<double>();
   const Eigen::Vector3d ref = pts[0].template cast<double>();
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d h = A.transpose() * (pts[i].template cast<double>() - ref);
-    lo = lo.cwiseMin(h);
-    hi = hi.cwiseMax(h);
-  }
   box.center = (ref + A * ((lo + hi) * 0.5)).template cast<S>();
   // Extents measured from the stored centre along the stored axes.
   const Eigen::Vector3d c = box.center.template cast<double>();
@@ -148,15 +144,52 @@ template <class S> Obb<S> fit_obb_with_axes(const Vec3<S>* pts, std::size_t n, c
   }
   return box;
 }
+}  // namespace detail
+
+/// The box with the given axes (columns, orthonormal to rounding) that holds the n points, its
+/// centre in the middle of the points' projections. Contains every point exactly (see the file
+/// comment). n == 0 gives an empty box (negative extents).
+template <class S> Obb<S> fit_obb_with_axes(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes) {
+  if (n == 0) {
+    Obb<S> box;
+    box.axes = axes;
+    box.half = Vec3<S>::Constant(S(-1));
+    return box;
+  }
+  const Eigen::Matrix3d A = axes.template cast<double>();
+  const Eigen::Vector3d ref = pts[0].template cast<double>();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d h = A.transpose() * (pts[i].template cast<double>() - ref);
+    lo = lo.cwiseMin(h);
+    hi = hi.cwiseMax(h);
+  }
+  return detail::fit_obb_in_range(pts, n, axes, lo, hi);
+}
 
 /// Oriented bounding box of n points (see ObbFit for how the axes are chosen; TriangleArea reads
 /// the points as consecutive triangle triples and falls back to the points' covariance when n is
-/// not a multiple of 3 or the triangles have no area). Contains every point exactly. O(n).
+/// not a multiple of 3 or the triangles have no area; the coordinate axes replace them when their
+/// box has under 3/4 of the volume, see the file comment). Contains every point exactly. O(n).
 template <class S> Obb<S> fit_obb(const Vec3<S>* pts, std::size_t n, ObbFit method = ObbFit::TriangleArea) {
   if (n == 0) return fit_obb_with_axes<S>(pts, 0, Mat3<S>::Identity());
   Eigen::Matrix3d C;
   if (method != ObbFit::TriangleArea || n % 3 != 0 || !detail::triangle_covariance(pts, n, C)) C = detail::point_covariance(pts, n);
-  return fit_obb_with_axes(pts, n, Mat3<S>(detail::covariance_axes(C).template cast<S>()));
+  const Mat3<S> axes = detail::covariance_axes(C).template cast<S>();
+  // the points' ranges on the covariance axes and on the coordinate axes, in one pass
+  const Eigen::Matrix3d A = axes.template cast<double>();
+  const Eigen::Vector3d ref = pts[0].template cast<double>();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo, lo_c = lo, hi_c = hi;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = pts[i].template cast<double>() - ref;
+    const Eigen::Vector3d h = A.transpose() * d;
+    lo = lo.cwiseMin(h);
+    hi = hi.cwiseMax(h);
+    lo_c = lo_c.cwiseMin(d);
+    hi_c = hi_c.cwiseMax(d);
+  }
+  if ((hi_c - lo_c).prod() < 0.75 * (hi - lo).prod()) return detail::fit_obb_in_range<S>(pts, n, Mat3<S>::Identity(), lo_c, hi_c);
+  return detail::fit_obb_in_range(pts, n, axes, lo, hi);
 }
 
 /// The eight corners of a box, computed in S (rounded): callers that need containment pad for it.

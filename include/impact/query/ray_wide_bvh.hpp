@@ -36,7 +36,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <new>
 #include <optional>
 #include <type_traits>
 
@@ -56,6 +55,19 @@ namespace detail {
 /// the same rule in a few comparisons (NaN fails them all); validate_ray throws for the others.
 template <class S> inline bool ray_in_range(const Ray<S>& ray) {
   constexpr S hi = CoordinateRange<S>::max;
+#if defined(__SSE2__)
+  if constexpr (std::is_same_v<S, double>) {  // the six coordinates two a register
+    const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+    const __m128d vhi = _mm_set1_pd(hi), vmin = _mm_set1_pd(CoordinateRange<S>::min_scale);
+    const __m128d o01 = _mm_and_pd(_mm_loadu_pd(ray.origin.data()), abs_mask);
+    const __m128d o2d0 = _mm_and_pd(_mm_set_pd(ray.direction[0], ray.origin[2]), abs_mask);
+    const __m128d d12 = _mm_and_pd(_mm_loadu_pd(ray.direction.data() + 1), abs_mask);
+    const __m128d in = _mm_and_pd(_mm_and_pd(_mm_cmple_pd(o01, vhi), _mm_cmple_pd(o2d0, vhi)), _mm_cmple_pd(d12, vhi));
+    // the largest direction component >= min_scale: some component is (NaN fails `in`)
+    const int scale = _mm_movemask_pd(_mm_cmpge_pd(d12, vmin)) | (_mm_movemask_pd(_mm_cmpge_pd(o2d0, vmin)) & 2);
+    return _mm_movemask_pd(in) == 3 && scale != 0 && ray.t_max >= S(0);
+  }
+#endif
   bool ok = ray.t_max >= S(0);
   S dmax = S(0);
   for (int i = 0; i < 3; ++i) {
@@ -215,7 +227,7 @@ template <class S> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
     if (wide.depth() <= kFixedDepth) {
-      FixedStack<3 * kFixedDepth> stack;
+      TraversalStack<WideEntry, 3 * kFixedDepth, StackOverflow::None> stack;  // 3 entries a level at most
       run(stack);
     } else {
       TraversalStack<WideEntry, 128> stack;
@@ -223,22 +235,6 @@ template <class S> struct WideCast {
     }
   }
   static constexpr int kFixedDepth = 40;
-  /// A stack of at most N entries (unchecked: the caller bounds it), slots uninitialised.
-  template <int N> class FixedStack {
-   public:
-    FixedStack() {}  // NOLINT(modernize-use-equals-default): the slots stay uninitialised
-    void push(const WideEntry& e) { new (&slots_[top_++].value) WideEntry(e); }
-    bool empty() const { return top_ == 0; }
-    WideEntry pop() { return slots_[--top_].value; }
-
-   private:
-    union Slot {
-      Slot() {}  // NOLINT(modernize-use-equals-default): no initialisation
-      WideEntry value;
-    };
-    Slot slots_[N];
-    int top_ = 0;
-  };
 
   template <class Stack> void run(Stack& stack) {
     const WideBvhNode* nodes = wide.nodes().data();
@@ -330,8 +326,13 @@ template <class S>
 std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
                                                           RayMeshStats* stats, bool use_simd = true) {
   if (wide.empty()) return std::nullopt;
-  const Vec3<S> o = pose ? Vec3<S>(pose->R.transpose() * (ray.origin - pose->t)) : ray.origin;
-  const Vec3<S> d = pose ? Vec3<S>(pose->R.transpose() * ray.direction) : ray.direction;
+  Vec3<S> posed_o, posed_d;  // the ray in the mesh's frame when posed (else the caller's, not copied)
+  if (pose) {
+    posed_o = pose->R.transpose() * (ray.origin - pose->t);
+    posed_d = pose->R.transpose() * ray.direction;
+  }
+  const Vec3<S>& o = pose ? posed_o : ray.origin;
+  const Vec3<S>& d = pose ? posed_d : ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
   WideCast<S> cast(wide, o, d, ray.t_max, use_simd);
   cast.run();

@@ -59,64 +59,11 @@ template <class S> class BlockTest {
 #if defined(IMPACT_BLOCK_TEST_AVX)
       if (avx_) return candidates_avx(b, t_max) & lanes;
 #endif
-      const __m128d o0 = _mm_set1_pd(o_[0]), o1 = _mm_set1_pd(o_[1]), o2 = _mm_set1_pd(o_[2]);
-      const __m128d sx = _mm_set1_pd(sx_), sy = _mm_set1_pd(sy_), sz = _mm_set1_pd(sz_);
-      const __m128d tmax = _mm_set1_pd(t_max), zero = _mm_setzero_pd();
       int m = 0;
-      for (int h = 0; h < 2; ++h) {
-        __m128d px[3], py[3], pz[3];
-        for (int v = 0; v < 3; ++v) {
-          const __m128d ax = _mm_sub_pd(load2(b.v[3 * v + off_[0]] + 2 * h), o0);
-          const __m128d ay = _mm_sub_pd(load2(b.v[3 * v + off_[1]] + 2 * h), o1);
-          const __m128d az = _mm_sub_pd(load2(b.v[3 * v + off_[2]] + 2 * h), o2);
-          px[v] = _mm_sub_pd(ax, _mm_mul_pd(sx, az));
-          py[v] = _mm_sub_pd(ay, _mm_mul_pd(sy, az));
-          pz[v] = _mm_mul_pd(sz, az);
-        }
-        const __m128d eu = _mm_sub_pd(_mm_mul_pd(px[2], py[1]), _mm_mul_pd(py[2], px[1]));
-        const __m128d ev = _mm_sub_pd(_mm_mul_pd(px[0], py[2]), _mm_mul_pd(py[0], px[2]));
-        const __m128d ew = _mm_sub_pd(_mm_mul_pd(px[1], py[0]), _mm_mul_pd(py[1], px[0]));
-        const __m128d neg = _mm_or_pd(_mm_or_pd(_mm_cmplt_pd(eu, zero), _mm_cmplt_pd(ev, zero)), _mm_cmplt_pd(ew, zero));
-        const __m128d pos = _mm_or_pd(_mm_or_pd(_mm_cmpgt_pd(eu, zero), _mm_cmpgt_pd(ev, zero)), _mm_cmpgt_pd(ew, zero));
-        const __m128d det = _mm_add_pd(_mm_add_pd(eu, ev), ew);
-        const __m128d tt = _mm_add_pd(_mm_add_pd(_mm_mul_pd(eu, pz[0]), _mm_mul_pd(ev, pz[1])), _mm_mul_pd(ew, pz[2]));
-        const __m128d tmd = _mm_mul_pd(tmax, det);
-        const __m128d up = _mm_cmpgt_pd(det, zero);
-        const __m128d out_up = _mm_or_pd(_mm_cmplt_pd(tt, zero), _mm_cmpgt_pd(tt, tmd));
-        const __m128d out_down = _mm_or_pd(_mm_cmpgt_pd(tt, zero), _mm_cmplt_pd(tt, tmd));
-        const __m128d miss = _mm_or_pd(_mm_or_pd(_mm_and_pd(neg, pos), _mm_cmpeq_pd(det, zero)),
-                                       _mm_or_pd(_mm_and_pd(up, out_up), _mm_andnot_pd(up, out_down)));
-        m |= (~_mm_movemask_pd(miss) & 3) << (2 * h);
-      }
+      for (int h = 0; h < 2; ++h) m |= sse_lanes<SseDouble>(b, h, t_max) << (2 * h);
       return m & lanes;
     } else {
-      const __m128 o0 = _mm_set1_ps(o_[0]), o1 = _mm_set1_ps(o_[1]), o2 = _mm_set1_ps(o_[2]);
-      const __m128 sx = _mm_set1_ps(sx_), sy = _mm_set1_ps(sy_), sz = _mm_set1_ps(sz_);
-      const __m128 tmax = _mm_set1_ps(t_max), zero = _mm_setzero_ps();
-      __m128 px[3], py[3], pz[3];
-      for (int v = 0; v < 3; ++v) {
-        const __m128 ax = _mm_sub_ps(_mm_load_ps(b.v[3 * v + off_[0]]), o0);
-        const __m128 ay = _mm_sub_ps(_mm_load_ps(b.v[3 * v + off_[1]]), o1);
-        const __m128 az = _mm_sub_ps(_mm_load_ps(b.v[3 * v + off_[2]]), o2);
-        px[v] = _mm_sub_ps(ax, _mm_mul_ps(sx, az));
-        py[v] = _mm_sub_ps(ay, _mm_mul_ps(sy, az));
-        pz[v] = _mm_mul_ps(sz, az);
-      }
-      const __m128 eu = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
-      const __m128 ev = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
-      const __m128 ew = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
-      const __m128 some_zero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(eu, zero), _mm_cmpeq_ps(ev, zero)), _mm_cmpeq_ps(ew, zero));
-      const __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(eu, zero), _mm_cmplt_ps(ev, zero)), _mm_cmplt_ps(ew, zero));
-      const __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(eu, zero), _mm_cmpgt_ps(ev, zero)), _mm_cmpgt_ps(ew, zero));
-      const __m128 det = _mm_add_ps(_mm_add_ps(eu, ev), ew);
-      const __m128 tt = _mm_add_ps(_mm_add_ps(_mm_mul_ps(eu, pz[0]), _mm_mul_ps(ev, pz[1])), _mm_mul_ps(ew, pz[2]));
-      const __m128 tmd = _mm_mul_ps(tmax, det);
-      const __m128 up = _mm_cmpgt_ps(det, zero);
-      const __m128 out_up = _mm_or_ps(_mm_cmplt_ps(tt, zero), _mm_cmpgt_ps(tt, tmd));
-      const __m128 out_down = _mm_or_ps(_mm_cmpgt_ps(tt, zero), _mm_cmplt_ps(tt, tmd));
-      const __m128 miss = _mm_or_ps(_mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, zero)),
-                                    _mm_or_ps(_mm_and_ps(up, out_up), _mm_andnot_ps(up, out_down)));
-      return ~_mm_movemask_ps(_mm_andnot_ps(some_zero, miss)) & lanes;
+      return sse_lanes<SseFloat>(b, 0, t_max) & lanes;
     }
 #else
     (void)b;
@@ -167,8 +114,79 @@ template <class S> class BlockTest {
   bool avx_ = false;
 #endif
 #if defined(__SSE2__)
-  static __m128d load2(const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); }
-  static __m128d load2(const double* f) { return _mm_load_pd(f); }
+  /// SSE2 in double: two lanes a register (a float block's coordinates converted exactly).
+  struct SseDouble {
+    using V = __m128d;
+    static constexpr int kLanes = 2;
+    static constexpr bool kFloat = false;
+    static V set1(double x) { return _mm_set1_pd(x); }
+    static V zero() { return _mm_setzero_pd(); }
+    static V load(const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); }
+    static V load(const double* f) { return _mm_load_pd(f); }
+    static V add(V a, V b) { return _mm_add_pd(a, b); }
+    static V sub(V a, V b) { return _mm_sub_pd(a, b); }
+    static V mul(V a, V b) { return _mm_mul_pd(a, b); }
+    static V lt(V a, V b) { return _mm_cmplt_pd(a, b); }
+    static V gt(V a, V b) { return _mm_cmpgt_pd(a, b); }
+    static V eq(V a, V b) { return _mm_cmpeq_pd(a, b); }
+    static V bit_or(V a, V b) { return _mm_or_pd(a, b); }
+    static V bit_and(V a, V b) { return _mm_and_pd(a, b); }
+    static V and_not(V a, V b) { return _mm_andnot_pd(a, b); }  // ~a & b
+    static int sign_bits(V a) { return _mm_movemask_pd(a); }
+  };
+  /// SSE in float: four lanes a register.
+  struct SseFloat {
+    using V = __m128;
+    static constexpr int kLanes = 4;
+    static constexpr bool kFloat = true;
+    static V set1(float x) { return _mm_set1_ps(x); }
+    static V zero() { return _mm_setzero_ps(); }
+    static V load(const float* f) { return _mm_load_ps(f); }
+    static V add(V a, V b) { return _mm_add_ps(a, b); }
+    static V sub(V a, V b) { return _mm_sub_ps(a, b); }
+    static V mul(V a, V b) { return _mm_mul_ps(a, b); }
+    static V lt(V a, V b) { return _mm_cmplt_ps(a, b); }
+    static V gt(V a, V b) { return _mm_cmpgt_ps(a, b); }
+    static V eq(V a, V b) { return _mm_cmpeq_ps(a, b); }
+    static V bit_or(V a, V b) { return _mm_or_ps(a, b); }
+    static V bit_and(V a, V b) { return _mm_and_ps(a, b); }
+    static V and_not(V a, V b) { return _mm_andnot_ps(a, b); }  // ~a & b
+    static int sign_bits(V a) { return _mm_movemask_ps(a); }
+  };
+  /// The test of lanes [h L, h L + L) of `b` (L = Ops::kLanes), written once for both lane types:
+  /// bit j set when lane h L + j is a candidate (see the class comment; in float, a lane with an
+  /// edge function equal to zero is one too).
+  template <class Ops, class T> int sse_lanes(const WideTriangleBlock<T>& b, int h, S t_max) const {
+    using V = typename Ops::V;
+    const V zero = Ops::zero(), tmax = Ops::set1(t_max);
+    const V sx = Ops::set1(sx_), sy = Ops::set1(sy_), sz = Ops::set1(sz_);
+    V px[3], py[3], pz[3];
+    for (int v = 0; v < 3; ++v) {
+      const V ax = Ops::sub(Ops::load(b.v[3 * v + off_[0]] + Ops::kLanes * h), Ops::set1(o_[0]));
+      const V ay = Ops::sub(Ops::load(b.v[3 * v + off_[1]] + Ops::kLanes * h), Ops::set1(o_[1]));
+      const V az = Ops::sub(Ops::load(b.v[3 * v + off_[2]] + Ops::kLanes * h), Ops::set1(o_[2]));
+      px[v] = Ops::sub(ax, Ops::mul(sx, az));
+      py[v] = Ops::sub(ay, Ops::mul(sy, az));
+      pz[v] = Ops::mul(sz, az);
+    }
+    const V eu = Ops::sub(Ops::mul(px[2], py[1]), Ops::mul(py[2], px[1]));
+    const V ev = Ops::sub(Ops::mul(px[0], py[2]), Ops::mul(py[0], px[2]));
+    const V ew = Ops::sub(Ops::mul(px[1], py[0]), Ops::mul(py[1], px[0]));
+    const V neg = Ops::bit_or(Ops::bit_or(Ops::lt(eu, zero), Ops::lt(ev, zero)), Ops::lt(ew, zero));
+    const V pos = Ops::bit_or(Ops::bit_or(Ops::gt(eu, zero), Ops::gt(ev, zero)), Ops::gt(ew, zero));
+    const V det = Ops::add(Ops::add(eu, ev), ew);
+    const V tt = Ops::add(Ops::add(Ops::mul(eu, pz[0]), Ops::mul(ev, pz[1])), Ops::mul(ew, pz[2]));
+    const V tmd = Ops::mul(tmax, det);
+    const V up = Ops::gt(det, zero);
+    const V out_up = Ops::bit_or(Ops::lt(tt, zero), Ops::gt(tt, tmd));
+    const V out_down = Ops::bit_or(Ops::gt(tt, zero), Ops::lt(tt, tmd));
+    V miss = Ops::bit_or(Ops::bit_or(Ops::bit_and(neg, pos), Ops::eq(det, zero)), Ops::bit_or(Ops::bit_and(up, out_up), Ops::and_not(up, out_down)));
+    if constexpr (Ops::kFloat) {  // an edge function equal to zero: the scalar test redoes it in double
+      const V some_zero = Ops::bit_or(Ops::bit_or(Ops::eq(eu, zero), Ops::eq(ev, zero)), Ops::eq(ew, zero));
+      miss = Ops::and_not(some_zero, miss);
+    }
+    return ~Ops::sign_bits(miss) & ((1 << Ops::kLanes) - 1);
+  }
 #endif
   int off_[3] = {0, 1, 2};  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
   S o_[3] = {S(0), S(0), S(0)}, sx_ = S(0), sy_ = S(0), sz_ = S(1);
