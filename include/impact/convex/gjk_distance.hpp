@@ -97,7 +97,7 @@ bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
   // shape is parallel to a face of the other) has no inside: the sides of its faces are rounding
   // noise, so every face is a candidate (without this a parallel pair 1e-6 apart was reported
   // intersecting).
-  static constexpr int face[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+  static constexpr int face[4][4] = {{0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}, {0, 1, 2, 3}};
   const Vec3<S> e1 = s[1].w - s[0].w, e2 = s[2].w - s[0].w, e3 = s[3].w - s[0].w;
   const S volume = e1.cross(e2).dot(e3);
   const S edge = std::max({e1.norm(), e2.norm(), e3.norm()});
@@ -167,12 +167,29 @@ enum class GjkStep {
   Inside,      ///< the simplex with p holds the origin
   NoProgress,  ///< the closest point did not come nearer (rounding): the simplex is kept as it was
   Progress,    ///< p joined the simplex; v is its new closest point to the origin
+  Level,       ///< p joined the simplex, whose closest point came no nearer, within the slack (gjk_step)
+};
+
+/// A simplex set aside by a Level step of gjk_step (the state before it: points, weights, closest
+/// point v and |v|^2), for the distance query to return to if no later step comes nearer.
+template <class S>
+struct GjkSavedSimplex {
+  SimplexPoint<S> s[4];
+  S lambda[4] = {S(0), S(0), S(0), S(0)};
+  int n = 0;
+  Vec3<S> v = Vec3<S>::Zero();
+  S vv = std::numeric_limits<S>::infinity();
 };
 
 /// Adds p to the simplex s[0..n) (barycentric lambda, closest point v to the origin, |v|^2 = vv)
 /// and reduces it to the face closest to the origin: the step shared by the distance query and
-/// EPA's enclosing simplex (epa.hpp).
-template <class S> GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v, S vv, const SimplexPoint<S>& p) {
+/// EPA's enclosing simplex (epa.hpp). With `level` given, a new closest point that comes no nearer
+/// than v within the rounding of the simplex (|v'|^2 <= vv + 32 eps |v| W, W the largest |w| of
+/// its points) is kept (Level), and the state before the step is saved in *level when it is nearer
+/// than the one saved there; without it such a step is undone (NoProgress).
+template <class S>
+GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v, S vv, const SimplexPoint<S>& p,
+                 GjkSavedSimplex<S>* level = nullptr) {
   for (int i = 0; i < n; ++i)
     if (s[i].w == p.w) return GjkStep::Repeated;
   SimplexPoint<S> saved[4];
@@ -185,17 +202,39 @@ template <class S> GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<
   s[n++] = p;
   Vec3<S> nv;
   if (!closest_on_simplex(s, n, lambda, nv)) return GjkStep::Inside;
-  if (!(nv.squaredNorm() < vv)) {
-    n = saved_n;
-    for (int i = 0; i < n; ++i) {
-      s[i] = saved[i];
-      lambda[i] = saved_lambda[i];
-    }
-    return GjkStep::NoProgress;
+  const S nvv = nv.squaredNorm();
+  if (nvv < vv) {
+    v = nv;
+    return GjkStep::Progress;
   }
-  v = nv;
-  return GjkStep::Progress;
+  if (level) {
+    S w2 = p.w.squaredNorm();
+    for (int i = 0; i < saved_n; ++i) w2 = std::max(w2, saved[i].w.squaredNorm());
+    if (nvv <= vv + S(32) * std::numeric_limits<S>::epsilon() * std::sqrt(vv * w2)) {
+      if (vv < level->vv) {
+        for (int i = 0; i < saved_n; ++i) {
+          level->s[i] = saved[i];
+          level->lambda[i] = saved_lambda[i];
+        }
+        level->n = saved_n;
+        level->v = v;
+        level->vv = vv;
+      }
+      v = nv;
+      return GjkStep::Level;
+    }
+  }
+  n = saved_n;
+  for (int i = 0; i < n; ++i) {
+    s[i] = saved[i];
+    lambda[i] = saved_lambda[i];
+  }
+  return GjkStep::NoProgress;
 }
+
+/// At most this many GJK steps per distance query may keep a simplex whose closest point came no
+/// nearer (GjkStep::Level).
+inline constexpr int kGjkLevelSteps = 8;
 
 /// GJK distance between A and B given world support functions support_a(d), support_b(d) (points
 /// maximising the dot product with d), a first direction (e.g. the difference of two interior
@@ -222,6 +261,9 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   Vec3<S> v = s[0].w;
   const S tol2 = tolerance * tolerance;
   bool converged = false;
+  S lower = S(0);       // the best lower bound of the distance so far
+  int level_steps = 0;  // steps kept without coming nearer (gjk_step's Level)
+  GjkSavedSimplex<S> level_saved;  // the nearest simplex a Level step left
   while (out.iterations < max_iterations) {
     const S vv = v.squaredNorm();
     if (vv <= tol2 || (stop_within_margin && margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
@@ -234,25 +276,45 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
     p.b = support_b(v);
     p.w = p.a - p.b;
     ++out.iterations;
-    // Duality gap: |v| - (v . w)/|v| bounds |v| - distance.
+    // Duality gap: |v| - lower bounds |v| - distance, lower the best (v . w)/|v| so far (each the
+    // distance of a plane separating the sets).
     const S vw = v.dot(p.w);
     if (margin >= S(0) && vw > S(0) && vw * vw > margin * margin * vv) {  // a separating plane beyond the margin
       converged = true;
       break;
     }
-    const S gap = vv - vw;
-    if (gap <= tolerance * std::sqrt(vv)) {
+    const S len = std::sqrt(vv);
+    if (vw > S(0)) lower = std::max(lower, vw / len);
+    if (len - lower <= tolerance) {
       converged = true;
       break;
     }
-    // a repeated support point or no progress (rounding): v is as close as the arithmetic allows
-    const GjkStep step = gjk_step(s, n, lambda, v, vv, p);
+    // A step whose closest point comes no nearer within rounding still brings a new support point
+    // in: kept (a bounded number of times), since near a flat part of the Minkowski difference
+    // whose support points are not its vertices (a cap of a cylinder or cone nearly parallel to
+    // another flat side) v's progress is second order in the gap, below the rounding of |v|^2,
+    // while the gap is first order: stopping there left it at 4e-9 of the size (cylinder caps
+    // tilted by 1e-8).
+    const GjkStep step = gjk_step(s, n, lambda, v, vv, p, level_steps < kGjkLevelSteps ? &level_saved : nullptr);
     if (step == GjkStep::Progress) continue;
+    if (step == GjkStep::Level) {
+      ++level_steps;
+      continue;
+    }
+    // a repeated support point or no progress (rounding): v is as close as the arithmetic allows
     out.intersecting = step == GjkStep::Inside;
     converged = true;
     break;
   }
   out.limit_reached = !converged;
+  if (level_saved.vv < v.squaredNorm()) {  // Level steps came no nearer in the end: back to the nearest
+    n = level_saved.n;
+    for (int i = 0; i < n; ++i) {
+      s[i] = level_saved.s[i];
+      lambda[i] = level_saved.lambda[i];
+    }
+    v = level_saved.v;
+  }
   Vec3<S> pa = Vec3<S>::Zero(), pb = Vec3<S>::Zero();
   for (int i = 0; i < n; ++i) {
     pa += lambda[i] * s[i].a;

@@ -26,7 +26,8 @@
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: cylinder against cylinder
 ///                                     or cone first through the certified candidates of
-///                                     convex/cylinder_pair.hpp, else the own EPA (convex/epa.hpp;
+///                                     convex/cylinder_pair.hpp, cone against box with the local
+///                                     certificate of convex/cone_box_terms.hpp, else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
@@ -43,6 +44,7 @@
 #pragma once
 
 #include "impact/convex/closed_form.hpp"
+#include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_pair.hpp"
 #include "impact/convex/epa.hpp"
@@ -80,7 +82,7 @@ struct ConvexQueryOptions {
   /// poses (verified on 10 of 130 cylinder–cylinder penetrations), so it cost more support calls
   /// than it saved (38.9 against 31.5 per query there), while EPA alone closes its gap to 1e-10.
   bool newton_refinement = false;
-  /// Cylinder against cylinder or cone: stop EPA early with the local certificate of
+  /// Cylinder against cylinder or cone, and cone against box: stop EPA early with the local certificate of
   /// convex/local_certificate.hpp (Newton on the closed-form overlap, a certified quadratic lower
   /// bound on a cap of directions about its minimiser, EPA's polytope for the rest); off: EPA to
   /// relative_tolerance alone (the answers agree within relative_tolerance; tested).
@@ -478,6 +480,56 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   return g;
 }
 
+/// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
+/// EPA from GJK's tetrahedron, stopped early by the local certificate of
+/// convex/local_certificate.hpp on the terms of convex/cone_box_terms.hpp (the cone's branch active
+/// at EPA's normal; none on a side ruling). A bound through one branch is exact only where that
+/// branch touches the contact, so a certificate is accepted when the true overlap at its normal is
+/// within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
+                                      const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_line = f.t - interior_point(a);
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = centre_line.norm();
+    if (len > S(0)) {
+      const Vec3<S> m = centre_line / len;
+      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) {
+        ConvexContact<S> c;
+        c.iterations = 1;
+        return c;
+      }
+    }
+  }
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  bool limit = false, failed = false;
+  if (!gjk_enclose(sa, sb, Vec3<S>(-centre_line), scale, o.max_iterations, simplex, its, limit, failed)) {
+    if (limit || failed) return general_penetration(a, pa, b, pb, o);
+    ConvexContact<S> none;
+    none.iterations = its;
+    return none;
+  }
+  const auto local = [&](const Vec3<S>& n) {
+    const auto exact = [&](const LocalCertificate<S>& lc) {
+      const Vec3<S>& k = lc.normal;
+      return lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol;
+    };
+    OverlapTerms<S> terms;
+    if (cone_box_terms(a, b, f.R, f.t, n, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, n);
+      if (exact(lc)) return lc;
+    }
+    return LocalCertificate<S>();
+  };
+  if (!o.local_certificate) return general_penetration(a, pa, b, pb, o, simplex, its);
+  return general_penetration(a, pa, b, pb, o, simplex, its, local);
+}
+
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
 /// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
 /// when the segment stays clear of the cylinder (GJK otherwise).
@@ -601,6 +653,10 @@ ConvexContact<S> penetration_unchecked(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration) return cylinder_pair_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Cylinder<S>>) {
       if (!options.libccd_penetration) return swapped(cylinder_pair_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Box<S>>) {
+      if (!options.libccd_penetration) return cone_box_penetration(a, pose_a, b, pose_b, options);
+    } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cone<S>>) {
+      if (!options.libccd_penetration) return swapped(cone_box_penetration(b, pose_b, a, pose_a, options));
     }
     return general_penetration(a, pose_a, b, pose_b, options);
   }
