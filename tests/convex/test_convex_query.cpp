@@ -219,8 +219,12 @@ void check_cylinder_candidates(const char* name, const Cylinder<double>& cyl, co
     EXPECT_NEAR(n.norm(), 1.0, 1e-12) << name;
     EXPECT_NEAR(overlap_along(cyl, pa, b, pb, n), c.depth, 1e-12 * scale) << name << ": depth is not the overlap along the normal";
     EXPECT_LE(c.depth_gap, tol) << name;
-    const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, b, pb, o.normal));
-    EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << name << ": grid " << -o.value;
+    // The ray oracle's search (most of this test's time) on every certified pair, under the
+    // sanitizers on every fourth: EPA below checks each pair's depth independently.
+    if (!IMPACT_TEST_SANITIZED || certified % 4 == 1) {
+      const double upper = std::min(-o.value, test::ray_depth_upper(cyl, pa, b, pb, o.normal));
+      EXPECT_NEAR(c.depth, upper, 1e-9 * scale) << name << ": grid " << -o.value;
+    }
     const auto e = detail::general_penetration(cyl, pa, b, pb, ConvexQueryOptions<double>{});
     ASSERT_TRUE(e.intersecting) << name;
     EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale) << name;

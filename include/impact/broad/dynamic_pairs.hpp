@@ -92,4 +92,30 @@ class DynamicPairs {
   std::vector<std::vector<std::int32_t>> near_;  // position -> positions of the dynamic objects whose fat boxes overlap its own
 };
 
+/// The pairs of a broad phase that splits its objects into static and dynamic ones and caches them
+/// in a StaticCandidates and a DynamicPairs (static_dynamic.hpp, hierarchical.hpp): for the
+/// dynamic objects at positions [begin, end), their static hits (kind 0) or their dynamic pairs
+/// (kind 1), or both for the whole list (find_split_pairs). Read only.
+template <class S, class Visit>
+bool find_split_pairs_part(const StaticCandidates<S>& cand, const DynamicPairs<S>& dyn, const ObjectTable<S>& t,
+                           const PairTask& task, Visit& visit, BroadPhaseStats& st) {
+  if (task.kind == 0) return cand.pairs(task.begin, task.end, visit, st);
+  return dyn.pairs(task.begin, task.end, cand, t, visit, st);
+}
+template <class S, class Visit>
+bool find_split_pairs(const StaticCandidates<S>& cand, const DynamicPairs<S>& dyn, const ObjectTable<S>& t, Visit& visit,
+                      BroadPhaseStats& st) {
+  return find_split_pairs_part(cand, dyn, t, PairTask{0, 0, cand.size()}, visit, st) &&
+         find_split_pairs_part(cand, dyn, t, PairTask{1, 0, cand.size()}, visit, st);
+}
+/// The parts of find_split_pairs over n dynamic objects for about `want` workers: ranges of at
+/// least 64 objects' static hits, then of their dynamic pairs.
+inline std::vector<PairTask> split_pair_tasks(std::size_t n, std::size_t want) {
+  std::vector<PairTask> tasks;
+  const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
+  for (std::uint8_t kind : {0, 1})
+    for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({kind, b, std::min(n, b + chunk)});
+  return tasks;
+}
+
 }  // namespace impact

@@ -111,24 +111,16 @@ class HierarchicalBroadPhase {
 
   template <class Visit>
   bool find_pairs(const ObjectTable<S>& t, Visit&& visit, BroadPhaseStats& st) const {
-    if (!cache_.pairs(0, cache_.size(), visit, st)) return false;
-    return pairs_.pairs(0, cache_.size(), cache_, t, visit, st);
+    return find_split_pairs(cache_, pairs_, t, visit, st);
   }
-
   /// Parts of find_pairs (broad_phase.hpp): ranges of the dynamic objects' static pairs, then
   /// ranges of their dynamic pairs.
   std::vector<PairTask> split_pairs(const ObjectTable<S>&, std::size_t want) const {
-    std::vector<PairTask> tasks;
-    const std::size_t n = cache_.size();
-    const std::size_t chunk = std::max<std::size_t>(64, n / std::max<std::size_t>(want, 1));
-    for (std::uint8_t kind : {0, 1})
-      for (std::size_t b = 0; b < n; b += chunk) tasks.push_back({kind, b, std::min(n, b + chunk)});
-    return tasks;
+    return split_pair_tasks(cache_.size(), want);
   }
   template <class Visit>
   bool find_pairs_part(const ObjectTable<S>& t, const PairTask& task, Visit&& visit, BroadPhaseStats& st) const {
-    if (task.kind == 0) return cache_.pairs(task.begin, task.end, visit, st);
-    return pairs_.pairs(task.begin, task.end, cache_, t, visit, st);
+    return find_split_pairs_part(cache_, pairs_, t, task, visit, st);
   }
 
   const DynamicTree<S>& static_tree() const { return static_; }

@@ -17,6 +17,7 @@
 
 #include "impact/broad/broad_phase.hpp"
 #include "impact/core/parallel.hpp"
+#include "impact/detail/morton.hpp"
 
 #include <algorithm>
 #include <cstddef>
@@ -27,15 +28,6 @@
 namespace impact {
 
 namespace detail {
-/// Spreads the low 10 bits of v so that there are two zero bits between consecutive ones.
-inline std::uint32_t spread_bits3(std::uint32_t v) {
-  v &= 0x3ffu;
-  v = (v | (v << 16)) & 0x030000ffu;
-  v = (v | (v << 8)) & 0x0300f00fu;
-  v = (v | (v << 4)) & 0x030c30c3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
 /// 30-bit Morton code of p quantised to 10 bits per axis by (p - lo) * scale (clamped).
 template <class S>
 inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3<S>& scale) {
@@ -44,7 +36,7 @@ inline std::uint32_t morton_code(const Vec3<S>& p, const Vec3<S>& lo, const Vec3
     const S q = (p[k] - lo[k]) * scale[k];
     c[k] = q > S(0) ? std::uint32_t(std::min(q, S(1023))) : 0u;
   }
-  return spread_bits3(c[0]) | (spread_bits3(c[1]) << 1) | (spread_bits3(c[2]) << 2);
+  return static_cast<std::uint32_t>(spread_bits_3(c[0]) | (spread_bits_3(c[1]) << 1) | (spread_bits_3(c[2]) << 2));
 }
 
 /// body(k, stats) for k in [0, n), on `threads` threads when n is large enough to pay; the

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// The bit spreading of 63-bit Morton (Z-order) codes, three coordinates of 21 bits each: shared by
-/// the bottom-up BVH build (bvh/build_bottom_up.hpp) and the particles' spatial order
-/// (response/particle_step.hpp). Each caller quantises its coordinates its own way and interleaves
+/// The bit spreading of Morton (Z-order) codes, three coordinates of up to 21 bits each (63 bits):
+/// shared by the bottom-up BVH build (bvh/build_bottom_up.hpp), the particles' spatial order
+/// (response/particle_step.hpp) and the broad phase's query order (broad/static_candidates.hpp,
+/// 10 bits per coordinate). Each caller quantises its coordinates its own way and interleaves
 /// them as spread_bits_3(q_x) | spread_bits_3(q_y) << 1 | spread_bits_3(q_z) << 2.
 #pragma once
 
