@@ -117,7 +117,6 @@ void validate_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& wm
     throw InvalidInput(fn + "negative pass or iteration count");
   if (o.impulse_relax_rounds < 0) throw InvalidInput(fn + "impulse_relax_rounds must be >= 0");
   if (o.proximity_rounds < 1) throw InvalidInput(fn + "proximity_rounds must be >= 1");
-  if (!(o.relaxation_factor > S(0) && o.relaxation_factor < S(2))) throw InvalidInput(fn + "relaxation_factor must be in (0, 2)");
   if (!(o.proximity_tolerance > S(0)) || !std::isfinite(double(o.proximity_tolerance)))
     throw InvalidInput(fn + "proximity_tolerance must be positive and finite");
   if (!(o.projection_tolerance > S(0)) || !std::isfinite(double(o.projection_tolerance)))
@@ -1067,14 +1066,12 @@ class Stepper {
     return constraint_of(p, c.a, n, target_);
   }
 
-  /// Relaxes the contact set contacts_ (relax_contacts) with the proximity tolerance: projected
-  /// over-relaxation with the multipliers lam_ accumulated over the step (one per contact; the
-  /// impulses a CCD hit got in its pass are its own, not counted in them, so never given back).
+  /// Relaxes the contact set contacts_ (relax_contacts: one-sided Gauss-Seidel) with the
+  /// proximity tolerance.
   RelaxStats relax(int rounds, std::vector<std::uint8_t>* acted) {
-    const double omega = static_cast<double>(opt_.relaxation_factor);
     return relax_contacts(
         contacts_, sys_.w, static_cast<double>(opt_.proximity_tolerance) * h_, rounds, [&](const ZoneConstraint& k) { return gap(k); },
-        [&](const ZoneConstraint& k, double dl, double dn) { return push(k, dl, dn); }, acted, omega == 1 ? nullptr : &lam_, omega);
+        [&](const ZoneConstraint& k, double dl, double dn) { return push(k, dl, dn); }, acted);
   }
 
   double gap(const ZoneConstraint& k) const {
@@ -1232,7 +1229,6 @@ class Stepper {
   std::vector<Near> near_;
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
-  std::vector<double> lam_;  // their accumulated multipliers (relax)
   std::vector<Hit> last_hits_;
   std::vector<CcdResult<S>> res_;  // test_changed's buffers, kept between passes
   std::vector<std::uint32_t> todo_;
