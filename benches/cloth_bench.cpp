@@ -4,7 +4,7 @@
 //
 //   impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K]
 //                      [--steps S] [--dt DT] [--thickness H] [--method harmon|rigid|impulses]
-//                      [--obstacle MESH] [--speed V] [--impulse-passes P] [--threads T] [--every K]
+//                      [--obstacle MESH] [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K]
 //                      [--json FILE] [--write-final FILE.obj]
 //
 // Each step: the model proposes x1 from x0 and the velocities (dynamics), the collision step
@@ -28,6 +28,8 @@
 // --speed V: the bullet's speed in the shot scene (m/s, default 1000).
 // --impulse-passes P: passes of CCD impulses before the zones (default: the library's, 3); with 0
 // the zones take every CCD collision, which is where harmon and rigid differ.
+// --proximity-rounds R: the proximity relaxation's round budget (ClothCollisionOptions::
+// proximity_rounds, >= 1; default the library's, 500).
 // Exit status 1 when any step ends with an exact intersection (the target is none, ever).
 #include "bench_util.hpp"
 #include "cloth_scenes.hpp"
@@ -56,7 +58,7 @@ struct Args {
   double dt = 1.0 / 120;
   double thickness = 0.004;
   std::string method = "harmon", obstacle, json, write_final;
-  int threads = 1, every = 1, impulse_passes = -1;
+  int threads = 1, every = 1, impulse_passes = -1, proximity_rounds = -1;
 };
 
 int default_steps(const std::string& scene) {
@@ -104,7 +106,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K] [--steps S]\n"
                "                          [--dt DT] [--thickness H] [--method harmon|rigid|impulses] [--obstacle MESH]\n"
-               "                          [--speed V] [--impulse-passes P] [--threads T] [--every K] [--json FILE]\n"
+               "                          [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K] [--json FILE]\n"
                "                          [--write-final FILE.obj]\n");
   return 2;
 }
@@ -127,6 +129,7 @@ int main(int argc, char** argv) {
     else if (s == "--obstacle" && (v = next())) a.obstacle = v;
     else if (s == "--speed" && (v = next())) a.scene.speed = std::atof(v);
     else if (s == "--impulse-passes" && (v = next())) a.impulse_passes = std::atoi(v);
+    else if (s == "--proximity-rounds" && (v = next())) a.proximity_rounds = std::atoi(v);
     else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
     else if (s == "--every" && (v = next())) a.every = std::atoi(v);
     else if (s == "--json" && (v = next())) a.json = v;
@@ -164,6 +167,7 @@ int main(int argc, char** argv) {
   opt.zones = a.method != "impulses";
   opt.zone_method = a.method == "rigid" ? ZoneMethod::Rigid : ZoneMethod::Harmon;
   if (a.impulse_passes >= 0) opt.impulse_passes = a.impulse_passes;
+  if (a.proximity_rounds >= 0) opt.proximity_rounds = a.proximity_rounds;
   ClothCollisionWorkspace<double> workspace;
   Eigen::Matrix<double, Eigen::Dynamic, 1> inverse_mass(nv);
   for (int i = 0; i < nv; ++i) inverse_mass(i) = s.model.kinematic(i) ? 0.0 : 1.0 / s.model.mass(i);
