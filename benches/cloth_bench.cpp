@@ -4,7 +4,7 @@
 //
 //   impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K]
 //                      [--steps S] [--dt DT] [--thickness H] [--method harmon|rigid|impulses]
-//                      [--obstacle MESH] [--speed V] [--impulse-passes P] [--relaxation W] [--threads T] [--every K]
+//                      [--obstacle MESH] [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K]
 //                      [--json FILE] [--write-final FILE.obj]
 //
 // Each step: the model proposes x1 from x0 and the velocities (dynamics), the collision step
@@ -28,8 +28,8 @@
 // --speed V: the bullet's speed in the shot scene (m/s, default 1000).
 // --impulse-passes P: passes of CCD impulses before the zones (default: the library's, 3); with 0
 // the zones take every CCD collision, which is where harmon and rigid differ.
-// --relaxation W: the contact relaxation's over-relaxation factor (ClothCollisionOptions::
-// relaxation_factor, in (0, 2); default the library's; 1 is one-sided Gauss-Seidel).
+// --proximity-rounds R: the proximity relaxation's round budget (ClothCollisionOptions::
+// proximity_rounds, >= 1; default the library's, 500).
 // Exit status 1 when any step ends with an exact intersection (the target is none, ever).
 #include "bench_util.hpp"
 #include "cloth_scenes.hpp"
@@ -58,8 +58,7 @@ struct Args {
   double dt = 1.0 / 120;
   double thickness = 0.004;
   std::string method = "harmon", obstacle, json, write_final;
-  int threads = 1, every = 1, impulse_passes = -1;
-  double relaxation = 0;
+  int threads = 1, every = 1, impulse_passes = -1, proximity_rounds = -1;
 };
 
 int default_steps(const std::string& scene) {
@@ -107,7 +106,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K] [--steps S]\n"
                "                          [--dt DT] [--thickness H] [--method harmon|rigid|impulses] [--obstacle MESH]\n"
-               "                          [--speed V] [--impulse-passes P] [--relaxation W] [--threads T] [--every K] [--json FILE]\n"
+               "                          [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K] [--json FILE]\n"
                "                          [--write-final FILE.obj]\n");
   return 2;
 }
@@ -130,7 +129,7 @@ int main(int argc, char** argv) {
     else if (s == "--obstacle" && (v = next())) a.obstacle = v;
     else if (s == "--speed" && (v = next())) a.scene.speed = std::atof(v);
     else if (s == "--impulse-passes" && (v = next())) a.impulse_passes = std::atoi(v);
-    else if (s == "--relaxation" && (v = next())) a.relaxation = std::atof(v);
+    else if (s == "--proximity-rounds" && (v = next())) a.proximity_rounds = std::atoi(v);
     else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
     else if (s == "--every" && (v = next())) a.every = std::atoi(v);
     else if (s == "--json" && (v = next())) a.json = v;
@@ -168,7 +167,7 @@ int main(int argc, char** argv) {
   opt.zones = a.method != "impulses";
   opt.zone_method = a.method == "rigid" ? ZoneMethod::Rigid : ZoneMethod::Harmon;
   if (a.impulse_passes >= 0) opt.impulse_passes = a.impulse_passes;
-  if (a.relaxation != 0) opt.relaxation_factor = a.relaxation;
+  if (a.proximity_rounds >= 0) opt.proximity_rounds = a.proximity_rounds;
   ClothCollisionWorkspace<double> workspace;
   Eigen::Matrix<double, Eigen::Dynamic, 1> inverse_mass(nv);
   for (int i = 0; i < nv; ++i) inverse_mass(i) = s.model.kinematic(i) ? 0.0 : 1.0 / s.model.mass(i);
@@ -291,7 +290,7 @@ int main(int argc, char** argv) {
         .add("energy_removed", energy_removed).add("zone_momentum_error", zone_dp).add("zone_angular_momentum_error", zone_dl);
     JsonObject out;
     out.add("bench", "impact-cloth-bench").add("scene", s.name).add("method", a.method).add("vertices", nv).add("triangles", nt)
-        .add("steps", a.steps).add("impulse_passes", opt.impulse_passes).add("relaxation_factor", double(opt.relaxation_factor)).raw("rows", JsonObject::array(rows)).raw("totals", totals.str());
+        .add("steps", a.steps).add("impulse_passes", opt.impulse_passes).raw("rows", JsonObject::array(rows)).raw("totals", totals.str());
     if (!bench::write_file(a.json, out.str())) {
       std::fprintf(stderr, "impact-cloth-bench: cannot write %s\n", a.json.c_str());
       return 1;

@@ -153,72 +153,14 @@ TEST(RelaxContacts, SameAsReferenceOnRandomContactSets) {
   }
 }
 
-// A stack of K sheets of n vertices (a chain per column) over a floor of pinned vertices, pulled
-// down by gravity: the relaxation needs many rounds, most of them touching few constraints (the
-// incidence path) and the first touching all (the scan).
-TEST(RelaxContacts, SameAsReferenceOnAStackOnAFloor) {
-  for (const int rounds : {3, 40, 2000}) {
-    RelaxSystem s;
-    const int K = 10, n = 30;
-    for (int v = 0; v < n; ++v) s.x.push_back(0.0), s.w.push_back(0.0);  // the floor
-    for (int k = 1; k <= K; ++k)
-      for (int v = 0; v < n; ++v) s.x.push_back(1.1 * k - 0.68), s.w.push_back(1.0);
-    for (int k = 1; k <= K; ++k)
-      for (int v = 0; v < n; ++v) {
-        // each vertex against the two nearest of the layer below (an edge-like pair)
-        for (int dv = 0; dv <= 1; ++dv) {
-          const int lo = (k - 1) * n + std::min(n - 1, v + dv), hi = k * n + v;
-          ZoneConstraint c;
-          c.count = 2;
-          c.v[0] = hi, c.v[1] = lo, c.a[0] = 1, c.a[1] = -1;
-          c.n = impact::Vec3<double>(1, 0, 0);
-          c.b = 1.1;
-          s.set.push_back(c);
-        }
-      }
-    expect_same_relaxation(s, 1e-6, rounds);
-  }
-}
-
-// Over-relaxation with accumulated multipliers (lambda): converged, the answer meets the
-// complementarity conditions of the inelastic contact problem, checked here on the positions and
-// multipliers: every gap >= b - tol, every lambda >= 0, lambda > 0 only where the gap is within tol
-// of b, and the positions are the start plus W A^T lambda (so the momentum of free vertices is
-// kept: every push is equal and opposite). On the stack it converges in far fewer rounds than
-// plain Gauss-Seidel.
-void expect_complementary(const RelaxSystem& start, double tol, double omega, int* rounds_out) {
-  RelaxSystem s = start;
-  std::vector<double> lambda;
-  const RelaxStats r = relax_contacts(
-      s.set, s.w, tol, 100000, [&](const ZoneConstraint& k) { return relax_gap(s, k); },
-      [&](const ZoneConstraint& k, double dl, double) {
-        relax_move(s, k, dl);
-        return true;
-      },
-      nullptr, &lambda, omega);
-  ASSERT_TRUE(r.converged);
-  ASSERT_EQ(lambda.size(), s.set.size());
-  std::vector<double> rebuilt = start.x;
-  for (std::size_t c = 0; c < s.set.size(); ++c) {
-    const ZoneConstraint& k = s.set[c];
-    const double g = relax_gap(s, k);
-    EXPECT_GE(g, k.b - tol - 1e-12);
-    EXPECT_GE(lambda[c], 0.0);
-    if (lambda[c] > 0) {
-      EXPECT_LE(g, k.b + tol + 1e-12);
-    }
-    for (int j = 0; j < k.count; ++j)
-      rebuilt[static_cast<std::size_t>(k.v[j])] += s.w[static_cast<std::size_t>(k.v[j])] * k.a[j] * k.n.x() * lambda[c];
-  }
-  for (std::size_t v = 0; v < s.x.size(); ++v) EXPECT_NEAR(rebuilt[v], s.x[v], 1e-9);
-  *rounds_out = r.rounds;
-}
-
+// A stack of K sheets of n vertices (a chain per column; each vertex against the two nearest of
+// the layer below, an edge-like pair) over a floor of pinned vertices, every sheet 0.68 below
+// where its constraints hold it (pulled down by gravity): each gap starts short.
 RelaxSystem relax_stack(int K, int n) {
   RelaxSystem s;
   for (int v = 0; v < n; ++v) s.x.push_back(0.0), s.w.push_back(0.0);  // the floor
   for (int k = 1; k <= K; ++k)
-    for (int v = 0; v < n; ++v) s.x.push_back(1.1 * k - 0.68 - 0.01 * ((v * 7 + k) % 5)), s.w.push_back(1.0 / (1 + (v + k) % 3));
+    for (int v = 0; v < n; ++v) s.x.push_back(1.1 * k - 0.68), s.w.push_back(1.0);
   for (int k = 1; k <= K; ++k)
     for (int v = 0; v < n; ++v)
       for (int dv = 0; dv <= 1; ++dv) {
@@ -233,29 +175,13 @@ RelaxSystem relax_stack(int K, int n) {
   return s;
 }
 
-TEST(RelaxContacts, OverRelaxationMeetsTheComplementarityConditions) {
-  std::mt19937 rng(7);
-  for (int trial = 0; trial < 30; ++trial) {
-    // random sets with pinned vertices can be infeasible; keep the ones plain relaxation solves
-    const RelaxSystem s = random_relax_system(rng, 10 + trial, 2 * (10 + trial), 0);
-    RelaxSystem probe = s;
-    std::vector<double> lam;
-    const RelaxStats gs = relax_contacts(
-        probe.set, probe.w, 1e-9, 20000, [&](const ZoneConstraint& k) { return relax_gap(probe, k); },
-        [&](const ZoneConstraint& k, double dl, double) {
-          relax_move(probe, k, dl);
-          return true;
-        },
-        nullptr, &lam, 1.0);
-    if (!gs.converged) continue;
-    int rounds = 0;
-    for (const double omega : {1.0, 1.3, 1.6, 1.9}) expect_complementary(s, 1e-9, omega, &rounds);
+// The stack (relax_stack) of 10 sheets: the relaxation needs many rounds, most of them touching
+// few constraints (the incidence path) and the first touching all (the scan).
+TEST(RelaxContacts, SameAsReferenceOnAStackOnAFloor) {
+  for (const int rounds : {3, 40, 2000}) {
+    const RelaxSystem s = relax_stack(10, 30);
+    expect_same_relaxation(s, 1e-6, rounds);
   }
-  int plain = 0, over = 0;
-  const RelaxSystem stack = relax_stack(10, 20);
-  expect_complementary(stack, 1e-6, 1.0, &plain);
-  expect_complementary(stack, 1e-6, 1.6, &over);
-  EXPECT_LT(3 * over, plain);  // far fewer rounds on a stack without friction
 }
 
 }  // namespace

@@ -68,18 +68,14 @@ struct ClothCollisionOptions {
   /// The impulses are relaxed in rounds (Gauss-Seidel, cloth/detail/relax_contacts.hpp) until no
   /// pair approaches by more than `proximity_tolerance` h (> 0), at most `proximity_rounds`
   /// (>= 1; 1 is a single pass over the pairs): resting contact (a stack of sheets on a floor)
-  /// is then stopped here, before the CCD stages.
+  /// is then stopped here, before the CCD stages. A deep stack needs hundreds of rounds (each
+  /// carries the stop about one layer further); the default 30 leaves the rest of such a stack
+  /// to the CCD impulses and their relaxation, which was cheaper overall on the layers scene
+  /// (see docs/cloth-history.md); 500 relaxes shallow stacks to convergence.
   bool proximity = true;
   S proximity_distance = S(0);
-  int proximity_rounds = 500;
+  int proximity_rounds = 30;
   S proximity_tolerance = S(1e-3);
-  /// The relaxation's over-relaxation factor omega, in (0, 2). 1 (default): one-sided
-  /// Gauss-Seidel, every push exactly meets its pair and nothing is given back. Otherwise the
-  /// relaxations (here and after each impulse pass) are projected successive over-relaxation on
-  /// the impulses accumulated per pair over the step: each push is omega times what meets its
-  /// pair, and a pair pushed past its bound gives back up to what it got (experimental: on the
-  /// layers scene it did not converge within proximity_rounds; see docs/cloth-history.md).
-  S relaxation_factor = S(1);
   /// Stage 2: at most `impulse_passes` passes of CCD impulses (0 skips the stage).
   /// After each pass its hits join the proximity pairs' constraints and the whole set is relaxed
   /// again for at most `impulse_relax_rounds` rounds (0: the hits' own impulses only).

@@ -59,20 +59,59 @@ struct ConvexHull {
   std::vector<HullFace<S>> faces; ///< the triangles merged into convex polygons
   Vec3<S> centroid = Vec3<S>::Zero();  ///< mean of the vertices (an interior point)
   S size = S(0);                  ///< largest distance from centroid to a vertex
+  /// The hull's edges as vertex adjacency in compressed rows, for support()'s hill climb: the
+  /// neighbours of vertex v are neighbors[neighbor_start[v] .. neighbor_start[v + 1]). Empty for
+  /// hulls of fewer than kHullClimbMinVertices vertices (support() scans those).
+  std::vector<int> neighbor_start, neighbors;
+  /// Where the climb starts, per octant of the direction (bit 0: x > 0, bit 1: y > 0, bit 2:
+  /// z > 0): the vertex farthest along that octant's diagonal (+-1, +-1, +-1).
+  std::array<int, 8> octant_vertex{};
 };
 
+/// Hulls of at least this many vertices answer support() by hill climbing on their edges; smaller
+/// ones by scanning every vertex (cheaper below it; measured on the convex bench's pairs).
+inline constexpr int kHullClimbMinVertices = 12;
+
+/// The vertex of h farthest along d. Hulls with an edge graph (convex_hull() builds one from
+/// kHullClimbMinVertices vertices) climb it: from the octant's start vertex to the neighbour
+/// farthest along d, until no neighbour is farther (on a convex polytope a vertex no neighbour
+/// beats is a farthest vertex; quickhull's triangles are convex up to its tolerance, so the value
+/// is the largest within that tolerance times |d|). Smaller hulls scan every vertex.
 template <class S>
 inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
-  int best = 0;
-  S best_dot = h.vertices.row(0).dot(d.transpose());
-  for (Eigen::Index i = 1; i < h.vertices.rows(); ++i) {
-    const S x = h.vertices.row(i).dot(d.transpose());
-    if (x > best_dot) {
-      best_dot = x;
-      best = static_cast<int>(i);
+  const S* p = h.vertices.data();
+  const auto along = [&](int v) { return p[3 * v] * d.x() + p[3 * v + 1] * d.y() + p[3 * v + 2] * d.z(); };
+  if (h.neighbors.empty()) {
+    int best = 0;
+    S best_dot = along(0);
+    const int n = static_cast<int>(h.vertices.rows());
+    for (int i = 1; i < n; ++i) {
+      const S x = along(i);
+      if (x > best_dot) {
+        best_dot = x;
+        best = i;
+      }
     }
+    return h.vertices.row(best).transpose();
   }
-  return h.vertices.row(best).transpose();
+  const int octant = int(d.x() > S(0)) | (int(d.y() > S(0)) << 1) | (int(d.z() > S(0)) << 2);
+  int v = h.octant_vertex[static_cast<std::size_t>(octant)];
+  S best_dot = along(v);
+  const int* start = h.neighbor_start.data();
+  const int* nb = h.neighbors.data();
+  for (;;) {
+    int next = v;
+    for (int k = start[v], end = start[v + 1]; k < end; ++k) {
+      const S x = along(nb[k]);
+      if (x > best_dot) {
+        best_dot = x;
+        next = nb[k];
+      }
+    }
+    if (next == v) break;  // the value strictly grows each step: no vertex is visited twice
+    v = next;
+  }
+  return h.vertices.row(v).transpose();
 }
 template <class S>
 inline Vec3<S> interior_point(const ConvexHull<S>& h) {
@@ -89,6 +128,33 @@ void validate_shape(const ConvexHull<S>& h, const char* where) {
 }
 
 namespace detail {
+
+/// support()'s edge graph and start vertices for h (its vertices and triangles set); nothing for
+/// hulls under kHullClimbMinVertices vertices. Each undirected edge u-v is the directed edge u->v
+/// of one triangle and v->u of the other, so each triangle's directed edges list every neighbour
+/// once.
+template <class S>
+void build_hull_climb(ConvexHull<S>& h) {
+  h.neighbor_start.clear();
+  h.neighbors.clear();
+  const int nv = static_cast<int>(h.vertices.rows());
+  if (nv < kHullClimbMinVertices) return;
+  std::vector<int> count(static_cast<std::size_t>(nv) + 1, 0);
+  for (Eigen::Index t = 0; t < h.triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k) ++count[static_cast<std::size_t>(h.triangles(t, k)) + 1];
+  for (int v = 0; v < nv; ++v) count[static_cast<std::size_t>(v) + 1] += count[static_cast<std::size_t>(v)];
+  h.neighbor_start = count;
+  h.neighbors.resize(static_cast<std::size_t>(count.back()));
+  for (Eigen::Index t = 0; t < h.triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k)
+      h.neighbors[static_cast<std::size_t>(count[static_cast<std::size_t>(h.triangles(t, k))]++)] = h.triangles(t, (k + 1) % 3);
+  for (int o = 0; o < 8; ++o) {
+    const Vec3<S> d((o & 1) ? S(1) : S(-1), (o & 2) ? S(1) : S(-1), (o & 4) ? S(1) : S(-1));
+    Eigen::Index best = 0;
+    (h.vertices * d).maxCoeff(&best);
+    h.octant_vertex[static_cast<std::size_t>(o)] = static_cast<int>(best);
+  }
+}
 
 template <class S>
 class QuickHull {
@@ -293,6 +359,7 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     for (int k = 0; k < 3; ++k) h.triangles(static_cast<Eigen::Index>(t), k) = remap[static_cast<std::size_t>(tris[t][static_cast<std::size_t>(k)])];
   h.centroid = h.vertices.colwise().mean().transpose();
   h.size = (h.vertices.rowwise() - h.centroid.transpose()).rowwise().norm().maxCoeff();
+  detail::build_hull_climb(h);
 
   // Merge adjacent triangles with (nearly) parallel normals into polygons (union–find over edges).
   const Eigen::Index nt = h.triangles.rows();

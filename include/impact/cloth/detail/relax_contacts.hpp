@@ -38,17 +38,12 @@ struct RelaxStats {
 /// moved). `gap(k)` is the constraint's current sum_j a_j n . x1_j; `apply(k, dl, dn)` moves the
 /// constraint's movable vertices by w_j a_j dl n, which changes its gap by dn = dl sum_j a_j^2 w_j
 /// (> 0: a push, which may add friction), and returns whether it moved anything.
-/// Without `lambda`: a constraint whose gap falls short of b by more than `tolerance` gets
-/// dl = (b - gap) / denom, which meets it exactly (one-sided: nothing is ever pulled back).
-/// With `lambda` (one accumulated multiplier per constraint, >= 0, kept by the caller across
-/// calls; missing entries start at 0): projected successive over-relaxation, dl = omega (b - gap)
-/// / denom clamped so that lambda + dl >= 0: a constraint short of b by more than `tolerance`
-/// pushes, one past b by more than `tolerance` with lambda > 0 gives some of its push back. The
-/// constraints' normals and weights are fixed, so this is projected SOR on a linear
-/// complementarity problem with a symmetric positive semidefinite matrix, convergent for omega in
-/// (0, 2); converged, every gap is >= b - tolerance and every constraint with lambda > 0 has
-/// gap <= b + tolerance. In a stack of K sheets on a floor plain Gauss-Seidel needs O(K^2)
-/// rounds, over-relaxation about O(K).
+/// A constraint whose gap falls short of b by more than `tolerance` gets dl = (b - gap) / denom,
+/// which meets it exactly (one-sided: nothing is ever pulled back). In a stack of K sheets on a
+/// floor this needs O(K^2) rounds. (Impulses accumulated per constraint, which a constraint
+/// pushed past b gives back, i.e. projected Gauss-Seidel or over-relaxation on the complementarity
+/// problem, were tried, also warm-started from the last step: on the layers scene they did not
+/// converge within 500 rounds where this does; see docs/cloth-history.md.)
 /// At most `max_rounds` rounds. `acted` (optional, set.size() entries) marks the constraints that
 /// got an impulse. Cost: O(w.size() + set.size()) to index, then per round the constraints visited
 /// and the listing of the next round's: a scan of every constraint when the vertices the round
@@ -57,12 +52,10 @@ struct RelaxStats {
 /// constraints and most of them act in a round).
 template <class Gap, class Apply>
 RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vector<double>& w, double tolerance, int max_rounds, Gap&& gap,
-                          Apply&& apply, std::vector<std::uint8_t>* acted = nullptr, std::vector<double>* lambda = nullptr,
-                          double omega = 1) {
+                          Apply&& apply, std::vector<std::uint8_t>* acted = nullptr) {
   RelaxStats r;
   const std::size_t m = set.size(), nv = w.size();
   if (m == 0 || max_rounds <= 0) return r;
-  if (lambda && lambda->size() < m) lambda->resize(m, 0.0);
   auto movable = [&](std::int32_t v) { return w[static_cast<std::size_t>(v)] > 0; };
   // Times count constraint visits. moved_at[v]: the visit whose impulse last moved vertex v;
   // visited_at[c]: constraint c's last visit. A constraint is checked again iff one of its movable
@@ -87,12 +80,7 @@ RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vec
       for (int j = 0; j < set[c].count; ++j)
         if (movable(set[c].v[j])) idx[fill[static_cast<std::size_t>(set[c].v[j])]++] = static_cast<std::uint32_t>(c);
   };
-  // Over-relaxed (omega != 1), a constraint's own impulse does not meet it exactly (it overshoots
-  // by (omega - 1) times its shortfall): it is checked again in the next round, as if moved.
-  const bool over = lambda != nullptr && omega != 1;
-  std::vector<std::uint8_t> self(over ? m : 0, 0);
   auto stale = [&](std::size_t c) {
-    if (over && self[c]) return true;
     const ZoneConstraint& k = set[c];
     for (int j = 0; j < k.count; ++j)
       if (moved_at[static_cast<std::size_t>(k.v[j])] > visited_at[c]) return true;  // immovable vertices keep 0
@@ -108,22 +96,13 @@ RelaxStats relax_contacts(const std::vector<ZoneConstraint>& set, const std::vec
     std::size_t reach = 0;  // entries of the incidence lists of the moved vertices
     for (const auto c : cur) {
       visited_at[c] = ++now;
-      if (over) self[c] = 0;
       const ZoneConstraint& k = set[c];
       const double short_by = k.b - gap(k);
-      double* lam = lambda ? &(*lambda)[c] : nullptr;
-      if (short_by <= tolerance && !(lam && *lam > 0 && short_by < -tolerance)) continue;
+      if (short_by <= tolerance) continue;
       double denom = 0;
       for (int j = 0; j < k.count; ++j) denom += k.a[j] * k.a[j] * w[static_cast<std::size_t>(k.v[j])];
       if (!(denom > 0)) continue;
-      double dl = short_by / denom, dn = short_by;
-      if (lam) {
-        dl = std::max(omega * dl, -*lam);
-        dn = dl * denom;
-        *lam += dl;
-      }
-      if (!apply(k, dl, dn)) continue;
-      if (over) self[c] = 1;
+      if (!apply(k, short_by / denom, short_by)) continue;
       ++r.impulses;
       if (acted) (*acted)[c] = 1;
       for (int j = 0; j < k.count; ++j) {

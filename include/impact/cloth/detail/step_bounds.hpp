@@ -1,0 +1,235 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Stepper's proofs that a candidate stays farther than h over the step without a CCD search:
+/// distance bounds (start boxes, relative motion, both ends, a fixed separating direction),
+/// sampling along the step (clear hits and misses), closest points, and the path lengths that
+/// keep a proof valid across passes.
+/// Part of cloth_collision_step's internals (stepper.hpp); not part of the interface.
+#pragma once
+
+#include "impact/cloth/detail/stepper.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace impact::detail::cloth {
+
+/// Lower bound on the distance of the pair's primitives at x0: the gap between their start
+/// boxes (in double).
+template <class S>
+double Stepper<S>::start_box_distance(const Prim& p) const {
+  Vec3<double> lo[2], hi[2];
+  const int split = p.ee ? 2 : 1;
+  for (int s = 0; s < 2; ++s) lo[s] = Vec3<double>::Constant(std::numeric_limits<double>::infinity()), hi[s] = -lo[s];
+  for (int k = 0; k < 4; ++k) {
+    const int s = k < split ? 0 : 1;
+    const Vec3<double> x = p0(p.v[k]);
+    lo[s] = lo[s].cwiseMin(x), hi[s] = hi[s].cwiseMax(x);
+  }
+  const Vec3<double> gap = (lo[1] - hi[0]).cwiseMax(lo[0] - hi[1]).cwiseMax(0.0);
+  return gap.norm();
+}
+
+/// The largest relative displacement over the step between a point of one primitive and a point
+/// of the other: every point of a primitive moves by a convex combination of its vertices'
+/// displacements, so the difference of the two is at most the largest vertex-pair difference.
+template <class S>
+double Stepper<S>::relative_motion(const Prim& p) const {
+  const int split = p.ee ? 2 : 1;
+  Vec3<double> d[4];
+  for (int k = 0; k < 4; ++k) d[k] = p1(p.v[k]) - p0(p.v[k]);
+  double m = 0;
+  for (int i = 0; i < split; ++i)
+    for (int j = split; j < 4; ++j) m = std::max(m, (d[i] - d[j]).norm());
+  return m;
+}
+
+/// A lower bound on the pair's distance over the whole step, returned when it exceeds
+/// need = h + bound_margin_ (the pair provably stays farther apart than h, so its CCD can be
+/// skipped); -infinity when no bound proves that. With m the pair's relative motion
+/// (relative_motion: for fixed barycentric weights the points' offset changes by t times a
+/// convex combination of vertex-pair displacement differences, at most m long), the distance at
+/// time t is at least d(0) - t m and at least d(1) - (1 - t) m, so at least their mean
+/// (d(0) + d(1) - m) / 2 over the whole step. First the start bound alone (d(0) - m, the start
+/// distance cached per candidate: a box bound, then the exact one), then both ends. A margin
+/// covers rounding. Thread-safe per index.
+template <class S>
+double Stepper<S>::separation_bound(std::size_t i) {
+  const Prim& p = cand_[i];
+  const double m = relative_motion(p), need = h_ + bound_margin_, none = -std::numeric_limits<double>::infinity();
+  if (std::isnan(d0_[i])) d0_[i] = start_box_distance(p);
+  if (d0_[i] > need + m) return d0_[i] - m;
+  if (!d0_exact_[i]) {
+    d0_[i] = closest(p, /*start=*/true).dist;
+    d0_exact_[i] = 1;
+    if (d0_[i] > need + m) return d0_[i] - m;
+  }
+  if (d0_[i] <= need) return none;  // nothing below can help: each bound is <= d(0)
+  const Contact c1 = closest(p, /*start=*/false);
+  const double both = 0.5 * (d0_[i] + c1.dist - m);
+  if (both > need) return both;
+  // Sliding pairs (a large relative motion along the contact, as in resting contact) fail the
+  // bounds above; a separating direction fixed over the step proves them (hull_bound).
+  return hull_bound(p, need);
+}
+
+/// Whether the convex hull of the pair's vertex offsets x_i - x_j (i of the first primitive,
+/// j of the second) at the start and at the end of the step stays farther than `need` from the
+/// origin. Every offset between a point of the first primitive and a point of the second at any
+/// time t is a convex combination of those (positions are linear in t, points are convex
+/// combinations of vertices), so the pair's distance stays above `need` over the whole step.
+/// The hull's distance from the origin is approached from both sides by Gilbert's algorithm
+/// (a point x of the hull: |x| bounds it from above; for n = x / |x|, min_k n . o_k from
+/// below): it stops with that lower bound (a lower bound on the pair's distance over the step)
+/// once it exceeds `need`, with -infinity once |x| does not (no fixed direction can separate by
+/// `need` then) or after a bounded number of steps. Rounding (|n| = 1 up to an ulp, the dot
+/// products) is covered by the margin in `need`.
+template <class S>
+double Stepper<S>::hull_bound(const Prim& p, double need) const {
+  const double none = -std::numeric_limits<double>::infinity();
+  const int split = p.ee ? 2 : 1;
+  Vec3<double> o[8];
+  int k = 0;
+  for (int i = 0; i < split; ++i)
+    for (int j = split; j < 4; ++j) {
+      o[k++] = p0(p.v[i]) - p0(p.v[j]);
+      o[k++] = p1(p.v[i]) - p1(p.v[j]);
+    }
+  Vec3<double> x = o[0];
+  for (int q = 1; q < k; ++q)
+    if (o[q].squaredNorm() < x.squaredNorm()) x = o[q];
+  for (int it = 0; it < 24; ++it) {
+    const double len = x.norm();
+    if (!(len > need)) return none;
+    const Vec3<double> n = x / len;
+    int best = 0;
+    double lb = n.dot(o[0]);
+    for (int q = 1; q < k; ++q) {
+      const double d = n.dot(o[q]);
+      if (d < lb) lb = d, best = q;
+    }
+    if (lb > need) return lb;
+    // the hull's point nearest the origin on the segment from x to the offset found
+    const Vec3<double> d = o[best] - x;
+    const double dd = d.squaredNorm();
+    if (!(dd > 0)) return none;
+    x += std::clamp(-x.dot(d) / dd, 0.0, 1.0) * d;
+  }
+  return none;
+}
+
+/// Clear hits and clear misses without the CCD's search, in every stage. A hit only gives a
+/// constraint (the step's guarantee rests on the misses); a miss is proved. With m the pair's
+/// relative motion (relative_motion: the distance changes by at most (t' - t) m between times t
+/// and t'), the distance is sampled (exact closest points, in double) at n + 1 evenly spaced
+/// times, n = ceil(4 m / h) (so it changes by at most h / 4 between samples; pairs with
+/// m > 32 h are left to the search).
+/// Hit: at the first sample closer than h (a contact, up to the rounding margin), the time just
+/// before the distance falls to h + band_ / 2 is bisected between it and the sample before; the
+/// pair was farther than 3 h / 4 before it (the samples are h / 4 apart in distance), so it had
+/// not crossed, and the closest points there give the normal, as at the search's time of impact.
+/// Miss: between two samples at t < t' with distances d, d' the distance is at least
+/// max(d - (s - t) m, d' - (t' - s) m) >= (d + d' - (t' - t) m) / 2 at every time s; when that
+/// exceeds need = h + bound_margin_ on every interval (an interval that fails it is halved, up
+/// to three times, at a new sample), the smallest such bound (a lower bound on the distance over
+/// the step) is `bound`. The margin covers the rounding of the samples' positions and distances
+/// (computed in double from coordinates of magnitude <= scale_, as the other bounds').
+/// Unknown (the search decides): everything else, and pairs closer than h at the start.
+/// Thread-safe.
+template <class S>
+typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, CcdResult<S>& r, double& bound) const {
+  const double m = relative_motion(p);
+  if (!(m <= 32 * h_)) return Sampled::unknown;
+  const int n = std::max(2, static_cast<int>(std::ceil(4 * m / h_)));
+  auto dist = [&](double t) {
+    auto X = [&](int j) { return Vec3<double>((1 - t) * p0(p.v[j]) + t * p1(p.v[j])); };
+    return closest_at(p, X).dist;
+  };
+  const double inside = h_ - bound_margin_, aim = h_ + 0.5 * band_, need = h_ + bound_margin_;
+  double lb = std::numeric_limits<double>::infinity();
+  // whether the distance stays above need on [a, b] (distances da, db there), halving up to depth times
+  auto prove = [&](auto& self, double a, double b, double da, double db, int depth) -> bool {
+    const double l = 0.5 * (da + db - (b - a) * m);
+    if (l > need) {
+      lb = std::min(lb, l);
+      return true;
+    }
+    if (depth == 0) return false;
+    const double mid = 0.5 * (a + b), dm = dist(mid);
+    if (!(dm > need)) return false;
+    return self(self, a, mid, da, dm, depth - 1) && self(self, mid, b, dm, db, depth - 1);
+  };
+  double prev = dist(0.0);
+  if (prev < inside) return Sampled::unknown;  // closer than h at the start: the search decides
+  bool proved = true;
+  for (int k = 1; k <= n; ++k) {
+    const double t = double(k) / n, d = dist(t);
+    if (d < inside) {
+      double lo = double(k - 1) / n, hi = t;
+      if (prev > aim)
+        for (int it = 0; it < 12; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (dist(mid) > aim ? lo : hi) = mid;
+        }
+      r = CcdResult<S>();
+      r.hit = true;
+      r.toi = static_cast<decltype(r.toi)>(lo);
+      return Sampled::hit;
+    }
+    proved = proved && prove(prove, double(k - 1) / n, t, prev, d, 3);
+    prev = d;
+  }
+  if (!proved) return Sampled::unknown;
+  bound = lb;
+  return Sampled::miss;
+}
+
+/// Notes the end positions' moves since the last call: a vertex whose end position changed
+/// counts as moved (changed_) and its path length grows by the distance moved. Every write to
+/// the end positions is seen here, whichever stage made it.
+template <class S>
+void Stepper<S>::note_moves() {
+  ++moves_noted_;
+  const std::size_t nv = sys_.w.size();
+  for (std::size_t v = 0; v < nv; ++v) {
+    const Eigen::Index r = Eigen::Index(v);
+    if (sys_.X1.row(r) == x1_seen_.row(r)) continue;
+    path_[v] += (sys_.X1.row(r).template cast<double>() - x1_seen_.row(r).template cast<double>()).norm();
+    x1_seen_.row(r) = sys_.X1.row(r);
+    changed_[v] = 1;
+  }
+}
+
+/// The sum of the path lengths of the pair's vertices (note_moves).
+template <class S>
+double Stepper<S>::path_sum(const Prim& p) const {
+  return path_[std::size_t(p.v[0])] + path_[std::size_t(p.v[1])] + path_[std::size_t(p.v[2])] + path_[std::size_t(p.v[3])];
+}
+
+/// Closest points of a pair at x0 (start) or x1, in double: distance, weights, unit normal.
+template <class S>
+typename Stepper<S>::Contact Stepper<S>::closest(const Prim& p, bool start) const {
+  return closest_at(p, [&](int k) { return start ? p0(p.v[k]) : p1(p.v[k]); });
+}
+
+template <class S>
+template <class Pos>
+typename Stepper<S>::Contact Stepper<S>::closest_at(const Prim& p, Pos&& X) {
+  Contact c;
+  if (p.ee) {
+    const auto r = closest_points_segment_segment(Segment<double>(X(0), X(1)), Segment<double>(X(2), X(3)));
+    c.a[0] = 1 - r.s, c.a[1] = r.s, c.a[2] = -(1 - r.t), c.a[3] = -r.t;
+  } else {
+    const auto r = closest_point_on_triangle(X(0), Triangle<double>(X(1), X(2), X(3)));
+    c.a[0] = 1, c.a[1] = -r.barycentric[0], c.a[2] = -r.barycentric[1], c.a[3] = -r.barycentric[2];
+  }
+  Vec3<double> d = Vec3<double>::Zero();
+  for (int k = 0; k < 4; ++k) d += c.a[k] * X(k);
+  c.dist = d.norm();
+  if (c.dist > 0) c.n = d / c.dist;
+  return c;
+}
+
+}  // namespace impact::detail::cloth

@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Stepper's CCD passes: the primitive CCD of a pair, and each pass's test of the candidates with
+/// a moved vertex (re-gathering first when a vertex left its envelope), proofs kept from earlier
+/// passes skipped.
+/// Part of cloth_collision_step's internals (stepper.hpp); not part of the interface.
+#pragma once
+
+#include "impact/cloth/detail/stepper.hpp"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace impact::detail::cloth {
+
+template <class S>
+CcdResult<S> Stepper<S>::ccd(const Prim& p, bool static_start) {
+  ++stats_.ccd_tests;
+  return ccd_at(p, static_start, /*coarse=*/false);
+}
+
+/// The primitive CCD of a pair (thread-safe: reads only). The start check, the zones and the
+/// fail-safe use the options as given (coarse == false). The impulse passes only need a hit's time and
+/// contact to within a fraction of h: each pushes its hit to (1 + separation_margin) h, so a
+/// pair reported at h + band_ (band_ = separation_margin h / 2) is pushed as it should be, and a
+/// false positive closer than that costs one harmless impulse. There each query gets the
+/// tolerance that reports hits within h + band_ (tolerance = band_ / (2 L), L the query's
+/// extent, at most 1e-2 and never below the given one) and no re-check. The zones do not take
+/// it: a zone is detected again after each projection, and near misses within the band kept
+/// zones growing and merging until the rounds ran out (a 2,000-step twisting run then needed
+/// the fail-safe in 298 steps and ended one closer than h). Neither changes the CCD's
+/// guarantee: hit == false still proves the pair stays farther apart than h.
+template <class S>
+CcdResult<S> Stepper<S>::ccd_at(const Prim& p, bool static_start, bool coarse) const {
+  auto a = [&](int k) { return Vec3<S>(sys_.X0.row(p.v[k]).transpose()); };
+  auto b = [&](int k) { return static_start ? Vec3<S>(sys_.X0.row(p.v[k]).transpose()) : Vec3<S>(sys_.X1.row(p.v[k]).transpose()); };
+  CcdOptions o = ccd_;
+  if (coarse && !static_start && band_ > 0) {
+    Vec3<double> lo = p0(p.v[0]), hi = lo;
+    for (int k = 0; k < 4; ++k) {
+      lo = lo.cwiseMin(p0(p.v[k])).cwiseMin(p1(p.v[k]));
+      hi = hi.cwiseMax(p0(p.v[k])).cwiseMax(p1(p.v[k]));
+    }
+    const double L = (hi - lo).maxCoeff();
+    o.tolerance = std::max(o.tolerance, L > 0 ? std::min(band_ / (2 * L), 1e-2) : 1e-2);
+    o.recheck_iterations = 0;
+  }
+  if (p.ee) return edge_edge_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), o);
+  return vertex_face_ccd(a(0), a(1), a(2), a(3), b(0), b(1), b(2), b(3), o);
+}
+
+/// CCD over the pairs that may have changed: gathers again only when a moved vertex left its
+/// envelope, then tests the candidates with a vertex moved since the last pass and the previous
+/// hits.
+template <class S>
+std::vector<typename Stepper<S>::Hit> Stepper<S>::detect() {
+  note_moves();
+  if (escaped()) regather();
+  return test_changed();
+}
+
+template <class S>
+std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
+  note_moves();
+  // The candidates to test, in increasing index order: those with a moved vertex (by a scan
+  // when many vertices moved, through the incidence index otherwise) and the last hits, less
+  // those whose proof from an earlier pass still holds (kept).
+  std::vector<std::uint32_t>& todo = todo_;
+  todo.clear();
+  std::size_t moved = 0;
+  for (auto c : changed_) moved += c;
+  if (++stamp_now_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), stamp_now_ = 1;
+  if (moved * 8 >= changed_.size()) {
+    for (std::size_t c = 0; c < cand_.size(); ++c) {
+      const Prim& p = cand_[c];
+      if (changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])])
+        todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
+    }
+  } else if (moved > 0) {
+    if (inc_off_.empty() || 4 * (cand_.size() - inc_n_) > inc_n_) build_incidence();
+    for (std::size_t v = 0; v < changed_.size(); ++v) {
+      if (!changed_[v]) continue;
+      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
+        if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, todo.push_back(inc_[k]);
+    }
+    for (std::size_t c = inc_n_; c < cand_.size(); ++c) {
+      const Prim& p = cand_[c];
+      if (stamp_[c] != stamp_now_ &&
+          (changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])]))
+        todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
+    }
+  }
+  for (const auto& h : last_hits_)
+    if (stamp_[h.c] != stamp_now_) stamp_[h.c] = stamp_now_, todo.push_back(h.c);
+  // Increasing order: by a scan of the stamps when many are marked (cheaper than sorting them).
+  if (todo.size() * 16 >= cand_.size()) {
+    todo.clear();
+    for (std::size_t c = 0; c < cand_.size(); ++c)
+      if (stamp_[c] == stamp_now_) todo.push_back(static_cast<std::uint32_t>(c));
+  } else {
+    std::sort(todo.begin(), todo.end());
+  }
+  const std::size_t listed = todo.size();
+  todo.erase(std::remove_if(todo.begin(), todo.end(), [&](std::uint32_t c) { return kept(c); }), todo.end());
+  stats_.ccd_kept += listed - todo.size();
+  // Results only for the pairs that ran a test (ran[i]); the buffer is kept between passes.
+  if (res_.size() < todo.size()) res_.resize(todo.size());
+  CcdResult<S>* res = res_.data();
+  std::vector<std::uint8_t> ran(todo.size(), 0);
+  parallel_for(todo.size(), opt_.threads, [&](std::size_t i) {
+    const std::size_t c = todo[i];
+    if (is_excluded(cand_[c])) return;
+    const double bound = separation_bound(c);
+    if (bound > -std::numeric_limits<double>::infinity()) {
+      key_[c] = key_of(cand_[c], bound);
+      return;
+    }
+    key_[c] = -1;
+    // Clear hits and misses need no search (sample_pair); every other pair gets the CCD (coarse
+    // in the impulse passes, as given in the zones and the fail-safe).
+    double sampled_bound = 0;
+    const Sampled sp = sample_pair(cand_[c], res[i], sampled_bound);
+    if (sp == Sampled::miss) {
+      key_[c] = key_of(cand_[c], sampled_bound);
+      return;
+    }
+    if (sp == Sampled::unknown) res[i] = ccd_at(cand_[c], false, /*coarse=*/!precise_);
+    ran[i] = 1;
+  });
+  std::size_t tested = 0;
+  for (auto r : ran) tested += r;
+  stats_.ccd_tests += tested;
+  stats_.ccd_skipped += todo.size() - tested;
+  std::vector<Hit> hits;
+  for (std::size_t i = 0; i < todo.size(); ++i)
+    if (ran[i] && res[i].hit) hits.push_back({cand_[todo[i]], res[i], todo[i]});
+  std::fill(changed_.begin(), changed_.end(), 0);
+  std::stable_sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi < y.r.toi; });
+  last_hits_ = hits;
+  return hits;
+}
+
+}  // namespace impact::detail::cloth
