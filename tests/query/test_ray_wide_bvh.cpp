@@ -11,6 +11,7 @@
 #include "impact/query/ray_wide_bvh.hpp"
 #include "support/meshes.hpp"
 #include "support/random.hpp"
+#include "wide_bvh_checks.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,135 +29,10 @@ constexpr int kWideSamples = IMPACT_TEST_SANITIZED ? 4 : 1;
 namespace impact {
 namespace {
 
-/// The cast's t against brute force's smallest t: exactly equal (a node's entry is a lower bound of
-/// its triangles' t, not only up to rounding; see detail::ray_mesh_triangle_hit).
-template <class S> void expect_first_t(S ref, S got, int i) { EXPECT_EQ(ref, got) << i; }
-
-/// Brute force: every triangle of the mesh by the library's per-triangle rule (the watertight test,
-/// the t = 0 tie rule, t never below the entry into the triangle's box), the smallest t (nullopt
-/// when none is hit).
-template <class S> std::optional<S> brute_first_t(const TriangleMesh<S>& m, const Ray<S>& ray, std::vector<int>* at_t = nullptr) {
-  const PreparedRay<S> pr(ray);
-  std::optional<S> best;
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
-    if (!h) continue;
-    if (!best || h->t < *best) best = h->t;
-  }
-  if (at_t && best)
-    for (int t = 0; t < m.num_triangles(); ++t) {
-      const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
-      if (h && h->t == *best) at_t->push_back(t);
-    }
-  return best;
-}
-
-template <class S> void check_structure(const TriangleMesh<S>& m, const WideBvh<S>& w, int leaf_size) {
-  ASSERT_EQ(w.num_triangles(), m.num_triangles());
-  std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
-  for (std::int32_t k = 0; k < w.num_triangles(); ++k) {
-    const int id = w.triangle_id(k);
-    ASSERT_GE(id, 0);
-    ASSERT_LT(id, m.num_triangles());
-    ++seen[static_cast<std::size_t>(id)];
-    const Triangle<S> t = m.triangle(id);
-    ASSERT_EQ(w.triangle(k).a, t.a);  // the mesh's own coordinates
-    ASSERT_EQ(w.triangle(k).b, t.b);
-    ASSERT_EQ(w.triangle(k).c, t.c);
-  }
-  for (int s : seen) ASSERT_EQ(s, 1);
-  // every leaf-order position lies in exactly one leaf; every box holds its subtree's vertices
-  std::vector<int> covered(static_cast<std::size_t>(w.num_triangles()), 0);
-  struct Item {
-    std::int32_t node;
-    float lo[3], hi[3];
-  };
-  std::vector<Item> stack{{0, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, {FLT_MAX, FLT_MAX, FLT_MAX}}};
-  auto inside = [](const Vec3<S>& p, const float (&lo)[3], const float (&hi)[3]) {
-    for (int k = 0; k < 3; ++k)
-      if (double(p[k]) < double(lo[k]) || double(p[k]) > double(hi[k])) return false;
-    return true;
-  };
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    const WideBvhNode& n = w.nodes()[static_cast<std::size_t>(it.node)];
-    int children = 0;
-    for (int c = 0; c < 4; ++c) {
-      if (n.count[c] < 0) continue;
-      ++children;
-      Item child{n.first[c], {}, {}};
-      for (int k = 0; k < 3; ++k) child.lo[k] = n.bounds[2 * k][c], child.hi[k] = n.bounds[2 * k + 1][c];
-      if (n.count[c] > 0) {
-        // a leaf's blocks: its triangles lane by lane in leaf order, zeros in the unused lanes
-        const std::int32_t block = n.first[c], first = w.block_first(block), blocks = (n.count[c] + 3) / 4;
-        ASSERT_GE(block, 0);
-        ASSERT_LE(block + blocks, w.num_blocks());
-        for (std::int32_t q = 0; q < 4 * blocks; ++q) {
-          const Triangle<S> t = w.block_triangle(block + q / 4, q % 4);
-          if (q % 4 == 0) {
-            ASSERT_EQ(w.block_first(block + q / 4), first + q);
-          }
-          if (q < n.count[c]) {
-            ASSERT_TRUE(t.a == w.triangle(first + q).a && t.b == w.triangle(first + q).b && t.c == w.triangle(first + q).c) << q;
-          } else {
-            ASSERT_TRUE(t.a.isZero() && t.b.isZero() && t.c.isZero()) << q;
-          }
-        }
-        // larger leaves hold copies of one triangle only (a leaf of the source tree)
-        for (std::int32_t k = first + 1; n.count[c] > leaf_size && k < first + n.count[c]; ++k)
-          ASSERT_TRUE(test::same_shape(w.triangle(k), w.triangle(first)));
-        ASSERT_FALSE(w.repeats_previous(first));  // marks stay within a leaf
-        for (std::int32_t k = first; k < first + n.count[c]; ++k) {
-          if (w.repeats_previous(k)) {
-            ASSERT_EQ(w.triangle(k).a, w.triangle(k - 1).a);
-            ASSERT_EQ(w.triangle(k).b, w.triangle(k - 1).b);
-            ASSERT_EQ(w.triangle(k).c, w.triangle(k - 1).c);
-          }
-          ++covered[static_cast<std::size_t>(k)];
-          const Triangle<S>& t = w.triangle(k);
-          ASSERT_TRUE(inside(t.a, child.lo, child.hi) && inside(t.b, child.lo, child.hi) && inside(t.c, child.lo, child.hi));
-          ASSERT_TRUE(inside(t.a, it.lo, it.hi) && inside(t.b, it.lo, it.hi) && inside(t.c, it.lo, it.hi));
-        }
-      } else {
-        ASSERT_GT(n.first[c], it.node);  // children after parents: no cycles
-        stack.push_back(child);
-      }
-    }
-    ASSERT_GE(children, 1);
-  }
-  for (int c : covered) ASSERT_EQ(c, 1);
-}
-
-/// Random rays and segments near the mesh's triangles: the wide cast (SIMD and scalar node tests)
-/// against brute force. Returns the number of hits.
-template <class S> int check_casts(const TriangleMesh<S>& m, const WideBvh<S>& w, int n, double scale, std::uint64_t seed) {
-  test::Rng rng(seed);
-  int hits = 0;
-  for (int i = 0; i < n; ++i) {
-    const Triangle<S> t = m.triangle(static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles()))));
-    const Vec3<S> o = t.centroid() + (rng.vec(-1, 1) * scale).template cast<S>();
-    Vec3<S> d = (rng.vec(-1, 1) * (i % 7 == 0 ? 20 * scale : scale)).template cast<S>();
-    if (i % 13 == 0) d[i % 3] = S(0);        // in a coordinate plane (1 / d infinite on an axis)
-    if (i % 17 == 0) d[(i + 1) % 3] = S(0);  // along a coordinate axis, with the case above
-    if (d.squaredNorm() == S(0)) continue;
-    const Ray<S> ray(o, d, i % 11 == 0 ? std::numeric_limits<S>::infinity() : S(1));
-    const auto ref = brute_first_t(m, ray);
-    const auto fast = ray_mesh_first_hit(w, ray);
-    const auto scalar = detail::ray_wide_first_hit_unchecked(w, ray, static_cast<const RigidTransform<S>*>(nullptr), nullptr, false);
-    EXPECT_EQ(ref.has_value(), fast.has_value()) << i;
-    EXPECT_EQ(fast.has_value(), scalar.has_value()) << i;
-    if (!ref || !fast || !scalar) continue;
-    ++hits;
-    expect_first_t(*ref, fast->t, i);
-    EXPECT_EQ(fast->t, scalar->t) << i;
-    EXPECT_EQ(fast->triangle, scalar->triangle) << i;
-    // the reported triangle is hit at the reported t
-    const auto h = detail::ray_mesh_triangle_hit(PreparedRay<S>(ray), m.triangle(fast->triangle));
-    EXPECT_TRUE(h && h->t == fast->t) << i;
-  }
-  return hits;
-}
+using test::wide::brute_first_t;
+using test::wide::check_casts;
+using test::wide::check_structure;
+using test::wide::expect_first_t;
 
 template <class S> class WideBvhTest : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double>;

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// WideBvh: a read-only 4-wide bounding-volume hierarchy over a triangle mesh, made for first-hit
-/// ray and segment casts (query/ray_wide_bvh.hpp). It is built by collapsing a binary tree (by
-/// default the surface-area-heuristic tree of the mesh): each wide node takes the two children of
-/// a binary node and keeps opening its largest-area inner child until it holds four, and every
-/// subtree of at most `leaf_size` triangles becomes one leaf. A node is two cache lines: its four
-/// children's float boxes (rounded outward) stored plane by plane, so one pass of SIMD arithmetic
-/// tests all four (AVX, SSE2 or a scalar loop giving the same answers), and their references. The
+/// WideBvh: a read-only 4-wide (or 8-wide: WideBvh<S, 8>) bounding-volume hierarchy over a
+/// triangle mesh, made for first-hit ray and segment casts (query/ray_wide_bvh.hpp). It is built by
+/// collapsing a binary tree (by default the surface-area-heuristic tree of the mesh): each wide
+/// node takes the two children of a binary node and keeps opening its largest-area inner child
+/// until it holds four (eight), and every subtree of at most `leaf_size` triangles becomes one
+/// leaf. A 4-wide node is two cache lines: its four children's float boxes (rounded outward)
+/// stored plane by plane, so one pass of SIMD arithmetic tests all four (SSE2 or a scalar loop
+/// giving the same answers), and their references; an 8-wide node is four (its test: AVX when the
+/// CPU has it, checked at run time, else SSE2 on two halves; no compiler flag needed). The
 /// triangles are copied in leaf order into blocks of four, coordinate by coordinate (a block holds
 /// a[x][4], a[y][4], ..., c[z][4]: one aligned load per coordinate of four triangles, no
 /// transposes; each leaf starts a block, a leaf of more than four triangles takes consecutive
@@ -44,23 +46,30 @@ struct WideBvhConfig {
   int sah_bins = 16;  ///< bins per axis of the binary SAH build (WideBvh(mesh) only), in [2, 256]
 };
 
-/// A node of a WideBvh: four children, their float boxes plane by plane.
-struct alignas(64) WideBvhNode {
+/// A node of a WideBvh of width W (4 or 8): W children, their float boxes plane by plane.
+template <int W> struct alignas(64) WideBvhNodeN {
+  static_assert(W == 4 || W == 8, "WideBvhNodeN: 4 or 8 children");
+  static constexpr int kWidth = W;
   /// bounds[2 * axis][child] is the lower, bounds[2 * axis + 1][child] the upper plane. Empty
   /// slots hold an inverted box (lower FLT_MAX, upper -FLT_MAX) that no ray enters.
-  float bounds[6][4];
-  std::int32_t first[4];  ///< inner child: node index; leaf: its first triangle block (WideBvh::block_first)
-  std::int32_t count[4];  ///< 0: inner child; > 0: leaf of that many triangles; -1: empty slot
+  float bounds[6][W];
+  std::int32_t first[W];  ///< inner child: node index; leaf: its first triangle block (WideBvh::block_first)
+  std::int32_t count[W];  ///< 0: inner child; > 0: leaf of that many triangles; -1: empty slot
 
-  WideBvhNode() {
-    for (int c = 0; c < 4; ++c) {
+  WideBvhNodeN() {
+    for (int c = 0; c < W; ++c) {
       for (int k = 0; k < 3; ++k) bounds[2 * k][c] = FLT_MAX, bounds[2 * k + 1][c] = -FLT_MAX;
       first[c] = 0;
       count[c] = -1;
     }
   }
 };
+/// The 4-wide node: two cache lines.
+using WideBvhNode = WideBvhNodeN<4>;
+/// The 8-wide node: four cache lines (the six planes of eight boxes in three, the references in one).
+using WideBvhNode8 = WideBvhNodeN<8>;
 static_assert(sizeof(WideBvhNode) == 128, "WideBvhNode: two cache lines");
+static_assert(sizeof(WideBvhNode8) == 256, "WideBvhNode8: four cache lines");
 
 /// Four triangles of a WideBvh leaf, coordinate by coordinate: v[3 * vertex + axis][lane] (vertex
 /// 0, 1, 2 = the triangle's a, b, c). Unused lanes hold zeros.
@@ -68,9 +77,14 @@ template <class T> struct alignas(4 * sizeof(T)) WideTriangleBlock {
   T v[9][4];
 };
 
-template <class S> class WideBvh {
+/// W: children a node, 4 (WideBvhNode, the default) or 8 (WideBvhNode8: half the levels, its node
+/// test eight boxes at once with AVX when the CPU has it).
+template <class S, int W = 4> class WideBvh {
  public:
   static_assert(is_supported_scalar_v<S>, "WideBvh: float or double");
+  static_assert(W == 4 || W == 8, "WideBvh: 4 or 8 children a node");
+  using Node = WideBvhNodeN<W>;
+  static constexpr int kWidth = W;
 
   WideBvh() = default;
 
@@ -96,7 +110,7 @@ template <class S> class WideBvh {
 
   bool empty() const { return ids_.empty(); }
   /// Nodes; nodes()[0] is the root (absent for an empty mesh).
-  const std::vector<WideBvhNode>& nodes() const { return nodes_; }
+  const std::vector<Node>& nodes() const { return nodes_; }
   /// Triangle at leaf-order position k (the mesh's coordinates, exactly). O(log leaves).
   Triangle<S> triangle(std::int32_t k) const {
     const auto it = std::upper_bound(block_first_.begin(), block_first_.end(), k);
@@ -135,13 +149,13 @@ template <class S> class WideBvh {
   bool has_repeats() const { return !repeats_.empty(); }
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
   /// Levels of inner nodes on the longest path from the root (0 for an empty tree): a
-  /// nearest-first walk keeps at most 3 depth() children pending.
+  /// nearest-first walk keeps at most (W - 1) depth() children pending.
   int depth() const { return depth_; }
   /// An upper bound of |x|_inf over the vertices (the scale of the casts' rounding).
   S coordinate_bound() const { return coordinate_bound_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(WideBvhNode) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
+    return nodes_.capacity() * sizeof(Node) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
            packed_.capacity() * sizeof(WideTriangleBlock<float>) + (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
            repeats_.capacity() / 8;
   }
@@ -187,7 +201,7 @@ template <class S> class WideBvh {
       const Vec3<S> e = b.max - b.min;
       return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
     };
-    nodes_.reserve(m / 3 + 1);
+    nodes_.reserve(m / (W - 1) + 1);
     nodes_.emplace_back();
     std::vector<int> level{1};  // of each wide node: the root is on level 1
     depth_ = 1;
@@ -195,14 +209,14 @@ template <class S> class WideBvh {
     while (!work.empty()) {
       const auto [src, dst] = work.back();
       work.pop_back();
-      std::int32_t kids[4];
+      std::int32_t kids[W];
       int k = 0;
       if (is_leaf(src)) {
         kids[k++] = src;  // a root that is a leaf
       } else {
         kids[k++] = tree.nodes[static_cast<std::size_t>(src)].left();
         kids[k++] = tree.nodes[static_cast<std::size_t>(src)].right();
-        while (k < 4) {  // open the largest inner child
+        while (k < W) {  // open the largest inner child
           int open = -1;
           for (int c = 0; c < k; ++c)
             if (!is_leaf(kids[c]) && (open < 0 || area(kids[c]) > area(kids[open]))) open = c;
@@ -212,7 +226,7 @@ template <class S> class WideBvh {
           kids[k++] = nd.right();
         }
       }
-      WideBvhNode node;
+      Node node;
       for (int c = 0; c < k; ++c) {
         const Aabb<S>& b = tree.nodes[static_cast<std::size_t>(kids[c])].bv;
         for (int a = 0; a < 3; ++a) {
@@ -243,7 +257,7 @@ template <class S> class WideBvh {
     };
     std::vector<LeafRef> leaves;
     for (std::size_t j = 0; j < nodes_.size(); ++j)
-      for (int c = 0; c < 4; ++c)
+      for (int c = 0; c < W; ++c)
         if (nodes_[j].count[c] > 0) leaves.push_back({nodes_[j].first[c], nodes_[j].count[c], j, c});
     std::sort(leaves.begin(), leaves.end());
     for (const LeafRef& l : leaves) {
@@ -265,7 +279,7 @@ template <class S> class WideBvh {
     else fill(full_);
   }
 
-  std::vector<WideBvhNode> nodes_;
+  std::vector<Node> nodes_;
   std::vector<WideTriangleBlock<float>> packed_;  // the triangle blocks when every coordinate is a float
   std::vector<WideTriangleBlock<S>> full_;        // otherwise
   std::vector<std::int32_t> block_first_;         // leaf-order position of each block's lane 0

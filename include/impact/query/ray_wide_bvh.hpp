@@ -2,7 +2,9 @@
 /// \file
 /// First-hit ray (or segment) casts through a WideBvh (bvh/wide_bvh.hpp): nearest-first, the
 /// four children of a node tested at once (SSE when compiled with it, else a scalar loop of the
-/// same IEEE operations in the same order: the same answers bit for bit), the nearest entered
+/// same IEEE operations in the same order: the same answers bit for bit; the eight of an 8-wide
+/// node with AVX when the CPU has it, the node loop compiled for AVX by a target attribute and
+/// picked at run time, else SSE on two halves: the same keys, so the same answers), the nearest entered
 /// child descended at once and the others kept on a stack with their entry parameter. The node
 /// test (query/wide_slab.hpp) runs in float (WideFloatSlab: the boxes are floats; its entry is lowered and its exit
 /// raised by a bound on its rounding, so it enters every box the double slab test WideSlab enters,
@@ -88,14 +90,16 @@ struct WideEntry {
 /// The state of one cast through a WideBvh (ray_wide_first_hit_unchecked), shared by its node
 /// loop and its leaves: the best hit so far and the bounds derived from it, the ray prepared for
 /// the triangle test (at the first leaf: most short casts reach none).
-template <class S> struct WideCast {
-  const WideBvh<S>& wide;
+template <class S, int W = 4> struct WideCast {
+  using Node = WideBvhNodeN<W>;
+  const WideBvh<S, W>& wide;
   const Vec3<S>& o;  // the ray in the mesh's frame (the caller's: it outlives the cast)
   const Vec3<S>& d;
   const Vec3<S> inv;
   const S t_max;
   const bool use_simd;
-  const WideFloatSlab<S> float_slab;
+  const bool use_avx;  // the 8-wide AVX node test and the AVX leaf test when the CPU has AVX
+  const WideFloatSlab<S, W> float_slab;
   S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
   std::int32_t best_k = -1;     // leaf-order position of the best hit
   std::int32_t best_block = -1;  // its block and lane
@@ -111,18 +115,18 @@ template <class S> struct WideCast {
   std::size_t node_tests = 0, triangle_tests = 0;
 
   /// `o_` and `d_` must outlive the cast.
-  WideCast(const WideBvh<S>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd)
-      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), float_slab(o_, inv, w.coordinate_bound()),
+  WideCast(const WideBvh<S, W>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd, bool avx = true)
+      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), float_slab(o_, inv, w.coordinate_bound()),
         best(t_max_), limit(t_max_), exit_f(float_round_up(double(t_max_))), bound_f(float_round_down(double(t_max_))) {}
 
   /// The keys in S of a node's children (WideSlab, or the box test for a zero direction component).
-  void double_keys(const WideBvhNode& n, S (&keys)[4]) {
+  void double_keys(const Node& n, S (&keys)[W]) {
     if (!slab) slab.emplace(o, inv);
     if (std::isfinite(inv[0]) && std::isfinite(inv[1]) && std::isfinite(inv[2])) {
       slab->keys(n, best, keys, use_simd);
       return;
     }
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < W; ++c) {
       const Aabb<S> box(Vec3<S>(S(n.bounds[0][c]), S(n.bounds[2][c]), S(n.bounds[4][c])),
                         Vec3<S>(S(n.bounds[1][c]), S(n.bounds[3][c]), S(n.bounds[5][c])));
       const auto t = n.count[c] < 0 ? std::nullopt : ray_box_entry(o, inv, box, best);
@@ -130,11 +134,11 @@ template <class S> struct WideCast {
     }
   }
   /// The children entered by the test in S (before limit), with their keys rounded down to float.
-  int double_mask(const WideBvhNode& n, float (&fk)[4]) {
-    S keys[4];
+  int double_mask(const Node& n, float (&fk)[W]) {
+    S keys[W];
     double_keys(n, keys);
     int mask = 0;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < W; ++c) {
       const bool in = keys[c] <= limit && n.count[c] >= 0;
       mask |= (in ? 1 : 0) << c;
       fk[c] = in ? float_round_down(double(keys[c])) : 0.0f;
@@ -165,7 +169,7 @@ template <class S> struct WideCast {
   IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
     if (!leaf_seen) {
       pr = PreparedRay<S>(Ray<S>(o, d, t_max));
-      block_test.set(pr);
+      block_test.set(pr, use_avx);
       leaf_seen = true;
     }
     const bool repeats = wide.has_repeats();
@@ -196,10 +200,10 @@ template <class S> struct WideCast {
   /// After a hit, at a node whose float keys of entered children are within rounding of it: the
   /// keys in S decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through
   /// a vertex would otherwise open every leaf around it).
-  IMPACT_NOINLINE int redecide(const WideBvhNode& n, float (&fk)[4]) { return double_mask(n, fk); }
+  IMPACT_NOINLINE int redecide(const Node& n, float (&fk)[W]) { return double_mask(n, fk); }
 
   /// Descends to the nearest entered child of `mask` (keys fk), pushing the others farthest first.
-  template <class Stack> void descend(const WideBvhNode& n, int mask, const float (&fk)[4], Stack& stack, std::int32_t& first, std::int32_t& count) {
+  template <class Stack> void descend(const Node& n, int mask, const float (&fk)[W], Stack& stack, std::int32_t& first, std::int32_t& count) {
     const int c0 = lowest_bit(mask);
     const int rest = mask & (mask - 1);
     if (!rest) {  // one child (the common case)
@@ -216,7 +220,7 @@ template <class S> struct WideCast {
       count = n.count[near];
       return;
     }
-    int order[4];
+    int order[W];
     const int m = order_children(mask, fk, order);
     for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
     first = n.first[order[0]];
@@ -227,7 +231,7 @@ template <class S> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
     if (wide.depth() <= kFixedDepth) {
-      TraversalStack<WideEntry, 3 * kFixedDepth, StackOverflow::None> stack;  // 3 entries a level at most
+      TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;  // W - 1 entries a level at most
       run(stack);
     } else {
       TraversalStack<WideEntry, 128> stack;
@@ -236,8 +240,34 @@ template <class S> struct WideCast {
   }
   static constexpr int kFixedDepth = 40;
 
+  /// The nearest pending child still at or below `bound` (popping the others); false when none.
+  template <class Stack> static bool pop_below(Stack& stack, float bound, std::int32_t& first, std::int32_t& count) {
+    while (!stack.empty()) {
+      const WideEntry e = stack.pop();
+      if (e.key <= bound) {
+        first = e.first;
+        count = e.count;
+        return true;
+      }
+    }
+    return false;
+  }
+#if defined(IMPACT_WIDE_AVX)
+  /// The traversal of an 8-wide tree with the AVX node test (compiled for AVX; called when the CPU
+  /// has it): the loop of run() with eight children tested at once.
+  template <class Stack> IMPACT_WIDE_AVX_TARGET void run_avx(Stack& stack);
+#endif
+
   template <class Stack> void run(Stack& stack) {
-    const WideBvhNode* nodes = wide.nodes().data();
+#if defined(IMPACT_WIDE_AVX)
+    if constexpr (W == 8) {
+      if (use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
+        run_avx(stack);
+        return;
+      }
+    }
+#endif
+    const Node* nodes = wide.nodes().data();
     std::int32_t first = 0, count = 0;  // the root: an inner node
     std::size_t tests = 0;
     const bool in_float = float_slab.usable();  // (false for an infinite 1 / d)
@@ -254,20 +284,24 @@ template <class S> struct WideCast {
     };
 #if defined(__SSE2__)
     if (in_float && use_simd) {
-      const typename WideFloatSlab<S>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
+      const typename WideFloatSlab<S, W>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
       for (;;) {
         // the bounds as of the last leaf, in registers for the node loop
         const __m128 exit_v = _mm_set1_ps(exit_f), bound_v = _mm_set1_ps(bound_f), tie_v = _mm_set1_ps(tie_f);
         const float bound = bound_f;
         while (count == 0) {
-          const WideBvhNode& n = nodes[first];
+          const Node& n = nodes[first];
           ++tests;
-          __m128 lo;
+          __m128 lo[W / 4];
           int mask = fs.entered(n, exit_v, bound_v, lo);
           if (mask) {
-            float fk[4];
-            _mm_storeu_ps(fk, lo);
-            if (IMPACT_UNLIKELY(_mm_movemask_ps(_mm_cmpge_ps(lo, tie_v)) & mask)) {
+            float fk[W];
+            int ties = 0;
+            for (int g = 0; g < W / 4; ++g) {
+              _mm_storeu_ps(fk + 4 * g, lo[g]);
+              ties |= _mm_movemask_ps(_mm_cmpge_ps(lo[g], tie_v)) << (4 * g);
+            }
+            if (IMPACT_UNLIKELY(ties & mask)) {
               mask = redecide(n, fk);
               if (!mask) {
                 if (!pop(bound)) {
@@ -297,14 +331,15 @@ template <class S> struct WideCast {
       if (count > 0) {
         leaf(first, count);
       } else {
-        const WideBvhNode& n = nodes[first];
+        const Node& n = nodes[first];
         ++tests;
-        float fk[4];
+        float fk[W];
         int mask;
         if (in_float) {
           mask = float_slab.entered_scalar(n, exit_f, bound_f, fk);
-          if (IMPACT_UNLIKELY((mask & ((fk[0] >= tie_f) | (fk[1] >= tie_f) << 1 | (fk[2] >= tie_f) << 2 | (fk[3] >= tie_f) << 3))))
-            mask = redecide(n, fk);
+          int ties = 0;
+          for (int c = 0; c < W; ++c) ties |= (fk[c] >= tie_f ? 1 : 0) << c;
+          if (IMPACT_UNLIKELY(mask & ties)) mask = redecide(n, fk);
         } else {
           mask = double_mask(n, fk);
         }
@@ -319,12 +354,63 @@ template <class S> struct WideCast {
   }
 };
 
+#if defined(IMPACT_WIDE_AVX)
+template <class S, int W>
+template <class Stack>
+IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
+  static_assert(W == 8, "the AVX node loop: 8-wide nodes");
+  const Node* nodes = wide.nodes().data();
+  std::int32_t first = 0, count = 0;  // the root: an inner node
+  std::size_t tests = 0;
+  const typename WideFloatSlab<S, W>::Avx fs = float_slab.avx();  // in registers for the node loop
+  for (;;) {
+    const __m256 exit_v = _mm256_set1_ps(exit_f), bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
+    const float bound = bound_f;
+    bool done = false;
+    while (count == 0) {
+      const Node& n = nodes[first];
+      ++tests;
+      __m256 lo;
+      int mask = WideFloatSlab<S, W>::entered_avx(fs, n, exit_v, bound_v, lo);
+      if (mask) {
+        float fk[W];
+        _mm256_storeu_ps(fk, lo);
+        if (IMPACT_UNLIKELY(_mm256_movemask_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ)) & mask)) {
+          mask = redecide(n, fk);
+          if (!mask) {
+            if (!pop_below(stack, bound, first, count)) {
+              done = true;
+              break;
+            }
+            continue;
+          }
+        }
+        descend(n, mask, fk, stack, first, count);
+        continue;
+      }
+      if (!pop_below(stack, bound, first, count)) {
+        done = true;
+        break;
+      }
+    }
+    if (!done) {
+      leaf(first, count);
+      done = !pop_below(stack, bound_f, first, count);
+    }
+    if (done) {
+      node_tests += tests;
+      return;
+    }
+  }
+}
+#endif
+
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
 /// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
 /// compare the two: the same answers, triangle included).
-template <class S>
-std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
-                                                          RayMeshStats* stats, bool use_simd = true) {
+template <class S, int W>
+std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
+                                                          RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
   if (wide.empty()) return std::nullopt;
   Vec3<S> posed_o, posed_d;  // the ray in the mesh's frame when posed (else the caller's, not copied)
   if (pose) {
@@ -334,10 +420,10 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
   const Vec3<S>& o = pose ? posed_o : ray.origin;
   const Vec3<S>& d = pose ? posed_d : ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  WideCast<S> cast(wide, o, d, ray.t_max, use_simd);
+  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
   cast.run();
   if (stats) {
-    stats->node_tests += 4 * cast.node_tests;
+    stats->node_tests += W * cast.node_tests;
     stats->triangle_tests += cast.triangle_tests;
   }
   if (cast.best_k < 0) return std::nullopt;
@@ -360,8 +446,8 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S>& wide
 /// same t, through the 4-wide tree. RayMeshHit::leaf_index is the leaf-order position in `wide`
 /// (WideBvh::triangle). Throws InvalidInput for a non-finite origin or direction, a zero
 /// direction, t_max NaN or negative (validate_ray), or a pose that is not rigid (validate_pose).
-template <class S>
-std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S>& wide, const Ray<S>& ray, const RigidTransform<S>& pose,
+template <class S, int W>
+std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>& pose,
                                                 RayMeshStats* stats = nullptr) {
   if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
   validate_pose(pose, "ray_mesh_first_hit");
@@ -369,7 +455,7 @@ std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S>& wide, const Ra
 }
 
 /// The same first hit with the ray in the mesh's own frame (no pose to check or apply).
-template <class S> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S>& wide, const Ray<S>& ray) {
+template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const Ray<S>& ray) {
   if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
   return detail::ray_wide_first_hit_unchecked(wide, ray, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
 }

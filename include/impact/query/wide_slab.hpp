@@ -1,13 +1,16 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// The node tests of a cast through a WideBvh (bvh/wide_bvh.hpp): the slab test of one ray
-/// against the four boxes of a node, in S (WideSlab, on the float boxes, exact in S with its exit
+/// against the four (or eight) boxes of a node, in S (WideSlab, on the float boxes, exact in S with its exit
 /// padded as in PBRT's robust slab test) and in float (WideFloatSlab, a quarter of the work, its
 /// entry lowered and its exit raised by a bound on its rounding so that it enters every box
 /// WideSlab enters, never later), and the order in which the entered children are visited
 /// (order_children, shared by both so that a cast visits the same nodes whichever test ran).
 /// Each runs with SSE when compiled with it, else as a scalar loop of the same IEEE operations in
-/// the same order: the same keys and masks bit for bit. Used by query/ray_wide_bvh.hpp.
+/// the same order: the same keys and masks bit for bit; the float test of an 8-wide node also in
+/// 256-bit AVX (compiled for AVX by a target attribute on GCC and Clang for x86, used when the CPU
+/// has it: wide_avx_available), again the same operations lane by lane. Used by
+/// query/ray_wide_bvh.hpp.
 #pragma once
 
 #include "impact/bvh/wide_bvh.hpp"
@@ -26,9 +29,27 @@
 #if defined(__AVX__)
 #include <immintrin.h>
 #endif
+// the 8-wide AVX node test: compiled for AVX whatever the target (a target attribute), called when
+// the CPU has it (wide_avx_available), else the SSE test of two halves
+#if defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define IMPACT_WIDE_AVX 1
+#define IMPACT_WIDE_AVX_TARGET __attribute__((target("avx")))
+#endif
 
 namespace impact {
 namespace detail {
+
+/// True when the 8-wide node test may use AVX: compiled in (GCC or Clang on x86) and the CPU has
+/// it (checked once).
+inline bool wide_avx_available() {
+#if defined(IMPACT_WIDE_AVX)
+  static const bool avx = __builtin_cpu_supports("avx");
+  return avx;
+#else
+  return false;
+#endif
+}
 
 /// The slab test of a ray against the four children of a WideBvhNode, for a ray whose inverse
 /// direction is finite on every axis: the near and far planes are picked once per ray by the
@@ -46,7 +67,7 @@ template <class S> class WideSlab {
   /// keys[c]: the entry parameter into child c's box, or NaN when the ray misses it or enters
   /// it after t_max. Empty slots give NaN, or +infinity for an infinite float ray (their planes
   /// overflow): the caller skips them by their count. `use_simd` false forces the scalar loop.
-  void keys(const WideBvhNode& n, S t_max, S (&keys)[4], bool use_simd = true) const {
+  template <int W> void keys(const WideBvhNodeN<W>& n, S t_max, S (&keys)[W], bool use_simd = true) const {
     constexpr S pad = S(4) * std::numeric_limits<S>::epsilon();  // robust slab test (PBRT 3.9.2)
     constexpr S nan = std::numeric_limits<S>::quiet_NaN();
     if constexpr (std::is_same_v<S, double>) {
@@ -54,22 +75,24 @@ template <class S> class WideSlab {
 #if defined(__AVX__)
         const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
         const __m256d vpad = _mm256_set1_pd(pad);
-        __m256d t0 = _mm256_setzero_pd(), t1 = _mm256_set1_pd(t_max);
-        for (int i = 0; i < 3; ++i) {
-          const __m256d o = _mm256_set1_pd(o_[i]), inv = _mm256_set1_pd(inv_[i]);
-          const __m256d a = _mm256_mul_pd(_mm256_sub_pd(_mm256_cvtps_pd(_mm_load_ps(n.bounds[near_[i]])), o), inv);
-          __m256d b = _mm256_mul_pd(_mm256_sub_pd(_mm256_cvtps_pd(_mm_load_ps(n.bounds[far_[i]])), o), inv);
-          b = _mm256_add_pd(b, _mm256_mul_pd(_mm256_and_pd(b, abs_mask), vpad));
-          t0 = _mm256_max_pd(a, t0);
-          t1 = _mm256_min_pd(b, t1);
+        for (int g = 0; g < W; g += 4) {  // children g .. g + 3
+          __m256d t0 = _mm256_setzero_pd(), t1 = _mm256_set1_pd(t_max);
+          for (int i = 0; i < 3; ++i) {
+            const __m256d o = _mm256_set1_pd(o_[i]), inv = _mm256_set1_pd(inv_[i]);
+            const __m256d a = _mm256_mul_pd(_mm256_sub_pd(_mm256_cvtps_pd(_mm_load_ps(n.bounds[near_[i]] + g)), o), inv);
+            __m256d b = _mm256_mul_pd(_mm256_sub_pd(_mm256_cvtps_pd(_mm_load_ps(n.bounds[far_[i]] + g)), o), inv);
+            b = _mm256_add_pd(b, _mm256_mul_pd(_mm256_and_pd(b, abs_mask), vpad));
+            t0 = _mm256_max_pd(a, t0);
+            t1 = _mm256_min_pd(b, t1);
+          }
+          const __m256d hit = _mm256_cmp_pd(t0, t1, _CMP_LE_OQ);
+          _mm256_storeu_pd(keys + g, _mm256_blendv_pd(_mm256_set1_pd(nan), t0, hit));
         }
-        const __m256d hit = _mm256_cmp_pd(t0, t1, _CMP_LE_OQ);
-        _mm256_storeu_pd(keys, _mm256_blendv_pd(_mm256_set1_pd(nan), t0, hit));
         return;
 #elif defined(__SSE2__)
         const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
         const __m128d vpad = _mm_set1_pd(pad);
-        for (int h = 0; h < 2; ++h) {  // children 2h and 2h + 1
+        for (int h = 0; h < W / 2; ++h) {  // children 2h and 2h + 1
           __m128d t0 = _mm_setzero_pd(), t1 = _mm_set1_pd(t_max);
           for (int i = 0; i < 3; ++i) {
             const __m128d o = _mm_set1_pd(o_[i]), inv = _mm_set1_pd(inv_[i]);
@@ -86,16 +109,17 @@ template <class S> class WideSlab {
 #endif
       }
     }
-    S t0[4] = {S(0), S(0), S(0), S(0)}, t1[4] = {t_max, t_max, t_max, t_max};
+    S t0[W], t1[W];
+    for (int c = 0; c < W; ++c) t0[c] = S(0), t1[c] = t_max;
     for (int i = 0; i < 3; ++i)
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < W; ++c) {
         const S a = (S(n.bounds[near_[i]][c]) - o_[i]) * inv_[i];
         S b = (S(n.bounds[far_[i]][c]) - o_[i]) * inv_[i];
         b += std::abs(b) * pad;
         t0[c] = a > t0[c] ? a : t0[c];  // maxpd / minpd: the second operand unless the first wins
         t1[c] = b < t1[c] ? b : t1[c];
       }
-    for (int c = 0; c < 4; ++c) keys[c] = t0[c] <= t1[c] ? t0[c] : nan;
+    for (int c = 0; c < W; ++c) keys[c] = t0[c] <= t1[c] ? t0[c] : nan;
   }
 
  private:
@@ -136,7 +160,7 @@ template <class S> inline S next_below(S x) {
   return y;
 }
 
-/// The slab test of a ray against the four children of a WideBvhNode in float: a conservative
+/// The slab test of a ray against the W children of a WideBvhNodeN<W> in float: a conservative
 /// version of WideSlab's keys (in S on the same float boxes) at a quarter of the work, for a ray
 /// whose inverse direction is in [2^-60, 2^60] in magnitude, whose origin and the tree's
 /// coordinates are at most 2^60 and whose origin is within 2^40 / |1 / d| of a float on every
@@ -158,8 +182,10 @@ template <class S> inline S next_below(S x) {
 ///    margin 2^-16 of e covers the rest.
 /// Empty slots (lower plane FLT_MAX, upper -FLT_MAX) give lo >= 2^67 (1 - 2^-19) - 2^41 > 0 > hi
 /// on every axis and are never entered (no count check). SSE when compiled with it, else a
-/// scalar loop of the same IEEE operations in the same order (the same keys and mask bit for bit).
-template <class S> class WideFloatSlab {
+/// scalar loop of the same IEEE operations in the same order (the same keys and mask bit for bit);
+/// for W = 8 SSE tests the two halves of four, and AVX (compiled for it by a target attribute,
+/// called when the CPU has it: entered_avx) all eight at once, in the same operations.
+template <class S, int W = 4> class WideFloatSlab {
  public:
   WideFloatSlab(const Vec3<S>& o, const Vec3<S>& inv, S coordinate_bound) {
 #if defined(__SSE2__)
@@ -179,7 +205,11 @@ template <class S> class WideFloatSlab {
       const double e = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
       const int sign = _mm_movemask_pd(i01) | (_mm_movemask_pd(i22) & 1) << 2;
       usable_ = (_mm_movemask_pd(_mm_and_pd(in01, in22)) == 3) & (coordinate_bound <= S(0x1p60)) & (e <= 0x1p40);
-      std::memcpy(sse_.planes, kPlanes[sign], sizeof sse_.planes);
+      if constexpr (W == 4) {
+        std::memcpy(sse_.planes, kPlanes[sign], sizeof sse_.planes);
+      } else {
+        for (int j = 0; j < 6; ++j) sse_.planes[j] = kPlanes[sign][j] * (W / 4);
+      }
       sse_.o[0] = _mm_shuffle_ps(of01, of01, 0x00), sse_.o[1] = _mm_shuffle_ps(of01, of01, 0x55), sse_.o[2] = _mm_shuffle_ps(of22, of22, 0x00);
       sse_.inv[0] = _mm_shuffle_ps(if01, if01, 0x00), sse_.inv[1] = _mm_shuffle_ps(if01, if01, 0x55), sse_.inv[2] = _mm_shuffle_ps(if22, if22, 0x00);
       e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
@@ -193,8 +223,8 @@ template <class S> class WideFloatSlab {
       const S a = std::abs(inv[i]);
       ok = ok & (std::abs(o[i]) <= S(0x1p60)) & (a <= S(0x1p60)) & (a >= S(0x1p-60));  // false for NaN
       const bool neg = inv[i] < S(0);
-      planes()[i] = static_cast<int>(sizeof(float[4])) * (2 * i + (neg ? 1 : 0));  // byte offsets of the planes
-      planes()[3 + i] = planes()[i] ^ static_cast<int>(sizeof(float[4]));
+      planes()[i] = static_cast<int>(sizeof(float[W])) * (2 * i + (neg ? 1 : 0));  // byte offsets of the planes
+      planes()[3 + i] = planes()[i] ^ static_cast<int>(sizeof(float[W]));
       const float of = static_cast<float>(o[i]), invf = static_cast<float>(inv[i]);
 #if defined(__SSE2__)
       sse_.o[i] = _mm_set1_ps(of), sse_.inv[i] = _mm_set1_ps(invf);
@@ -217,12 +247,12 @@ template <class S> class WideFloatSlab {
 
   /// The children entered before `bound` (a float <= the cast's bound): bit c set when lo[c] <=
   /// hi[c] and lo[c] <= bound; keys[c] = lo[c] (the others anything); `t_max_up` a float >= t_max.
-  int entered(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4], bool use_simd = true) const {
+  int entered(const WideBvhNodeN<W>& n, float t_max_up, float bound, float (&keys)[W], bool use_simd = true) const {
 #if defined(__SSE2__)
     if (use_simd) {
-      __m128 lo;
-      const int m = entered(n, _mm_set1_ps(t_max_up), _mm_set1_ps(bound), lo);
-      _mm_storeu_ps(keys, lo);
+      __m128 lo[W / 4];
+      const int m = sse_.entered(n, _mm_set1_ps(t_max_up), _mm_set1_ps(bound), lo);
+      for (int g = 0; g < W / 4; ++g) _mm_storeu_ps(keys + 4 * g, lo[g]);
       return m;
     }
 #else
@@ -236,9 +266,21 @@ template <class S> class WideFloatSlab {
   struct Sse {
     __m128 o[3], inv[3], e;  // origin and inverse direction rounded to float, e, broadcast
     int planes[6];           // byte offsets in a node of the near planes of x, y, z, then of the far ones
-    /// entered() with the bounds broadcast and the keys left in a register.
-    int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const {
+    /// entered() of a 4-wide node with the bounds broadcast and the keys left in a register.
+    int entered(const WideBvhNodeN<W>& n, __m128 t_max_up, __m128 bound, __m128& keys) const {
+      static_assert(W == 4, "one register of keys: a 4-wide node");
+      return lanes(reinterpret_cast<const char*>(n.bounds), t_max_up, bound, keys);
+    }
+    /// The same for any width, keys[h] holding children 4h .. 4h + 3 (an 8-wide node: two halves of
+    /// four).
+    int entered(const WideBvhNodeN<W>& n, __m128 t_max_up, __m128 bound, __m128 (&keys)[W / 4]) const {
       const char* p = reinterpret_cast<const char*>(n.bounds);
+      int m = lanes(p, t_max_up, bound, keys[0]);
+      if constexpr (W == 8) m |= lanes(p + 16, t_max_up, bound, keys[1]) << 4;
+      return m;
+    }
+    /// The test of four children whose planes are at the byte offsets `planes` from p.
+    int lanes(const char* p, __m128 t_max_up, __m128 bound, __m128& keys) const {
       __m128 t0 = _mm_setzero_ps(), t1 = t_max_up;
       for (int i = 0; i < 3; ++i) {
         const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(reinterpret_cast<const float*>(p + planes[i])), o[i]), inv[i]);
@@ -254,17 +296,60 @@ template <class S> class WideFloatSlab {
   };
   const Sse& sse() const { return sse_; }
   /// entered() with the bounds broadcast and the keys left in a register.
-  int entered(const WideBvhNode& n, __m128 t_max_up, __m128 bound, __m128& keys) const { return sse_.entered(n, t_max_up, bound, keys); }
+  int entered(const WideBvhNodeN<W>& n, __m128 t_max_up, __m128 bound, __m128& keys) const { return sse_.entered(n, t_max_up, bound, keys); }
+#endif
+#if defined(IMPACT_WIDE_AVX)
+  /// The per-ray state of the AVX test of eight children, broadcast to eight lanes (made by
+  /// avx() inside a function compiled for AVX).
+  struct Avx {
+    __m256 o[3], inv[3], e;
+    int planes[6];
+  };
+  IMPACT_WIDE_AVX_TARGET Avx avx() const {
+    Avx a;
+    for (int i = 0; i < 3; ++i) {
+      a.o[i] = _mm256_set1_ps(origin(i));
+      a.inv[i] = _mm256_set1_ps(inverse(i));
+      a.planes[i] = planes()[i];
+      a.planes[3 + i] = planes()[3 + i];
+    }
+    a.e = _mm256_set1_ps(e_);
+    return a;
+  }
+  /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same operations as the
+  /// SSE and scalar tests, lane by lane (no FMA), so the same keys and mask bit for bit.
+  IMPACT_WIDE_AVX_TARGET static int entered_avx(const Avx& a, const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) {
+    const char* p = reinterpret_cast<const char*>(n.bounds);
+    __m256 t0 = _mm256_setzero_ps(), t1 = t_max_up;
+    for (int i = 0; i < 3; ++i) {
+      const __m256 lo = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[i])), a.o[i]), a.inv[i]);
+      const __m256 hi = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[3 + i])), a.o[i]), a.inv[i]);
+      t0 = _mm256_max_ps(lo, t0);
+      t1 = _mm256_min_ps(hi, t1);
+    }
+    const __m256 lo = _mm256_sub_ps(_mm256_mul_ps(t0, _mm256_set1_ps(kLow)), a.e);
+    const __m256 hi = _mm256_add_ps(_mm256_mul_ps(t1, _mm256_set1_ps(kHigh)), a.e);
+    keys = lo;
+    return _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(lo, hi, _CMP_LE_OQ), _mm256_cmp_ps(lo, bound, _CMP_LE_OQ)));
+  }
+  /// entered() through entered_avx (call only when wide_avx_available()).
+  IMPACT_WIDE_AVX_TARGET int entered_avx(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
+    __m256 lo;
+    const int m = entered_avx(avx(), n, _mm256_set1_ps(t_max_up), _mm256_set1_ps(bound), lo);
+    _mm256_storeu_ps(keys, lo);
+    return m;
+  }
 #endif
 
   /// entered() by a scalar loop of the same IEEE operations in the same order.
-  int entered_scalar(const WideBvhNode& n, float t_max_up, float bound, float (&keys)[4]) const {
+  int entered_scalar(const WideBvhNodeN<W>& n, float t_max_up, float bound, float (&keys)[W]) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
-    float t0[4] = {0.0f, 0.0f, 0.0f, 0.0f}, t1[4] = {t_max_up, t_max_up, t_max_up, t_max_up};
+    float t0[W], t1[W];
+    for (int c = 0; c < W; ++c) t0[c] = 0.0f, t1[c] = t_max_up;
     for (int i = 0; i < 3; ++i) {
       const float* near = reinterpret_cast<const float*>(p + planes()[i]);
       const float* far = reinterpret_cast<const float*>(p + planes()[3 + i]);
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < W; ++c) {
         const float a = (near[c] - origin(i)) * inverse(i);
         const float b = (far[c] - origin(i)) * inverse(i);
         t0[c] = a > t0[c] ? a : t0[c];  // maxps / minps: the second operand unless the first wins
@@ -272,7 +357,7 @@ template <class S> class WideFloatSlab {
       }
     }
     int m = 0;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < W; ++c) {
       const float lo = t0[c] * kLow - e_, hi = t1[c] * kHigh + e_;
       keys[c] = lo;
       m |= (lo <= hi && lo <= bound ? 1 : 0) << c;
@@ -296,8 +381,8 @@ template <class S> class WideFloatSlab {
   float origin(int i) const { return o_[i]; }
   float inverse(int i) const { return inv_[i]; }
 #endif
-  /// kPlanes[sign]: the byte offsets in a node of the near planes of x, y, z then the far ones,
-  /// for the direction's sign bits (bit i: component i negative).
+  /// kPlanes[sign]: the byte offsets in a 4-wide node of the near planes of x, y, z then the far
+  /// ones, for the direction's sign bits (bit i: component i negative); twice them in an 8-wide one.
   static constexpr int kPlanes[8][6] = {{0, 32, 64, 16, 48, 80}, {16, 32, 64, 0, 48, 80}, {0, 48, 64, 16, 32, 80},
                                         {16, 48, 64, 0, 32, 80}, {0, 32, 80, 16, 48, 64}, {16, 32, 80, 0, 48, 64},
                                         {0, 48, 80, 16, 32, 64}, {16, 48, 80, 0, 32, 64}};
@@ -311,14 +396,29 @@ template <class S> class WideFloatSlab {
 #endif
 };
 
+/// The index of the lowest set bit of m (m != 0).
+inline int lowest_bit(int m) {
+#if defined(__GNUC__) || defined(__clang__)
+  return __builtin_ctz(static_cast<unsigned>(m));
+#else
+  int c = 0;
+  while (!(m & 1)) m >>= 1, ++c;
+  return c;
+#endif
+}
+
 /// The children entered at a node, nearest first: writes the entered slots of `mask` ordered by
 /// key (ties: the lower slot first), returns how many. Shared by every node test, so that a cast
 /// visits the same nodes in the same order whichever computed the keys.
-template <class K> inline int order_children(int mask, const K (&keys)[4], int (&order)[4]) {
+template <class K, int N> inline int order_children(int mask, const K (&keys)[N], int (&order)[N]) {
   int m = 0;
-  for (int c = 0; c < 4; ++c) {
-    order[m] = c;
-    m += (mask >> c) & 1;
+  if constexpr (N <= 4) {  // the slots in order without branches
+    for (int c = 0; c < N; ++c) {
+      order[m] = c;
+      m += (mask >> c) & 1;
+    }
+  } else {  // a few of eight: one step a set bit
+    for (unsigned bits = static_cast<unsigned>(mask); bits; bits &= bits - 1) order[m++] = lowest_bit(static_cast<int>(bits));
   }
   for (int i = 1; i < m; ++i) {
     const int c = order[i];
@@ -330,17 +430,6 @@ template <class K> inline int order_children(int mask, const K (&keys)[4], int (
     order[j] = c;
   }
   return m;
-}
-
-/// The index of the lowest set bit of m (m != 0).
-inline int lowest_bit(int m) {
-#if defined(__GNUC__) || defined(__clang__)
-  return __builtin_ctz(static_cast<unsigned>(m));
-#else
-  int c = 0;
-  while (!(m & 1)) m >>= 1, ++c;
-  return c;
-#endif
 }
 
 }  // namespace detail

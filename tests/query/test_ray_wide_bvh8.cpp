@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: MIT
+// The 8-wide WideBvh (WideBvh<S, 8>, WideBvhNode8) and its casts: the structure, and the casts
+// against brute force over all triangles in float and double (random rays, axis-parallel and
+// infinite ones, rays through vertices and edge points of closed meshes, degenerate meshes, a tree
+// deeper than the fixed stack, a rigid pose), with the three node-test paths compared on every
+// ray: AVX (eight boxes at once, when the CPU has it), SSE (two halves of four) and the scalar
+// loop, which must give the same t and triangle. The 8-wide float node test itself: AVX, SSE and
+// scalar keys and masks bit for bit, and conservative against the double slab test.
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/ray_wide_bvh.hpp"
+#include "support/random.hpp"
+#include "wide_bvh_checks.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "support/sanitizer.hpp"
+
+namespace impact {
+namespace {
+
+constexpr int kWide8Samples = IMPACT_TEST_SANITIZED ? 4 : 1;
+
+template <class S> class WideBvh8Test : public ::testing::Test {};
+using Wide8Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(WideBvh8Test, Wide8Scalars);
+
+TYPED_TEST(WideBvh8Test, TorusStructureAndFirstHits) {
+  using S = TypeParam;
+  const TriangleMesh<S> torus = make_torus<S>(S(1), S(0.4), 32, 16);
+  for (int leaf : {1, 4, 7}) {
+    WideBvhConfig cfg;
+    cfg.leaf_size = leaf;
+    const WideBvh<S, 8> w(torus, cfg);
+    test::wide::check_structure(torus, w, leaf);
+    const int n = 1500 / kWide8Samples;
+    EXPECT_GT(test::wide::check_casts(torus, w, n, 0.1, 7 + std::uint64_t(leaf)), n / 10);
+  }
+  // an 8-wide tree has fewer levels than the 4-wide one of the same binary tree
+  const WideBvh<S, 8> w8(torus);
+  const WideBvh<S, 4> w4(torus);
+  EXPECT_LT(w8.depth(), w4.depth());
+  EXPECT_LT(w8.nodes().size(), w4.nodes().size());
+  // collapsing an existing tree (spatial middle split, leaves of 3) keeps the answers
+  MeshBvhConfig mcfg;
+  mcfg.build.leaf_size = 3;
+  const WideBvh<S, 8> from_tree(MeshBvh<Aabb<S>>(torus, mcfg));
+  test::wide::check_structure(torus, from_tree, 4);
+  EXPECT_GT(test::wide::check_casts(torus, from_tree, 500 / kWide8Samples, 0.1, 99), 50 / kWide8Samples);
+}
+
+// Rays aimed at vertices and edge midpoints of closed meshes: a watertight cast hits, with brute
+// force's t, on every path.
+TYPED_TEST(WideBvh8Test, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
+  using S = TypeParam;
+  for (const bool sphere : {true, false}) {
+    const TriangleMesh<S> m = sphere ? make_icosphere<S>(S(1), 2) : make_torus<S>(S(1), S(0.4), 24, 12);
+    const WideBvh<S, 8> w(m);
+    test::Rng rng(5);
+    int hits = 0;
+    const int n = 1200 / kWide8Samples;
+    const RigidTransform<S>* no_pose = nullptr;
+    for (int i = 0; i < n; ++i) {
+      const int t = static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles())));
+      const Vec3<S> a = m.vertex(m.F(t, i % 3)), b = m.vertex(m.F(t, (i + 1) % 3));
+      const Vec3<S> p = i % 2 == 0 ? a : Vec3<S>((a + b) / S(2));
+      const Vec3<S> o = i % 4 < 2 ? Vec3<S>(p * S(0.5)) : Vec3<S>(p + (rng.vec(-1, 1) * 3.0).template cast<S>());
+      const Vec3<S> d = p - o;
+      if (d.squaredNorm() == S(0)) continue;
+      const Ray<S> ray(o, d, S(2));
+      const auto ref = test::wide::brute_first_t(m, ray);
+      const auto fast = ray_mesh_first_hit(w, ray);
+      const auto sse = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, nullptr, true, false);
+      ASSERT_EQ(ref.has_value(), fast.has_value()) << i;
+      ASSERT_EQ(fast.has_value(), sse.has_value()) << i;
+      if (sphere && i % 4 < 2) {
+        ASSERT_TRUE(fast.has_value()) << i;  // from inside the sphere, out through p
+      }
+      if (!fast) continue;
+      ++hits;
+      test::wide::expect_first_t(*ref, fast->t, i);
+      EXPECT_EQ(fast->t, sse->t) << i;
+      EXPECT_EQ(fast->triangle, sse->triangle) << i;
+    }
+    EXPECT_GT(hits, n / 2);
+  }
+}
+
+// Degenerate meshes: zero-area triangles, 40 coincident triangles (more than eight children's
+// worth in one leaf of the source tree), one triangle, a flat mesh.
+TYPED_TEST(WideBvh8Test, DegenerateMeshes) {
+  using S = TypeParam;
+  std::vector<TriangleMesh<S>> meshes;
+  {
+    const TriangleMesh<S> grid = make_torus<S>(S(1), S(0.4), 12, 6);
+    const int nv = grid.num_vertices();
+    Vertices<S> V(nv + 2, 3);
+    V.topRows(nv) = grid.V;
+    V.row(nv) << S(0), S(0), S(0);
+    V.row(nv + 1) << S(2), S(0), S(0);
+    Faces F(grid.num_triangles() + 2, 3);
+    F.topRows(grid.num_triangles()) = grid.F;
+    F.row(grid.num_triangles()) << 0, 0, 1;                 // a repeated vertex
+    F.row(grid.num_triangles() + 1) << nv, nv + 1, nv + 1;  // a segment
+    meshes.emplace_back(V, F);
+  }
+  {
+    Vertices<S> V(3, 3);
+    V << S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1), S(0);
+    Faces F(40, 3);
+    for (int t = 0; t < 40; ++t) F.row(t) << 0, 1, 2;  // coincident
+    meshes.emplace_back(V, F);
+    meshes.emplace_back(V, Faces(F.topRows(1)));  // one triangle
+  }
+  {
+    test::Rng rng(3);
+    Vertices<S> V(60, 3);
+    for (int i = 0; i < 60; ++i) V.row(i) << S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(0);  // flat
+    Faces F(80, 3);
+    for (int t = 0; t < 80; ++t) F.row(t) << int(rng.index(60)), int(rng.index(60)), int(rng.index(60));
+    meshes.emplace_back(V, F);
+  }
+  for (std::size_t k = 0; k < meshes.size(); ++k) {
+    const WideBvh<S, 8> w(meshes[k]);
+    test::wide::check_structure(meshes[k], w, 4);
+    EXPECT_GT(test::wide::check_casts(meshes[k], w, 600 / kWide8Samples, 0.5, 11 + k), 0) << k;
+  }
+}
+
+// A tree deeper than the fixed stack bounds (a chain of 1,500 shrinking triangles): the stack with a
+// heap overflow, the answers brute force's on every path.
+TEST(WideBvh8, DeepTreeCastsLikeBruteForce) {
+  const int n = 1500;
+  Vertices<double> V(3 * n, 3);
+  Faces F(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const double x = std::pow(0.8, i), s = 0.3 * x;
+    V.row(3 * i) << x, 0, 0;
+    V.row(3 * i + 1) << x, s, 0;
+    V.row(3 * i + 2) << x, 0, s;
+    F.row(i) << 3 * i, 3 * i + 1, 3 * i + 2;
+  }
+  const TriangleMesh<double> m(V, F);
+  const WideBvh<double, 8> w(m);
+  ASSERT_GT(w.depth(), (detail::WideCast<double, 8>::kFixedDepth));
+  test::wide::check_structure(m, w, 4);
+  EXPECT_GT(test::wide::check_casts(m, w, 400, 0.5, 17), 0);
+  for (int i = 0; i < 40; ++i) {
+    const double y = std::pow(0.8, 5 * i) * 0.01;
+    const Ray<double> ray(Vec3<double>(-1.0, y, y), Vec3<double>(1.0, 0.0, 0.0), 3.0);
+    const auto ref = test::wide::brute_first_t(m, ray);
+    const auto fast = ray_mesh_first_hit(w, ray);
+    ASSERT_TRUE(ref.has_value() && fast.has_value()) << i;
+    EXPECT_EQ(*ref, fast->t) << i;
+  }
+}
+
+// Under a rigid pose: the plain tree's hit.
+TYPED_TEST(WideBvh8Test, PoseMatchesThePlainTree) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_torus<S>(S(1), S(0.4), 24, 12);
+  const WideBvh<S, 8> w(m);
+  const MeshBvh<Aabb<S>> plain(m);
+  test::Rng rng(23);
+  int hits = 0;
+  for (int i = 0; i < 600 / kWide8Samples; ++i) {
+    const RigidTransform<double> pd = test::random_pose(rng, Eigen::Vector3d::Constant(-2), Eigen::Vector3d::Constant(2));
+    const RigidTransform<S> pose(pd.R.template cast<S>(), pd.t.template cast<S>());
+    const Ray<S> ray((rng.vec(-3, 3)).template cast<S>(), (rng.vec(-1, 1) * 6.0).template cast<S>(), S(1));
+    const auto a = ray_mesh_first_hit(w, ray, pose), b = ray_mesh_first_hit(plain, ray, pose);
+    ASSERT_EQ(a.has_value(), b.has_value()) << i;
+    if (!a) continue;
+    ++hits;
+    EXPECT_EQ(a->t, b->t) << i;
+  }
+  EXPECT_GT(hits, 20 / kWide8Samples);
+}
+
+// The 8-wide float node test: AVX (when the CPU has it), SSE and scalar give the same keys and
+// mask bit for bit; a child the double slab test (WideSlab, on the same float boxes) enters before
+// the bound is entered, its key never above the double entry; empty slots are never entered.
+TYPED_TEST(WideBvh8Test, FloatSlabIsConservative) {
+  using S = TypeParam;
+  test::Rng rng(67);
+  int entered = 0, missed = 0, avx_checked = 0;
+  for (int i = 0; i < 8000 / kWide8Samples; ++i) {
+    const double scale = std::ldexp(1.0, int(rng.integer(40)));
+    const Vec3<S> o = (rng.vec(-1, 1) * scale).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0 * scale).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    const detail::WideFloatSlab<S, 8> fs(o, inv, S(4 * scale));
+    if (!fs.usable()) continue;
+    WideBvhNode8 n;
+    const int used = 1 + int(rng.index(8));
+    for (int c = 0; c < used; ++c) {
+      const Eigen::Vector3d m = rng.vec(-1.5, 1.5) * scale, h = rng.vec(0.0, i % 5 == 0 ? 1e-6 : 0.8) * scale;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 2);
+    const float bound = i % 2 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 1.5);
+    const float exit = detail::float_round_up(double(t_max));
+    float simd[8], scalar[8];
+    const int ms = fs.entered(n, exit, bound, simd, true), mc = fs.entered(n, exit, bound, scalar, false);
+    ASSERT_EQ(ms, mc) << i;
+#if defined(IMPACT_WIDE_AVX)
+    if (detail::wide_avx_available()) {
+      float avx[8];
+      const int ma = fs.entered_avx(n, exit, bound, avx);
+      ASSERT_EQ(ma, mc) << i;
+      for (int c = 0; c < 8; ++c)
+        if ((mc >> c) & 1) {
+          EXPECT_EQ(avx[c], scalar[c]) << i << " " << c;
+        }
+      ++avx_checked;
+    }
+#endif
+    S exact[8];
+    detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
+    for (int c = 0; c < 8; ++c) {
+      if ((mc >> c) & 1) {
+        EXPECT_EQ(simd[c], scalar[c]) << i << " " << c;
+      }
+      if (c >= used) {
+        EXPECT_FALSE((mc >> c) & 1) << "empty slot entered " << i;
+        continue;
+      }
+      if (exact[c] <= S(bound)) {
+        ++entered;
+        ASSERT_TRUE((mc >> c) & 1) << i << " " << c;
+        EXPECT_LE(S(scalar[c]), exact[c]) << i << " " << c;
+      } else {
+        missed += (mc >> c) & 1 ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_GT(entered, 500 / kWide8Samples);
+  EXPECT_GT(missed, 500 / kWide8Samples);
+  if (detail::wide_avx_available()) {
+    EXPECT_GT(avx_checked, 1000 / kWide8Samples);
+  }
+}
+
+}  // namespace
+}  // namespace impact
