@@ -94,36 +94,7 @@ TYPED_TEST(WideBvh8Test, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
 // worth in one leaf of the source tree), one triangle, a flat mesh.
 TYPED_TEST(WideBvh8Test, DegenerateMeshes) {
   using S = TypeParam;
-  std::vector<TriangleMesh<S>> meshes;
-  {
-    const TriangleMesh<S> grid = make_torus<S>(S(1), S(0.4), 12, 6);
-    const int nv = grid.num_vertices();
-    Vertices<S> V(nv + 2, 3);
-    V.topRows(nv) = grid.V;
-    V.row(nv) << S(0), S(0), S(0);
-    V.row(nv + 1) << S(2), S(0), S(0);
-    Faces F(grid.num_triangles() + 2, 3);
-    F.topRows(grid.num_triangles()) = grid.F;
-    F.row(grid.num_triangles()) << 0, 0, 1;                 // a repeated vertex
-    F.row(grid.num_triangles() + 1) << nv, nv + 1, nv + 1;  // a segment
-    meshes.emplace_back(V, F);
-  }
-  {
-    Vertices<S> V(3, 3);
-    V << S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1), S(0);
-    Faces F(40, 3);
-    for (int t = 0; t < 40; ++t) F.row(t) << 0, 1, 2;  // coincident
-    meshes.emplace_back(V, F);
-    meshes.emplace_back(V, Faces(F.topRows(1)));  // one triangle
-  }
-  {
-    test::Rng rng(3);
-    Vertices<S> V(60, 3);
-    for (int i = 0; i < 60; ++i) V.row(i) << S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(0);  // flat
-    Faces F(80, 3);
-    for (int t = 0; t < 80; ++t) F.row(t) << int(rng.index(60)), int(rng.index(60)), int(rng.index(60));
-    meshes.emplace_back(V, F);
-  }
+  const std::vector<TriangleMesh<S>> meshes = test::wide::degenerate_meshes<S>();
   for (std::size_t k = 0; k < meshes.size(); ++k) {
     const WideBvh<S, 8> w(meshes[k]);
     test::wide::check_structure(meshes[k], w, 4);

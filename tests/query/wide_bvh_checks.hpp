@@ -5,6 +5,7 @@
 // and random casts against brute force and against each other's paths.
 #pragma once
 
+#include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
 #include "support/meshes.hpp"
 #include "support/random.hpp"
@@ -156,6 +157,42 @@ template <class S, int W> int check_casts(const TriangleMesh<S>& m, const WideBv
     EXPECT_TRUE(h && h->t == fast->t) << i;
   }
   return hits;
+}
+
+/// Degenerate meshes for the casts: a torus with a repeated-vertex triangle and a segment, 40
+/// coincident triangles, one triangle, and 80 random triangles of a flat point set.
+template <class S> std::vector<TriangleMesh<S>> degenerate_meshes() {
+  std::vector<TriangleMesh<S>> meshes;
+  {
+    const TriangleMesh<S> grid = make_torus<S>(S(1), S(0.4), 12, 6);
+    const int nv = grid.num_vertices();
+    Vertices<S> V(nv + 2, 3);
+    V.topRows(nv) = grid.V;
+    V.row(nv) << S(0), S(0), S(0);
+    V.row(nv + 1) << S(2), S(0), S(0);
+    Faces F(grid.num_triangles() + 2, 3);
+    F.topRows(grid.num_triangles()) = grid.F;
+    F.row(grid.num_triangles()) << 0, 0, 1;                 // a repeated vertex
+    F.row(grid.num_triangles() + 1) << nv, nv + 1, nv + 1;  // a segment
+    meshes.emplace_back(V, F);
+  }
+  {
+    Vertices<S> V(3, 3);
+    V << S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1), S(0);
+    Faces F(40, 3);
+    for (int t = 0; t < 40; ++t) F.row(t) << 0, 1, 2;  // coincident
+    meshes.emplace_back(V, F);
+    meshes.emplace_back(V, Faces(F.topRows(1)));  // one triangle
+  }
+  {
+    test::Rng rng(3);
+    Vertices<S> V(60, 3);
+    for (int i = 0; i < 60; ++i) V.row(i) << S(rng.uniform(-1, 1)), S(rng.uniform(-1, 1)), S(0);  // flat
+    Faces F(80, 3);
+    for (int t = 0; t < 80; ++t) F.row(t) << int(rng.index(60)), int(rng.index(60)), int(rng.index(60));
+    meshes.emplace_back(V, F);
+  }
+  return meshes;
 }
 
 }  // namespace wide

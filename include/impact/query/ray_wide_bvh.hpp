@@ -271,17 +271,6 @@ template <class S, int W = 4> struct WideCast {
     std::int32_t first = 0, count = 0;  // the root: an inner node
     std::size_t tests = 0;
     const bool in_float = float_slab.usable();  // (false for an infinite 1 / d)
-    auto pop = [&](float bound) {  // the nearest pending child still below the bound
-      while (!stack.empty()) {
-        const WideEntry e = stack.pop();
-        if (e.key <= bound) {
-          first = e.first;
-          count = e.count;
-          return true;
-        }
-      }
-      return false;
-    };
 #if defined(__SSE2__)
     if (in_float && use_simd) {
       const typename WideFloatSlab<S, W>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
@@ -304,7 +293,7 @@ template <class S, int W = 4> struct WideCast {
             if (IMPACT_UNLIKELY(ties & mask)) {
               mask = redecide(n, fk);
               if (!mask) {
-                if (!pop(bound)) {
+                if (!pop_below(stack, bound, first, count)) {
                   node_tests += tests;
                   return;
                 }
@@ -314,13 +303,13 @@ template <class S, int W = 4> struct WideCast {
             descend(n, mask, fk, stack, first, count);
             continue;
           }
-          if (!pop(bound)) {
+          if (!pop_below(stack, bound, first, count)) {
             node_tests += tests;
             return;
           }
         }
         leaf(first, count);
-        if (!pop(bound_f)) {
+        if (!pop_below(stack, bound_f, first, count)) {
           node_tests += tests;
           return;
         }
@@ -348,7 +337,7 @@ template <class S, int W = 4> struct WideCast {
           continue;
         }
       }
-      if (!pop(bound_f)) break;
+      if (!pop_below(stack, bound_f, first, count)) break;
     }
     node_tests += tests;
   }
