@@ -482,9 +482,9 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   return g;
 }
 
-/// A cone (a) and a box (b): the certified candidates of convex/cone_box_pair.hpp (a face of the box
-/// against the cone's deepest point, a corner of the box through the cone's side or base), else
-/// GJK until it encloses the origin or separates them (no contact), then
+/// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
+/// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
+/// deepest point, a corner or an edge of the box through the cone's side or base), else
 /// EPA from GJK's tetrahedron, stopped early by the local certificate of
 /// convex/local_certificate.hpp on the terms of convex/cone_box_terms.hpp (the cone's branch active
 /// at EPA's normal; none on a side ruling). A bound through one branch is exact only where that
@@ -509,24 +509,26 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
       }
     }
   }
-  ConvexContact<S> cand;  // the certified candidates of convex/cone_box_pair.hpp (no GJK when they decide)
-  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) {
-    cand.iterations += 1;
-    cand.normal = pa.rotate(cand.normal);
-    cand.point = pa.apply(cand.point);
-    const S depth = cand.depth;
-    settle_contact(a, pa, b, pb, cand);  // the point onto the mid plane (the depth is f(normal) again)
-    cand.depth = std::min(cand.depth, depth);
-    return cand;
-  }
   SimplexPoint<S> simplex[4];
   int its = 1;
   bool limit = false, failed = false;
   if (!gjk_enclose(sa, sb, Vec3<S>(-centre_line), scale, o.max_iterations, simplex, its, limit, failed)) {
     if (limit || failed) return general_penetration(a, pa, b, pb, o);
     ConvexContact<S> none;
-    none.iterations = its + cand.iterations;
+    none.iterations = its;
     return none;
+  }
+  // intersecting: the certified candidates of convex/cone_box_pair.hpp (after GJK, which decides
+  // the separated poses more cheaply than they would), else EPA from GJK's tetrahedron
+  ConvexContact<S> cand;
+  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) {
+    cand.iterations += its;
+    cand.normal = pa.rotate(cand.normal);
+    cand.point = pa.apply(cand.point);
+    const S depth = cand.depth;
+    settle_contact(a, pa, b, pb, cand);  // the point onto the mid plane (the depth is f(normal) again)
+    cand.depth = std::min(cand.depth, depth);
+    return cand;
   }
   const auto local = [&](const Vec3<S>& n) {
     const auto exact = [&](const LocalCertificate<S>& lc) {
