@@ -280,6 +280,53 @@ TEST(ConvexQuery, CylinderPairCandidatesAgainstOracleAndEpa) {
       5);
 }
 
+// A cone against a box (convex/cone_box_pair.hpp): wherever the candidates certify a contact, its
+// depth is the overlap along its normal and EPA's within 1e-9 of the size, the two certified
+// brackets overlap, both kinds (a face of the box; a corner or edge of the box through the cone's
+// side or base) certify some poses, some are left to EPA, separated pairs are never certified, and
+// the query (either order) gives the certified answer. check_pair checks the queries against the
+// oracle on other poses.
+TEST(ConvexQuery, ConeBoxCandidatesAgreeWithEpa) {
+  const auto& z = zoo();
+  const double scale = std::max(shape_size(z.cone), shape_size(z.box)), tol = 1e-10 * scale;
+  int certified = 0, left = 0, face = 0, body = 0;
+  for (const auto& pose : convex_poses(400, 0.6 * (shape_size(z.cone) + shape_size(z.box)), 48)) {
+    const RigidTransform<double>& pa = pose.first;
+    const RigidTransform<double>& pb = pose.second;
+    const detail::PairFrame<double> f(pa, pb);
+    ConvexContact<double> c;
+    const bool ok = detail::cone_box_contact(z.cone, z.box, f.R, f.t, tol, c);
+    const auto e = detail::general_penetration(z.cone, pa, z.box, pb, ConvexQueryOptions<double>{});
+    if (!e.intersecting) {
+      EXPECT_FALSE(ok) << "certified a separated pair";
+      continue;
+    }
+    if (!ok) {
+      ++left;
+      continue;
+    }
+    ++certified;
+    const V3 n = pa.rotate(c.normal);
+    EXPECT_NEAR(overlap_along(z.cone, pa, z.box, pb, n), c.depth, 1e-12 * scale) << "depth is not the overlap along the normal";
+    EXPECT_LE(c.depth_gap, tol);
+    EXPECT_NEAR(c.depth, e.depth, 1e-9 * scale);
+    EXPECT_LE(c.depth - c.depth_gap, e.depth + 1e-12 * scale) << "our lower bound above EPA's depth";
+    EXPECT_LE(e.depth - e.depth_gap, c.depth + 1e-12 * scale) << "EPA's lower bound above our depth";
+    const double along_box = (f.R.transpose() * c.normal).cwiseAbs().maxCoeff();
+    ++(along_box > 1 - 1e-12 ? face : body);
+    const auto q = convex_penetration(z.cone, pa, z.box, pb);
+    EXPECT_NEAR(q.depth, c.depth, 1e-12 * scale);
+    EXPECT_LT((q.normal - n).norm(), 1e-12);
+    const auto r = convex_penetration(z.box, pb, z.cone, pa);
+    EXPECT_NEAR(r.depth, c.depth, 1e-12 * scale);
+    EXPECT_LT((r.normal + n).norm(), 1e-12);
+  }
+  EXPECT_GT(face, 0);
+  EXPECT_GT(body, 0);
+  EXPECT_GT(left, 0);
+  std::printf("cone-box          %d certified (%d by a face of the box, %d by its corners or edges), %d left to EPA\n", certified, face, body, left);
+}
+
 // EPA started from GJK's tetrahedron (epa_penetration_from_simplex, as cylinder_pair_penetration
 // hands it over) against EPA that runs its own GJK: the same certified bracket (each run's depth
 // within the other's [depth - gap, depth] up to the tolerance), the support calls of the

@@ -286,15 +286,17 @@ TYPED_TEST(WideBvhTest, FloatSlabIsConservative) {
 #if defined(__SSE2__)
 /// The block test of a leaf against the watertight test on each lane's triangle: in double the
 /// lanes it passes are exactly the triangles the test hits; in float a superset (an edge function
-/// equal to zero is left to the test); with AVX (when the CPU has it) as with SSE2. Returns the
-/// lanes it rejects.
+/// equal to zero is left to the test); with AVX (when the CPU has it) as with SSE2; in double the
+/// passed lanes' values (LaneValues) give the test's t, barycentrics and side. Returns the lanes
+/// it rejects.
 template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const Ray<S>& ray, int count) {
   const PreparedRay<S> pr(ray);
   detail::BlockTest<S> bt, sse;
   bt.set(pr);  // AVX when the CPU has it (double)
   sse.set(pr, false);
-  const int todo = bt.candidates(b, count, ray.t_max);
-  EXPECT_EQ(todo, sse.candidates(b, count, ray.t_max));  // the same bits
+  typename detail::BlockTest<S>::LaneValues values, sse_values;
+  const int todo = bt.candidates(b, count, ray.t_max, &values);
+  EXPECT_EQ(todo, sse.candidates(b, count, ray.t_max, &sse_values));  // the same bits
   int skipped = 0;
   for (int c = 0; c < count; ++c) {
     auto at = [&](int v) { return Vec3<S>(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c])); };
@@ -302,6 +304,17 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
     const bool hit = intersect_ray_triangle(pr, t).has_value(), passed = (todo >> c) & 1;
     if (std::is_same_v<S, double>) {
       EXPECT_EQ(passed, hit) << "lane " << c;
+      if (passed && hit) {  // the lane's values give the test's hit values, AVX and SSE2 alike
+        const auto h = intersect_ray_triangle(pr, t);
+        const S inv_det = S(1) / values.det[c];
+        EXPECT_EQ(h->t, std::min(S(values.tt[c] * inv_det), ray.t_max)) << "lane " << c;
+        EXPECT_EQ(h->u, S(values.eu[c] * inv_det)) << "lane " << c;
+        EXPECT_EQ(h->v, S(values.ev[c] * inv_det)) << "lane " << c;
+        EXPECT_EQ(h->w, S(values.ew[c] * inv_det)) << "lane " << c;
+        EXPECT_EQ(h->front, values.det[c] > S(0)) << "lane " << c;
+        EXPECT_EQ(values.det[c], sse_values.det[c]) << "lane " << c;
+        EXPECT_EQ(values.tt[c], sse_values.tt[c]) << "lane " << c;
+      }
     } else if (!passed) {
       EXPECT_FALSE(hit) << "skipped a hit, lane " << c;
     }

@@ -125,7 +125,7 @@ template <class S, int W> void check_structure(const TriangleMesh<S>& m, const W
 /// Random rays and segments near the mesh's triangles: the wide cast against brute force, and its
 /// paths against each other: the default one (SIMD; for W = 8 the AVX node test when the CPU has
 /// it), SSE only (W = 8: two halves of four), and the scalar node test and leaf loop, with the same
-/// t and the same triangle. Returns the number of hits.
+/// t, triangle and barycentrics. Returns the number of hits.
 template <class S, int W> int check_casts(const TriangleMesh<S>& m, const WideBvh<S, W>& w, int n, double scale, std::uint64_t seed) {
   Rng rng(seed);
   int hits = 0;
@@ -152,9 +152,15 @@ template <class S, int W> int check_casts(const TriangleMesh<S>& m, const WideBv
     EXPECT_EQ(fast->triangle, scalar->triangle) << i;
     EXPECT_EQ(fast->t, sse->t) << i;
     EXPECT_EQ(fast->triangle, sse->triangle) << i;
-    // the reported triangle is hit at the reported t
+    // the hit values of the block test's lanes (double) are the scalar test's, bit for bit
+    EXPECT_EQ(fast->barycentric, scalar->barycentric) << i;
+    EXPECT_EQ(fast->barycentric, sse->barycentric) << i;
+    // the reported triangle is hit at the reported t, with the reported barycentrics
     const auto h = detail::ray_mesh_triangle_hit(PreparedRay<S>(ray), m.triangle(fast->triangle));
     EXPECT_TRUE(h && h->t == fast->t) << i;
+    if (h) {
+      EXPECT_EQ(Vec3<S>(h->u, h->v, h->w), fast->barycentric) << i;
+    }
   }
   return hits;
 }

@@ -78,6 +78,22 @@ InsideBall<S> inside_ball(const Cone<S>& c, const Vec3<S>& x) {
   return b;
 }
 
+/// Box: the nearest of its six faces (the first axis on ties).
+template <class S>
+InsideBall<S> inside_ball(const Box<S>& b, const Vec3<S>& x) {
+  InsideBall<S> out;
+  for (int i = 0; i < 3; ++i) {
+    const S gap = b.half[i] - std::abs(x[i]);
+    if (!(gap >= S(0))) return InsideBall<S>();
+    if (i == 0 || gap < out.rho) {
+      out.rho = gap;
+      out.push = Vec3<S>::Zero();
+      out.push[i] = x[i] >= S(0) ? S(-1) : S(1);
+    }
+  }
+  return out;
+}
+
 /// The certified contact of triangle t (a) and shape b (a Cylinder or Cone), both in b's frame,
 /// when a single point of t decides it within `tolerance` (see the file comment): true and `out`
 /// set (normal from the triangle towards the shape, depth, depth_gap, point on the plane midway

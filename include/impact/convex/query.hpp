@@ -26,7 +26,8 @@
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: cylinder against cylinder
 ///                                     or cone first through the certified candidates of
-///                                     convex/cylinder_pair.hpp, cone against box with the local
+///                                     convex/cylinder_pair.hpp, cone against box through those of
+///                                     convex/cone_box_pair.hpp, then EPA with the local
 ///                                     certificate of convex/cone_box_terms.hpp, else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
@@ -44,6 +45,7 @@
 #pragma once
 
 #include "impact/convex/closed_form.hpp"
+#include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_pair.hpp"
@@ -481,6 +483,8 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
 }
 
 /// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
+/// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
+/// deepest point, a corner or an edge of the box through the cone's side or base), else
 /// EPA from GJK's tetrahedron, stopped early by the local certificate of
 /// convex/local_certificate.hpp on the terms of convex/cone_box_terms.hpp (the cone's branch active
 /// at EPA's normal; none on a side ruling). A bound through one branch is exact only where that
@@ -514,6 +518,18 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     none.iterations = its;
     return none;
   }
+  // intersecting: the certified candidates of convex/cone_box_pair.hpp (after GJK, which decides
+  // the separated poses more cheaply than they would), else EPA from GJK's tetrahedron
+  ConvexContact<S> cand;
+  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) {
+    cand.iterations += its;
+    cand.normal = pa.rotate(cand.normal);
+    cand.point = pa.apply(cand.point);
+    const S depth = cand.depth;
+    settle_contact(a, pa, b, pb, cand);  // the point onto the mid plane (the depth is f(normal) again)
+    cand.depth = std::min(cand.depth, depth);
+    return cand;
+  }
   const auto local = [&](const Vec3<S>& n) {
     const auto exact = [&](const LocalCertificate<S>& lc) {
       const Vec3<S>& k = lc.normal;
@@ -526,8 +542,9 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  if (!o.local_certificate) return general_penetration(a, pa, b, pb, o, simplex, its);
-  return general_penetration(a, pa, b, pb, o, simplex, its, local);
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local) : general_penetration(a, pa, b, pb, o, simplex, its);
+  g.iterations += cand.iterations;
+  return g;
 }
 
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment

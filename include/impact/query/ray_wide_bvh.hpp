@@ -13,7 +13,8 @@
 /// coordinate (WideTriangleBlock), go four at a time through the watertight test's own operations
 /// in SIMD (BlockTest, query/wide_leaf_filter.hpp: SSE2, or AVX when the CPU has it), which passes
 /// exactly the triangles the scalar test hits (in float, also those with an edge function equal to
-/// zero); those go to the scalar test itself, which decides.
+/// zero); in double their hit values (t, barycentrics) come from the lanes themselves (the same
+/// operations, so the same bits), in float the scalar test itself decides them.
 ///
 /// Numerical contract: that of query/ray_mesh.hpp. Every crossing is decided by the same
 /// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: a
@@ -145,27 +146,54 @@ template <class S, int W = 4> struct WideCast {
     }
     return mask;
   }
-  /// The triangle in lane c of block b by the narrow-phase rule; a strictly earlier hit replaces
-  /// the best one.
-  void test(std::int32_t b, int c) {
+  /// The triangle in lane c of block b (a candidate of the block test) by the narrow-phase rule; a
+  /// strictly earlier hit replaces the best one. In double with SIMD from the block test's values
+  /// (test_lane), else by the scalar test.
+  void test(std::int32_t b, int c, const typename BlockTest<S>::LaneValues& values) {
+    if constexpr (BlockTest<S>::kHasValues) {
+      if (use_simd) {
+        test_lane(b, c, values);
+        return;
+      }
+    }
     pr.ray.t_max = best;
     const auto h = ray_mesh_triangle_hit(pr, inv, wide.block_triangle(b, c));
-    if (h && (best_k < 0 || h->t < best)) {
-      best = h->t;
-      best_k = wide.block_first(b) + c;
-      best_block = b;
-      best_lane = c;
-      best_bary = Vec3<S>(h->u, h->v, h->w);
-      limit = next_below(best);
-      exit_f = float_round_up(double(best));
-      bound_f = float_round_down(double(limit));
-      const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(float_slab.absolute_error()));
-      tie_f = float_round_down(double(best) - slack);
-    }
+    if (h && (best_k < 0 || h->t < best)) record(b, c, h->t, Vec3<S>(h->u, h->v, h->w));
+  }
+  /// test() from the block test's values of lane c (`values`: the scalar test's own
+  /// intermediate values, so the same decision and hit values bit for bit): the depth checked
+  /// against the current best, then the rest of ray_mesh_triangle_hit (the entry into the
+  /// triangle's box, the t = 0 rule).
+  void test_lane(std::int32_t b, int c, const typename BlockTest<S>::LaneValues& values) {
+    const S det = values.det[c], tt = values.tt[c];
+    const S tmd = best * det;
+    if (det > S(0) ? (tt < S(0) || tt > tmd) : (tt > S(0) || tt < tmd)) return;
+    const S inv_det = S(1) / det;
+    S t = std::min(S(tt * inv_det), best);
+    const Triangle<S> tri = wide.block_triangle(b, c);
+    const Aabb<S> box(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c));
+    const std::optional<S> entry = ray_box_entry(o, inv, box, best);
+    if (!entry) return;
+    if (t < *entry) t = *entry;
+    if (t == S(0) && !(det > S(0))) return;
+    if (best_k < 0 || t < best) record(b, c, t, Vec3<S>(S(values.eu[c] * inv_det), S(values.ev[c] * inv_det), S(values.ew[c] * inv_det)));
+  }
+  /// A new best hit: triangle in lane c of block b at t.
+  void record(std::int32_t b, int c, S t, const Vec3<S>& bary) {
+    best = t;
+    best_k = wide.block_first(b) + c;
+    best_block = b;
+    best_lane = c;
+    best_bary = bary;
+    limit = next_below(best);
+    exit_f = float_round_up(double(best));
+    bound_f = float_round_down(double(limit));
+    const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(float_slab.absolute_error()));
+    tie_f = float_round_down(double(best) - slack);
   }
   /// The triangles of a leaf (its blocks from `block`): four at a time through the block test
-  /// (the scalar test's decisions, SIMD), the candidates by the scalar test; without SIMD each by
-  /// the scalar test.
+  /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
+  /// scalar test.
   IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
     if (!leaf_seen) {
       pr = PreparedRay<S>(Ray<S>(o, d, t_max));
@@ -174,12 +202,13 @@ template <class S, int W = 4> struct WideCast {
     }
     const bool repeats = wide.has_repeats();
     const std::int32_t first = wide.block_first(block);
+    typename BlockTest<S>::LaneValues values;  // of the block being tested, when it passes a lane
     for (std::int32_t q = 0; q < count; q += 4, ++block) {
       const int lanes = static_cast<int>(std::min<std::int32_t>(4, count - q));
       int todo = (1 << lanes) - 1;
       if (use_simd) {
-        const int m = wide.packed() ? block_test.candidates(wide.packed_blocks()[static_cast<std::size_t>(block)], lanes, best)
-                                    : block_test.candidates(wide.full_blocks()[static_cast<std::size_t>(block)], lanes, best);
+        const int m = wide.packed() ? block_test.candidates(wide.packed_blocks()[static_cast<std::size_t>(block)], lanes, best, &values)
+                                    : block_test.candidates(wide.full_blocks()[static_cast<std::size_t>(block)], lanes, best, &values);
         todo &= m;
       }
       if (repeats) {
@@ -193,7 +222,7 @@ template <class S, int W = 4> struct WideCast {
       while (todo) {
         const int c = lowest_bit(todo);
         todo &= todo - 1;
-        test(block, c);
+        test(block, c, values);
       }
     }
   }
@@ -225,6 +254,17 @@ template <class S, int W = 4> struct WideCast {
     for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
     first = n.first[order[0]];
     count = n.count[order[0]];
+  }
+
+  /// Starts loading the cache line of a node's references (first, count) with its planes: the
+  /// loads of the references wait for the node test's mask, and in an 8-wide node they are on a
+  /// line of their own.
+  static void prefetch_references(const Node& n) {
+#if defined(__SSE2__)
+    _mm_prefetch(reinterpret_cast<const char*>(n.first), _MM_HINT_T0);
+#else
+    (void)n;
+#endif
   }
 
   /// The traversal: nearest child first, the others on the stack with their keys (a fixed array
@@ -280,6 +320,7 @@ template <class S, int W = 4> struct WideCast {
         const float bound = bound_f;
         while (count == 0) {
           const Node& n = nodes[first];
+          prefetch_references(n);
           ++tests;
           __m128 lo[W / 4];
           int mask = fs.entered(n, exit_v, bound_v, lo);
@@ -358,6 +399,7 @@ IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
     bool done = false;
     while (count == 0) {
       const Node& n = nodes[first];
+      prefetch_references(n);
       ++tests;
       __m256 lo;
       int mask = WideFloatSlab<S, W>::entered_avx(fs, n, exit_v, bound_v, lo);

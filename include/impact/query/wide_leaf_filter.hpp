@@ -36,6 +36,22 @@ namespace detail {
 /// an instruction (the same operations, so the same bits). Set up once a ray.
 template <class S> class BlockTest {
  public:
+  /// The scalar test's intermediate values of a block's four lanes, as the SIMD test computed
+  /// them (the same bits): the edge functions, their sum det and the scaled depth tt. A lane the
+  /// test passed is hit with a bound t_max unless tt is outside [0, t_max det] (det > 0) or
+  /// [t_max det, 0] (det < 0); then t = min(tt / det, t_max) and the barycentrics are e / det, as
+  /// detail::finish_ray_hit computes them.
+  struct alignas(32) LaneValues {
+    S eu[4] = {}, ev[4] = {}, ew[4] = {}, det[4] = {}, tt[4] = {};
+  };
+  /// True when candidates() fills LaneValues (S = double with SSE2: the lanes are computed in
+  /// the scalar test's operations, no recomputation in double as for float).
+#if defined(__SSE2__)
+  static constexpr bool kHasValues = std::is_same_v<S, double>;
+#else
+  static constexpr bool kHasValues = false;
+#endif
+
   BlockTest() = default;
   /// `allow_avx` false keeps to SSE2 (for the tests that compare the two).
   void set(const PreparedRay<S>& pr, bool allow_avx = true) {
@@ -51,16 +67,18 @@ template <class S> class BlockTest {
   }
   /// Bit c set when the triangle in lane c of `b` may be hit with t_max = `t_max` (see the class
   /// comment). Lanes at and above `count` (<= 4) are clear.
-  template <class T> int candidates(const WideTriangleBlock<T>& b, int count, S t_max) const {
+  /// When kHasValues and the result is not zero, `values` holds the lanes' values (else it is
+  /// left as it was).
+  template <class T> int candidates(const WideTriangleBlock<T>& b, int count, S t_max, LaneValues* values = nullptr) const {
     if (!valid_) return 0;
     const int lanes = (1 << count) - 1;
 #if defined(__SSE2__)
     if constexpr (std::is_same_v<S, double>) {
 #if defined(IMPACT_BLOCK_TEST_AVX)
-      if (avx_) return candidates_avx(b, t_max) & lanes;
+      if (avx_) return candidates_avx(b, t_max, lanes, values);
 #endif
       int m = 0;
-      for (int h = 0; h < 2; ++h) m |= sse_lanes<SseDouble>(b, h, t_max) << (2 * h);
+      for (int h = 0; h < 2; ++h) m |= sse_lanes<SseDouble>(b, h, t_max, values) << (2 * h);
       return m & lanes;
     } else {
       return sse_lanes<SseFloat>(b, 0, t_max) & lanes;
@@ -81,7 +99,7 @@ template <class S> class BlockTest {
   __attribute__((target("avx"))) static __m256d load4(const float* f) { return _mm256_cvtps_pd(_mm_load_ps(f)); }
   __attribute__((target("avx"))) static __m256d load4(const double* f) { return _mm256_load_pd(f); }
   /// The double test of the four lanes in 256-bit AVX (no FMA: the scalar test's roundings).
-  template <class T> __attribute__((target("avx"))) int candidates_avx(const WideTriangleBlock<T>& b, S t_max) const {
+  template <class T> __attribute__((target("avx"))) int candidates_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, LaneValues* values) const {
     const __m256d o0 = _mm256_set1_pd(o_[0]), o1 = _mm256_set1_pd(o_[1]), o2 = _mm256_set1_pd(o_[2]);
     const __m256d sx = _mm256_set1_pd(sx_), sy = _mm256_set1_pd(sy_), sz = _mm256_set1_pd(sz_);
     const __m256d tmax = _mm256_set1_pd(t_max), zero = _mm256_setzero_pd();
@@ -109,7 +127,15 @@ template <class S> class BlockTest {
     const __m256d out_down = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_GT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_LT_OQ));
     const __m256d miss = _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(neg, pos), _mm256_cmp_pd(det, zero, _CMP_EQ_OQ)),
                                       _mm256_or_pd(_mm256_and_pd(up, out_up), _mm256_andnot_pd(up, out_down)));
-    return ~_mm256_movemask_pd(miss) & 15;
+    const int m = ~_mm256_movemask_pd(miss) & lanes;
+    if (m && values) {
+      _mm256_store_pd(values->eu, eu);
+      _mm256_store_pd(values->ev, ev);
+      _mm256_store_pd(values->ew, ew);
+      _mm256_store_pd(values->det, det);
+      _mm256_store_pd(values->tt, tt);
+    }
+    return m;
   }
   bool avx_ = false;
 #endif
@@ -133,6 +159,7 @@ template <class S> class BlockTest {
     static V bit_and(V a, V b) { return _mm_and_pd(a, b); }
     static V and_not(V a, V b) { return _mm_andnot_pd(a, b); }  // ~a & b
     static int sign_bits(V a) { return _mm_movemask_pd(a); }
+    static void store(double* p, V a) { _mm_store_pd(p, a); }
   };
   /// SSE in float: four lanes a register.
   struct SseFloat {
@@ -152,11 +179,13 @@ template <class S> class BlockTest {
     static V bit_and(V a, V b) { return _mm_and_ps(a, b); }
     static V and_not(V a, V b) { return _mm_andnot_ps(a, b); }  // ~a & b
     static int sign_bits(V a) { return _mm_movemask_ps(a); }
+    static void store(float* p, V a) { _mm_store_ps(p, a); }
   };
   /// The test of lanes [h L, h L + L) of `b` (L = Ops::kLanes), written once for both lane types:
   /// bit j set when lane h L + j is a candidate (see the class comment; in float, a lane with an
   /// edge function equal to zero is one too).
-  template <class Ops, class T> int sse_lanes(const WideTriangleBlock<T>& b, int h, S t_max) const {
+  /// In double, `values` (when not null) gets the lanes' values (LaneValues) when one passes.
+  template <class Ops, class T> int sse_lanes(const WideTriangleBlock<T>& b, int h, S t_max, LaneValues* values = nullptr) const {
     using V = typename Ops::V;
     const V zero = Ops::zero(), tmax = Ops::set1(t_max);
     const V sx = Ops::set1(sx_), sy = Ops::set1(sy_), sz = Ops::set1(sz_);
@@ -185,7 +214,17 @@ template <class S> class BlockTest {
       const V some_zero = Ops::bit_or(Ops::bit_or(Ops::eq(eu, zero), Ops::eq(ev, zero)), Ops::eq(ew, zero));
       miss = Ops::and_not(some_zero, miss);
     }
-    return ~Ops::sign_bits(miss) & ((1 << Ops::kLanes) - 1);
+    const int m = ~Ops::sign_bits(miss) & ((1 << Ops::kLanes) - 1);
+    if constexpr (!Ops::kFloat) {
+      if (m && values) {
+        const int at = Ops::kLanes * h;
+        Ops::store(values->eu + at, eu), Ops::store(values->ev + at, ev), Ops::store(values->ew + at, ew);
+        Ops::store(values->det + at, det), Ops::store(values->tt + at, tt);
+      }
+    } else {
+      (void)values;
+    }
+    return m;
   }
 #endif
   int off_[3] = {0, 1, 2};  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)

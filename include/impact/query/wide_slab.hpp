@@ -205,11 +205,7 @@ template <class S, int W = 4> class WideFloatSlab {
       const double e = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
       const int sign = _mm_movemask_pd(i01) | (_mm_movemask_pd(i22) & 1) << 2;
       usable_ = (_mm_movemask_pd(_mm_and_pd(in01, in22)) == 3) & (coordinate_bound <= S(0x1p60)) & (e <= 0x1p40);
-      if constexpr (W == 4) {
-        std::memcpy(sse_.planes, kPlanes[sign], sizeof sse_.planes);
-      } else {
-        for (int j = 0; j < 6; ++j) sse_.planes[j] = kPlanes[sign][j] * (W / 4);
-      }
+      std::memcpy(sse_.planes, kPlaneOffsets.at[sign], sizeof sse_.planes);
       sse_.o[0] = _mm_shuffle_ps(of01, of01, 0x00), sse_.o[1] = _mm_shuffle_ps(of01, of01, 0x55), sse_.o[2] = _mm_shuffle_ps(of22, of22, 0x00);
       sse_.inv[0] = _mm_shuffle_ps(if01, if01, 0x00), sse_.inv[1] = _mm_shuffle_ps(if01, if01, 0x55), sse_.inv[2] = _mm_shuffle_ps(if22, if22, 0x00);
       e_ = usable_ ? float_round_up(e * (1.0 + 0x1p-16) + 0x1p-100) : 0.0f;
@@ -386,6 +382,17 @@ template <class S, int W = 4> class WideFloatSlab {
   static constexpr int kPlanes[8][6] = {{0, 32, 64, 16, 48, 80}, {16, 32, 64, 0, 48, 80}, {0, 48, 64, 16, 32, 80},
                                         {16, 48, 64, 0, 32, 80}, {0, 32, 80, 16, 48, 64}, {16, 32, 80, 0, 48, 64},
                                         {0, 48, 80, 16, 32, 64}, {16, 48, 80, 0, 32, 64}};
+  /// kPlanes scaled to the node's width (the offsets of a W-wide node), made at compile time.
+  struct PlaneOffsets {
+    int at[8][6];
+  };
+  static constexpr PlaneOffsets plane_offsets() {
+    PlaneOffsets p{};
+    for (int sign = 0; sign < 8; ++sign)
+      for (int j = 0; j < 6; ++j) p.at[sign][j] = kPlanes[sign][j] * (W / 4);
+    return p;
+  }
+  static constexpr PlaneOffsets kPlaneOffsets = plane_offsets();
   bool usable_ = false;
   float e_ = 0.0f;
 #if defined(__SSE2__)

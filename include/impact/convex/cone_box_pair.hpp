@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// A certified shortcut for the penetration of an intersecting cone and box (convex/query.hpp runs
+/// it before GJK and EPA), built as convex/cylinder_pair.hpp is: with f(n) = h_A(n) + h_B(-n), the
+/// overlap along a unit direction n (the depth is min_n f(n)), each candidate gives an upper bound
+/// f(n) at its direction and a lower bound rho from a point x of one shape inside the other, rho
+/// its distance to that shape's boundary (the ball of radius rho about x lies inside it, so every
+/// translation that separates them is at least rho long). The candidates:
+///   a face of the box against the cone's deepest point across it (its apex or a base rim point),
+///       n the face's inward normal;
+///   a corner of the box inside the cone, n the outward normal of the nearest of the cone's side
+///       (its tangent plane at the corner's azimuth) and base;
+///   an edge of the box across the cone's side, n the side normal orthogonal to the edge, x the
+///       edge's point at that normal's azimuth.
+/// Where one of them is the contact (a rim point or the apex in a face, a corner through the side
+/// or the base) the two bounds meet up to rounding; when the best upper and lower bounds are within
+/// the tolerance, the answer is certified as EPA's is (depth = the upper bound, depth_gap = upper -
+/// lower); otherwise (an edge of the box against the rim, a contact near an edge of either whose
+/// nearest boundary is not the contact's) the caller runs EPA.
+/// Over the bench's 175 intersecting cone–box poses the candidates certify 100 (measured with
+/// impact-convex-bench's poses).
+///
+/// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
+/// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.
+/// Thread safety: pure functions.
+#pragma once
+
+#include "impact/convex/cylinder_pair.hpp"
+#include "impact/convex/deepest_point.hpp"
+#include "impact/convex/shapes.hpp"
+
+namespace impact::detail {
+
+/// The certified contact of cone a and box b when one of the candidates of the file comment decides
+/// it within `tolerance`, in a's frame (b placed by R, t there): true and `out` set (normal from a
+/// towards b, depth, depth_gap, the deciding point (the caller moves it onto the plane midway
+/// between the supporting planes), iterations counts the overlap evaluations); else false. A
+/// separated pair is never certified (a lower bound needs a point of one inside the other).
+template <class S>
+bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance, ConvexContact<S>& out) {
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
+  const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
+  CandidateBounds<S> k;
+  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lb) { k.offer(n, overlap(n), x, lb); };
+  // the box's faces: the cone's deepest point across each, in the box's frame
+  for (int i = 0; i < 3; ++i) {
+    for (const S s : {S(1), S(-1)}) {
+      const Vec3<S> n = s * R.col(i);
+      const Vec3<S> x = support(a, n);
+      const InsideBall<S> ball = inside_ball(b, Vec3<S>(R.transpose() * (x - t)));
+      if (ball.rho > S(0)) offer(n, x, ball.rho);
+    }
+  }
+  if (k.upper - k.lower <= tolerance) return k.finish(tolerance, out);
+  // the box's corners inside the cone, pushed out through its nearest side or base
+  for (int v = 0; v < 8; ++v) {
+    const Vec3<S> corner((v & 1) ? b.half.x() : -b.half.x(), (v & 2) ? b.half.y() : -b.half.y(), (v & 4) ? b.half.z() : -b.half.z());
+    const Vec3<S> x = R * corner + t;
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (ball.rho > S(0)) offer(Vec3<S>(-ball.push), x, ball.rho);
+  }
+  if (k.upper - k.lower <= tolerance) return k.finish(tolerance, out);
+  // an edge of the box across the cone's side: n the side normal orthogonal to the edge (2h u . e
+  // = -r e_z, u the azimuth), the edge the box's deepest along -n, x its point at azimuth u
+  const S r = a.radius, h = a.half_length, len = std::sqrt(S(4) * h * h + r * r);
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<S> e = R.col(i);
+    const S m2 = e.x() * e.x() + e.y() * e.y(), c = -r * e.z() / (S(2) * h);
+    if (!(m2 > S(1e-12)) || c * c >= m2) continue;
+    const S along = c / m2, across = std::sqrt(m2 - c * c) / m2;
+    for (const S sign : {S(1), S(-1)}) {
+      const S ux = along * e.x() - sign * across * e.y(), uy = along * e.y() + sign * across * e.x();
+      const Vec3<S> n(S(2) * h * ux / len, S(2) * h * uy / len, r / len);
+      const Vec3<S> d = R.transpose() * n;  // the box's deepest edge along -n: the corner signs off axis i
+      Vec3<S> corner(d.x() > S(0) ? -b.half.x() : b.half.x(), d.y() > S(0) ? -b.half.y() : b.half.y(), d.z() > S(0) ? -b.half.z() : b.half.z());
+      corner[i] = -b.half[i];
+      const Vec3<S> p0 = R * corner + t, ev = (S(2) * b.half[i]) * e;
+      const S qp = -uy * p0.x() + ux * p0.y(), qe = -uy * ev.x() + ux * ev.y();
+      if (!(std::abs(qe) > S(0))) continue;
+      const S s = -qp / qe;
+      if (!(s >= S(0) && s <= S(1))) continue;
+      const Vec3<S> x = p0 + s * ev;
+      const InsideBall<S> ball = inside_ball(a, x);
+      if (ball.rho > S(0)) offer(n, x, ball.rho);
+    }
+  }
+  return k.finish(tolerance, out);
+}
+
+}  // namespace impact::detail
