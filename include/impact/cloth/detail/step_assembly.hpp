@@ -80,6 +80,18 @@ void Stepper<S>::assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic,
     sys_.has_tree = true;
     sys_.tree_faces = sys_.F;
     sys_.tree_inflate = sys_.tree.inflate;
+    const auto& nodes = sys_.tree.tree.nodes;
+    sys_.tree_parent.assign(nodes.size(), -1);
+    sys_.tri_leaf.assign(static_cast<std::size_t>(sys_.F.rows()), -1);
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      if (nodes[k].is_leaf()) {
+        for (std::int32_t q = nodes[k].first; q < nodes[k].first + nodes[k].count; ++q)
+          sys_.tri_leaf[static_cast<std::size_t>(sys_.tree.tree.primitives[static_cast<std::size_t>(q)])] = static_cast<std::int32_t>(k);
+      } else {
+        sys_.tree_parent[static_cast<std::size_t>(nodes[k].left())] = sys_.tree_parent[static_cast<std::size_t>(nodes[k].right())] =
+            static_cast<std::int32_t>(k);
+      }
+    }
   }
   stats_.broad.ms += ms_since(t0);
 }

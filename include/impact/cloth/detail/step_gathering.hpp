@@ -26,14 +26,14 @@ namespace impact::detail::cloth {
 template <class S>
 void Stepper<S>::build_ownership() {
   const Faces& F = sys_.F;
-  own_.assign(static_cast<std::size_t>(F.rows()), 0);
+  sys_.own.assign(static_cast<std::size_t>(F.rows()), 0);
   std::vector<std::uint8_t> seen(sys_.w.size(), 0);
   std::vector<std::pair<std::int32_t, std::int32_t>> edges;
   edges.reserve(static_cast<std::size_t>(F.rows()) * 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const std::int32_t v = F(f, k);
-      if (!seen[static_cast<std::size_t>(v)]) seen[static_cast<std::size_t>(v)] = 1, own_[static_cast<std::size_t>(f)] |= std::uint8_t(1u << k);
+      if (!seen[static_cast<std::size_t>(v)]) seen[static_cast<std::size_t>(v)] = 1, sys_.own[static_cast<std::size_t>(f)] |= std::uint8_t(1u << k);
       std::int32_t a = F(f, k), c = F(f, (k + 1) % 3);
       if (a > c) std::swap(a, c);
       edges.push_back({a, c});
@@ -45,18 +45,18 @@ void Stepper<S>::build_ownership() {
   for (std::size_t i = 0; i < order.size(); ++i) {
     if (i > 0 && edges[std::size_t(order[i])] == edges[std::size_t(order[i - 1])]) continue;
     const auto occ = order[i];
-    own_[std::size_t(occ / 3)] |= std::uint8_t(8u << (occ % 3));
+    sys_.own[std::size_t(occ / 3)] |= std::uint8_t(8u << (occ % 3));
   }
   // Vertex -> incident triangles (CSR), for the re-gathering of the triangles of escaped vertices.
-  vtri_off_.assign(sys_.w.size() + 1, 0);
+  sys_.vtri_off.assign(sys_.w.size() + 1, 0);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++vtri_off_[std::size_t(F(f, k)) + 1];
-  for (std::size_t v = 0; v + 1 < vtri_off_.size(); ++v) vtri_off_[v + 1] += vtri_off_[v];
-  vtri_.resize(vtri_off_.back());
-  std::vector<std::uint32_t> fill(vtri_off_.begin(), vtri_off_.end() - 1);
+    for (int k = 0; k < 3; ++k) ++sys_.vtri_off[std::size_t(F(f, k)) + 1];
+  for (std::size_t v = 0; v + 1 < sys_.vtri_off.size(); ++v) sys_.vtri_off[v + 1] += sys_.vtri_off[v];
+  sys_.vtri.resize(sys_.vtri_off.back());
+  std::vector<std::uint32_t> fill(sys_.vtri_off.begin(), sys_.vtri_off.end() - 1);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) vtri_[fill[std::size_t(F(f, k))]++] = static_cast<std::int32_t>(f);
-  own_faces_ = sys_.F;
+    for (int k = 0; k < 3; ++k) sys_.vtri[fill[std::size_t(F(f, k))]++] = static_cast<std::int32_t>(f);
+  sys_.own_faces = sys_.F;
 }
 
 /// d / 2 in S, rounded up so that twice it is at least d.
@@ -107,7 +107,7 @@ template <class S>
 void Stepper<S>::gather() {
   const auto t0 = Clock::now();
   ++stats_.broad.passes;
-  if (own_faces_.rows() != sys_.F.rows() || own_faces_ != sys_.F) build_ownership();
+  if (sys_.vtri_off.size() != sys_.w.size() + 1 || sys_.own_faces.rows() != sys_.F.rows() || sys_.own_faces != sys_.F) build_ownership();
   const Faces& F = sys_.F;
   const std::size_t nv = sys_.w.size(), nf = static_cast<std::size_t>(F.rows());
   ebox_.resize(nv);
@@ -118,6 +118,8 @@ void Stepper<S>::gather() {
   }
   tbox_.resize(nf);
   for (std::size_t f = 0; f < nf; ++f) tbox_[f] = triangle_envelope(f);
+  edge_boxes_.resize(3 * nf);
+  for (std::size_t f = 0; f < nf; ++f) owned_edge_boxes(f);
   old_gbox_ = gbox_;
   old_tbox_ = tbox_;
   refit_tree();
@@ -158,7 +160,8 @@ void Stepper<S>::regather() {
   ++stats_.broad.passes;
   const Faces& F = sys_.F;
   const std::size_t nv = sys_.w.size(), nf = static_cast<std::size_t>(F.rows());
-  std::vector<std::uint8_t> grown_tri(nf, 0);
+  std::vector<std::uint8_t>& grown_tri = grown_tri_;
+  if (grown_tri.size() != nf) grown_tri.assign(nf, 0);
   std::vector<std::int32_t> tris, verts;
   // old_gbox_, old_tbox_ hold the boxes before this gathering (copies of gbox_ and tbox_ from
   // gather(), brought up to date for the grown entries at the end).
@@ -169,23 +172,13 @@ void Stepper<S>::regather() {
     b.extend(ebox_[v]);
     ebox_[v] = b;
     gbox_[v] = grown_envelope(v, b);
-    for (std::uint32_t k = vtri_off_[v]; k < vtri_off_[v + 1]; ++k)
-      if (!grown_tri[std::size_t(vtri_[k])]) grown_tri[std::size_t(vtri_[k])] = 1, tris.push_back(vtri_[k]);
+    for (std::uint32_t k = sys_.vtri_off[v]; k < sys_.vtri_off[v + 1]; ++k)
+      if (!grown_tri[std::size_t(sys_.vtri[k])]) grown_tri[std::size_t(sys_.vtri[k])] = 1, tris.push_back(sys_.vtri[k]);
   }
-  for (auto f : tris) tbox_[std::size_t(f)] = triangle_envelope(std::size_t(f));
-  refit_tree();
+  for (auto f : tris) tbox_[std::size_t(f)] = triangle_envelope(std::size_t(f)), owned_edge_boxes(std::size_t(f));
+  refit_grown(tris);
   std::vector<Prim> found;
-  for (auto fa : tris) {
-    const Aabb<S> box = tbox_[std::size_t(fa)];
-    traverse(
-        sys_.tree.tree, [&](const Aabb<S>& n) { return overlap(n, box); },
-        [&](std::int32_t fb) {
-          // each triangle pair once: a pair of two grown triangles from the smaller one
-          if (fb == fa || (grown_tri[std::size_t(fb)] && fb < fa)) return true;
-          if (overlap(box, tbox_[std::size_t(fb)])) pairs_of(fa, fb, found, /*only_new=*/true);
-          return true;
-        });
-  }
+  grown_pairs(tris, [&](std::int32_t fa, std::int32_t fb) { pairs_of(fa, fb, found, /*only_new=*/true); });
   // pairs_of kept only the pairs not known yet: every candidate is generated by the one
   // triangle pair that owns its primitives, kept iff pairs_of's box tests hold, and boxes only
   // grow, so a pair is among the candidates iff those tests held for the boxes before this
@@ -196,7 +189,7 @@ void Stepper<S>::regather() {
   const std::size_t added = found.size();
   cand_.insert(cand_.end(), found.begin(), found.end());
   for (auto v : verts) old_gbox_[std::size_t(v)] = gbox_[std::size_t(v)];
-  for (auto f : tris) old_tbox_[std::size_t(f)] = tbox_[std::size_t(f)];
+  for (auto f : tris) old_tbox_[std::size_t(f)] = tbox_[std::size_t(f)], grown_tri[std::size_t(f)] = 0;
   if (added) {
     d0_.resize(cand_.size(), std::numeric_limits<double>::quiet_NaN());
     d0_exact_.resize(cand_.size(), 0);
@@ -209,6 +202,62 @@ void Stepper<S>::regather() {
   const double ms = ms_since(t0);
   stats_.broad.ms += ms;
   broad_acc_ += ms;
+}
+
+/// Calls visit(fa, fb) once for every pair of distinct triangles with overlapping boxes (tbox_)
+/// of which at least one is among `tris` (marked in grown_tri_): a walk of the tree against
+/// itself that enters only node pairs with a marked node, the marks set from the triangles'
+/// leaves up. These are the triangle pairs a query of each triangle of `tris` would find, each
+/// once, at the cost of a walk restricted to the grown parts of the tree.
+template <class S>
+template <class Visit>
+void Stepper<S>::grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit) {
+  const auto& t = sys_.tree.tree;
+  if (t.empty() || tris.empty()) return;
+  std::vector<std::uint8_t>& mark = grown_node_;
+  if (mark.size() != t.nodes.size()) mark.assign(t.nodes.size(), 0);
+  std::vector<std::int32_t> marked;
+  for (auto f : tris)
+    for (std::int32_t k = sys_.tri_leaf[std::size_t(f)]; k >= 0 && !mark[std::size_t(k)]; k = sys_.tree_parent[std::size_t(k)])
+      mark[std::size_t(k)] = 1, marked.push_back(k);
+  auto tri_pair = [&](std::int32_t fa, std::int32_t fb) {
+    if ((grown_tri_[std::size_t(fa)] || grown_tri_[std::size_t(fb)]) && overlap(tbox_[std::size_t(fa)], tbox_[std::size_t(fb)])) visit(fa, fb);
+  };
+  auto size = [](const Aabb<S>& b) { return (b.max - b.min).sum(); };
+  std::vector<std::pair<std::int32_t, std::int32_t>>& stack = pair_stack_;
+  stack.clear();
+  stack.push_back({0, 0});
+  while (!stack.empty()) {
+    const auto ij = stack.back();
+    stack.pop_back();
+    const std::int32_t i = ij.first, j = ij.second;
+    const auto& ni = t.nodes[std::size_t(i)];
+    const auto& nj = t.nodes[std::size_t(j)];
+    if (i == j) {
+      if (!mark[std::size_t(i)]) continue;
+      if (ni.is_leaf()) {
+        for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+          for (std::int32_t q = p + 1; q < ni.first + ni.count; ++q) tri_pair(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
+      } else {
+        stack.push_back({ni.left(), ni.right()});
+        stack.push_back({ni.right(), ni.right()});
+        stack.push_back({ni.left(), ni.left()});
+      }
+      continue;
+    }
+    if (!(mark[std::size_t(i)] || mark[std::size_t(j)]) || !overlap(ni.bv, nj.bv)) continue;
+    if (ni.is_leaf() && nj.is_leaf()) {
+      for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+        for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q) tri_pair(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
+    } else if (nj.is_leaf() || (!ni.is_leaf() && size(ni.bv) >= size(nj.bv))) {
+      stack.push_back({ni.right(), j});
+      stack.push_back({ni.left(), j});
+    } else {
+      stack.push_back({i, nj.right()});
+      stack.push_back({i, nj.left()});
+    }
+  }
+  for (auto k : marked) mark[std::size_t(k)] = 0;
 }
 
 /// The envelope of vertex v for the current end position: its swept box, with the slack if it
@@ -228,6 +277,18 @@ Aabb<S> Stepper<S>::triangle_envelope(std::size_t f) const {
   return merge(merge(gbox_[std::size_t(F(Eigen::Index(f), 0))], gbox_[std::size_t(F(Eigen::Index(f), 1))]), gbox_[std::size_t(F(Eigen::Index(f), 2))]);
 }
 
+/// The grown envelopes of the edges triangle f owns (edge k from F(f, k) to F(f, k + 1)), kept
+/// for pairs_of. A re-gathering updates those of the grown triangles, which own every edge of a
+/// grown vertex (an edge's owner is incident to both its ends).
+template <class S>
+void Stepper<S>::owned_edge_boxes(std::size_t f) {
+  const Faces& F = sys_.F;
+  const std::uint8_t o = sys_.own[f];
+  for (int k = 0; k < 3; ++k)
+    if (o & (8u << k))
+      edge_boxes_[3 * f + std::size_t(k)] = merge(gbox_[std::size_t(F(Eigen::Index(f), k))], gbox_[std::size_t(F(Eigen::Index(f), (k + 1) % 3))]);
+}
+
 template <class S>
 void Stepper<S>::refit_tree() {
   impact::refit(sys_.tree.tree, [&](const std::int32_t* ids, std::size_t n) {
@@ -235,6 +296,24 @@ void Stepper<S>::refit_tree() {
     for (std::size_t k = 0; k < n; ++k) box.extend(tbox_[std::size_t(ids[k])]);
     return box;
   });
+}
+
+/// The refit after a re-gathering grew the boxes of the triangles `tris` (boxes only grow): each
+/// one's leaf and ancestors are extended by its new box, up to the first ancestor that already
+/// holds it (every node above holds that one). Since a node's box is the union of its leaves'
+/// boxes and boxes only grow, this gives the same boxes as refit_tree, bit for bit, in time
+/// proportional to the grown triangles' paths instead of the whole tree.
+template <class S>
+void Stepper<S>::refit_grown(const std::vector<std::int32_t>& tris) {
+  auto& nodes = sys_.tree.tree.nodes;
+  for (auto f : tris) {
+    const Aabb<S>& b = tbox_[std::size_t(f)];
+    for (std::int32_t k = sys_.tri_leaf[std::size_t(f)]; k >= 0; k = sys_.tree_parent[std::size_t(k)]) {
+      Aabb<S>& nb = nodes[std::size_t(k)].bv;
+      if ((b.min.array() >= nb.min.array()).all() && (b.max.array() <= nb.max.array()).all()) break;
+      nb.extend(b);
+    }
+  }
 }
 
 /// The candidate primitive pairs of the triangle pair (fa, fb) (not both obstacle): the
@@ -248,7 +327,7 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
   const Faces& F = sys_.F;
   auto incident = [&](std::int32_t v, std::int32_t f) { return F(f, 0) == v || F(f, 1) == v || F(f, 2) == v; };
   auto vf = [&](std::int32_t ta, std::int32_t tb) {  // owned vertices of ta against face tb
-    const std::uint8_t o = own_[std::size_t(ta)];
+    const std::uint8_t o = sys_.own[std::size_t(ta)];
     for (int k = 0; k < 3; ++k) {
       if (!(o & (1u << k))) continue;
       const std::int32_t v = F(ta, k);
@@ -262,13 +341,13 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
   };
   vf(fa, fb);
   vf(fb, fa);
-  const std::uint8_t oa = own_[std::size_t(fa)], ob = own_[std::size_t(fb)];
+  const std::uint8_t oa = sys_.own[std::size_t(fa)], ob = sys_.own[std::size_t(fb)];
   if (!(oa & 0x38) || !(ob & 0x38)) return;
   for (int i = 0; i < 3; ++i) {
     if (!(oa & (8u << i))) continue;
     std::int32_t a0 = F(fa, i), a1 = F(fa, (i + 1) % 3);
     if (a0 > a1) std::swap(a0, a1);
-    const Aabb<S> ea = merge(gbox_[std::size_t(a0)], gbox_[std::size_t(a1)]);
+    const Aabb<S>& ea = edge_boxes_[3 * std::size_t(fa) + std::size_t(i)];
     if (!overlap(ea, tbox_[std::size_t(fb)])) continue;
     const bool was_a = only_new && overlap(merge(old_gbox_[std::size_t(a0)], old_gbox_[std::size_t(a1)]), old_tbox_[std::size_t(fb)]);
     for (int j = 0; j < 3; ++j) {
@@ -276,7 +355,7 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
       std::int32_t b0 = F(fb, j), b1 = F(fb, (j + 1) % 3);
       if (b0 > b1) std::swap(b0, b1);
       if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
-      if (!overlap(ea, merge(gbox_[std::size_t(b0)], gbox_[std::size_t(b1)]))) continue;  // both grown
+      if (!overlap(ea, edge_boxes_[3 * std::size_t(fb) + std::size_t(j)])) continue;  // both grown
       if (was_a && overlap(merge(old_gbox_[std::size_t(a0)], old_gbox_[std::size_t(a1)]), merge(old_gbox_[std::size_t(b0)], old_gbox_[std::size_t(b1)])))
         continue;
       Prim p;

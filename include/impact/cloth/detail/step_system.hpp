@@ -42,6 +42,15 @@ struct System {
   bool has_tree = false;
   Faces tree_faces;                // the faces the tree was built for
   S tree_inflate = S(0);
+  // With the tree: each node's parent (-1 at the root) and each triangle's leaf, for refitting
+  // only the leaves whose triangles grew and their ancestors (Stepper::refit_grown).
+  std::vector<std::int32_t> tree_parent, tri_leaf;
+  // With the faces (Stepper::build_ownership): the vertices (bits 0-2) and edges (bits 3-5) each
+  // triangle owns, the vertex -> incident triangles index (CSR), and the faces they were built for.
+  std::vector<std::uint8_t> own;
+  std::vector<std::uint32_t> vtri_off;
+  std::vector<std::int32_t> vtri;
+  Faces own_faces;
 };
 
 inline std::string pair_name(const Prim& p) {

@@ -23,6 +23,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace impact::detail::cloth {
@@ -96,6 +97,10 @@ class Stepper {
   Aabb<S> envelope(std::size_t v) const;
   Aabb<S> triangle_envelope(std::size_t f) const;
   void refit_tree();
+  void refit_grown(const std::vector<std::int32_t>& tris);
+  void owned_edge_boxes(std::size_t f);
+  template <class Visit>
+  void grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit);
   void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out, bool only_new = false) const;
   bool escaped() const;
   void build_incidence();
@@ -158,12 +163,12 @@ class Stepper {
   S near_inflate_ = S(0), ccd_inflate_ = S(0);  // half the proximity distance, h / 2 (rounded up)
   double broad_acc_ = 0;
   std::vector<Prim> cand_, excluded_;
-  std::vector<std::uint8_t> own_;
-  std::vector<std::uint32_t> vtri_off_;  // vertex -> incident triangles (CSR)
-  std::vector<std::int32_t> vtri_;
-  Faces own_faces_;
   std::vector<Aabb<S>> ebox_, gbox_, tbox_;  // per vertex: envelope, grown envelope; per triangle
   std::vector<Aabb<S>> old_gbox_, old_tbox_;  // gbox_, tbox_ before the current re-gathering
+  std::vector<Aabb<S>> edge_boxes_;           // per triangle and edge k: the grown envelope of an owned edge
+  std::vector<std::uint8_t> grown_tri_;       // regather's triangles with a grown vertex (all 0 between calls)
+  std::vector<std::uint8_t> grown_node_;      // grown_pairs: tree nodes above such a triangle (all 0 between calls)
+  std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // grown_pairs walk
   std::vector<double> d0_;                   // per candidate: a lower bound on its distance at x0
   std::vector<std::uint8_t> d0_exact_;       // ... which is the exact distance (in double)
   std::vector<std::uint32_t> stamp_, inc_off_, inc_, inc_fill_;
