@@ -4,7 +4,8 @@
 #   bash cmake/bootstrap.sh bench [impact-collide-bench arguments...]
 #   bash cmake/bootstrap.sh test  [extra ctest arguments...]
 # It installs the Debian packages it needs (apt-get, as root or through sudo), configures a Release
-# build with warnings as errors in build/release (IMPACT_BUILD_DIR overrides), then builds and runs
+# build with warnings as errors in build/release (bench) or build/test (test; IMPACT_BUILD_DIR
+# overrides either), then builds and runs
 # the collision benchmark, or builds everything and runs the whole ctest suite. Set IMPACT_DATA_DIR to a folder that
 # holds meshes/ and ccd-queries/ to run the data-driven tests (they report SKIPPED without it, and FAIL when CI=true).
 set -euo pipefail
@@ -31,10 +32,20 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-build="${IMPACT_BUILD_DIR:-$root/build/release}"
+# Two build folders, so that neither mode recompiles the other's: the bench mode's build/release
+# compiles the benches at -O3; the test mode's build/test compiles the benches and examples at -O1
+# (IMPACT_BENCH_OPTIMIZATION, as the tests), since there they only run as smoke tests.
+if [ "$mode" = test ]; then
+  build="${IMPACT_BUILD_DIR:-$root/build/test}"
+  bench_optimization=-O1
+else
+  build="${IMPACT_BUILD_DIR:-$root/build/release}"
+  bench_optimization=
+fi
 jobs="$(nproc 2>/dev/null || echo 2)"
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DIMPACT_WARNINGS_AS_ERRORS=ON -DIMPACT_DATA_DIR="${IMPACT_DATA_DIR:-}" ${IMPACT_CMAKE_ARGS:-}
+  -DIMPACT_WARNINGS_AS_ERRORS=ON -DIMPACT_DATA_DIR="${IMPACT_DATA_DIR:-}" \
+  -DIMPACT_BENCH_OPTIMIZATION="$bench_optimization" ${IMPACT_CMAKE_ARGS:-}
 case "$mode" in
   bench)
     cmake --build "$build" -j "$jobs" --target impact-collide-bench

@@ -23,3 +23,18 @@ if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
     target_link_options(impact_warnings INTERFACE -fsanitize=thread)
   endif()
 endif()
+
+# impact_directory_optimization(FLAG): the targets of the calling directory compile at FLAG (-O1,
+# say) instead of the optimized build types' own level (Release, RelWithDebInfo, MinSizeRel; Debug
+# and the sanitizer builds keep theirs); an empty FLAG changes nothing. g++'s maybe-uninitialized
+# analysis depends on the optimizer, and at -O1 it takes copies of Eigen's comma-initialised
+# matrices for reads of uninitialised memory: it is off wherever the level is lowered
+# (-Wuninitialized stays, and the clang builds of .ci/run keep their own checks).
+function(impact_directory_optimization flag)
+  if(flag AND CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+    add_compile_options($<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:${flag}>)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+      add_compile_options($<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:-Wno-maybe-uninitialized>)
+    endif()
+  endif()
+endfunction()

@@ -16,6 +16,9 @@
 ///  - solve_ldp_sparse (cloth/zone_ldp_sparse.hpp, projected Newton on the dual) and
 ///    solve_ldp_primal (cloth/zone_ldp_primal.hpp, semismooth Newton on an augmented
 ///    Lagrangian of the primal): a sparse LDLT per iteration, for large zones.
+/// The three solvers (and the primal one's Newton system) are templates, always used with
+/// ZoneLdp, only so that Eigen's factorisations are instantiated in the files that call them: as
+/// inline functions they cost every file including a cloth header about 7 s of compile time.
 /// Internals of the cloth layer (namespace impact::detail).
 #pragma once
 
@@ -117,7 +120,8 @@ inline LdpStatus ldp_outer_verdict(const ZoneLdp& P, const Eigen::VectorXd& lamb
 /// Lawson-Hanson LDP through NNLS (see the file comment). `max_changes` bounds the active-set
 /// changes (each adds or drops one row). Infeasible when the NNLS residual vanishes (relative
 /// 1e-12). Solved means the NNLS's own optimality test passed; the caller checks the rows.
-inline LdpSolution solve_ldp_dense(const ZoneLdp& P, int max_changes) {
+template <class Ldp = ZoneLdp>
+LdpSolution solve_ldp_dense(const Ldp& P, int max_changes) {
   LdpSolution out;
   const auto M = static_cast<Eigen::Index>(P.rows.size());
   out.lambda = Eigen::VectorXd::Zero(M);

@@ -52,6 +52,7 @@ struct PrimalLdpOptions {
 /// Eigen still copies it once per factorisation, as it does any input with NaturalOrdering<int>):
 /// column 3B + v (B in the new order) holds rows 3A .. 3A + 2 of each coupled
 /// block A < B in increasing order, then the diagonal block's rows 3B .. 3B + v.
+template <class Ldp = ZoneLdp>
 struct PrimalSystem {
   int nb = 0;
   std::vector<int> newidx;           ///< block -> its place in the order
@@ -68,7 +69,7 @@ struct PrimalSystem {
   /// col_off / col_adj: for each block B (indices mapped by `map`), the blocks A < B sharing a
   /// row with use(i) with it, sorted and unique (with `both`, the blocks A > B too).
   template <class Use>
-  void couple(const ZoneLdp& P, const Use& use, const std::vector<int>& map, bool both) {
+  void couple(const Ldp& P, const Use& use, const std::vector<int>& map, bool both) {
     const auto nbs = static_cast<std::size_t>(nb);
     col_off.assign(nbs + 2, 0);
     auto each = [&](auto&& f) {
@@ -107,7 +108,7 @@ struct PrimalSystem {
 
   /// newidx from the AMD order of the block graph of the rows with use(i).
   template <class Use>
-  void order(const ZoneLdp& P, const Use& use) {
+  void order(const Ldp& P, const Use& use) {
     std::vector<int> id(static_cast<std::size_t>(nb));
     for (int b = 0; b < nb; ++b) id[static_cast<std::size_t>(b)] = b;
     couple(P, use, id, /*both=*/true);
@@ -133,7 +134,7 @@ struct PrimalSystem {
   }
 
   /// Assembles K for the rows with act[i] (inv_eps = 1 / eps) and factorises it. False on breakdown.
-  bool factorize(const ZoneLdp& P, const std::vector<char>& act, double inv_eps) {
+  bool factorize(const Ldp& P, const std::vector<char>& act, double inv_eps) {
     couple(P, [&](std::size_t i) { return act[i] != 0; }, newidx, /*both=*/false);
     const auto nbs = static_cast<std::size_t>(nb);
     const auto n = 3 * static_cast<Eigen::Index>(nb);
@@ -204,7 +205,8 @@ struct PrimalSystem {
 /// Solves the LDP `P` (see the file comment). Failed when the budget runs out or a
 /// factorisation breaks down; Infeasible with the certificate above; Solved when the KKT
 /// conditions hold to a quarter of each row's tolerance.
-inline LdpSolution solve_ldp_primal(const ZoneLdp& P, const PrimalLdpOptions& opt = {}) {
+template <class Ldp = ZoneLdp>
+LdpSolution solve_ldp_primal(const Ldp& P, const PrimalLdpOptions& opt = {}) {
   LdpSolution out;
   const auto m = static_cast<Eigen::Index>(P.rows.size());
   const auto n = 3 * static_cast<Eigen::Index>(P.blocks);
@@ -218,7 +220,7 @@ inline LdpSolution solve_ldp_primal(const ZoneLdp& P, const PrimalLdpOptions& op
   Eigen::VectorXd mu = Eigen::VectorXd::Zero(m), lambda = Eigen::VectorXd::Zero(m), y = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd r(m), s(m);
   std::vector<char> act(static_cast<std::size_t>(m), 0), prev(static_cast<std::size_t>(m), 2);
-  PrimalSystem sys(P.blocks);
+  PrimalSystem<Ldp> sys(P.blocks);
   int factorizations = 0;
   auto residuals = [&](const Eigen::VectorXd& yy) {  // r_i = c_i + eps mu_i - g_i . y
     r = P.c + eps * mu - (ldp_slack(P, yy) + P.c);

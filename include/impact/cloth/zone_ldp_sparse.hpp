@@ -59,7 +59,8 @@ struct SparseLdpOptions {
 /// Solves the LDP `P` (see the file comment). Failed when the budget runs out or a
 /// factorisation breaks down; Infeasible with the certificate above; Solved when the KKT
 /// conditions hold to a quarter of each row's tolerance.
-inline LdpSolution solve_ldp_sparse(const ZoneLdp& P, const SparseLdpOptions& opt = {}) {
+template <class Ldp = ZoneLdp>
+LdpSolution solve_ldp_sparse(const Ldp& P, const SparseLdpOptions& opt = {}) {
   LdpSolution out;
   const auto m = static_cast<Eigen::Index>(P.rows.size());
   out.lambda = Eigen::VectorXd::Zero(m);
