@@ -253,6 +253,15 @@ void settle_contact(const A& a, const RigidTransform<S>& pa, const B& b, const R
   c.point += ((top_a + low_b) / S(2) - c.normal.dot(c.point)) * c.normal;
 }
 
+/// settle_contact for a contact whose depth is already certified (EPA's, or a pair's closed-form
+/// candidates'): the point onto the mid plane, the depth the smaller of the two.
+template <class S, class A, class B>
+void settle_certified_contact(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
+  const S depth = c.depth;
+  settle_contact(a, pa, b, pb, c);
+  c.depth = std::min(c.depth, depth);
+}
+
 /// libccd's penetration, settled (settle_contact) and certified: EPA's own depth is the distance
 /// to its inner polytope, a lower bound of the true depth, and the overlap along its normal an
 /// upper bound. libccd 2.1's EPA sometimes stops early (on a polytope vertex or edge, or when a
@@ -374,11 +383,7 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
     ConvexContact<S> c =
         own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local);
     if (!failed) {
-      if (c.intersecting) {
-        const S depth = c.depth;
-        settle_contact(a, pa, b, pb, c);  // the point onto the mid plane (the depth is f(normal) again)
-        c.depth = std::min(c.depth, depth);
-      }
+      if (c.intersecting) settle_certified_contact(a, pa, b, pb, c);
       return c;
     }
   }
@@ -423,9 +428,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
     c.iterations += 1;
     c.normal = pa.rotate(c.normal);
     c.point = pa.apply(c.point);
-    const S depth = c.depth;
-    settle_contact(a, pa, b, pb, c);  // the point onto the mid plane (the depth is f(normal) again)
-    c.depth = std::min(c.depth, depth);
+    settle_certified_contact(a, pa, b, pb, c);
     return c;
   }
   SimplexPoint<S> simplex[4];
@@ -525,9 +528,7 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     cand.iterations += its;
     cand.normal = pa.rotate(cand.normal);
     cand.point = pa.apply(cand.point);
-    const S depth = cand.depth;
-    settle_contact(a, pa, b, pb, cand);  // the point onto the mid plane (the depth is f(normal) again)
-    cand.depth = std::min(cand.depth, depth);
+    settle_certified_contact(a, pa, b, pb, cand);
     return cand;
   }
   const auto local = [&](const Vec3<S>& n) {
