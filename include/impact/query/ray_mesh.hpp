@@ -76,6 +76,20 @@ namespace detail {
 template <class S>
 inline std::optional<S> ray_box_entry(const Vec3<S>& o, const Vec3<S>& inv_d, const Aabb<S>& box, S t_max);
 
+/// The two rules below on a watertight hit at t (front: the ray enters the triangle's front): t
+/// raised to the entry into the triangle's box (none when the ray misses the box before t_max),
+/// and none at exactly t = 0 from behind. Shared by ray_mesh_triangle_hit and the wide cast's
+/// SIMD lanes (query/ray_wide_bvh.hpp), which must decide alike.
+template <class S>
+inline std::optional<S> mesh_hit_t(const Vec3<S>& o, const Vec3<S>& inv, const Triangle<S>& tri, S t, bool front, S t_max) {
+  const Aabb<S> box(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c));
+  const std::optional<S> entry = ray_box_entry(o, inv, box, t_max);
+  if (!entry) return std::nullopt;
+  if (t < *entry) t = *entry;
+  if (t == S(0) && !front) return std::nullopt;
+  return t;
+}
+
 /// The narrow-phase watertight test with the library's rules. `pr.ray.t_max` is the current bound,
 /// `inv` the componentwise inverse of the ray's direction (safe_inverse).
 ///  - The ray must enter the triangle's bounding box by the node tests' own slab test
@@ -94,11 +108,9 @@ template <class S>
 inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Vec3<S>& inv, const Triangle<S>& tri) {
   auto h = intersect_ray_triangle(pr, tri);
   if (!h) return h;
-  const Aabb<S> box(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c));
-  const std::optional<S> entry = ray_box_entry(pr.ray.origin, inv, box, pr.ray.t_max);
-  if (!entry) return std::nullopt;
-  if (h->t < *entry) h->t = *entry;
-  if (h->t == S(0) && !h->front) return std::nullopt;
+  const std::optional<S> t = mesh_hit_t(pr.ray.origin, inv, tri, h->t, h->front, pr.ray.t_max);
+  if (!t) return std::nullopt;
+  h->t = *t;
   return h;
 }
 

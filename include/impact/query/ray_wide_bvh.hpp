@@ -169,14 +169,9 @@ template <class S, int W = 4> struct WideCast {
     const S tmd = best * det;
     if (det > S(0) ? (tt < S(0) || tt > tmd) : (tt > S(0) || tt < tmd)) return;
     const S inv_det = S(1) / det;
-    S t = std::min(S(tt * inv_det), best);
-    const Triangle<S> tri = wide.block_triangle(b, c);
-    const Aabb<S> box(tri.a.cwiseMin(tri.b).cwiseMin(tri.c), tri.a.cwiseMax(tri.b).cwiseMax(tri.c));
-    const std::optional<S> entry = ray_box_entry(o, inv, box, best);
-    if (!entry) return;
-    if (t < *entry) t = *entry;
-    if (t == S(0) && !(det > S(0))) return;
-    if (best_k < 0 || t < best) record(b, c, t, Vec3<S>(S(values.eu[c] * inv_det), S(values.ev[c] * inv_det), S(values.ew[c] * inv_det)));
+    const std::optional<S> th = detail::mesh_hit_t(o, inv, wide.block_triangle(b, c), std::min(S(tt * inv_det), best), det > S(0), best);
+    if (th && (best_k < 0 || *th < best))
+      record(b, c, *th, Vec3<S>(S(values.eu[c] * inv_det), S(values.ev[c] * inv_det), S(values.ew[c] * inv_det)));
   }
   /// A new best hit: triangle in lane c of block b at t.
   void record(std::int32_t b, int c, S t, const Vec3<S>& bary) {
