@@ -6,7 +6,7 @@
 
 Each file is recognised by its content, so several runs of the same bench can be given together:
 the charts then show the median of the runs with a bar from the lowest to the highest value (the
-ranges the README quotes). Charts written, when the JSON holds the data:
+ranges the docs quote). Charts written, when the JSON holds the data:
 
   impact-scene-bench     <stem>-scene-scaling.png   ms per step against objects, per method
                          <stem>-scene-methods.png   ms per step per method (main scene)

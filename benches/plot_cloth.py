@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Renders an OBJ written by impact-cloth-bench --write-final (objects "cloth...", obstacles, the
-ground as a large quad) into a small PNG for the README, with matplotlib's 3D polygons and a
+ground as a large quad) into a small PNG for docs/cloth.md, with matplotlib's 3D polygons and a
 simple Lambert shading. Needs Debian's python3-matplotlib (and numpy); not needed by the tests.
 
     python3 benches/plot_cloth.py FINAL.obj OUT.png [--title TEXT] [--elev DEG] [--azim DEG]

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
-// Ground truth: every query file under $IMPACT_DATA_DIR/ccd-queries. Asserted, as the README states
+// Ground truth: every query file under $IMPACT_DATA_DIR/ccd-queries. Asserted, as docs/ccd.md states
 // them: zero false negatives, zero false positives with the default options (the double-double
 // re-check on), and with the search alone (recheck_iterations = 0) no more false positives than the
-// README's 49 (vertex-face) and 56 (edge-edge), which the bench counts the same way; every count is
+// docs/ccd.md's 49 (vertex-face) and 56 (edge-edge), which the bench counts the same way; every count is
 // against the files' ground truth (exact rational arithmetic of the data set's authors), and printed
 // (stdout, RecordProperty). Also checks the exact conversion of the rational coordinates.
 #include "impact/ccd/edge_edge.hpp"
@@ -65,7 +65,7 @@ KindStats run_kind(const std::string& root, const std::string& kind, const impac
   return s;
 }
 
-// Default options: no false negative, no false positive (README, Continuous collision).
+// Default options: no false negative, no false positive (docs/ccd.md).
 TEST(CcdGroundTruth, VertexFaceNoFalseNegativesNoFalsePositives) {
   IMPACT_REQUIRE_DATA(root, "ccd-queries/README.md");
   const std::string dir = root.substr(0, root.size() - std::string("/README.md").size());
@@ -89,7 +89,7 @@ TEST(CcdGroundTruth, EdgeEdgeNoFalseNegativesNoFalsePositives) {
 }
 
 // The search alone (no double-double re-check): still no false negative, and no more false
-// positives than the README's table states (49 and 56; fewer would be an improvement to report).
+// positives than the table of docs/ccd.md states (49 and 56; fewer would be an improvement to report).
 TEST(CcdGroundTruth, SearchOnlyFalsePositivesAsStated) {
   IMPACT_REQUIRE_DATA(root, "ccd-queries/README.md");
   const std::string dir = root.substr(0, root.size() - std::string("/README.md").size());

@@ -6,6 +6,10 @@
 //    oracle below;
 //  - all_pairs_ccd_hits: every such pair through vertex_face_ccd / edge_edge_ccd (no tree, no
 //    candidate filtering): checks that the step's broad phase missed nothing;
+//  Both skip the pairs of triangles whose boxes over the whole motion are farther apart, along
+//  one coordinate, than a reach of a few thicknesses: such pairs stay that far apart at every time
+//  of the linear motion (every position lies in its vertex's box), so they can neither come within
+//  the thickness nor be a CCD hit. Compared one by one, not through a tree.
 //  - Scene: cloth + kinematic obstacles, combined the way the step numbers them.
 #pragma once
 
@@ -61,18 +65,38 @@ struct PrimitivePair {
 /// Every non-adjacent primitive pair of distinct triangles, not both obstacle ones, each once: a
 /// vertex-face pair comes from every triangle holding the vertex and an edge-edge pair from the
 /// two triangles of each edge, so the walk over triangle pairs meets most pairs several times;
-/// each is kept at its first meeting, as met.
+/// each is kept at its first meeting, as met. Triangles whose boxes over the motion (both ends)
+/// are more than `reach` apart along a coordinate are skipped (infinity: none).
 template <class S>
-std::vector<PrimitivePair> unique_pairs(const Combined<S>& c) {
+std::vector<PrimitivePair> unique_pairs(const Combined<S>& c, double reach = std::numeric_limits<double>::infinity()) {
   struct Keyed {
     std::array<int, 5> key;
     PrimitivePair pair;
   };
   std::vector<Keyed> all;
   const auto nf = c.F.rows();
+  // each triangle's box over both ends of the motion, in double (exact conversions)
+  std::vector<std::array<double, 6>> box(static_cast<std::size_t>(nf));
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    auto& b = box[std::size_t(f)];
+    for (int k = 0; k < 3; ++k) b[std::size_t(k)] = std::numeric_limits<double>::infinity(), b[std::size_t(k + 3)] = -b[std::size_t(k)];
+    for (int j = 0; j < 3; ++j)
+      for (const Vertices<S>* X : {&c.X0, &c.X1})
+        for (int k = 0; k < 3; ++k) {
+          const double x = double((*X)(c.F(f, j), k));
+          b[std::size_t(k)] = std::min(b[std::size_t(k)], x), b[std::size_t(k + 3)] = std::max(b[std::size_t(k + 3)], x);
+        }
+  }
+  auto apart = [&](Eigen::Index a, Eigen::Index b) {
+    const auto &ba = box[std::size_t(a)], &bb = box[std::size_t(b)];
+    for (std::size_t k = 0; k < 3; ++k)
+      if (ba[k] - bb[k + 3] > reach || bb[k] - ba[k + 3] > reach) return true;
+    return false;
+  };
   for (Eigen::Index a = 0; a < nf; ++a)
     for (Eigen::Index b = a + 1; b < nf; ++b) {
       if (c.obstacle_tri[std::size_t(a)] && c.obstacle_tri[std::size_t(b)]) continue;
+      if (apart(a, b)) continue;
       const int ia[3] = {c.F(a, 0), c.F(a, 1), c.F(a, 2)}, ib[3] = {c.F(b, 0), c.F(b, 1), c.F(b, 2)};
       auto in = [](const int* t, int v) { return t[0] == v || t[1] == v || t[2] == v; };
       // a vertex against a triangle: keyed by the vertex and the triangle's index
@@ -97,10 +121,14 @@ std::vector<PrimitivePair> unique_pairs(const Combined<S>& c) {
   return out;
 }
 
+/// The smallest distance of any pair at the K + 1 sample times; pairs farther apart than `reach`
+/// (see unique_pairs) are left out, so the answer is exact when at most `reach` and otherwise
+/// above `reach`: `sampled_min_distance(c, K, 2 * h) >= h` holds exactly when every pair stays at
+/// least h apart at the samples.
 template <class S>
-double sampled_min_distance(const Combined<S>& c, int K = 32) {
+double sampled_min_distance(const Combined<S>& c, int K = 32, double reach = std::numeric_limits<double>::infinity()) {
   double best = std::numeric_limits<double>::infinity();
-  const std::vector<PrimitivePair> pairs = unique_pairs(c);
+  const std::vector<PrimitivePair> pairs = unique_pairs(c, reach);
   const Vertices<double> X0 = c.X0.template cast<double>(), X1 = c.X1.template cast<double>();
   for (int s = 0; s <= K; ++s) {
     const double t = double(s) / K;
@@ -126,7 +154,9 @@ int all_pairs_ccd_hits(const Combined<S>& c, double min_separation) {
   int hits = 0;
   auto P0 = [&](int v) { return Vec3<S>(c.X0.row(v).transpose()); };
   auto P1 = [&](int v) { return Vec3<S>(c.X1.row(v).transpose()); };
-  for (const PrimitivePair& p : unique_pairs(c)) {
+  // A CCD hit comes within min_separation (up to the CCD's small relative tolerance): pairs more
+  // than four times that apart cannot be one. Touching pairs (min_separation 0) are never apart.
+  for (const PrimitivePair& p : unique_pairs(c, 4 * min_separation)) {
     const int* v = p.v;
     const auto r = p.edge_edge ? impact::edge_edge_ccd(P0(v[0]), P0(v[1]), P0(v[2]), P0(v[3]), P1(v[0]), P1(v[1]), P1(v[2]), P1(v[3]), o)
                                : impact::vertex_face_ccd(P0(v[0]), P0(v[1]), P0(v[2]), P0(v[3]), P1(v[0]), P1(v[1]), P1(v[2]), P1(v[3]), o);

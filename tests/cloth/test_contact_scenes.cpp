@@ -106,7 +106,7 @@ void run_pressed(Stages s, unsigned seed) {
   // Oracles independent of the step's tree and stages.
   const auto c = combine(p.cloth.F, p.cloth.V, x1, p.obs);
   EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, p.h), 0);
-  EXPECT_GE(cloth_test::sampled_min_distance(c, 8), p.h);
+  EXPECT_GE(cloth_test::sampled_min_distance(c, 8, 2 * p.h), p.h);
   const auto rep = verify_cloth_state(p.cloth.F, x1, p.obs, ObstacleTime::End, ClothVerifyOptions{2 * p.h, 16});
   EXPECT_EQ(rep.intersections, 0u);
   EXPECT_GE(rep.min_distance, p.h);
@@ -150,7 +150,7 @@ double sliding_after(bool coplanar, ZoneMethod m, bool* collision_free) {
   EXPECT_LT(st.zone_momentum_error, bound);
   const auto c = combine(F, x0, x1, ClothObstacles<S>{});
   EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, h), 0);
-  EXPECT_GE(cloth_test::sampled_min_distance(c, 64), h);
+  EXPECT_GE(cloth_test::sampled_min_distance(c, 64, 2 * h), h);
   // Relative displacement along x of the facing edges' midpoints (the contact).
   auto mid = [&](const Vertices<S>& X, int a, int b) { return 0.5 * double(X(a, 0) + X(b, 0)); };
   return (mid(x1, 3, 4) - mid(x0, 3, 4)) - (mid(x1, 0, 1) - mid(x0, 0, 1));
@@ -210,7 +210,7 @@ ClothStepStats resting_stack(int rounds, Vertices<S>* x0_out, Vertices<S>* x1_ou
   EXPECT_TRUE(st.collision_free);
   const auto c = combine(cloth.F, cloth.V, x1, obs);
   EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, h), 0);
-  EXPECT_GE(cloth_test::sampled_min_distance(c, 8), h);
+  EXPECT_GE(cloth_test::sampled_min_distance(c, 8, 2 * h), h);
   *x0_out = cloth.V, *x1_out = x1, *h_out = h;
   return st;
 }
@@ -297,7 +297,7 @@ TYPED_TEST(ClothScenes, FallingStackGatheredAgainOverSteps) {
     regathered += st.broad.passes - 1;
     const auto c = combine(cloth.F, x0, x1, obs);
     EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, h), 0) << "step " << step;
-    EXPECT_GE(cloth_test::sampled_min_distance(c, 8), h) << "step " << step;
+    EXPECT_GE(cloth_test::sampled_min_distance(c, 8, 2 * h), h) << "step " << step;
     x0 = x1;
   }
   EXPECT_GT(regathered, 0);

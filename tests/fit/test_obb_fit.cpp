@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <vector>
 
 using namespace impact;
@@ -39,6 +40,10 @@ template <class S> void expect_holds(const Obb<S>& b, const std::vector<Vec3<S>>
   EXPECT_TRUE((b.half.array() >= S(0)).all());
   EXPECT_NEAR(double(b.axes.determinant()), 1.0, 1e-5);
   for (const auto& p : pts) ASSERT_TRUE(contains(b, p)) << p.transpose();
+  // the ball (Obb::radius) holds every point too, measured in long double
+  for (const auto& p : pts)
+    ASSERT_LE((p.template cast<long double>() - b.center.template cast<long double>()).norm(), static_cast<long double>(b.radius))
+        << p.transpose();
 }
 
 template <class S> std::vector<Vec3<S>> cloud(Rng& rng, int n, double scale, const Eigen::Vector3d& offset, const Eigen::Matrix3d& shape) {
@@ -179,6 +184,8 @@ TYPED_TEST(ObbFitTest, MergeAndTransformContainTheirInputs) {
     for (const auto& q : pa) {
       const Vec3L h = local(moved, Vec3L(xs.R.template cast<long double>() * q.template cast<long double>() + xs.t.template cast<long double>()));
       for (int k = 0; k < 3; ++k) ASSERT_LE(std::abs(h[k]), static_cast<long double>(moved.half[k]));
+      const Vec3L mq = xs.R.template cast<long double>() * q.template cast<long double>() + xs.t.template cast<long double>();
+      ASSERT_LE((mq - moved.center.template cast<long double>()).norm(), static_cast<long double>(moved.radius));
     }
   }
 }
@@ -222,4 +229,35 @@ TYPED_TEST(ObbFitTest, OverlapNeverMissesTouchingBoxes) {
   }
   // a corner just off a face is usually separated by a face axis or an edge axis
   EXPECT_GT(rejected_apart, trials / 2);
+}
+
+TYPED_TEST(ObbFitTest, BallsNeverRejectTouchingSets) {
+  using S = TypeParam;
+  using T = BvTraits<Obb<S>>;
+  // Two fitted boxes whose point sets share one point exactly must overlap, at every offset from
+  // the origin, also through a transform; their balls (Obb::radius) must reject some pairs that
+  // the boxes alone accept (pairs apart along a box diagonal), or the balls would test nothing.
+  Rng rng(11);
+  int ball_only = 0;
+  for (double off : {0.0, 1.0, 1e3, 1e6}) {
+    for (int trial = 0; trial < 200; ++trial) {
+      const auto pa = cloud<S>(rng, 9, 1.0, rng.vec(-off, off), rng.rotation() * Eigen::Vector3d(1, 0.5, 0.2).asDiagonal());
+      auto pb = cloud<S>(rng, 9, 0.5, Eigen::Vector3d::Zero(), rng.rotation());
+      const Vec3<S> shift = pa[std::size_t(trial % 9)] - pb[0];
+      for (auto& q : pb) q = (q + shift).eval();
+      pb[0] = pa[std::size_t(trial % 9)];  // exactly shared
+      const Obb<S> a = T::fit(pa.data(), pa.size()), b = T::fit(pb.data(), pb.size());
+      ASSERT_TRUE(T::overlap(a, b)) << "offset " << off;
+      ASSERT_TRUE(T::overlap(b, a)) << "offset " << off;
+      const RigidTransform<S> xf = random_pose(rng, Eigen::Vector3d::Constant(-off), Eigen::Vector3d::Constant(off)).cast<S>();
+      ASSERT_TRUE(T::overlap(T::transformed(a, xf), b, xf)) << "offset " << off;
+      // b moved out along a's box diagonal until only the corners could meet
+      Obb<S> far = b;
+      far.center = (a.center + a.axes * a.half + b.axes * b.half.cwiseProduct(Vec3<S>(S(-0.9), S(-0.9), S(-0.9)))).eval();
+      Obb<S> far_box = far, a_box = a;
+      far_box.radius = a_box.radius = std::numeric_limits<S>::infinity();
+      ball_only += T::overlap(a_box, far_box) && !T::overlap(a, far);
+    }
+  }
+  EXPECT_GT(ball_only, 0);
 }

@@ -118,7 +118,7 @@ TYPED_TEST(Particles, AnalyticBounceHeights) {
                 double(eps), double(dt), worst_bt, worst_pr);
     ::testing::Test::RecordProperty(std::string("bounce_rel_err_backtrack_eps") + std::to_string(int(eps * 10)), std::to_string(worst_bt));
     ::testing::Test::RecordProperty(std::string("bounce_rel_err_project_eps") + std::to_string(int(eps * 10)), std::to_string(worst_pr));
-    EXPECT_LT(worst_bt, is_double<S>() ? 1.2e-14 : 5e-5);  // the README's figure for double (1.1e-14 measured)
+    EXPECT_LT(worst_bt, is_double<S>() ? 1.2e-14 : 5e-5);  // the figure of docs/particles.md for double (1.1e-14 measured)
     EXPECT_GT(worst_pr, worst_bt);  // projection is the quick and dirty one
   }
 }
@@ -168,7 +168,7 @@ template <class S> void energy_run(const ColliderSet<S>& cs, const MeshBvh<Aabb<
   std::printf("[ energy ] %s %s: %d particles x %d steps, %zu impacts, speed rel. error %.3g, outside %d, budget exhausted %zu\n",
               is_double<S>() ? "double" : "float", what, n_particles, steps, total.impacts, worst, outside, total.budget_exhausted);
   EXPECT_EQ(outside, 0) << what;
-  EXPECT_LE(worst, is_double<S>() ? 1.3e-14 : 2e-4) << what;  // the README's figure for double (1.23e-14 measured on spot)
+  EXPECT_LE(worst, is_double<S>() ? 1.3e-14 : 2e-4) << what;  // the figure of docs/particles.md for double (1.23e-14 measured on spot)
   EXPECT_GT(total.impacts, std::size_t(steps / 20)) << what;
 }
 
@@ -280,7 +280,7 @@ template <class S> void resting_run(const ColliderSet<S>& cs, S floor, S radius,
   std::printf("[ resting ] %s %s: lowest gap %.3g, final |v| %.3g, z jitter %.3g, budget exhausted %zu\n",
               is_double<S>() ? "double" : "float", what, double(lowest), double(vmax), double(zmax - zmin), st.budget_exhausted);
   EXPECT_GE(lowest, S(0)) << what;
-  EXPECT_EQ(vmax, S(0)) << what;  // exactly zero, as the README says
+  EXPECT_EQ(vmax, S(0)) << what;  // exactly zero, as docs/particles.md says
   EXPECT_EQ(zmax - zmin, S(0)) << what;
   EXPECT_LE(zmin - floor - radius, S(1e-4)) << what;
 }

@@ -8,7 +8,7 @@ namespace impact {
 /// Where the top-down builder cuts a node along the longest axis of its primitives' centroid box.
 enum class SplitRule {
   /// Middle of the centroid box along its longest axis (the default). O(n) per level, and it
-  /// gave the fastest queries in impact-collide-bench (see README, "Split rule").
+  /// gave the fastest queries in impact-collide-bench (see docs/collide.md, "Split rule").
   SpatialMiddle,
   /// Median of the centroids along that axis: a balanced tree (depth log2 n), but cells of
   /// unequal size on uneven meshes. O(n) per level with nth_element.

@@ -27,7 +27,7 @@
 /// et al. 2012) that most lowers its children's areas: without them, inserting a scanned mesh in
 /// its file order gives a tree four times as deep as the top-down build's.
 ///
-/// Measured on igea (268,686 triangles, file order, AABB decisions; README "Hierarchies"): the
+/// Measured on igea (268,686 triangles, file order, AABB decisions; docs/hierarchies.md): the
 /// greedy search with rotations inserts everything in 7-8x the top-down build of the same tree,
 /// with a surface-area cost 1.2x the top-down middle split's; branch and bound about 14x, 1.15x.
 ///

@@ -79,6 +79,10 @@ bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& ove
     const auto [i, j] = stack.pop();
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
     const auto& nb = b.nodes[static_cast<std::size_t>(j)];
+    // the children (adjacent) of both nodes, fetched while the test runs: one of the two pairs of
+    // children is read next whenever the test passes
+    if (!na.is_leaf()) detail::prefetch_bytes(&a.nodes[static_cast<std::size_t>(na.first)], 2 * sizeof(na));
+    if (!nb.is_leaf()) detail::prefetch_bytes(&b.nodes[static_cast<std::size_t>(nb.first)], 2 * sizeof(nb));
     if (!overlap(na, nb)) continue;
     if (!detail::visit_or_split(a, b, i, j, stack, visit, order)) return false;
   }

@@ -33,12 +33,35 @@
 #include <array>
 #include <cfloat>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 namespace impact {
+
+namespace detail {
+/// True when the double x is exactly a float (finite or infinite; false for NaN), decided on its
+/// bits alone: a round trip double(float(x)) == x gives the same answer in IEEE arithmetic, but
+/// a compiler that keeps the float in a wider register (x87 excess precision, which g++ 12 does
+/// not strip from casts in C++) or folds the round trip away (-ffast-math) would answer true for
+/// every x, and a WideBvh would then store rounded triangles. O(1), integer operations only.
+inline bool is_float_exact(double x) {
+  std::uint64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  const int biased = static_cast<int>((b >> 52) & 0x7ff);
+  const std::uint64_t fraction = b & ((std::uint64_t(1) << 52) - 1);
+  if (biased == 0x7ff) return fraction == 0;  // infinities are floats, NaNs are not
+  if (biased == 0) return fraction == 0;      // zeros; a double subnormal is far below float's range
+  const int e = biased - 1023;                // x = 1.fraction * 2^e
+  if (e > 127 || e < -149) return false;
+  // a float keeps 23 fraction bits (e >= -126), fewer below: the multiples of 2^-149
+  const int kept = e >= -126 ? 23 : e + 149;
+  return (fraction & ((std::uint64_t(1) << (52 - kept)) - 1)) == 0;
+}
+inline bool is_float_exact(float) { return true; }
+}  // namespace detail
 
 /// Build settings of a WideBvh.
 struct WideBvhConfig {
@@ -179,7 +202,7 @@ template <class S, int W = 4> class WideBvh {
       const Triangle<S> t = mesh.triangle(leaf);
       S* p = full.data() + 9 * static_cast<std::size_t>(k);
       for (int c = 0; c < 3; ++c) p[c] = t.a[c], p[3 + c] = t.b[c], p[6 + c] = t.c[c];
-      for (int c = 0; c < 9; ++c) floats = floats && S(static_cast<float>(p[c])) == p[c];
+      for (int c = 0; c < 9; ++c) floats = floats && detail::is_float_exact(p[c]);
       coordinate_bound_ = std::max({coordinate_bound_, t.a.cwiseAbs().maxCoeff(), t.b.cwiseAbs().maxCoeff(), t.c.cwiseAbs().maxCoeff()});
     }
     if (tree.empty() || n == 0) return;

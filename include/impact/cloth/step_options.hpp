@@ -100,7 +100,7 @@ struct ClothCollisionOptions {
   /// The primitive CCD's tolerance and budgets. min_separation and t_max are set by the step (h
   /// and 1); the rest is used as given by the start check, the zones and the fail-safe. The
   /// impulse passes locate hits only to within separation_margin h / 2 (a larger tolerance per
-  /// query, no re-check; see the README's cloth section): what they do with a hit needs no more.
+  /// query, no re-check; see docs/cloth.md): what they do with a hit needs no more.
   CcdOptions ccd{};
   /// x0 closer than h somewhere: throw (default) or report and proceed.
   StartViolation on_start_violation = StartViolation::Throw;
@@ -127,7 +127,7 @@ struct ClothPair {
 /// Statistics of one call of cloth_collision_step.
 struct ClothStepStats {
   /// Swept tree build/refit and candidate gathering; passes = gatherings (1 unless a vertex
-  /// left its envelope during the step, see the README's broad-phase paragraph).
+  /// left its envelope during the step, see docs/cloth.md, the broad phase).
   ClothStageStats broad;
   /// collisions = proximity pairs that got an impulse, passes = relaxation rounds
   ClothStageStats proximity;

@@ -107,6 +107,7 @@ template <class S_> struct BvTraits<Obb<S_>> {
     const S grow = S(8) * std::numeric_limits<S>::epsilon() *
                    (std::max(a.center.cwiseAbs().maxCoeff(), b.center.cwiseAbs().maxCoeff()) + std::max(a.half.sum(), b.half.sum()));
     m.half.array() += grow;
+    m.radius += grow * S(2);  // the corners' ball, grown as the box (sqrt(3) times the per-axis growth)
     return m;
   }
   static S size(const Obb<S>& a) { return a.half.norm(); }
@@ -121,11 +122,13 @@ template <class S_> struct BvTraits<Obb<S_>> {
     return ObbPairFrame<S>(xf).overlaps(a, b);
   }
   static Obb<S> transformed(const Obb<S>& a, const RigidTransform<S>& xf) {
-    Obb<S> o{xf.apply(a.center), xf.R * a.axes, a.half};
-    o.half.array() += S(16) * std::numeric_limits<S>::epsilon() * (o.center.cwiseAbs().maxCoeff() + a.half.sum());
+    Obb<S> o{xf.apply(a.center), xf.R * a.axes, a.half, a.radius};
+    const S grow = S(16) * std::numeric_limits<S>::epsilon() * (o.center.cwiseAbs().maxCoeff() + a.half.sum());
+    o.half.array() += grow;
+    o.radius += S(2) * grow + S(4) * std::numeric_limits<S>::epsilon() * a.radius;
     return o;
   }
-  static Obb<S> inflated(const Obb<S>& a, S margin) { return {a.center, a.axes, (a.half.array() + margin).matrix()}; }
+  static Obb<S> inflated(const Obb<S>& a, S margin) { return {a.center, a.axes, (a.half.array() + margin).matrix(), a.radius + margin}; }
 };
 
 namespace detail {

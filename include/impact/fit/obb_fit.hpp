@@ -13,8 +13,8 @@
 ///    a mesh do not pull the axes towards them, as they do with the vertex covariance.
 ///  - Points: the covariance of the points themselves.
 ///
-/// Contract: the returned box {center + axes h : |h_i| <= half_i} contains every input point,
-/// exactly, for the stored (rounded) centre, axes and extents: the extents are measured after the
+/// Contract: the returned box {center + axes h : |h_i| <= half_i} and the ball of `radius` about
+/// `center` each contain every input point, exactly, for the stored (rounded) centre, axes and extents: the extents are measured after the
 /// centre and axes are rounded to S, in double, and padded by a bound of what that rounding and
 /// the axes' departure from orthonormality can hide. Degenerate inputs (one point, coincident,
 /// collinear or coplanar points, zero-area triangles) give a finite box with some zero extents.
@@ -119,11 +119,12 @@ Obb<S> fit_obb_in_range(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes, 
   // Extents measured from the stored centre along the stored axes.
   const Eigen::Vector3d c = box.center.template cast<double>();
   Eigen::Vector3d ext = Eigen::Vector3d::Zero();
-  double reach = 0.0;
+  double reach = 0.0, r2 = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d d = pts[i].template cast<double>() - c;
     ext = ext.cwiseMax((A.transpose() * d).cwiseAbs());
     reach = std::max(reach, d.cwiseAbs().maxCoeff());
+    r2 = std::max(r2, d.squaredNorm());
   }
   // The box is {c + A h}: a point p has h = A^-1 (p - c), which differs from the computed A^T (p -
   // c) by at most |A^T A - I| |p - c| (the axes are orthonormal to a few ulps of S) plus the
@@ -136,12 +137,18 @@ Obb<S> fit_obb_in_range(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes, 
   const double eps_s = static_cast<double>(std::numeric_limits<S>::epsilon());
   const double pad = (3.0 * orth + 16.0 * eps_d) * 3.0 * reach + (eps_s + 16.0 * eps_d) * c.cwiseAbs().maxCoeff() +
                      std::numeric_limits<double>::denorm_min();
-  for (int k = 0; k < 3; ++k) {
-    const double e = ext[k] + pad;
+  const auto round_up = [](double e) {
     S s = static_cast<S>(e);
     if (double(s) < e) s = std::nextafter(s, std::numeric_limits<S>::infinity());
-    box.half[k] = s;
-  }
+    return s;
+  };
+  for (int k = 0; k < 3; ++k) box.half[k] = round_up(ext[k] + pad);
+  // The ball about the stored centre: |p - c| is within a few ulps of double of the computed
+  // sqrt(r2) (each d exact to 1 ulp of |d|, the sum of squares and the root to a few more), and c
+  // may be the unrounded double centre (see above): the distance to the stored one differs by at
+  // most the centre's rounding, sqrt(3) ulps of S of its largest coordinate.
+  box.radius = round_up(std::sqrt(r2) * (1.0 + 8.0 * eps_d) + 2.0 * (eps_s + 16.0 * eps_d) * c.cwiseAbs().maxCoeff() +
+                        std::numeric_limits<double>::denorm_min());
   return box;
 }
 }  // namespace detail

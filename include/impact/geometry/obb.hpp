@@ -18,6 +18,11 @@ template <class S> struct Obb {
   Vec3<S> center = Vec3<S>::Zero();
   Mat3<S> axes = Mat3<S>::Identity();  ///< columns are the box axes (a rotation)
   Vec3<S> half = Vec3<S>::Zero();      ///< half extents along the axes, >= 0
+  /// As a bounding volume only: every point the box was fitted around lies within `radius` of
+  /// `center` (fit_obb measures it), so the volume bounded is the box cut by that ball, and the
+  /// pair tests reject on the two balls before the 15 axes (ObbPairFrame). Infinity (the
+  /// default, and for boxes used as shapes) means no ball: the box alone.
+  S radius = std::numeric_limits<S>::infinity();
 };
 
 /// Separating-axis test of two boxes given in one frame: box A (axes Ra, half extents ea, centre

@@ -25,6 +25,10 @@ namespace impact {
 ///    runs with R = A^T X B, whose entries are within g of those of A^T U B: a pad of g on every
 ///    |R_ij| and 2 g E on every axis (E = |t_b|_1 + sum(half_a) + sum(half_b)) cover both the
 ///    larger box and the centre's projections on the axes built from R.
+///  - Balls (Obb::radius, infinite when absent): the image of b's ball lies in the ball of radius
+///    |X|_2 r_b <= (1 + g) r_b about X c_b + t; the centres' distance is rounded by at most a few
+///    tens of ulps of M per coordinate and B's moved vertices by less (the narrow phase's
+///    rounding), so the balls are padded by 64 ulps of 3 M + r_a + r_b. Infinite radii never reject.
 ///  - Rounding: R = fl(A^T fl(X B)) and t_b = fl(A^T fl(fl(X c_b + t) - c_a)) are within a few
 ///    tens of ulps of 1 and of M = |c_a| + |X c_b + t| + |t| + |c_b| (max norms), so 64 ulps of
 ///    3 M + E on every axis, with obb_overlap's own pad of |R|, cover them.
@@ -44,6 +48,7 @@ template <class S> class ObbPairFrame {
     Mat3<S> axes = Mat3<S>::Zero();    ///< fl(X B)
     Vec3<S> center = Vec3<S>::Zero();  ///< fl(X c_b + t)
     Vec3<S> half = Vec3<S>::Zero();    ///< b's half extents
+    S radius = 0;                      ///< b's ball radius stretched by X's defect (infinite: no ball)
     S m = 0;                           ///< |X c_b + t| + |t| + |c_b| (max norms)
   };
   Image image(const Obb<S>& b) const {
@@ -51,6 +56,7 @@ template <class S> class ObbPairFrame {
     im.axes = x_ * b.axes;
     im.center = x_ * b.center + t_;
     im.half = b.half;
+    im.radius = b.radius * (S(1) + defect_);
     im.m = im.center.cwiseAbs().maxCoeff() + t_.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
     return im;
   }
@@ -61,17 +67,22 @@ template <class S> class ObbPairFrame {
   /// The same test with b's image computed beforehand (image(b)).
   bool overlaps(const Obb<S>& a, const Image& b) const {
     constexpr S eps = std::numeric_limits<S>::epsilon();
+    const Vec3<S> d = b.center - a.center;
+    const S M = a.center.cwiseAbs().maxCoeff() + b.m;
+    {
+      // the balls first (a few operations, and most pairs far apart fail here)
+      const S r = a.radius + b.radius + S(64) * eps * (S(3) * M + a.radius + b.radius);
+      if (d.squaredNorm() > r * r * (S(1) + S(16) * eps)) return false;
+    }
     // R = A^T (X B) and tb = A^T (X c_b + t - c_a), written out (fewer instructions than Eigen's
     // packets on 3-vectors)
     Mat3<S> R;
     Vec3<S> tb;
-    const Vec3<S> d = b.center - a.center;
     for (int i = 0; i < 3; ++i) {
       const S u = a.axes(0, i), v = a.axes(1, i), w = a.axes(2, i);
       for (int j = 0; j < 3; ++j) R(i, j) = u * b.axes(0, j) + v * b.axes(1, j) + w * b.axes(2, j);
       tb[i] = u * d[0] + v * d[1] + w * d[2];
     }
-    const S M = a.center.cwiseAbs().maxCoeff() + b.m;
     const S E = tb.cwiseAbs().sum() + a.half.sum() + b.half.sum();
     const S slack = S(64) * eps * (S(3) * M + E) + S(2) * defect_ * E + std::numeric_limits<S>::denorm_min();
     return obb_overlap<S>(a.half, R, tb, b.half, slack, defect_);
