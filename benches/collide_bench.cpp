@@ -96,6 +96,20 @@ template <class Query> double least_us(int repeat, Query&& query) {
   return best;
 }
 
+/// Records one pose's boolean and all-pairs times for round `round` of --rounds: the first round
+/// appends them (and returns true: the pose's answers are counted then), later rounds only lower
+/// them. Both libraries go through it.
+bool record_times(int round, std::size_t pose, double us_boolean, double us_all, std::vector<double>& tb, std::vector<double>& ta) {
+  if (round > 0) {
+    tb[pose] = std::min(tb[pose], us_boolean);
+    ta[pose] = std::min(ta[pose], us_all);
+    return false;
+  }
+  tb.push_back(us_boolean);
+  ta.push_back(us_all);
+  return true;
+}
+
 struct Row {
   std::string library, bv, query;
   double build_ms = 0;
@@ -169,13 +183,7 @@ int main(int argc, char** argv) {
       const bool hit = res_b[0].isCollision();
       run = 0;
       const double us_a = least_us(args.repeat, [&] { fcl::collide(fa.get(), tf_id, fb.get(), tf[k], all_req, res_a[std::size_t(run++)]); });
-      if (round > 0) {  // later rounds only lower the times
-        tb[k] = std::min(tb[k], us_b);
-        ta[k] = std::min(ta[k], us_a);
-        continue;
-      }
-      tb.push_back(us_b);
-      ta.push_back(us_a);
+      if (!record_times(round, k, us_b, us_a, tb, ta)) continue;  // later rounds only lower the times
       std::set<std::pair<int, int>> ps;
       for (std::size_t c = 0; c < res_a[0].numContacts(); ++c) ps.emplace(res_a[0].getContact(c).b1, res_a[0].getContact(c).b2);
       rb_.colliding += hit;
@@ -223,13 +231,7 @@ int main(int argc, char** argv) {
       const double us_b = least_us(args.repeat, [&] { hit = collides(ma, id, mb, poses[k], &st); });
       CollideResult<double> res;
       const double us_a = least_us(args.repeat, [&] { res = collide(ma, id, mb, poses[k], all); });
-      if (round > 0) {  // later rounds only lower the times
-        tb[k] = std::min(tb[k], us_b);
-        ta[k] = std::min(ta[k], us_a);
-        continue;
-      }
-      tb.push_back(us_b);
-      ta.push_back(us_a);
+      if (!record_times(round, k, us_b, us_a, tb, ta)) continue;  // later rounds only lower the times
       rb_.bv_tests += double(st.bv_tests);
       rb_.tri_tests += double(st.primitive_tests);
       ra_.bv_tests += double(res.stats.bv_tests);
