@@ -25,11 +25,13 @@ struct TwistResult {
   double min_distance = 0;
   std::size_t zones = 0, failsafe_steps = 0;
   std::size_t ccd_tests = 0, collisions = 0;
+  int front_steps = 0;  // steps whose gathering walked on from the last step's front
   std::vector<double> final_x;  // the last positions, row by row
 };
 
 template <class S>
-TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method, int verify_every, int threads = 1) {
+TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method, int verify_every, int threads = 1,
+                      bool walk_from_root = false) {
   using namespace impact;
   auto g = make_grid<S>(n, n, S(1));
   const double h = 0.2 / n, dt = 0.01;
@@ -77,6 +79,8 @@ TwistResult twist_run(int n, int steps, double turns, impact::ZoneMethod method,
         x1.row(a) -= (wa * corr).cast<S>().transpose();
         x1.row(b) += (wb * corr).cast<S>().transpose();
       }
+    if (walk_from_root) ws.system.front.clear();  // the swept tree's self-walk starts from the root
+    res.front_steps += ws.system.front.empty() ? 0 : 1;
     const auto st = cloth_collision_step(g.F, w, x, x1, ClothObstacles<S>{}, opt, &ws);
     res.not_collision_free += st.collision_free ? 0 : 1;
     res.zones += st.zone_count;

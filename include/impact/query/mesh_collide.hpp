@@ -281,25 +281,42 @@ template <class BV> struct MeshNodeOverlap {
 };
 
 /// The walk order of the boolean queries: of two children, the one whose centre is nearer the
-/// other node's centre first (compared in mesh a's frame). A stopped walk reaches a colliding pair
-/// sooner on average (the bunny against itself, SAH OBB trees, 1,000 random poses: 192 -> 95 node
-/// tests for the colliding ones); a walk that finds nothing visits the same node pairs either way.
-/// The first `kFree` node tests keep the tree's order: most queries are decided within a few (the
-/// poses far apart), and they would only pay for the comparisons.
+/// other node's centre first. A stopped walk reaches a colliding pair sooner on average (the bunny
+/// against itself, SAH OBB trees, 1,000 random poses: 192 -> 95 node tests for the colliding ones);
+/// a walk that finds nothing visits the same node pairs either way. A split of a node of A compares
+/// in A's frame, against the other node's centre moved by X (for oriented boxes, the image the
+/// node test has just computed, `overlap`); a split of a node of B compares in B's frame, against
+/// X^T (c_a - t): one product per split, none for the children. A heuristic only: X off a rotation
+/// by rounding changes which child is nearer at ties at most. For spheres and AABBs the first
+/// `kFree` node tests keep the tree's order: most queries are decided within a few (the poses far
+/// apart), and they would only pay for the comparisons. Oriented boxes order every split: their
+/// node test costs several times the comparison (the bunny against itself, 1,000 poses, callgrind:
+/// +86 instructions per query on the 817 free poses, -21,500 on the 183 colliding ones).
 template <class BV> struct NearestChildFirst {
   using S = typename BvTraits<BV>::Scalar;
-  static constexpr std::uint64_t kFree = 8;
+  static constexpr std::uint64_t kFree = MeshNodeOverlap<BV>::kObb ? 0 : 8;
   const RigidTransform<S>& b_to_a;
   const std::uint64_t& tests;  // the query's node tests so far
+  const MeshNodeOverlap<BV>* overlap = nullptr;
   bool right_first_a(const BV& left, const BV& right, const BV& other_b) const {
-    if (tests < kFree) return false;
-    const Vec3<S> c = b_to_a.apply(BvTraits<BV>::center(other_b));
+    if constexpr (kFree > 0) {
+      if (tests < kFree) return false;
+    }
+    Vec3<S> c;
+    if constexpr (MeshNodeOverlap<BV>::kObb) {
+      if (overlap && overlap->imaged_b && &overlap->imaged_b->bv == &other_b) c = overlap->image_b.center;
+      else c = b_to_a.apply(BvTraits<BV>::center(other_b));
+    } else {
+      c = b_to_a.apply(BvTraits<BV>::center(other_b));
+    }
     return (BvTraits<BV>::center(right) - c).squaredNorm() < (BvTraits<BV>::center(left) - c).squaredNorm();
   }
   bool right_first_b(const BV& other_a, const BV& left, const BV& right) const {
-    if (tests < kFree) return false;
-    const Vec3<S> c = BvTraits<BV>::center(other_a);
-    return (b_to_a.apply(BvTraits<BV>::center(right)) - c).squaredNorm() < (b_to_a.apply(BvTraits<BV>::center(left)) - c).squaredNorm();
+    if constexpr (kFree > 0) {
+      if (tests < kFree) return false;
+    }
+    const Vec3<S> c = b_to_a.R.transpose() * (BvTraits<BV>::center(other_a) - b_to_a.t);
+    return (BvTraits<BV>::center(right) - c).squaredNorm() < (BvTraits<BV>::center(left) - c).squaredNorm();
   }
 };
 
@@ -345,7 +362,7 @@ CollideResult<typename BvTraits<BV>::Scalar> collide(const MeshBvh<BV>& a, const
   if (options.all_pairs)
     traverse_pair_nodes(a.tree(), b.tree(), overlap, visit);
   else
-    traverse_pair_nodes(a.tree(), b.tree(), overlap, visit, 0, 0, detail::NearestChildFirst<BV>{b_to_a, result.stats.bv_tests});
+    traverse_pair_nodes(a.tree(), b.tree(), overlap, visit, 0, 0, detail::NearestChildFirst<BV>{b_to_a, result.stats.bv_tests, &overlap});
   return result;
 }
 
@@ -369,7 +386,7 @@ bool collides(const MeshBvh<BV>& a, const RigidTransform<typename BvTraits<BV>::
         hit = triangles_intersect(a.triangle(p), Triangle<S>(b_to_a.apply(tb.a), b_to_a.apply(tb.b), b_to_a.apply(tb.c)));
         return !hit;
       },
-      0, 0, detail::NearestChildFirst<BV>{b_to_a, st.bv_tests});
+      0, 0, detail::NearestChildFirst<BV>{b_to_a, st.bv_tests, &overlap});
   if (stats) *stats = st;
   return hit;
 }

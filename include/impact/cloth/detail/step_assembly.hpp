@@ -92,6 +92,12 @@ void Stepper<S>::assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic,
             static_cast<std::int32_t>(k);
       }
     }
+    sys_.tree_count.assign(nodes.size(), 0);
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+      if (nodes[k].is_leaf())
+        for (std::int32_t a = static_cast<std::int32_t>(k); a >= 0; a = sys_.tree_parent[static_cast<std::size_t>(a)])
+          sys_.tree_count[static_cast<std::size_t>(a)] += nodes[k].count;
+    sys_.front.clear();
   }
   stats_.broad.ms += ms_since(t0);
 }

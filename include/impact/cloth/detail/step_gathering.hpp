@@ -124,12 +124,7 @@ void Stepper<S>::gather() {
   old_tbox_ = tbox_;
   refit_tree();
   cand_.clear();
-  traverse_self(
-      sys_.tree.tree, [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); },
-      [&](std::int32_t fa, std::int32_t fb) {
-        pairs_of(fa, fb, cand_);
-        return true;
-      });
+  self_pairs([&](std::int32_t fa, std::int32_t fb) { pairs_of(fa, fb, cand_); });
   // Per candidate: a lower bound on its distance at x0 (NaN: not known yet), the pass stamp;
   // the vertex -> candidate index is built when first needed.
   d0_.assign(cand_.size(), std::numeric_limits<double>::quiet_NaN());
@@ -258,6 +253,81 @@ void Stepper<S>::grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visi
     }
   }
   for (auto k : marked) mark[std::size_t(k)] = 0;
+}
+
+/// Calls visit(fa, fb) once for every pair of distinct triangles whose leaves' boxes overlap in
+/// the refitted tree, the pairs a walk of the tree against itself finds, in the order of that
+/// walk; the walk starts from where the last step's walk stopped instead of from the root. The
+/// walk is a fixed tree of node pairs: (i, i) splits into (l, l), (r, r), (l, r); (i, j) splits
+/// the node with more triangles (i on a tie) and stops where the boxes do not overlap or both
+/// are leaves. The node pairs where it stopped (the front) cover every pair of distinct
+/// triangles exactly once (each (i, j) the pairs across leaves below i and j, each leaf (i, i)
+/// those within it), and refitting keeps the tree's topology, so walking on from each front pair
+/// in order visits every overlapping leaf pair once, in the order of a walk from the root; the
+/// new front is where this walk stopped. Fronts only deepen: non-overlapping pairs left deep by
+/// motion are walked again from the root once they exceed 1.5 times their share per overlapping
+/// leaf pair in the last walk from the root.
+template <class S>
+template <class Visit>
+void Stepper<S>::self_pairs(Visit&& visit) {
+  const auto& t = sys_.tree.tree;
+  if (t.empty()) return;
+  const auto& cnt = sys_.tree_count;
+  std::vector<std::pair<std::int32_t, std::int32_t>>& front = sys_.front;
+  std::vector<std::pair<std::int32_t, std::int32_t>>& next = sys_.front_next;
+  const bool from_root = front.empty();
+  if (from_root) front.push_back({0, 0});
+  next.clear();
+  next.reserve(front.size() + front.size() / 4);
+  std::size_t apart = 0, leaves = 0;
+  std::vector<std::pair<std::int32_t, std::int32_t>>& stack = pair_stack_;
+  for (const auto& e : front) {
+    stack.clear();
+    stack.push_back(e);
+    while (!stack.empty()) {
+      const std::int32_t i = stack.back().first, j = stack.back().second;
+      stack.pop_back();
+      const auto& ni = t.nodes[std::size_t(i)];
+      if (i == j) {
+        if (ni.is_leaf()) {
+          if (ni.count < 2) continue;  // no pair within it: not kept
+          for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+            for (std::int32_t q = p + 1; q < ni.first + ni.count; ++q) visit(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
+          next.push_back({i, i});
+        } else {
+          stack.push_back({ni.left(), ni.right()});
+          stack.push_back({ni.right(), ni.right()});
+          stack.push_back({ni.left(), ni.left()});
+        }
+        continue;
+      }
+      const auto& nj = t.nodes[std::size_t(j)];
+      if (!overlap(ni.bv, nj.bv)) {
+        next.push_back({i, j});
+        ++apart;
+        continue;
+      }
+      const bool li = ni.is_leaf(), lj = nj.is_leaf();
+      if (li && lj) {
+        for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
+          for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q) visit(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
+        next.push_back({i, j});
+        ++leaves;
+      } else if (lj || (!li && cnt[std::size_t(i)] >= cnt[std::size_t(j)])) {
+        stack.push_back({ni.right(), j});
+        stack.push_back({ni.left(), j});
+      } else {
+        stack.push_back({i, nj.right()});
+        stack.push_back({i, nj.left()});
+      }
+    }
+  }
+  front.swap(next);
+  const double per_leaf = static_cast<double>(apart) / static_cast<double>(std::max<std::size_t>(leaves, 1));
+  if (from_root)
+    sys_.front_apart_per_leaf = per_leaf;
+  else if (per_leaf > 1.5 * sys_.front_apart_per_leaf)
+    front.clear();  // stale: the next gathering walks from the root
 }
 
 /// The envelope of vertex v for the current end position: its swept box, with the slack if it

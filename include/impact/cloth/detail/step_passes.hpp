@@ -109,7 +109,8 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   // Results only for the pairs that ran a test (ran[i]); the buffer is kept between passes.
   if (res_.size() < todo.size()) res_.resize(todo.size());
   CcdResult<S>* res = res_.data();
-  std::vector<std::uint8_t> ran(todo.size(), 0);
+  std::vector<std::uint8_t>& ran = ran_;
+  ran.assign(todo.size(), 0);
   parallel_for(todo.size(), opt_.threads, [&](std::size_t i) {
     const std::size_t c = todo[i];
     if (is_excluded(cand_[c])) return;

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace impact::detail::cloth {
@@ -30,6 +31,19 @@ struct Prim {
   }
 };
 
+/// The broad phase's and the passes' per-step arrays (Stepper's, which sets every one up again in
+/// each step before reading it): kept between steps only for their storage, so that a step at
+/// millions of candidates does not allocate and fault in its arrays afresh.
+template <class S>
+struct StepBuffers {
+  std::vector<Prim> cand;
+  std::vector<Aabb<S>> ebox, gbox, tbox, old_gbox, old_tbox, edge_boxes;
+  std::vector<double> d0, path;
+  std::vector<std::uint8_t> d0_exact, changed, ran;
+  std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo;
+  std::vector<CcdResult<S>> res;
+};
+
 /// Everything kept between steps (in a workspace): combined arrays, the tree.
 template <class S>
 struct System {
@@ -45,12 +59,20 @@ struct System {
   // With the tree: each node's parent (-1 at the root) and each triangle's leaf, for refitting
   // only the leaves whose triangles grew and their ancestors (Stepper::refit_grown).
   std::vector<std::int32_t> tree_parent, tri_leaf;
+  // With the tree: each node's triangle count (the self-walk's fixed split rule) and the walk's
+  // front from the last gathering (Stepper::self_pairs): node pairs where it stopped, in walk
+  // order (empty: walk from the root), with the share of non-overlapping entries of the last walk
+  // from the root, per overlapping leaf pair, for deciding when the front has gone stale.
+  std::vector<std::int32_t> tree_count;
+  std::vector<std::pair<std::int32_t, std::int32_t>> front, front_next;
+  double front_apart_per_leaf = 0;
   // With the faces (Stepper::build_ownership): the vertices (bits 0-2) and edges (bits 3-5) each
   // triangle owns, the vertex -> incident triangles index (CSR), and the faces they were built for.
   std::vector<std::uint8_t> own;
   std::vector<std::uint32_t> vtri_off;
   std::vector<std::int32_t> vtri;
   Faces own_faces;
+  StepBuffers<S> buf;
 };
 
 inline std::string pair_name(const Prim& p) {

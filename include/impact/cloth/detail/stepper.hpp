@@ -100,6 +100,8 @@ class Stepper {
   void refit_grown(const std::vector<std::int32_t>& tris);
   void owned_edge_boxes(std::size_t f);
   template <class Visit>
+  void self_pairs(Visit&& visit);
+  template <class Visit>
   void grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit);
   void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out, bool only_new = false) const;
   bool escaped() const;
@@ -162,30 +164,40 @@ class Stepper {
   S slack_ = S(0);
   S near_inflate_ = S(0), ccd_inflate_ = S(0);  // half the proximity distance, h / 2 (rounded up)
   double broad_acc_ = 0;
-  std::vector<Prim> cand_, excluded_;
-  std::vector<Aabb<S>> ebox_, gbox_, tbox_;  // per vertex: envelope, grown envelope; per triangle
-  std::vector<Aabb<S>> old_gbox_, old_tbox_;  // gbox_, tbox_ before the current re-gathering
-  std::vector<Aabb<S>> edge_boxes_;           // per triangle and edge k: the grown envelope of an owned edge
+  // The large per-step arrays live in the workspace (StepBuffers), set up again in every step.
+  StepBuffers<S>& buf_ = sys_.buf;
+  std::vector<Prim>& cand_ = buf_.cand;
+  std::vector<Prim> excluded_;
+  std::vector<Aabb<S>>& ebox_ = buf_.ebox;  // per vertex: envelope, grown envelope; per triangle
+  std::vector<Aabb<S>>& gbox_ = buf_.gbox;
+  std::vector<Aabb<S>>& tbox_ = buf_.tbox;
+  std::vector<Aabb<S>>& old_gbox_ = buf_.old_gbox;  // gbox_, tbox_ before the current re-gathering
+  std::vector<Aabb<S>>& old_tbox_ = buf_.old_tbox;
+  std::vector<Aabb<S>>& edge_boxes_ = buf_.edge_boxes;  // per triangle and edge k: the grown envelope of an owned edge
   std::vector<std::uint8_t> grown_tri_;       // regather's triangles with a grown vertex (all 0 between calls)
   std::vector<std::uint8_t> grown_node_;      // grown_pairs: tree nodes above such a triangle (all 0 between calls)
   std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // grown_pairs walk
-  std::vector<double> d0_;                   // per candidate: a lower bound on its distance at x0
-  std::vector<std::uint8_t> d0_exact_;       // ... which is the exact distance (in double)
-  std::vector<std::uint32_t> stamp_, inc_off_, inc_, inc_fill_;
+  std::vector<double>& d0_ = buf_.d0;              // per candidate: a lower bound on its distance at x0
+  std::vector<std::uint8_t>& d0_exact_ = buf_.d0_exact;  // ... which is the exact distance (in double)
+  std::vector<std::uint32_t>& stamp_ = buf_.stamp;
+  std::vector<std::uint32_t>& inc_off_ = buf_.inc_off;
+  std::vector<std::uint32_t>& inc_ = buf_.inc;
+  std::vector<std::uint32_t>& inc_fill_ = buf_.inc_fill;
   std::size_t inc_n_ = 0;  // candidates covered by the vertex -> candidate index
   std::uint32_t stamp_now_ = 0;
   std::vector<Near> near_;
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
   std::vector<Hit> last_hits_;
-  std::vector<CcdResult<S>> res_;  // test_changed's buffers, kept between passes
-  std::vector<std::uint32_t> todo_;
-  std::vector<std::uint8_t> changed_;
+  std::vector<CcdResult<S>>& res_ = buf_.res;  // test_changed's buffers
+  std::vector<std::uint32_t>& todo_ = buf_.todo;
+  std::vector<std::uint8_t>& ran_ = buf_.ran;
+  std::vector<std::uint8_t>& changed_ = buf_.changed;
   // Proofs kept across the passes of a step (note_moves, kept): per vertex, the path length of its
   // end position over the step's passes and the end positions at the last pass; per candidate,
   // the key below which the sum of its vertices' path lengths keeps its last proof valid (< 0:
   // none).
-  std::vector<double> path_;
+  std::vector<double>& path_ = buf_.path;
   Vertices<S> x1_seen_;
   std::vector<double> key_;
   int moves_noted_ = 0;
