@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -372,6 +373,17 @@ TEST(ConvexQuery, EpaFromGjkTetrahedronAgreesWithItsOwnGjk) {
       EXPECT_NEAR(overlap_along(a, pa, b, pb, handed.normal), handed.depth, 1e-12 * scale) << name;
       EXPECT_NEAR(handed.normal.dot(handed.point_a()), handed.normal.dot(support(a, pa, handed.normal)), 1e-9 * scale) << name;
       EXPECT_NEAR(handed.normal.dot(handed.point_b()), handed.normal.dot(support(b, pb, V3(-handed.normal))), 1e-9 * scale) << name;
+      // seeded with a direction (the answer's, in a's frame, or any): the same bracket, the seed
+      // only an upper bound to start from
+      for (const V3& dir : {V3(pa.R.transpose() * fresh.normal), V3(V3(0.3, -0.8, 0.5).normalized())}) {
+        const auto seeded = detail::general_penetration<double>(a, pa, b, pb, ConvexQueryOptions<double>(), nullptr, 0,
+                                                                detail::NoLocalCertificate{}, &dir);
+        ASSERT_TRUE(seeded.intersecting) << name;
+        EXPECT_LE(seeded.depth_gap, tol) << name;
+        EXPECT_LE(seeded.depth, fresh.depth + tol) << name;
+        EXPECT_GE(seeded.depth, fresh.depth - fresh.depth_gap - tol) << name;
+        EXPECT_NEAR(overlap_along(a, pa, b, pb, seeded.normal), seeded.depth, 1e-12 * scale) << name;
+      }
     }
   };
   run("cylinder-cylinder", z.cylinder, z.cylinder, 71);
@@ -427,6 +439,36 @@ TEST(ConvexQuery, CylinderPairsSeparatedAlongTheCentreLine) {
   const auto c = convex_penetration(z.cylinder, pa, z.cylinder, far);
   EXPECT_FALSE(c.intersecting);
   EXPECT_EQ(c.iterations, 1);
+}
+
+// The cylinder pairs' skip of a rim candidate (detail::circle_clear_of_cylinder) against samples of
+// the circle: a circle said to be clear has no sample strictly inside the cylinder, and circles
+// near, through and around it are said clear often enough to matter.
+TEST(ConvexQuery, CircleClearOfCylinderNeverSkipsAPointInside) {
+  test::Rng rng(93);
+  const double radius = 0.4, half = 0.5, margin = 1e-12;
+  int clear = 0, inside = 0;
+  for (int trial = 0; trial < (IMPACT_TEST_SANITIZED ? 300 : 3000); ++trial) {
+    const V3 c = rng.vec(-1.2, 1.2), n = rng.vec(-1, 1).normalized();
+    const double r = rng.uniform(0.05, 0.8);
+    const V3 u = detail::any_orthogonal(n), v = n.cross(u);
+    bool any_inside = false;
+    for (int k = 0; k < 720 && !any_inside; ++k) {
+      const double phi = 2 * 3.141592653589793 * k / 720;
+      const V3 x = c + r * (std::cos(phi) * u + std::sin(phi) * v);
+      any_inside = std::hypot(x.x(), x.y()) < radius - 1e-9 && std::abs(x.z()) < half - 1e-9;
+    }
+    const bool said_clear = detail::circle_clear_of_cylinder(c, r, n, radius, half, margin);
+    clear += said_clear;
+    inside += any_inside;
+    ASSERT_FALSE(said_clear && any_inside) << "trial " << trial;
+    ASSERT_EQ(detail::circle_clear_of_cylinder(Eigen::Vector3f(c.cast<float>()), float(r), Eigen::Vector3f(n.cast<float>()), 0.4f, 0.5f,
+                                               1e-5f) && any_inside,
+              false)
+        << "float, trial " << trial;
+  }
+  EXPECT_GE(clear, IMPACT_TEST_SANITIZED ? 30 : 300);
+  EXPECT_GE(inside, IMPACT_TEST_SANITIZED ? 30 : 300);
 }
 
 // The closest-face scan of EPA (the SSE2 path for double, the scalar one for float) against a plain

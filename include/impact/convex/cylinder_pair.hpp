@@ -94,6 +94,19 @@ inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v
   sin_phi = si;
 }
 
+/// Whether no point of the circle about c (radius r, its plane's unit normal n) lies strictly
+/// inside the cylinder of radius `radius` and half length `half` about the z axis (by more than
+/// `margin`): every point's distance to the axis is at least |c_xy| - r and its height within
+/// r sqrt(1 - n_z^2) of c_z. Then a candidate at the circle's point has no ball inside that
+/// cylinder (nor inside a cone it bounds) and is skipped without minimising over the circle.
+template <class S>
+inline bool circle_clear_of_cylinder(const Vec3<S>& c, S r, const Vec3<S>& n, S radius, S half, S margin) {
+  const S cxy = std::sqrt(c.x() * c.x() + c.y() * c.y());
+  if (cxy - r >= radius + margin) return true;
+  const S zr = r * std::sqrt(std::max(S(1) - n.z() * n.z(), S(0)));
+  return std::abs(c.z()) - zr >= half + margin;
+}
+
 /// The bounds the candidates give: the least overlap with its direction and point, the largest
 /// certified lower bound.
 template <class S>
@@ -152,7 +165,8 @@ S two_balls_lower(const A& a, const B& b, const InB& in_b, const Vec3<S>& ca, S 
 template <class S>
 bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
                            ConvexContact<S>& out) {
-  const Vec3<S> bz = R.col(2);
+  const Vec3<S> bz = R.col(2), az_in_b = R.row(2).transpose();
+  const S margin = std::numeric_limits<S>::epsilon() * S(1024) * (a.radius + a.half_length + b.radius + b.half_length + t.norm());
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
   const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
   const auto in_b = [&](const Vec3<S>& x) { return Vec3<S>(R.transpose() * (x - t)); };
@@ -190,6 +204,7 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
   const auto rims_of_b = [&] {
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> c = t + s * b.half_length * bz, u = b.radius * R.col(0), v = b.radius * R.col(1);
+      if (circle_clear_of_cylinder(c, b.radius, bz, a.radius, a.half_length, margin)) continue;
       S co, si;
       circle_minimise(c, u, v, S(1), S(0), a.half_length, co, si);
       const Vec3<S> x = c + co * u + si * v;
@@ -202,6 +217,7 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
   const auto rims_of_a = [&] {
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> c = in_b(Vec3<S>(S(0), S(0), s * a.half_length));
+      if (circle_clear_of_cylinder(c, a.radius, az_in_b, b.radius, b.half_length, margin)) continue;
       const Vec3<S> u = a.radius * R.row(0).transpose(), v = a.radius * R.row(1).transpose();
       S co, si;
       circle_minimise(c, u, v, S(1), S(0), b.half_length, co, si);
@@ -229,8 +245,9 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
 template <class S>
 bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
                            ConvexContact<S>& out) {
-  const Vec3<S> bz = R.col(2);
+  const Vec3<S> bz = R.col(2), az_in_b = R.row(2).transpose();
   const S rc = b.radius, hc = b.half_length, len = std::sqrt(S(4) * hc * hc + rc * rc);
+  const S margin = std::numeric_limits<S>::epsilon() * S(1024) * (a.radius + a.half_length + rc + hc + t.norm());
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
   const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
   const auto in_b = [&](const Vec3<S>& x) { return Vec3<S>(R.transpose() * (x - t)); };
@@ -287,6 +304,7 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
   };
   const auto base_rim = [&] {  // b's base rim against a's ruling: the rim point nearest a's axis
     const Vec3<S> c = t - hc * bz, u = rc * R.col(0), v = rc * R.col(1);
+    if (circle_clear_of_cylinder(c, rc, bz, a.radius, a.half_length, margin)) return;
     S co, si;
     circle_minimise(c, u, v, S(1), S(0), a.half_length, co, si);
     radial_push(Vec3<S>(c + co * u + si * v));
@@ -294,6 +312,7 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
   const auto rims_of_a = [&] {  // b's side against a's rims: the rim point deepest below it
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> c = in_b(Vec3<S>(S(0), S(0), s * a.half_length));
+      if (circle_clear_of_cylinder(c, a.radius, az_in_b, rc, hc, margin)) continue;  // b's bounding cylinder
       const Vec3<S> u = a.radius * R.row(0).transpose(), v = a.radius * R.row(1).transpose();
       S co, si;
       circle_minimise(c, u, v, S(2) * hc, rc, hc, co, si);

@@ -82,6 +82,10 @@ struct EpaSettings {
   S scale = S(1);                 ///< the shapes' size: FD steps and jump thresholds are relative to it
   int max_iterations = 128;       ///< support calls per shape in all
   bool refine = false;            ///< curved shapes: Newton after EPA's coarse stop (see the file comment)
+  /// epa_penetration_local: evaluate f at the unit direction `seed` first (one support call), an
+  /// upper bound to start from and the local certificate's first start (e.g. a candidate's normal)
+  bool seeded = false;
+  Vec3<S> seed = Vec3<S>::UnitZ();
 };
 
 namespace detail {
@@ -441,6 +445,14 @@ EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const Support
       (void)stop_gap;
     }
   };
+
+  if (st.seeded) {  // a direction known to overlap little: its overlap is an upper bound to start from
+    const SimplexPoint<S> p = supp(st.seed);
+    upper = st.seed.dot(p.w);
+    best_n = st.seed;
+    best_a = p.a;
+    best_b = p.b;
+  }
 
   // EPA until upper - lower <= stop_gap; returns false when it ended without reaching it (bound,
   // capacity or a degenerate step: `limit` / `failed` say which; no progress possible counts as reached).

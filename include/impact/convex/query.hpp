@@ -322,7 +322,7 @@ inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_
 template <class S, class SupportA, class SupportB, class Local = NoLocalCertificate>
 ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& la, const Vec3<S>& lb, S scale,
                                   const ConvexQueryOptions<S>& o, bool refine, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                                  int simplex_calls = 0, const Local& local = Local{}) {
+                                  int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
   const Vec3<S> origin = (la + lb) / S(2);
   const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support_a(d) - origin); };
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support_b(d) - origin); };
@@ -332,6 +332,10 @@ ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& sup
   st.coarse_tolerance = S(1e-3) * scale;
   st.max_iterations = o.max_iterations;
   st.refine = refine;
+  if (seed) {
+    st.seeded = true;
+    st.seed = *seed;
+  }
   EpaPenetration<S> r;
   if (simplex) {
     SimplexPoint<S> moved[4];  // into the frame centred at `origin` (w = a - b is unchanged)
@@ -360,12 +364,12 @@ ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& sup
 template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                          const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                         int simplex_calls = 0, const Local& local = Local{}) {
+                         int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
   const PairFrame<S> f(pa, pb);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
-  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed, simplex, simplex_calls, local);
+  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed, simplex, simplex_calls, local, seed);
   if (!c.intersecting) return c;
   c.normal = pa.rotate(c.normal);
   c.point = pa.apply(c.point);
@@ -377,11 +381,11 @@ ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>&
 template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                      const ConvexQueryOptions<S>& o, const SimplexPoint<S>* simplex = nullptr, int simplex_calls = 0,
-                                     const Local& local = Local{}) {
+                                     const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
   if (!o.libccd_penetration) {
     bool failed = false;
     ConvexContact<S> c =
-        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local);
+        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local, seed);
     if (!failed) {
       if (c.intersecting) settle_certified_contact(a, pa, b, pb, c);
       return c;
@@ -464,23 +468,19 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
         const LocalCertificate<S> lc = local_certificate(terms, m);
         if (exact(lc)) return lc;
       }
-      // else (a's rim or ruling against b's side) the body moved to the ruling of the minimiser
-      // found, round by round (each moves about half-way)
-      m = n;
-      for (int round = 0; round < 8; ++round) {
-        if (!cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) break;
-        const LocalCertificate<S> lc = local_certificate(terms, m);
-        if (!lc.ok) break;
-        if (exact(lc)) return lc;
-        m = lc.normal;
-      }
+      // else (a's rim or ruling against b's side) no certificate: moving the body round by round
+      // to the ruling of the minimiser found (up to 8 rounds) certified 9 of the 88 queries that got
+      // this far on the bench's 2000 poses at 226 certificate evaluations, more than it saved
       return LocalCertificate<S>();
     } else {
       return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
     }
   };
-  ConvexContact<S> g =
-      o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local) : general_penetration(a, pa, b, pb, o, simplex, its);
+  // EPA evaluates the best candidate's direction first (an upper bound near the answer, and the
+  // local certificate's first start)
+  const Vec3<S>* seed = c.depth < std::numeric_limits<S>::infinity() ? &c.normal : nullptr;
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
   g.iterations += 1 + c.iterations;
   return g;
 }
@@ -543,7 +543,9 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local) : general_penetration(a, pa, b, pb, o, simplex, its);
+  const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;  // as for cylinder pairs
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
   g.iterations += cand.iterations;
   return g;
 }
