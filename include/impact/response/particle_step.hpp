@@ -80,8 +80,9 @@ template <class S> struct StepOptions {
   /// bounds of the distance to every collider (free_ball_at): exact for planes, spheres and boxes,
   /// in O(1) from a mesh's distance grid when it has one (MeshCollider::distance_grid), else from
   /// the mesh's tree, at most free_ball_factor times the leg's length. With grids on every mesh the
-  /// ball is first sought around the leg's end (it then also holds the legs that follow), else
-  /// around its start; a leg is also clear of the meshes, or of the other colliders, when their
+  /// ball is first sought near the leg's end (around the centre of the grid cell holding it, the
+  /// largest ball that cell's bound gives; it then also holds the legs that follow), else around
+  /// its start; a leg is also clear of the meshes, or of the other colliders, when their
   /// balls around both of its ends (and, for grids, its midpoint) cover it. Legs inside the ball
   /// skip every collision test. Conservative (a test is skipped only when no surface is within
   /// the leg's reach); 0 disables it.
@@ -163,12 +164,21 @@ inline void first_hit_one(const C& c, int index, const Vec3<S>& x, const Vec3<S>
 template <class C> struct IsMeshCollider : std::false_type {};
 template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 
+/// The point x in the frame of pose P, for distance bounds (free balls): x itself when every
+/// static backtracking collider's pose is the identity (StepContext::identity_poses), where the
+/// product would only turn some zeros' signs.
+template <class S> inline Vec3<S> bound_frame(const RigidTransform<S>& P, const Vec3<S>& x, bool identity) {
+  if (identity) return x;
+  return P.R.transpose() * (x - P.t);
+}
+
 /// A free ball around a centre: the radii within which the centre of a particle of the given
 /// radius stays clear of the meshes and of the other backtracking colliders.
 template <class S> struct FreeBallRefresh {
-  bool cheap = true;      ///< every mesh had a grid (the radii came in O(1))
-  S mesh_radius = S(0);   ///< clear of every backtracking mesh
-  S other_radius = S(0);  ///< clear of every backtracking plane, sphere and box
+  bool cheap = true;                 ///< every mesh had a grid (the radii came in O(1))
+  Vec3<S> center = Vec3<S>::Zero();  ///< the balls' centre
+  S mesh_radius = S(0);              ///< clear of every backtracking mesh
+  S other_radius = S(0);             ///< clear of every backtracking plane, sphere and box
 };
 
 /// The free ball around x, for a leg of length len of a particle of the given radius, clear of
@@ -178,16 +188,19 @@ template <class S> struct FreeBallRefresh {
 /// free_ball_factor * len and is a cheap lower bound of the distance: the walk descends only
 /// into nodes whose box contains x; any other node bounds its triangles by its box's distance,
 /// and the leaves that contain x give exact triangle distances. Conservative, O(depth) per mesh.
+/// A mesh collider `known` of the set, when given, is bounded by known_bound instead (a lower
+/// bound of the distance from x to it that the caller has already).
 template <class S, class BV, class... X>
 inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV, X...>& colliders,
-                                       const StepOptions<S>& opt) {
+                                       const StepOptions<S>& opt, const MeshCollider<BV>* known = nullptr,
+                                       S known_bound = std::numeric_limits<S>::infinity(), bool identity = false) {
   FreeBallRefresh<S> out;
+  out.center = x;
   const S eps = std::numeric_limits<S>::epsilon();
-  S R = std::numeric_limits<S>::infinity();  // bound on the distance of the centre to any mesh
+  S R = known_bound;  // bound on the distance of the centre to any mesh (`known`'s given)
   for (const auto& c : colliders.meshes) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
-    const RigidTransform<S>& P = c.motion.pose;
-    const Vec3<S> q = P.R.transpose() * (x - P.t);
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack || &c == known) continue;
+    const Vec3<S> q = bound_frame(c.motion.pose, x, identity);
     if (c.distance_grid) {
       R = std::min(R, c.distance_grid->lower_bound(q));
       continue;
@@ -220,8 +233,7 @@ inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const 
   S Ro = std::numeric_limits<S>::infinity();  // the same for planes, spheres and boxes
   auto simple = [&](const auto& c) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) return;
-    const RigidTransform<S>& P = c.motion.pose;
-    const Vec3<S> q = P.R.transpose() * (x - P.t);
+    const Vec3<S> q = bound_frame(c.motion.pose, x, identity);
     Ro = std::min(Ro, c.clearance(q) * (S(1) - S(64) * eps) - S(64) * eps * (q.cwiseAbs().maxCoeff() + c.scale()));
   };
   for (const auto& c : colliders.planes) simple(c);
@@ -238,13 +250,49 @@ inline S clear_radius(const FreeBallRefresh<S>& f) {
   return std::min(f.mesh_radius, f.other_radius);
 }
 
+/// A free ball holding x, from the distance grids (every backtracking mesh has one): the ball
+/// around the centre of the grid cell holding x (of the first such mesh, mapped to the world),
+/// when it holds x, else the ball around x. A grid's bound at a point is its cell's value less
+/// the distance to the cell's centre, so the ball around the centre holds the ball around any
+/// point of the cell that its bound would give (for the meshes; the planes, spheres and boxes are
+/// measured at the centre too): a larger ball, which more of the legs that follow stay in.
+template <class S, class BV, class... X>
+inline FreeBallRefresh<S> free_ball_near(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV, X...>& colliders,
+                                         const StepOptions<S>& opt, bool identity = false) {
+  for (const auto& c : colliders.meshes) {
+    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack || !c.distance_grid) continue;
+    const RigidTransform<S>& P = c.motion.pose;
+    S bound = S(0);
+    const Vec3<S> centre = c.distance_grid->cell_bound(bound_frame(P, x, identity), bound);
+    const Vec3<S> m = identity ? centre : P.apply(centre);
+    if (m == x) break;
+    // the bound at m: the one at the cell's centre when m maps back onto it (exactly, as under
+    // the identity), else the grid's bound at the point m maps to
+    const Vec3<S> qm = bound_frame(P, m, identity);
+    const FreeBallRefresh<S> f =
+        free_ball_at(m, len, radius, colliders, opt, &c, qm == centre ? bound : c.distance_grid->lower_bound(qm), identity);
+    const S r = clear_radius(f);
+    if ((x - m).squaredNorm() <= r * r) return f;
+    break;
+  }
+  return free_ball_at(x, len, radius, colliders, opt, static_cast<const MeshCollider<BV>*>(nullptr), std::numeric_limits<S>::infinity(), identity);
+}
+
+/// The radius of a ball around y that the ball (center, r) holds (0 when it does not hold y):
+/// r less the distance, less its rounding.
+template <class S> inline S radius_within(const Vec3<S>& y, const Vec3<S>& center, S r) {
+  const S eps = std::numeric_limits<S>::epsilon();
+  const S q = r - (y - center).norm() * (S(1) + S(8) * eps) - S(8) * eps * (y.cwiseAbs().maxCoeff() + center.cwiseAbs().maxCoeff());
+  return q > S(0) ? q : S(0);
+}
+
 /// True when every static backtracking mesh (each with a distance grid) provably keeps the
 /// segment x -> e clear, given clear radii rx and re for the meshes at both ends (balls of
 /// centres clear of every mesh): the two balls cover the segment (their radii add up to its
 /// length), or the ball around the midpoint bridges the gap between them.
 template <class S, class BV, class... X>
 inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, S len, S radius,
-                                const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt) {
+                                const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt, bool identity = false) {
   const S margin = S(64) * std::numeric_limits<S>::epsilon() * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
   if (rx + re >= len + margin) return true;
   if (!(rx > S(0) && re > S(0))) return false;
@@ -252,8 +300,7 @@ inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, 
   for (const auto& c : colliders.meshes) {
     if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
     if (!c.distance_grid) return false;
-    const RigidTransform<S>& P = c.motion.pose;
-    const S rm = c.distance_grid->lower_bound(P.R.transpose() * (m - P.t)) - radius;
+    const S rm = c.distance_grid->lower_bound(bound_frame(c.motion.pose, m, identity)) - radius;
     if (!(rx + rm >= len / S(2) + margin && rm + re >= len / S(2) + margin)) return false;
   }
   return true;
@@ -301,6 +348,7 @@ template <class S> struct StepContext {
   bool use_free_ball = false;  ///< the free-ball cache is in use
   bool any_projection = false;  ///< some collider uses projection
   bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
+  bool identity_poses = false;  ///< every backtracking collider's pose is exactly the identity
   template <class BV, class... X> StepContext(const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
     rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
     moving = colliders.any_moving();
@@ -310,6 +358,11 @@ template <class S> struct StepContext {
     all_grids = true;
     for (const auto& c : colliders.meshes)
       if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !c.distance_grid) all_grids = false;
+    identity_poses = true;
+    colliders.for_each([&](const auto& c, int) {
+      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !(c.motion.pose.R == Mat3<S>::Identity() && c.motion.pose.t == Vec3<S>::Zero()))
+        identity_poses = false;
+    });
   }
 };
 
@@ -345,35 +398,35 @@ LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, c
                            const StepOptions<S>& opt, const StepContext<S>& ctx) {
   LegClearance c;
   const Vec3<S> e = x + d;
-  const S R2 = p.free_radius * p.free_radius;
-  auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= R2; };
+  auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= p.free_radius * p.free_radius; };
   if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
     c.all = true;
   } else if (p.free_radius < S(0) && in_ball(x)) {
     // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
   } else {
     const S len = d.norm();
-    const S e2 = (e - x).squaredNorm();
-    // The ball around x is the particle's own when it is centred there (the last leg ended at
-    // its end ball); both of its radii are then at least free_radius.
-    const bool own_at_x = p.free_radius >= S(0) && p.free_center == x;
-    S rx_mesh = own_at_x ? p.free_radius : S(0), rx_other = rx_mesh;
-    // First a ball around the leg's end (it holds the next legs too) when the grids make it
-    // O(1); else, or when it does not reach back to x, a ball around x.
+    // The particle's own ball around x (trees: centred there, found where the last leg ended;
+    // grids: holding x, usually found where the last leg ended): both of its radii around x are
+    // then at least free_radius less the distance to its centre.
+    const bool own_at_x = p.free_radius >= S(0) && (p.free_center == x || (ctx.all_grids && in_ball(x)));
+    S rx_mesh = own_at_x ? (p.free_center == x ? p.free_radius : radius_within(x, p.free_center, p.free_radius)) : S(0);
+    S rx_other = rx_mesh;
+    // First a ball near the leg's end (it holds the next legs too) when the grids make it O(1);
+    // else, or when it does not hold the leg, a ball around x.
     FreeBallRefresh<S> fe;
     fe.cheap = false;
     if (ctx.all_grids) {
-      fe = detail::free_ball_at(e, len, p.radius, colliders, opt);
-      p.free_center = e;  // where the next leg starts, unless this one is hit
+      fe = detail::free_ball_near(e, len, p.radius, colliders, opt, ctx.identity_poses);
+      p.free_center = fe.center;  // near where the next leg starts, unless this one is hit
       p.free_radius = detail::clear_radius(fe);
-      c.all = e2 <= p.free_radius * p.free_radius;
+      c.all = in_ball(x) && in_ball(e);
     }
     if (!c.all && !own_at_x) {
-      const auto fx = detail::free_ball_at(x, len, p.radius, colliders, opt);
+      const auto fx = detail::free_ball_at(x, len, p.radius, colliders, opt, static_cast<const MeshCollider<BV>*>(nullptr), std::numeric_limits<S>::infinity(), ctx.identity_poses);
       rx_mesh = fx.mesh_radius;
       rx_other = fx.other_radius;
       const S rx = detail::clear_radius(fx);
-      c.all = e2 <= rx * rx;
+      c.all = (e - x).squaredNorm() <= rx * rx;
       if (!fe.cheap) {
         p.free_center = x;
         p.free_radius = rx;
@@ -384,9 +437,11 @@ LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, c
     if (!c.all) {
       // the meshes, or the rest, alone may still be clear: the ball at x, or (grids) the balls
       // at both ends and the midpoint
-      c.meshes = e2 <= rx_mesh * rx_mesh ||
-                 (fe.cheap && detail::grids_clear_segment(rx_mesh, fe.mesh_radius, x, e, len, p.radius, colliders, opt));
-      c.others = e2 <= rx_other * rx_other || (fe.cheap && rx_other + fe.other_radius >= len);
+      const S e2 = (e - x).squaredNorm();
+      const S re_mesh = fe.cheap ? radius_within(e, fe.center, fe.mesh_radius) : S(0);
+      const S re_other = fe.cheap ? radius_within(e, fe.center, fe.other_radius) : S(0);
+      c.meshes = e2 <= rx_mesh * rx_mesh || (fe.cheap && detail::grids_clear_segment(rx_mesh, re_mesh, x, e, len, p.radius, colliders, opt, ctx.identity_poses));
+      c.others = e2 <= rx_other * rx_other || (fe.cheap && rx_other + re_other >= len);
     }
   }
   return c;
