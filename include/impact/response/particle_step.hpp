@@ -444,21 +444,36 @@ template <class S> struct StepContext {
   }
 };
 
+/// What free_flight needs of a step, computed once per call (the per-particle loop then reads
+/// no options): whether free flights are possible at all, the step's displacement and velocity
+/// change under gravity (the same products step_particle_in computes), the collider digest.
+template <class S> struct FreeFlightStep {
+  bool possible = false;
+  S dt = S(0);
+  Vec3<S> half_g_dt2 = Vec3<S>::Zero();  ///< (dt^2 / 2) g
+  Vec3<S> g_dt = Vec3<S>::Zero();        ///< g dt
+  std::uint64_t set_key = 0;
+  FreeFlightStep(S dt_, const StepOptions<S>& opt, const StepContext<S>& ctx)
+      : possible(ctx.use_free_ball && !ctx.any_projection && opt.max_iterations > 0 && dt_ > S(0)),
+        dt(dt_),
+        half_g_dt2((dt_ * dt_ / S(2)) * opt.gravity),
+        g_dt(opt.gravity * dt_),
+        set_key(ctx.ball_key) {}
+};
+
 /// The step of a particle whose whole flight stays inside its free ball: exactly what
 /// step_particle_in does on that path (one all-clear leg), without its set-up. Returns false, with
 /// the particle untouched, when the full step is needed.
 template <class S>
-inline bool free_flight(Particle<S>& p, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx) {
-  if (!ctx.use_free_ball || ctx.any_projection || !(p.free_radius > S(0)) || opt.max_iterations <= 0 || !(dt > S(0)) ||
-      p.free_key != particle_ball_key(ctx.ball_key, p.radius))
-    return false;
-  const Vec3<S> d = p.velocity * dt + (dt * dt / S(2)) * opt.gravity;
+inline bool free_flight(Particle<S>& p, const FreeFlightStep<S>& f) {
+  if (!f.possible || !(p.free_radius > S(0)) || p.free_key != particle_ball_key(f.set_key, p.radius)) return false;
+  const Vec3<S> d = p.velocity * f.dt + f.half_g_dt2;
   if (d.squaredNorm() == S(0)) return false;
   const S R2 = p.free_radius * p.free_radius;
   const Vec3<S> e = p.position + d;
   if (!((p.position - p.free_center).squaredNorm() <= R2 && (e - p.free_center).squaredNorm() <= R2)) return false;
   p.position = e;
-  p.velocity += opt.gravity * dt;
+  p.velocity += f.g_dt;
   return true;
 }
 
@@ -824,11 +839,12 @@ StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<
   colliders.validate("step_particles");
   detail::validate_particles(particles, dt, "step_particles");
   const detail::StepContext<S> ctx(colliders, dt, opt);
+  const detail::FreeFlightStep<S> flight(dt, opt, ctx);
   const auto run = [&](std::size_t begin, std::size_t end) {
     StepStats st;
     detail::NoLegObserver none;
     for (std::size_t i = begin; i < end; ++i) {
-      if (detail::free_flight(particles[i], dt, opt, ctx)) continue;
+      if (detail::free_flight(particles[i], flight)) continue;
       st += detail::step_particle_in(particles[i], colliders, dt, opt, ctx, none);
     }
     return st;
