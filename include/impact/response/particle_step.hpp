@@ -182,6 +182,30 @@ template <class S> struct FreeBallRefresh {
   S other_radius = S(0);             ///< clear of every backtracking plane, sphere and box
 };
 
+/// min(R, a lower bound of the distance from the local point q to the mesh of c), from its tree:
+/// the walk descends only into nodes whose box contains q; any other node bounds its triangles by
+/// its box's distance, and the leaves that contain q give exact triangle distances. Out of line
+/// (free_ball_at, small without it, is inlined into the grids' refreshes).
+template <class BV, class S>
+IMPACT_NOINLINE S tree_distance_bound(const MeshCollider<BV>& c, const Vec3<S>& q, S R) {
+  traverse(
+      c.mesh->tree(),
+      [&](const BV& bv) {
+        const S d2 = squared_distance_to_bv(q, bv);
+        if (d2 >= R * R) return false;
+        if (d2 > S(0)) {
+          R = std::sqrt(d2);
+          return false;
+        }
+        return true;
+      },
+      [&](std::int32_t k) {
+        R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
+        return true;
+      });
+  return R;
+}
+
 /// The free ball around x, for a leg of length len of a particle of the given radius, clear of
 /// every backtracking collider (all static here). Planes, spheres and boxes give their exact
 /// clearance (shrunk for rounding). A mesh with a distance grid (MeshCollider::distance_grid)
@@ -207,22 +231,7 @@ inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const 
       continue;
     }
     out.cheap = false;
-    R = std::min(R, opt.free_ball_factor * len + radius);
-    traverse(
-        c.mesh->tree(),
-        [&](const BV& bv) {
-          const S d2 = squared_distance_to_bv(q, bv);
-          if (d2 >= R * R) return false;
-          if (d2 > S(0)) {
-            R = std::sqrt(d2);
-            return false;
-          }
-          return true;
-        },
-        [&](std::int32_t k) {
-          R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
-          return true;
-        });
+    R = tree_distance_bound(c, q, std::min(R, opt.free_ball_factor * len + radius));
   }
   // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
   const S x_margin = S(64) * eps * x.cwiseAbs().maxCoeff();
