@@ -51,12 +51,24 @@ struct HullFace {
   S offset = S(0);
 };
 
+/// An edge between two faces of a hull (edges inside a merged polygon are left out): its vertices,
+/// v0 -> v1 counter-clockwise in face f0 (so v1 -> v0 in f1). The separating-axis test
+/// (convex/polytope_sat.hpp) reads the arc from f0's normal to f1's on the Gauss map.
+struct HullEdge {
+  int v0 = 0, v1 = 0;
+  int f0 = 0, f1 = 0;
+};
+
 /// A convex hull, in its own frame (a RigidTransform places it). Build with convex_hull().
 template <class S>
 struct ConvexHull {
   Vertices<S> vertices;           ///< the hull's vertices (input points), one per row
   Faces triangles;                ///< outward (counter-clockwise seen from outside) triangles
   std::vector<HullFace<S>> faces; ///< the triangles merged into convex polygons
+  std::vector<HullEdge> edges;    ///< each edge between two different faces once
+  /// The faces' planes by component, for loops over every face: normal x of each face, then
+  /// normal y, normal z, offset (4 blocks of faces.size() values).
+  std::vector<S> face_planes;
   Vec3<S> centroid = Vec3<S>::Zero();  ///< mean of the vertices (an interior point)
   S size = S(0);                  ///< largest distance from centroid to a vertex
   /// The hull's edges as vertex adjacency in compressed rows, for support()'s hill climb: the
@@ -423,6 +435,22 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     for (int v : f.vertices) off = std::max(off, f.normal.dot(h.vertices.row(v).transpose()));
     f.offset = off;
   }
+  const std::size_t nf = h.faces.size();
+  h.face_planes.resize(4 * nf);
+  for (std::size_t i = 0; i < nf; ++i) {
+    for (int k = 0; k < 3; ++k) h.face_planes[static_cast<std::size_t>(k) * nf + i] = h.faces[i].normal[k];
+    h.face_planes[3 * nf + i] = h.faces[i].offset;
+  }
+  // The edges between two faces, each once (from the triangle where it runs upwards in index).
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int u = h.triangles(t, k), v = h.triangles(t, (k + 1) % 3);
+      if (u > v) continue;
+      const auto it = edge_tri.find(key(v, u));
+      if (it == edge_tri.end()) continue;
+      const int f0 = group_face[find(static_cast<int>(t))], f1 = group_face[find(it->second)];
+      if (f0 != f1) h.edges.push_back(HullEdge{u, v, f0, f1});
+    }
   return h;
 }
 

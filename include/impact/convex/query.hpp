@@ -23,6 +23,11 @@
 ///                                     against a cylinder by convex/segment_cylinder.hpp); when the
 ///                                     core itself meets the other shape: the own EPA on the core,
 ///                                     plus the radius
+///   box – hull                        penetration: separating axes (convex/polytope_sat.hpp) for
+///                                     hulls of up to 128 faces, else as the other pairs;
+///   hull – hull                       penetration: the line between the centres (apart: done),
+///                                     then as the other pairs;
+///                                     boolean and distance as the other pairs below
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: cylinder against cylinder
 ///                                     or cone first through the certified candidates of
@@ -51,6 +56,7 @@
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_pair.hpp"
 #include "impact/convex/epa.hpp"
+#include "impact/convex/polytope_sat.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
 #include "impact/convex/local_certificate.hpp"
@@ -688,6 +694,12 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration) return cone_box_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cone<S>>) {
       if (!options.libccd_penetration) return swapped(cone_box_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, ConvexHull<S>>) {  // separating axes
+      if (!options.libccd_penetration && use_box_hull_sat(b)) return box_hull_sat(a, pose_a, b, pose_b);
+    } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Box<S>>) {
+      if (!options.libccd_penetration && use_box_hull_sat(a)) return swapped(box_hull_sat(b, pose_b, a, pose_a));
+    } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, ConvexHull<S>>) {
+      if (!options.libccd_penetration && centre_line_separates(a, pose_a, b, pose_b)) return ConvexContact<S>{};
     }
     return general_penetration(a, pose_a, b, pose_b, options);
   }
