@@ -7,7 +7,8 @@
 //                        [--json FILE]
 //
 // Mesh B defaults to mesh A; without meshes a built-in generated scene is used (a torus against an
-// icosphere). Poses come from tests/support/poses.hpp: A stays at the origin, B gets a uniformly
+// icosphere). impact's trees are built with the SAH split unless --split says otherwise (the
+// SAH-built OBB tree is the best impact structure on every scene measured, docs/collide.md). Poses come from tests/support/poses.hpp: A stays at the origin, B gets a uniformly
 // random rotation and a translation uniform in A's bounding box grown by B's bounding radius. For each method it prints build time, median and mean query time,
 // colliding poses, mismatches against FCL OBBRSS (boolean answers, or pair sets in all-pairs mode),
 // mean BV and triangle tests, and the speed ratio FCL OBBRSS / method. Timed per query: impact's
@@ -37,7 +38,7 @@ using impact::bench::seconds_since;
 namespace {
 
 struct Args {
-  std::string mesh_a, mesh_b, json, bv = "all", split = "middle";
+  std::string mesh_a, mesh_b, json, bv = "all", split = "sah";
   int poses = 1000, leaf = 1, repeat = 1, rounds = 1;
   std::uint64_t seed = 1;
 };
@@ -45,6 +46,8 @@ struct Args {
 constexpr const char* kUsage =
     "usage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
     "                            [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--repeat K] [--rounds K] [--json FILE]\n"
+    "  --split R   how impact's trees are built (default sah: the best impact structure, the SAH-built OBB tree, in the\n"
+    "              default run; middle is the library's default split)\n"
     "  --repeat K  time each query K times on its pose and keep the least (default 1: one cold query per pose)\n"
     "  --rounds K  pass over all the poses K times and keep each pose's least time (cold queries, preemption filtered)\n";
 

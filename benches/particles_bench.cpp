@@ -3,7 +3,7 @@
 //
 //   impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]
 //                          [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L] [--grid G]
-//                          [--compact C] [--wide 0|1] [--threads T] [--seed X] [--json FILE]
+//                          [--compact C] [--wide 0|1] [--threads T] [--seed X] [--quick] [--json FILE]
 //
 // Without MESH a built-in closed mesh (a torus) is used. The particles start uniformly in the
 // mesh's bounding box (inside and outside the mesh) with random directions and speeds whose
@@ -38,6 +38,8 @@
 // velocities bit for bit). Their speed-up is printed by the wall clock and by the CPU times (one
 // thread's CPU time over max(the caller's CPU time, the workers' per worker)), which is what an
 // idle machine would show when the wall clock measures the neighbours too.
+// --quick runs only the reference, backtrack-wide and embree-user rows (for profiling and for
+// comparing builds: the other rows, the threads rows included, are left out).
 // Each method runs twice from the same start: once timed, once audited for escapes (the audit's
 // tree walks between steps would disturb the timing); the bench checks that both end alike.
 // Reported per method: particle-steps per second (stepping only, single thread, thread CPU time), particles
@@ -80,6 +82,7 @@ struct Args {
   int compact = 4;
   int wide = 1;
   int threads = 0;
+  bool quick = false;
   std::uint64_t seed = 1;
 };
 
@@ -444,9 +447,11 @@ template <class S> int run_all(const Args& a) {
     std::printf("distance grid: %d cells along the longest side, %.1f MB, built in %.2f s (not timed)\n", a.grid, double(grid.memory_bytes()) / 1e6,
                 grid_seconds);
   const RunResult<S> ref = measure(ref_init, cs_bt, bvh, container, opt, a.dt, a.steps, a.substeps, a.sort_every);
-  const RunResult<S> bt = measure(ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
-  const RunResult<S> pr = measure(ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
-  const RunResult<S> nv = measure(naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
+  const std::vector<Particle<S>> none;  // --quick: the rows left out run no particles
+  const RunResult<S> bt = measure(a.quick ? none : ps, cs_bt, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
+  const RunResult<S> pr = measure(a.quick ? none : ps, cs_pr, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
+  const RunResult<S> nv = measure(a.quick ? none : naive_init, cs_naive, bvh, container, opt, a.dt, a.steps, 1, a.sort_every);
+  const int n_main = a.quick ? 0 : a.particles;
   if (a.wide)
     std::printf("wide tree: %.1f MB, built in %.2f s (not timed)\n", double(wide.memory_bytes()) / 1e6, wide_seconds);
 
@@ -467,7 +472,7 @@ template <class S> int run_all(const Args& a) {
     w.pos_err_max = sm.max;
     return w;
   };
-  std::vector<Row> rows = {row("backtrack", bt, a.particles, 1), row("project", pr, a.particles, 1), row("naive", nv, n_naive, 1),
+  std::vector<Row> rows = {row("backtrack", bt, n_main, 1), row("project", pr, n_main, 1), row("naive", nv, a.quick ? 0 : n_naive, 1),
                            row("reference", ref, n_ref, a.substeps)};
   if (a.wide) rows.push_back(row("backtrack-wide", measure(ps, cs_wide, bvh, container, opt, a.dt, a.steps, 1, a.sort_every), a.particles, 1));
 #ifdef IMPACT_HAVE_EMBREE
@@ -497,6 +502,7 @@ template <class S> int run_all(const Args& a) {
   const int threads = resolve_threads(a.threads);
   std::vector<std::tuple<std::string, double, double>> speedups;  // name, by the wall clock, by the CPU times
   for (const auto& [name, cs, base_index] : {std::make_tuple("backtrack", &cs_bt, 0), std::make_tuple("project", &cs_pr, 1)}) {
+    if (a.quick) break;
     const auto [one, many] = measure_threads(ps, *cs, bvh, container, opt, a.dt, a.steps, a.sort_every, threads);
     const Row base = rows[std::size_t(base_index)];  // a copy: rows grows below
     for (const auto* r : {&one, &many}) {
@@ -523,11 +529,11 @@ template <class S> int run_all(const Args& a) {
   }
   std::printf("share of particle-steps with an impact (backtrack): %.1f%%; reference: %d sub-steps\n", 100 * bt.impact_share,
               a.substeps);
-  if (n_naive > 0) std::printf("backtrack / naive speed: %.0fx\n", rows[0].rate / std::max(rows[2].rate, 1e-300));
+  if (n_naive > 0 && !a.quick) std::printf("backtrack / naive speed: %.0fx\n", rows[0].rate / std::max(rows[2].rate, 1e-300));
   for (const auto& w : rows)
     if (w.method == "embree-user")
       for (const auto& m : rows)
-        if (m.method == "backtrack" || m.method == "backtrack-wide")
+        if ((m.method == "backtrack" || m.method == "backtrack-wide") && m.particles > 0)
           std::printf("%s / embree-user speed: %.2fx\n", m.method.c_str(), m.rate / std::max(w.rate, 1e-300));
   for (const auto& [name, x, y] : speedups)
     std::printf("%s, %d threads / 1 thread (same final state): %.2fx by the wall clock, %.2fx by the CPU times%s\n", name.c_str(),
@@ -551,7 +557,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
                  "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
-                 "                              [--grid G] [--compact C] [--wide 0|1] [--threads T] [--seed X] [--json FILE]\n");
+                 "                              [--grid G] [--compact C] [--wide 0|1] [--threads T] [--seed X] [--quick] [--json FILE]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -566,6 +572,7 @@ int main(int argc, char** argv) {
     else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
     else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
     else if (s == "--float") a.use_float = true;
+    else if (s == "--quick") a.quick = true;
     else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
     else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
     else if (s == "--compact" && (v = next())) a.compact = std::max(0, std::atoi(v));

@@ -14,13 +14,17 @@
 // relative_tolerance of the size (1e-10 double, 1e-5 float) plus rounding, never below the truth
 // by more than rounding; the witness points that distance apart.
 #include "impact/convex/query.hpp"
+#include "impact/convex/signed_volumes.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <type_traits>
 
 namespace {
 
@@ -150,7 +154,58 @@ void tilted_discs(int n, double min_tilt_exponent) {
   tilted_disc_over_face<S>("cone over box", box, 0.3, 0.4, cone, 0.5, 0.6, n, min_tilt_exponent, 4);
 }
 
+// GJK's simplex solver alone (detail::sv_closest, convex/signed_volumes.hpp) on slivers whose
+// closest point to the origin is inside: a segment, or a triangle whose apex lies at a height h of
+// 1e-6 .. 1e-1 of its base L above the base (1e-3 .. 1e-1 in float), the origin's foot between the base and the apex, all
+// in a plane at distance d from the origin, turned at random. The distance is d up to the points'
+// rounding (the foot's height over the plane is a convex combination of the vertices' heights, so
+// rounding a vertex by e moves it by at most e), so |v| must be d within a few ulps of the points.
+// Formed as l1 s1 + l2 s2 + l3 s3 (weights that do not sum to 1 scale v) the error grew as L / h:
+// up to 185,000 ulps here in double, 205 in float; some 1,000 ulps of |v|^2 on a 1e-3 sliver were
+// enough to stop GJK early on one compiler's rounding and not the other's; now 3 and 1 ulps.
+template <class S>
+void sliver_closest_points(int n, double min_height_exponent, std::uint64_t seed) {
+  test::Rng rng(seed);
+  double worst = 0;  // the largest | |v| - d | in ulps of the largest point
+  for (int i = 0; i < n; ++i) {
+    const double d = rng.uniform(0.05, 1), l1 = rng.uniform(0.5, 1), l2 = rng.uniform(0.5, 1);
+    const double h = (l1 + l2) * std::pow(10.0, rng.uniform(min_height_exponent, -1)), f = rng.uniform(0.05, 0.5);
+    const double apex_x = rng.uniform(-0.3 * l1, 0.3 * l2);
+    const bool segment = i % 4 == 0;
+    // local frame: the base along x at y = -f h, the apex at y = (1 - f) h, the plane z = d
+    const Eigen::Vector3d local[3] = {{-l1, segment ? 0 : -f * h, d}, {l2, segment ? 0 : -f * h, d}, {apex_x, (1 - f) * h, d}};
+    const Eigen::Matrix3d R = gjk_random_rotation<double>(rng);
+    detail::SimplexPoint<S> p[3];
+    double size = 0;
+    for (int k = 0; k < 3; ++k) {
+      p[k].w = (R * local[k]).template cast<S>();
+      p[k].a = p[k].w;
+      p[k].b = Vec3<S>::Zero();
+      size = std::max(size, double(p[k].w.norm()));
+    }
+    detail::SimplexClosest<S> r;
+    ASSERT_TRUE(detail::sv_closest(p, segment ? 2 : 3, r));
+    ASSERT_EQ(r.m, segment ? 2 : 3) << "the origin's foot is inside";
+    double sum = 0;
+    for (int k = 0; k < r.m; ++k) {
+      EXPECT_GT(r.lambda[k], S(0));
+      sum += double(r.lambda[k]);
+    }
+    const double ulp = std::numeric_limits<S>::epsilon() * size;
+    EXPECT_NEAR(sum, 1.0, 4 * std::numeric_limits<S>::epsilon());
+    const double err = std::abs(std::sqrt(double(r.vv)) - d);
+    worst = std::max(worst, err / ulp);
+    EXPECT_LE(err, 8 * ulp) << (segment ? "segment" : "triangle") << " h/L " << h / (l1 + l2) << ": |v| " << std::sqrt(double(r.vv))
+                            << ", distance " << d;
+  }
+  std::printf("sliver closest points (%s): %d simplices, max error %.1f ulps of the points\n", std::is_same_v<S, float> ? "float" : "double", n,
+              worst);
+}
+
 constexpr int kGjkClosedFormPoses = IMPACT_TEST_SANITIZED ? 200 : 2000;
+
+TEST(GjkClosedForm, SliverSimplexClosestPointDouble) { sliver_closest_points<double>(kGjkClosedFormPoses, -6, 33); }
+TEST(GjkClosedForm, SliverSimplexClosestPointFloat) { sliver_closest_points<float>(kGjkClosedFormPoses, -3, 34); }
 
 TEST(GjkClosedForm, ParallelCylindersDouble) { parallel_cylinders<double>(kGjkClosedFormPoses, 31); }
 TEST(GjkClosedForm, ParallelCylindersFloat) { parallel_cylinders<float>(kGjkClosedFormPoses, 32); }

@@ -32,7 +32,9 @@ struct ConvexContact {
   Vec3<S> normal = Vec3<S>::UnitZ();  ///< unit, from a towards b
   Vec3<S> point = Vec3<S>::Zero();    ///< midway between the deepest points of a and b
   int iterations = 0;                 ///< support calls of the iterative solver used (0: closed form)
-  bool limit_reached = false;         ///< the iteration bound stopped the solver
+  /// The solver stopped before its tolerance: an iteration bound, or (penetration) rounding or a
+  /// degenerate polytope left the bracket [depth - depth_gap, depth] wider than it (query.hpp).
+  bool limit_reached = false;
   /// Iterative solvers (EPA, MPR): depth minus a certified lower bound of the true depth (the
   /// distance from the origin to the boundary of the solver's inner polytope of the Minkowski
   /// difference). The true depth lies in [depth - depth_gap, depth]. 0 for closed forms.

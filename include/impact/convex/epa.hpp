@@ -44,6 +44,8 @@
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/local_certificate.hpp"
 #include "impact/core/types.hpp"
+#include "impact/geometry/triangle.hpp"
+#include "impact/narrow/closest_point.hpp"
 
 #include <algorithm>
 #include <cmath>

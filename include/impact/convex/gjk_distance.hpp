@@ -3,9 +3,10 @@
 /// Separation distance and witness points of two convex sets given by their support functions:
 /// the GJK algorithm (Gilbert, Johnson & Keerthi 1988) in the form of van den Bergen ("Collision
 /// Detection in Interactive 3D Environments", 2003, section 4.3): the simplex's closest point to
-/// the origin by Voronoi regions (Ericson, Real-Time Collision Detection, 5.1), a relative stopping
-/// test on the duality gap, and a bound on the iterations. libccd has no distance query (its GJK
-/// answers only "intersecting or not"), so this one is the library's own; it needs Eigen only.
+/// the origin by signed volumes (convex/signed_volumes.hpp, Montanari et al. 2017), a relative
+/// stopping test on the duality gap, and a bound on the iterations. libccd has no distance query
+/// (its GJK answers only "intersecting or not"), so this one is the library's own; it needs Eigen
+/// only.
 ///
 /// Numerical contract: APPROXIMATE. On return with converged = true the reported distance d and the
 /// true distance d* satisfy d - tolerance <= d* <= d (d is the length of a vector of the Minkowski
@@ -15,9 +16,8 @@
 /// set and the best upper bound found so far is returned.
 #pragma once
 
+#include "impact/convex/signed_volumes.hpp"
 #include "impact/core/types.hpp"
-#include "impact/geometry/triangle.hpp"
-#include "impact/narrow/closest_point.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -37,112 +37,6 @@ struct ConvexDistance {
 };
 
 namespace detail {
-
-template <class S>
-struct SimplexPoint {
-  Vec3<S> w, a, b;  // w = a - b
-};
-
-/// Reduces the simplex to the smallest sub-simplex whose hull holds the point closest to the
-/// origin; sets lambda (weights of the kept points) and returns that point. Returns false when the
-/// origin is inside the tetrahedron (the sets intersect).
-template <class S>
-bool closest_on_simplex(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v) {
-  if (n == 1) {
-    lambda[0] = S(1);
-    v = s[0].w;
-    return true;
-  }
-  if (n == 2) {
-    const Vec3<S> ab = s[1].w - s[0].w;
-    const S den = ab.squaredNorm();
-    const S t = den > S(0) ? std::clamp(-s[0].w.dot(ab) / den, S(0), S(1)) : S(0);
-    if (t <= S(0)) {
-      n = 1;
-    } else if (t >= S(1)) {
-      s[0] = s[1];
-      n = 1;
-    } else {
-      lambda[0] = S(1) - t;
-      lambda[1] = t;
-      v = s[0].w + t * ab;
-      return true;
-    }
-    lambda[0] = S(1);
-    v = s[0].w;
-    return true;
-  }
-  if (n == 3) {
-    const auto cp = closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(s[0].w, s[1].w, s[2].w));
-    SimplexPoint<S> kept[3];
-    int m = 0;
-    for (int i = 0; i < 3; ++i)
-      if (cp.barycentric[i] > S(0)) {
-        kept[m] = s[i];
-        lambda[m] = cp.barycentric[i];
-        ++m;
-      }
-    if (m == 0) {  // cannot happen (the weights sum to 1); keep the first point
-      kept[0] = s[0];
-      lambda[0] = S(1);
-      m = 1;
-    }
-    for (int i = 0; i < m; ++i) s[i] = kept[i];
-    n = m;
-    v = cp.point;
-    return true;
-  }
-  // Tetrahedron: is the origin inside? Otherwise the best of the faces it is outside of. A flat
-  // tetrahedron (volume within rounding of 0: four nearly coplanar points, as when a face of one
-  // shape is parallel to a face of the other) has no inside: the sides of its faces are rounding
-  // noise, so every face is a candidate (without this a parallel pair 1e-6 apart was reported
-  // intersecting).
-  static constexpr int face[4][4] = {{0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}, {0, 1, 2, 3}};
-  const Vec3<S> e1 = s[1].w - s[0].w, e2 = s[2].w - s[0].w, e3 = s[3].w - s[0].w;
-  const S volume = e1.cross(e2).dot(e3);
-  const S edge = std::max({e1.norm(), e2.norm(), e3.norm()});
-  const bool flat = !(std::abs(volume) > S(64) * std::numeric_limits<S>::epsilon() * edge * edge * edge);
-  S best = std::numeric_limits<S>::infinity();
-  int best_face = -1;
-  Vec3<S> best_bary = Vec3<S>::Zero(), best_point = Vec3<S>::Zero();
-  bool outside_any = false;
-  for (int f = 0; f < 4; ++f) {
-    const Vec3<S>& p0 = s[face[f][0]].w;
-    const Vec3<S>& p1 = s[face[f][1]].w;
-    const Vec3<S>& p2 = s[face[f][2]].w;
-    const Vec3<S>& opp = s[face[f][3]].w;
-    const Vec3<S> nrm = (p1 - p0).cross(p2 - p0);
-    const S side_origin = -nrm.dot(p0);
-    const S side_opp = nrm.dot(opp - p0);
-    if (!flat && side_origin * side_opp >= S(0)) continue;  // origin on the tetrahedron's side of this face
-    outside_any = true;
-    const auto cp = closest_point_on_triangle(Vec3<S>::Zero().eval(), Triangle<S>(p0, p1, p2));
-    if (cp.squared_distance < best) {
-      best = cp.squared_distance;
-      best_face = f;
-      best_bary = cp.barycentric;
-      best_point = cp.point;
-    }
-  }
-  if (!outside_any) return false;
-  SimplexPoint<S> kept[3];
-  int m = 0;
-  for (int i = 0; i < 3; ++i)
-    if (best_bary[i] > S(0)) {
-      kept[m] = s[face[best_face][i]];
-      lambda[m] = best_bary[i];
-      ++m;
-    }
-  if (m == 0) {
-    kept[0] = s[face[best_face][0]];
-    lambda[0] = S(1);
-    m = 1;
-  }
-  for (int i = 0; i < m; ++i) s[i] = kept[i];
-  n = m;
-  v = best_point;
-  return true;
-}
 
 /// A unit vector orthogonal to u (u unit).
 template <class S>
@@ -192,44 +86,42 @@ GjkStep gjk_step(SimplexPoint<S>* s, int& n, S* lambda, Vec3<S>& v, S vv, const 
                  GjkSavedSimplex<S>* level = nullptr) {
   for (int i = 0; i < n; ++i)
     if (s[i].w == p.w) return GjkStep::Repeated;
-  SimplexPoint<S> saved[4];
-  S saved_lambda[4];
-  const int saved_n = n;
-  for (int i = 0; i < n; ++i) {
-    saved[i] = s[i];
-    saved_lambda[i] = lambda[i];
+  // s[n] is free (a reduced simplex has at most 3 points): p goes there, and s[0..n) stays as it
+  // was until the step is kept
+  s[n] = p;
+  SimplexClosest<S> r;
+  if (!sv_closest(s, n + 1, r)) {
+    ++n;
+    return GjkStep::Inside;
   }
-  s[n++] = p;
-  Vec3<S> nv;
-  if (!closest_on_simplex(s, n, lambda, nv)) return GjkStep::Inside;
-  const S nvv = nv.squaredNorm();
-  if (nvv < vv) {
-    v = nv;
-    return GjkStep::Progress;
-  }
-  if (level) {
+  const S nvv = r.vv;
+  bool keep = nvv < vv;
+  if (!keep && level) {
     S w2 = p.w.squaredNorm();
-    for (int i = 0; i < saved_n; ++i) w2 = std::max(w2, saved[i].w.squaredNorm());
+    for (int i = 0; i < n; ++i) w2 = std::max(w2, s[i].w.squaredNorm());
     if (nvv <= vv + S(32) * std::numeric_limits<S>::epsilon() * std::sqrt(vv * w2)) {
       if (vv < level->vv) {
-        for (int i = 0; i < saved_n; ++i) {
-          level->s[i] = saved[i];
-          level->lambda[i] = saved_lambda[i];
+        for (int i = 0; i < n; ++i) {
+          level->s[i] = s[i];
+          level->lambda[i] = lambda[i];
         }
-        level->n = saved_n;
+        level->n = n;
         level->v = v;
         level->vv = vv;
       }
-      v = nv;
-      return GjkStep::Level;
+      keep = true;
     }
   }
-  n = saved_n;
-  for (int i = 0; i < n; ++i) {
-    s[i] = saved[i];
-    lambda[i] = saved_lambda[i];
+  if (!keep) return GjkStep::NoProgress;
+  SimplexPoint<S> kept[4];
+  for (int i = 0; i < r.m; ++i) kept[i] = s[r.index[i]];
+  for (int i = 0; i < r.m; ++i) {
+    s[i] = kept[i];
+    lambda[i] = r.lambda[i];
   }
-  return GjkStep::NoProgress;
+  n = r.m;
+  v = r.v;
+  return nvv < vv ? GjkStep::Progress : GjkStep::Level;
 }
 
 /// At most this many GJK steps per distance query may keep a simplex whose closest point came no

@@ -16,6 +16,14 @@
 /// finite, > 0 (a capsule's half length may be 0: a sphere) and at most CoordinateRange<S>::max.
 /// Zero radii or heights are rejected rather than treated as segments or discs: a flat shape makes
 /// the penetration depth of two flat shapes undefined and the expanding polytope of EPA degenerate.
+/// For the same reason a cylinder, cone or box must not be numerically flat: its least extent (the
+/// smaller of radius and half length, the least half extent) must be at least kMaxFlatness<S> =
+/// 1024 machine epsilons of its largest (an aspect ratio of at most 4.4e12 in double, 8,192 in
+/// float). Thinner ones are rejected: EPA's polytope of such a shape is flat to within rounding, and
+/// its depths were off by up to the whole size (fuzzing found them; swept over random poses, every
+/// bracket closes at 4.4e12 in double and 16,384 in float, and stays open on a quarter to all of
+/// the poses from 1e14 in double). A capsule has no such bound: its queries work on its segment
+/// and treat the radius as a margin. Convex hulls have their own flatness test (convex_hull()).
 /// The members are public for reading; a shape whose members are changed after construction must
 /// be re-validated with validate_shape().
 ///
@@ -29,7 +37,11 @@
 #include "impact/geometry/sphere.hpp"
 #include "impact/geometry/transform.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
 
 namespace impact {
 
@@ -78,20 +90,41 @@ void validate_shape(const Sphere<S>& s, const char* where) {
   validate_positive(s.radius, where, "sphere.radius");
 }
 
+/// The least extent of a cylinder, cone or box, relative to its largest, below which it is
+/// numerically flat (see the file comment): 1024 machine epsilons.
+template <class S>
+inline constexpr S kMaxFlatness = S(1024) * std::numeric_limits<S>::epsilon();
+
 namespace detail {
+/// Throws InvalidInput when `least` < kMaxFlatness<S> * `largest` (both finite and > 0).
+template <class S>
+void validate_not_flat(S least, S largest, const char* where, const char* shape) {
+  if (IMPACT_LIKELY(least >= kMaxFlatness<S> * largest)) return;
+  std::ostringstream s;
+  s.precision(17);
+  s << where << ": " << shape << " is numerically flat: its least extent " << least << " is below " << kMaxFlatness<S>
+    << " (1024 machine epsilons) of its largest " << largest << " (an aspect ratio of at most " << S(1) / kMaxFlatness<S> << ")";
+  throw InvalidInput(s.str());
+}
+
 /// The radius and half length of a capsule, cylinder or cone, named radius_name and length_name in
 /// the messages: both finite and in range, the radius > 0, the half length > 0 too unless
-/// `zero_length_ok`.
+/// `zero_length_ok`; unless `zero_length_ok` (a capsule), not numerically flat either.
 template <class S>
 void validate_radius_and_half_length(S radius, S half_length, bool zero_length_ok, const char* where, const char* radius_name,
                                      const char* length_name) {
   constexpr S range = CoordinateRange<S>::max;  // the common case first (comparisons are false for NaN)
-  if (IMPACT_LIKELY(radius > S(0) && radius <= range && (zero_length_ok ? half_length >= S(0) : half_length > S(0)) && half_length <= range))
+  if (IMPACT_LIKELY(radius > S(0) && radius <= range && (zero_length_ok ? half_length >= S(0) : half_length > S(0)) && half_length <= range &&
+                    (zero_length_ok || std::min(radius, half_length) >= kMaxFlatness<S> * std::max(radius, half_length))))
     return;
   validate_length(radius, where, radius_name);
   validate_positive(radius, where, radius_name);
   validate_length(half_length, where, length_name);
-  if (!zero_length_ok) validate_positive(half_length, where, length_name);
+  if (!zero_length_ok) {
+    validate_positive(half_length, where, length_name);
+    validate_not_flat(std::min(radius, half_length), std::max(radius, half_length), where,
+                      std::string(radius_name).substr(0, std::string(radius_name).find('.')).c_str());
+  }
 }
 }  // namespace detail
 
@@ -111,6 +144,7 @@ template <class S>
 void validate_shape(const Box<S>& s, const char* where) {
   validate_coordinates(s.half, where, "box.half");
   if (!(s.half.minCoeff() > S(0))) throw InvalidInput(std::string(where) + ": box.half must be > 0 on every axis");
+  detail::validate_not_flat(s.half.minCoeff(), s.half.maxCoeff(), where, "box");
 }
 
 namespace detail {

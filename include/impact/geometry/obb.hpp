@@ -8,6 +8,7 @@
 #include "impact/core/types.hpp"
 #include "impact/geometry/aabb.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -32,10 +33,16 @@ template <class S> struct Obb {
 /// `slack` >= 0 is added to every axis's sum of projected radii: callers pass a bound of the
 /// rounding in R and tb (see BvTraits<Obb>::overlap), which makes the test conservative for
 /// boxes far from the origin too. `axis_pad` >= 0 is added to every |R_ij|: callers whose R is
-/// off its true value by up to that much per entry pass it (ObbPairFrame). Complexity: at most 15
-/// axis tests.
+/// off its true value by up to that much per entry pass it (ObbPairFrame). `cap_a`, `cap_b`
+/// (infinite by default) bound each volume's extent on the six face axes, per unit of the axis's
+/// length (at most 1 + axis_pad for these axes): a volume that is a box cut by a ball of radius r
+/// about its centre extends at most r from it on any unit axis, so on those axes its projected
+/// radius is the lesser of the box's and r (Obb::radius; ObbPairFrame passes the padded radii).
+/// The edge axes keep the boxes' radii (capping them too cost more than the pairs it rejected).
+/// Complexity: at most 15 axis tests.
 template <class S>
-inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, const Vec3<S>& eb, S slack = S(0), S axis_pad = S(0)) {
+inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, const Vec3<S>& eb, S slack = S(0), S axis_pad = S(0),
+                        S cap_a = std::numeric_limits<S>::infinity(), S cap_b = std::numeric_limits<S>::infinity()) {
   // Everything in A's local frame: B's axes are the columns of R, its centre is tb. Plain scalar
   // arithmetic on copies: Eigen's packets on 3-vectors cost more than they save here.
   const S pad = S(64) * std::numeric_limits<S>::epsilon() + axis_pad;
@@ -47,11 +54,11 @@ inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, 
       r[i][j] = R(i, j);
       q[i][j] = std::abs(r[i][j]) + pad;
     }
-    if (std::abs(t[i]) > a[i] + (q[i][0] * b[0] + q[i][1] * b[1] + q[i][2] * b[2]) + slack) return false;
+    if (std::abs(t[i]) > a[i] + std::min(q[i][0] * b[0] + q[i][1] * b[1] + q[i][2] * b[2], cap_b) + slack) return false;
   }
   // B's face axes
   for (int j = 0; j < 3; ++j)
-    if (std::abs(r[0][j] * t[0] + r[1][j] * t[1] + r[2][j] * t[2]) > (q[0][j] * a[0] + q[1][j] * a[1] + q[2][j] * a[2]) + b[j] + slack)
+    if (std::abs(r[0][j] * t[0] + r[1][j] * t[1] + r[2][j] * t[2]) > std::min(q[0][j] * a[0] + q[1][j] * a[1] + q[2][j] * a[2], cap_a) + b[j] + slack)
       return false;
   // edge-edge axes a_i x b_j
   for (int i = 0; i < 3; ++i) {

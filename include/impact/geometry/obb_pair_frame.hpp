@@ -40,52 +40,103 @@ template <class S> class ObbPairFrame {
   ObbPairFrame() : x_(Mat3<S>::Identity()), t_(Vec3<S>::Zero()), defect_(0) {}
   explicit ObbPairFrame(const RigidTransform<S>& b_to_a)
       : x_(b_to_a.R), t_(b_to_a.t), defect_(rotation_defect_bound(b_to_a.R) * (S(1) + S(8) * std::numeric_limits<S>::epsilon())) {}
+  /// The same with a bound of X's defect known beforehand: `defect` >= |X^T X - I|_2 (for example
+  /// validated_product_defect() for X = relative_transform of two poses that passed validate_pose:
+  /// the mesh queries do not measure X then, about 80 instructions a query).
+  ObbPairFrame(const RigidTransform<S>& b_to_a, S defect) : x_(b_to_a.R), t_(b_to_a.t), defect_(defect) {}
+
+  /// A bound of |X^T X - I|_2 for X = fl(Ra^T Rb), the rotation of relative_transform(pose_a,
+  /// pose_b), whatever the two poses that passed validate_pose. With tol = rotation_tolerance and
+  /// u the unit roundoff: validate_pose bounds every computed entry of fl(R^T R) - I by tol, so
+  /// every exact entry by tol + 3.2u (the dot products' rounding, the subtraction exact), and
+  /// |R^T R - I|_2 <= |.|_F <= g1 := 3 tol + 10u for each pose. Ra Ra^T - I has the same 2-norm, so
+  /// X_exact = Ra^T Rb has |X^T X - I|_2 <= g1 (1 + g1) + g1 (= Rb^T (Ra Ra^T - I) Rb + Rb^T Rb -
+  /// I). The rounding E of the product has |E|_F <= 3 gamma_3 (1 + g1) <= 9.5u, adding at most
+  /// 2 |X|_2 |E| + |E|^2 <= 20u. In all g <= 6 tol + 9 tol^2 + 40u <= 7 tol + 64u for tol <= 1e-2
+  /// (tol is 1e-6 in double, 3.5e-4 in float). Looser than the measured bound (about 1e-15 for
+  /// exact rotations): every volume grows by about 2 g of its size, so the node tests may accept a
+  /// few pairs more; no answer changes.
+  static S validated_product_defect() {
+    return S(7) * rotation_tolerance<S>() + S(64) * std::numeric_limits<S>::epsilon();
+  }
 
   /// What the test needs of box b (of B's frame) whatever box a is: its axes and centre moved by
   /// X and t, and its part of the rounding bound. A traversal that tests one box b against
-  /// several boxes of A in a row computes it once (MeshNodeOverlap does).
+  /// several boxes of A in a row computes it once (MeshNodeOverlap does). The axes are computed
+  /// only when a test needs them (most pairs are rejected by the balls first): image_centre(b)
+  /// leaves them out, and overlaps(a, im, b) fills them in on first use.
   struct Image {
-    Mat3<S> axes = Mat3<S>::Zero();    ///< fl(X B)
+    Mat3<S> axes = Mat3<S>::Zero();    ///< fl(X B), when has_axes
     Vec3<S> center = Vec3<S>::Zero();  ///< fl(X c_b + t)
     Vec3<S> half = Vec3<S>::Zero();    ///< b's half extents
     S radius = 0;                      ///< b's ball radius stretched by X's defect (infinite: no ball)
     S m = 0;                           ///< |X c_b + t| + |t| + |c_b| (max norms)
+    bool has_axes = false;
   };
-  Image image(const Obb<S>& b) const {
+  Image image_centre(const Obb<S>& b) const {
     Image im;
-    im.axes = x_ * b.axes;
     im.center = x_ * b.center + t_;
     im.half = b.half;
     im.radius = b.radius * (S(1) + defect_);
     im.m = im.center.cwiseAbs().maxCoeff() + t_.cwiseAbs().maxCoeff() + b.center.cwiseAbs().maxCoeff();
     return im;
   }
+  Image image(const Obb<S>& b) const {
+    Image im = image_centre(b);
+    im.axes = x_ * b.axes;
+    im.has_axes = true;
+    return im;
+  }
 
   /// May box a (of A's frame) and the image of box b (of B's frame) share a point?
-  bool overlaps(const Obb<S>& a, const Obb<S>& b) const { return overlaps(a, image(b)); }
+  bool overlaps(const Obb<S>& a, const Obb<S>& b) const {
+    Image im = image_centre(b);
+    return overlaps(a, im, b);
+  }
 
-  /// The same test with b's image computed beforehand (image(b)).
-  bool overlaps(const Obb<S>& a, const Image& b) const {
+  /// The same test with b's image computed beforehand (image_centre(b) or image(b)); its axes are
+  /// computed here if it has none yet. Three stages, each conservative on its own: the two balls;
+  /// A's three face axes against b's ball (its image lies within radius of its centre, so its
+  /// extent along any unit axis is at most the radius: no product with b's axes needed yet); then
+  /// the 15 axes, with each volume's extent on an axis the lesser of its box's and its ball's (each
+  /// node bounds the box cut by the ball).
+  bool overlaps(const Obb<S>& a, Image& b, const Obb<S>& b_box) const {
     constexpr S eps = std::numeric_limits<S>::epsilon();
     const Vec3<S> d = b.center - a.center;
     const S M = a.center.cwiseAbs().maxCoeff() + b.m;
+    const S ball_pad = S(64) * eps * (S(3) * M + a.radius + b.radius);
     {
       // the balls first (a few operations, and most pairs far apart fail here)
-      const S r = a.radius + b.radius + S(64) * eps * (S(3) * M + a.radius + b.radius);
+      const S r = a.radius + b.radius + ball_pad;
       if (d.squaredNorm() > r * r * (S(1) + S(16) * eps)) return false;
     }
-    // R = A^T (X B) and tb = A^T (X c_b + t - c_a), written out (fewer instructions than Eigen's
-    // packets on 3-vectors)
-    Mat3<S> R;
+    const S g = defect_;
+    // tb = A^T (X c_b + t - c_a), written out (fewer instructions than Eigen's packets)
     Vec3<S> tb;
+    for (int i = 0; i < 3; ++i) tb[i] = a.axes(0, i) * d[0] + a.axes(1, i) * d[1] + a.axes(2, i) * d[2];
+    const S E = std::abs(tb[0]) + std::abs(tb[1]) + std::abs(tb[2]) + a.half.sum() + b.half.sum();
+    const S slack = S(64) * eps * (S(3) * M + E) + S(2) * g * E + std::numeric_limits<S>::denorm_min();
+    {
+      // A's faces against b's ball: the rounding of tb is within slack (as for the box axes), the
+      // ball's own (its centre, the narrow phase's moved vertices) within ball_pad
+      const S rb = b.radius + ball_pad + slack;
+      if (std::abs(tb[0]) > a.half[0] + rb || std::abs(tb[1]) > a.half[1] + rb || std::abs(tb[2]) > a.half[2] + rb) return false;
+    }
+    if (!b.has_axes) {
+      b.axes = x_ * b_box.axes;
+      b.has_axes = true;
+    }
+    // R = A^T (X B), written out
+    Mat3<S> R;
     for (int i = 0; i < 3; ++i) {
       const S u = a.axes(0, i), v = a.axes(1, i), w = a.axes(2, i);
       for (int j = 0; j < 3; ++j) R(i, j) = u * b.axes(0, j) + v * b.axes(1, j) + w * b.axes(2, j);
-      tb[i] = u * d[0] + v * d[1] + w * d[2];
     }
-    const S E = tb.cwiseAbs().sum() + a.half.sum() + b.half.sum();
-    const S slack = S(64) * eps * (S(3) * M + E) + S(2) * defect_ * E + std::numeric_limits<S>::denorm_min();
-    return obb_overlap<S>(a.half, R, tb, b.half, slack, defect_);
+    // a's ball caps its extent on b's face axes (at most 1 + 2g long: X B's columns are within g
+    // of unit length, A's axes orthonormal within rounding); b's ball on A's face axes was the
+    // stage above
+    const S stretch = S(1) + S(2) * g + S(64) * eps;
+    return obb_overlap<S>(a.half, R, tb, b.half, slack, g, (a.radius + ball_pad) * stretch);
   }
 
  private:

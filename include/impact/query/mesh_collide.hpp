@@ -227,15 +227,28 @@ template <class BV> struct MeshNodeOverlap {
   RigidTransform<S> b_to_a, a_to_b;
   std::uint64_t* tests;
   PosePad<S> pad;
-  std::conditional_t<kObb, ObbPairFrame<S>, NoFrame> frame;  ///< oriented boxes: X's defect, bounded once
+  /// oriented boxes: X's defect bounded once for every pair of validated poses
+  /// (ObbPairFrame::validated_product_defect: x must be relative_transform of two poses that passed
+  /// validate_pose, as in collide and collides)
+  std::conditional_t<kObb, ObbPairFrame<S>, NoFrame> frame;
   struct NoImage {};
   /// oriented boxes: the image of the last node of B tested, reused while the walk splits A's
-  /// nodes against it (a query's own object: never shared between threads)
+  /// nodes against it (a query's own object: never shared between threads); its axes are computed
+  /// by the first test that gets past the balls
   mutable std::conditional_t<kObb, typename ObbPairFrame<S>::Image, NoImage> image_b{};
   mutable const BvhNode<BV>* imaged_b = nullptr;
 
+  template <class B = BV, std::enable_if_t<std::is_same_v<B, Obb<S>>, int> = 0>
+  static ObbPairFrame<S> make_frame(const RigidTransform<S>& x) {
+    return ObbPairFrame<S>(x, ObbPairFrame<S>::validated_product_defect());
+  }
+  template <class B = BV, std::enable_if_t<!std::is_same_v<B, Obb<S>>, int> = 0>
+  static NoFrame make_frame(const RigidTransform<S>& x) {
+    return NoFrame(x);
+  }
+
   MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
-      : a(a_), b(b_), b_to_a(x), a_to_b(kSphere ? x.inverse() : RigidTransform<S>{}), tests(counter), frame(x) {
+      : a(a_), b(b_), b_to_a(x), a_to_b(kSphere ? x.inverse() : RigidTransform<S>{}), tests(counter), frame(make_frame(x)) {
     // oriented boxes bound the rounding and the defect of the transform in their own test
     if constexpr (kSphere || std::is_same_v<BV, Aabb<S>>) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
   }
@@ -270,10 +283,10 @@ template <class BV> struct MeshNodeOverlap {
       return obb_overlap<S>(ea, b_to_a.R, tb, eb);
     } else if constexpr (kObb) {
       if (imaged_b != &nb) {
-        image_b = frame.image(nb.bv);
+        image_b = frame.image_centre(nb.bv);
         imaged_b = &nb;
       }
-      return frame.overlaps(na.bv, image_b);
+      return frame.overlaps(na.bv, image_b, nb.bv);
     } else {
       return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }

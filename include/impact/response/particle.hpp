@@ -5,6 +5,8 @@
 
 #include "impact/core/types.hpp"
 
+#include <cstdint>
+
 namespace impact {
 
 /// A particle: centre position, velocity and radius (0 for a point particle; a ball of that
@@ -16,10 +18,16 @@ template <class S> struct Particle {
   /// Cache kept by the backtracking step: a ball of centres (free_center, free_radius) known to
   /// keep this particle clear of every static backtracking collider, so that legs inside it skip
   /// the collision tests. Moving the particle anywhere is safe (a leg outside the ball is cast as
-  /// usual); set free_radius = 0 when colliders are added, moved or deformed. A negative value is
-  /// a cool-down radius: no new ball is searched for within it.
+  /// usual). A negative value is a cool-down radius: no new ball is searched for within it.
   Vec3<S> free_center = Vec3<S>::Zero();
   S free_radius = S(0);
+  /// The collider set and radius the ball was found for (a 64-bit digest of the colliders' poses,
+  /// shapes, sides, strategies and mesh addresses, and of this particle's radius): a step whose
+  /// digest differs drops the ball, so adding, removing or moving colliders or growing the radius
+  /// needs no reset. Editing a mesh's vertices in place (MeshBvh::set_vertices) or a convex
+  /// shape's parameters is not seen: set free_radius = 0 then (a distance grid must be rebuilt
+  /// after such an edit anyway).
+  std::uint64_t free_key = 0;
 };
 
 }  // namespace impact

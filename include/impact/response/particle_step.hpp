@@ -55,6 +55,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 #include <type_traits>
 #include <vector>
@@ -181,6 +182,30 @@ template <class S> struct FreeBallRefresh {
   S other_radius = S(0);             ///< clear of every backtracking plane, sphere and box
 };
 
+/// min(R, a lower bound of the distance from the local point q to the mesh of c), from its tree:
+/// the walk descends only into nodes whose box contains q; any other node bounds its triangles by
+/// its box's distance, and the leaves that contain q give exact triangle distances. Out of line
+/// (free_ball_at, small without it, is inlined into the grids' refreshes).
+template <class BV, class S>
+IMPACT_NOINLINE S tree_distance_bound(const MeshCollider<BV>& c, const Vec3<S>& q, S R) {
+  traverse(
+      c.mesh->tree(),
+      [&](const BV& bv) {
+        const S d2 = squared_distance_to_bv(q, bv);
+        if (d2 >= R * R) return false;
+        if (d2 > S(0)) {
+          R = std::sqrt(d2);
+          return false;
+        }
+        return true;
+      },
+      [&](std::int32_t k) {
+        R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
+        return true;
+      });
+  return R;
+}
+
 /// The free ball around x, for a leg of length len of a particle of the given radius, clear of
 /// every backtracking collider (all static here). Planes, spheres and boxes give their exact
 /// clearance (shrunk for rounding). A mesh with a distance grid (MeshCollider::distance_grid)
@@ -206,22 +231,7 @@ inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const 
       continue;
     }
     out.cheap = false;
-    R = std::min(R, opt.free_ball_factor * len + radius);
-    traverse(
-        c.mesh->tree(),
-        [&](const BV& bv) {
-          const S d2 = squared_distance_to_bv(q, bv);
-          if (d2 >= R * R) return false;
-          if (d2 > S(0)) {
-            R = std::sqrt(d2);
-            return false;
-          }
-          return true;
-        },
-        [&](std::int32_t k) {
-          R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
-          return true;
-        });
+    R = tree_distance_bound(c, q, std::min(R, opt.free_ball_factor * len + radius));
   }
   // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
   const S x_margin = S(64) * eps * x.cwiseAbs().maxCoeff();
@@ -341,6 +351,34 @@ inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, const Vec3<S>& a, const
 
 namespace detail {
 
+/// A 64-bit digest of a sequence of values (their bit patterns), for StepContext::ball_key.
+struct BallKeyHasher {
+  std::uint64_t h = 0x6a09e667f3bcc909ull;
+  void word(std::uint64_t w) {
+    h ^= w + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 32;
+  }
+  template <class S> void scalar(S x) {
+    static_assert(sizeof(S) <= sizeof(std::uint64_t), "BallKeyHasher: scalar wider than 64 bits");
+    std::uint64_t w = 0;
+    std::memcpy(&w, &x, sizeof(S));
+    word(w);
+  }
+  template <class M> void matrix(const M& m) {
+    for (Eigen::Index i = 0; i < m.size(); ++i) scalar(m.data()[i]);
+  }
+  void pointer(const void* p) { word(static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(p))); }
+};
+
+/// The key of a particle's free ball (Particle::free_key) for a step whose collider digest is
+/// `set_key`: the digest mixed with the particle's radius; never 0 (a particle's initial key).
+template <class S> inline std::uint64_t particle_ball_key(std::uint64_t set_key, S radius) {
+  std::uint64_t w = 0;
+  std::memcpy(&w, &radius, sizeof(S));
+  return (set_key ^ (w * 0x9e3779b97f4a7c15ull)) | 1u;
+}
+
 /// What a step computes once for every particle.
 template <class S> struct StepContext {
   S rest = S(0);               ///< resting threshold
@@ -349,6 +387,11 @@ template <class S> struct StepContext {
   bool any_projection = false;  ///< some collider uses projection
   bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
   bool identity_poses = false;  ///< every backtracking collider's pose is exactly the identity
+  /// Digest of what the free balls depend on (Particle::free_key): every collider's effective
+  /// strategy and pose, the shapes of planes, spheres and boxes, the sides, each mesh's address,
+  /// triangle count and distance grid, each trailing-type collider's scale and clearance at seven
+  /// points of its frame.
+  std::uint64_t ball_key = 0;
   template <class BV, class... X> StepContext(const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
     rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
     moving = colliders.any_moving();
@@ -363,23 +406,83 @@ template <class S> struct StepContext {
       if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !(c.motion.pose.R == Mat3<S>::Identity() && c.motion.pose.t == Vec3<S>::Zero()))
         identity_poses = false;
     });
+    if (use_free_ball) ball_key = set_key(colliders, opt);
   }
+
+  template <class BV, class... X> static std::uint64_t set_key(const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt) {
+    BallKeyHasher k;
+    k.word(colliders.planes.size());
+    k.word(colliders.spheres.size());
+    k.word(colliders.boxes.size());
+    k.word(colliders.meshes.size());
+    k.word(colliders.size());
+    colliders.for_each([&](const auto& c, int) {
+      k.word(static_cast<std::uint64_t>(effective(c.strategy, opt.strategy)));
+      k.matrix(c.motion.pose.R);
+      k.matrix(c.motion.pose.t);
+    });
+    for (const auto& c : colliders.planes) {
+      k.matrix(c.plane.normal);
+      k.scalar(c.plane.offset);
+    }
+    for (const auto& c : colliders.spheres) {
+      k.matrix(c.sphere.center);
+      k.scalar(c.sphere.radius);
+      k.word(static_cast<std::uint64_t>(c.side));
+    }
+    for (const auto& c : colliders.boxes) {
+      k.matrix(c.box.center);
+      k.matrix(c.box.axes);
+      k.matrix(c.box.half);
+      k.word(static_cast<std::uint64_t>(c.side));
+    }
+    for (const auto& c : colliders.meshes) {
+      k.pointer(c.mesh);
+      k.word(c.mesh ? static_cast<std::uint64_t>(c.mesh->num_triangles()) : 0u);
+      k.pointer(c.distance_grid);
+      k.word(static_cast<std::uint64_t>(c.side));
+    }
+    colliders.for_each_extra([&](const auto& c) {
+      const S r = c.scale();
+      k.scalar(r);
+      k.scalar(c.clearance(Vec3<S>::Zero()));
+      for (int a = 0; a < 3; ++a)
+        for (const S sgn : {S(-1), S(1)}) k.scalar(c.clearance(Vec3<S>(Vec3<S>::Unit(a) * (sgn * r))));
+    });
+    return k.h;
+  }
+};
+
+/// What free_flight needs of a step, computed once per call (the per-particle loop then reads
+/// no options): whether free flights are possible at all, the step's displacement and velocity
+/// change under gravity (the same products step_particle_in computes), the collider digest.
+template <class S> struct FreeFlightStep {
+  bool possible = false;
+  S dt = S(0);
+  Vec3<S> half_g_dt2 = Vec3<S>::Zero();  ///< (dt^2 / 2) g
+  Vec3<S> g_dt = Vec3<S>::Zero();        ///< g dt
+  std::uint64_t set_key = 0;
+  FreeFlightStep(S dt_, const StepOptions<S>& opt, const StepContext<S>& ctx)
+      : possible(ctx.use_free_ball && !ctx.any_projection && opt.max_iterations > 0 && dt_ > S(0)),
+        dt(dt_),
+        half_g_dt2((dt_ * dt_ / S(2)) * opt.gravity),
+        g_dt(opt.gravity * dt_),
+        set_key(ctx.ball_key) {}
 };
 
 /// The step of a particle whose whole flight stays inside its free ball: exactly what
 /// step_particle_in does on that path (one all-clear leg), without its set-up. Returns false, with
 /// the particle untouched, when the full step is needed.
 template <class S>
-inline bool free_flight(Particle<S>& p, S dt, const StepOptions<S>& opt, const StepContext<S>& ctx) {
-  if (!ctx.use_free_ball || ctx.any_projection || !(p.free_radius > S(0)) || opt.max_iterations <= 0 || !(dt > S(0)))
-    return false;
-  const Vec3<S> d = p.velocity * dt + (dt * dt / S(2)) * opt.gravity;
+inline bool free_flight(Particle<S>& p, const FreeFlightStep<S>& f) {
+  if (!f.possible || !(p.free_radius > S(0)) || p.free_key != particle_ball_key(f.set_key, p.radius)) return false;
+  const Vec3<S> d = p.velocity * f.dt + f.half_g_dt2;
   if (d.squaredNorm() == S(0)) return false;
   const S R2 = p.free_radius * p.free_radius;
   const Vec3<S> e = p.position + d;
   if (!((p.position - p.free_center).squaredNorm() <= R2 && (e - p.free_center).squaredNorm() <= R2)) return false;
   p.position = e;
-  p.velocity += opt.gravity * dt;
+  p.velocity += f.g_dt;
   return true;
 }
 
@@ -514,6 +617,13 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colli
   S mu_rest = S(0);
   const bool moving = ctx.moving;
   const bool use_free_ball = ctx.use_free_ball;
+  if (use_free_ball) {  // a ball found for other colliders or another radius is dropped
+    const std::uint64_t key = particle_ball_key(ctx.ball_key, p.radius);
+    if (p.free_key != key) {
+      p.free_radius = S(0);
+      p.free_key = key;
+    }
+  }
 
   for (int it = 0;; ++it) {
     // acceleration and velocity constrained by the resting contacts of this step
@@ -627,6 +737,35 @@ template <class S> inline void validate_particle(const Particle<S>& p, std::size
     ok &= int(std::abs(p.position[k]) <= lim) & int(std::abs(p.free_center[k]) <= lim) & int(std::abs(p.velocity[k]) * dt <= lim);
   if (IMPACT_UNLIKELY(!ok)) reject_particle(p, index, dt, where);
 }
+/// validate_particle for every particle, in blocks of 64: a block passes at once when the sum of
+/// the magnitudes of its positions, free-ball centres and radii is within CoordinateRange, the
+/// sum of its velocities' magnitudes times dt too, no radius is negative and no free radius NaN
+/// (the sums of non-negative terms, rounded, are at least each term, and are NaN or infinite when
+/// a term is); else each of its particles is checked on its own, which throws for the first that
+/// fails. The same rule as validate_particle's, in a few vector additions a particle.
+template <class S> inline void validate_particles(const std::vector<Particle<S>>& ps, S dt, const char* where) {
+  constexpr S lim = CoordinateRange<S>::max;
+  constexpr std::size_t block = 64;
+  for (std::size_t b = 0; b < ps.size(); b += block) {
+    const std::size_t e = std::min(ps.size(), b + block);
+    Vec3<S> sx = Vec3<S>::Zero(), sc = Vec3<S>::Zero(), sv = Vec3<S>::Zero();
+    S sr = S(0), rmin = S(0);
+    int nan = 0;
+    for (std::size_t i = b; i < e; ++i) {
+      const Particle<S>& p = ps[i];
+      sx += p.position.cwiseAbs();
+      sc += p.free_center.cwiseAbs();
+      sv += p.velocity.cwiseAbs();
+      sr += p.radius;
+      rmin = std::min(rmin, p.radius);
+      nan += int(p.free_radius != p.free_radius);
+    }
+    const S sum = (sx + sc).sum() + sr;
+    if (IMPACT_LIKELY(sum <= lim && sv.sum() * dt <= lim && rmin >= S(0) && nan == 0)) continue;
+    for (std::size_t i = b; i < e; ++i) validate_particle(ps[i], i, dt, where);
+  }
+}
+
 /// The checks of validate_particle one by one, throwing for the first that fails.
 template <class S> IMPACT_NOINLINE void reject_particle(const Particle<S>& p, std::size_t index, S dt, const char* where) {
   constexpr S lim = CoordinateRange<S>::max;
@@ -707,13 +846,14 @@ template <class S, class BV, class... X>
 StepStats step_particles(std::vector<Particle<S>>& particles, const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
   detail::validate_step_options(dt, opt, "step_particles");
   colliders.validate("step_particles");
-  for (std::size_t i = 0; i < particles.size(); ++i) detail::validate_particle(particles[i], i, dt, "step_particles");
+  detail::validate_particles(particles, dt, "step_particles");
   const detail::StepContext<S> ctx(colliders, dt, opt);
+  const detail::FreeFlightStep<S> flight(dt, opt, ctx);
   const auto run = [&](std::size_t begin, std::size_t end) {
     StepStats st;
     detail::NoLegObserver none;
     for (std::size_t i = begin; i < end; ++i) {
-      if (detail::free_flight(particles[i], dt, opt, ctx)) continue;
+      if (detail::free_flight(particles[i], flight)) continue;
       st += detail::step_particle_in(particles[i], colliders, dt, opt, ctx, none);
     }
     return st;
