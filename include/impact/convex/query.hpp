@@ -29,8 +29,10 @@
 ///                                     then as the other pairs;
 ///                                     boolean and distance as the other pairs below
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
-///                                     (gjk_distance.hpp); penetration: cylinder against cylinder
-///                                     or cone first through the certified candidates of
+///                                     (gjk_distance.hpp); penetration: cylinders and cones with
+///                                     parallel axes in closed form (convex/parallel_axes.hpp);
+///                                     cylinder against cylinder or cone
+///                                     first through the certified candidates of
 ///                                     convex/cylinder_pair.hpp, cone against box through those of
 ///                                     convex/cone_box_pair.hpp, then EPA with the local
 ///                                     certificate of convex/cone_box_terms.hpp, else the own EPA (convex/epa.hpp;
@@ -60,6 +62,7 @@
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
 #include "impact/convex/local_certificate.hpp"
+#include "impact/convex/parallel_axes.hpp"
 #include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/convex/triangle_shape.hpp"
@@ -429,6 +432,13 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
     }
   }
   ConvexContact<S> c;
+  if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) {  // parallel axes: closed form
+    c.iterations += 1;
+    c.normal = pa.rotate(c.normal);
+    c.point = pa.apply(c.point);
+    settle_certified_contact(a, pa, b, pb, c);
+    return c;
+  }
   bool certified;
   if constexpr (std::is_same_v<B, Cone<S>>) {
     certified = cylinder_cone_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
@@ -490,6 +500,22 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
                                            : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
   g.iterations += 1 + c.iterations;
   return g;
+}
+
+/// Two cones: the closed form of convex/parallel_axes.hpp when their axes are parallel, else the
+/// general penetration.
+template <class S>
+ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb,
+                                       const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  ConvexContact<S> c;
+  if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * query_scale<S>(a, b), c)) {
+    c.normal = pa.rotate(c.normal);
+    c.point = pa.apply(c.point);
+    settle_certified_contact(a, pa, b, pb, c);
+    return c;
+  }
+  return general_penetration(a, pa, b, pb, o);
 }
 
 /// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
@@ -690,6 +716,8 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration) return cylinder_pair_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Cylinder<S>>) {
       if (!options.libccd_penetration) return swapped(cylinder_pair_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Cone<S>>) {
+      if (!options.libccd_penetration) return cone_pair_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, Box<S>>) {
       if (!options.libccd_penetration) return cone_box_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cone<S>>) {

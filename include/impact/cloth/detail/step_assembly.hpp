@@ -58,8 +58,8 @@ void Stepper<S>::assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic,
   }
   check_coords(sys_.X0, "cloth_collision_step: rigid obstacle at pose0");
   check_coords(sys_.X1, "cloth_collision_step: rigid obstacle at pose1");
-  changed_.assign(static_cast<std::size_t>(nv), 1);
-  path_.assign(static_cast<std::size_t>(nv), 0.0);
+  refill(changed_, static_cast<std::size_t>(nv), std::uint8_t(1));
+  refill(path_, static_cast<std::size_t>(nv), 0.0);
   x1_seen_ = sys_.X1;
   moves_noted_ = 0;
   // Coordinate scale, for the rounding margin of distances computed in double.

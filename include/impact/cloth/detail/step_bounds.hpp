@@ -40,10 +40,10 @@ double Stepper<S>::relative_motion(const Prim& p) const {
   const int split = p.ee ? 2 : 1;
   Vec3<double> d[4];
   for (int k = 0; k < 4; ++k) d[k] = p1(p.v[k]) - p0(p.v[k]);
-  double m = 0;
+  double m2 = 0;  // the largest squared norm: one square root (the same value, sqrt being monotone)
   for (int i = 0; i < split; ++i)
-    for (int j = split; j < 4; ++j) m = std::max(m, (d[i] - d[j]).norm());
-  return m;
+    for (int j = split; j < 4; ++j) m2 = std::max(m2, (d[i] - d[j]).squaredNorm());
+  return std::sqrt(m2);
 }
 
 /// A lower bound on the pair's distance over the whole step, returned when it exceeds

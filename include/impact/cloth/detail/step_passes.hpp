@@ -62,55 +62,64 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::detect() {
   return test_changed();
 }
 
+/// The candidates with a vertex moved since the last pass (changed_) and the last hits are
+/// listed in increasing index order, less those whose proof from an earlier pass still holds
+/// (kept); each listed one is proved apart by a bound or by sampling (its key noted), or else
+/// tested, the CCD's search deciding unless sampling found a clear hit. Returns the hits,
+/// earliest first (in index order among equal times).
 template <class S>
 std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   note_moves();
-  // The candidates to test, in increasing index order: those with a moved vertex (by a scan
-  // when many vertices moved, through the incidence index otherwise) and the last hits, less
-  // those whose proof from an earlier pass still holds (kept).
+  // The candidates to test: by one scan of every candidate when many vertices moved (the last
+  // hits marked first, so that the scan lists them in order too); else through the vertex ->
+  // candidate index (the candidates appended since it was built by a scan of those), then
+  // sorted, or listed by a scan of the stamps when many were marked (cheaper than sorting).
   std::vector<std::uint32_t>& todo = todo_;
   todo.clear();
-  std::size_t moved = 0;
+  std::size_t moved = 0, listed = 0;
   for (auto c : changed_) moved += c;
   if (++stamp_now_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), stamp_now_ = 1;
+  for (const auto& h : last_hits_) stamp_[h.c] = stamp_now_;
+  auto touched = [&](const Prim& p) {
+    return changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])];
+  };
   if (moved * 8 >= changed_.size()) {
-    for (std::size_t c = 0; c < cand_.size(); ++c) {
-      const Prim& p = cand_[c];
-      if (changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])])
-        todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
-    }
-  } else if (moved > 0) {
-    if (inc_off_.empty() || 4 * (cand_.size() - inc_n_) > inc_n_) build_incidence();
-    for (std::size_t v = 0; v < changed_.size(); ++v) {
-      if (!changed_[v]) continue;
-      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
-        if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, todo.push_back(inc_[k]);
-    }
-    for (std::size_t c = inc_n_; c < cand_.size(); ++c) {
-      const Prim& p = cand_[c];
-      if (stamp_[c] != stamp_now_ &&
-          (changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])]))
-        todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
-    }
-  }
-  for (const auto& h : last_hits_)
-    if (stamp_[h.c] != stamp_now_) stamp_[h.c] = stamp_now_, todo.push_back(h.c);
-  // Increasing order: by a scan of the stamps when many are marked (cheaper than sorting them).
-  if (todo.size() * 16 >= cand_.size()) {
-    todo.clear();
     for (std::size_t c = 0; c < cand_.size(); ++c)
-      if (stamp_[c] == stamp_now_) todo.push_back(static_cast<std::uint32_t>(c));
+      if (stamp_[c] == stamp_now_ || touched(cand_[c])) {
+        ++listed;
+        if (!kept(c)) todo.push_back(static_cast<std::uint32_t>(c));
+      }
   } else {
-    std::sort(todo.begin(), todo.end());
+    for (const auto& h : last_hits_) todo.push_back(h.c);
+    if (moved > 0) {
+      if (inc_off_.empty() || 4 * (cand_.size() - inc_n_) > inc_n_) build_incidence();
+      for (std::size_t v = 0; v < changed_.size(); ++v) {
+        if (!changed_[v]) continue;
+        for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
+          if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, todo.push_back(inc_[k]);
+      }
+      for (std::size_t c = inc_n_; c < cand_.size(); ++c)
+        if (stamp_[c] != stamp_now_ && touched(cand_[c])) todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
+    }
+    if (todo.size() * 16 >= cand_.size()) {
+      todo.clear();
+      for (std::size_t c = 0; c < cand_.size(); ++c)
+        if (stamp_[c] == stamp_now_) todo.push_back(static_cast<std::uint32_t>(c));
+    } else {
+      std::sort(todo.begin(), todo.end());
+    }
+    listed = todo.size();
+    todo.erase(std::remove_if(todo.begin(), todo.end(), [&](std::uint32_t c) { return kept(c); }), todo.end());
   }
-  const std::size_t listed = todo.size();
-  todo.erase(std::remove_if(todo.begin(), todo.end(), [&](std::uint32_t c) { return kept(c); }), todo.end());
   stats_.ccd_kept += listed - todo.size();
-  // Results only for the pairs that ran a test (ran[i]); the buffer is kept between passes.
-  if (res_.size() < todo.size()) res_.resize(todo.size());
-  CcdResult<S>* res = res_.data();
-  std::vector<std::uint8_t>& ran = ran_;
-  ran.assign(todo.size(), 0);
+  // First each listed candidate's bounds and sampling (status 1: the search decides, 2: sampling
+  // found a clear hit at time toi[i]); then the search for status 1, with results stored for
+  // the candidates of status 1 and 2 alone (a CcdResult per listed candidate was 56 bytes each
+  // for millions of them, mostly proved apart).
+  std::vector<std::uint8_t>& status = status_;
+  status.assign(todo.size(), 0);
+  std::vector<double>& toi = toi_;
+  if (toi.size() < todo.size()) toi.clear(), toi.resize(todo.size() + todo.size() / 2);
   parallel_for(todo.size(), opt_.threads, [&](std::size_t i) {
     const std::size_t c = todo[i];
     if (is_excluded(cand_[c])) return;
@@ -123,21 +132,36 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
     // Clear hits and misses need no search (sample_pair); every other pair gets the CCD (coarse
     // in the impulse passes, as given in the zones and the fail-safe).
     double sampled_bound = 0;
-    const Sampled sp = sample_pair(cand_[c], res[i], sampled_bound);
+    CcdResult<S> r;
+    const Sampled sp = sample_pair(cand_[c], r, sampled_bound);
     if (sp == Sampled::miss) {
       key_[c] = key_of(cand_[c], sampled_bound);
       return;
     }
-    if (sp == Sampled::unknown) res[i] = ccd_at(cand_[c], false, /*coarse=*/!precise_);
-    ran[i] = 1;
+    if (sp == Sampled::hit) toi[i] = static_cast<double>(r.toi);
+    status[i] = sp == Sampled::hit ? 2 : 1;
   });
-  std::size_t tested = 0;
-  for (auto r : ran) tested += r;
-  stats_.ccd_tests += tested;
-  stats_.ccd_skipped += todo.size() - tested;
-  std::vector<Hit> hits;
+  std::vector<std::uint32_t>& run = run_;
+  run.clear();
   for (std::size_t i = 0; i < todo.size(); ++i)
-    if (ran[i] && res[i].hit) hits.push_back({cand_[todo[i]], res[i], todo[i]});
+    if (status[i]) run.push_back(static_cast<std::uint32_t>(i));
+  if (res_.size() < run.size()) res_.resize(run.size());
+  CcdResult<S>* res = res_.data();
+  parallel_for(run.size(), opt_.threads, [&](std::size_t k) {
+    const std::size_t i = run[k], c = todo[i];
+    if (status[i] == 2) {
+      res[k] = CcdResult<S>();  // as sample_pair's hit
+      res[k].hit = true;
+      res[k].toi = static_cast<decltype(res[k].toi)>(toi[i]);
+    } else {
+      res[k] = ccd_at(cand_[c], false, /*coarse=*/!precise_);
+    }
+  });
+  stats_.ccd_tests += run.size();
+  stats_.ccd_skipped += todo.size() - run.size();
+  std::vector<Hit> hits;
+  for (std::size_t k = 0; k < run.size(); ++k)
+    if (res[k].hit) hits.push_back({cand_[todo[run[k]]], res[k], todo[run[k]]});
   std::fill(changed_.begin(), changed_.end(), 0);
   std::stable_sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi < y.r.toi; });
   last_hits_ = hits;

@@ -11,6 +11,7 @@
 #include "impact/core/types.hpp"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -36,13 +37,26 @@ struct Prim {
 /// millions of candidates does not allocate and fault in its arrays afresh.
 template <class S>
 struct StepBuffers {
-  std::vector<Prim> cand;
+  std::vector<Prim> cand, found;
   std::vector<Aabb<S>> ebox, gbox, tbox, old_gbox, old_tbox, edge_boxes;
-  std::vector<double> d0, path;
-  std::vector<std::uint8_t> d0_exact, changed, ran;
-  std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo;
+  std::vector<double> d0, path, key, toi;
+  std::vector<std::uint8_t> d0_exact, changed, status;
+  std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo, run;
   std::vector<CcdResult<S>> res;
+  Vertices<S> x1_seen;
 };
+
+/// Sets v to n copies of x. Storage that must grow gets half as much again in reserve: the
+/// candidates grow by up to a third per step while a stack lands, and an array allocated at
+/// exactly its size would be allocated, and its pages faulted in, afresh in each such step.
+template <class T>
+void refill(std::vector<T>& v, std::size_t n, const T& x) {
+  if (n > v.capacity()) {
+    v.clear();
+    v.reserve(n + n / 2);
+  }
+  v.assign(n, x);
+}
 
 /// Everything kept between steps (in a workspace): combined arrays, the tree.
 template <class S>

@@ -189,17 +189,21 @@ class Stepper {
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
   std::vector<Hit> last_hits_;
-  std::vector<CcdResult<S>>& res_ = buf_.res;  // test_changed's buffers
+  // test_changed's buffers: the candidates to test, each one's outcome, those that ran a test
+  // and their results
   std::vector<std::uint32_t>& todo_ = buf_.todo;
-  std::vector<std::uint8_t>& ran_ = buf_.ran;
+  std::vector<std::uint8_t>& status_ = buf_.status;
+  std::vector<std::uint32_t>& run_ = buf_.run;
+  std::vector<double>& toi_ = buf_.toi;
+  std::vector<CcdResult<S>>& res_ = buf_.res;
   std::vector<std::uint8_t>& changed_ = buf_.changed;
   // Proofs kept across the passes of a step (note_moves, kept): per vertex, the path length of its
   // end position over the step's passes and the end positions at the last pass; per candidate,
   // the key below which the sum of its vertices' path lengths keeps its last proof valid (< 0:
   // none).
   std::vector<double>& path_ = buf_.path;
-  Vertices<S> x1_seen_;
-  std::vector<double> key_;
+  Vertices<S>& x1_seen_ = buf_.x1_seen;
+  std::vector<double>& key_ = buf_.key;
   int moves_noted_ = 0;
   static constexpr int moves_cap_ = 1000;
 };
