@@ -115,8 +115,8 @@ TEST(FreeBallStale, MeshPoseMovedAfterTheBallsWereFound) {
 
 TEST(FreeBallStale, MeshVerticesEditedInPlaceAfterTheBallsWereFound) {
   // the same MeshBvh (same address, same triangle count) moved by set_vertices: only its
-  // revision tells the step that the balls were found for other coordinates; with a grid, the
-  // grid is rebuilt into the same object, as the collider's contract asks
+  // revision tells the step that the balls were found for other coordinates; the collider is
+  // refreshed and, with a grid, the grid rebuilt into the same object, as their contracts ask
   for (const bool with_grid : {true, false})
     for (const bool one_at_a_time : {false, true}) {
       StaleScene sc(with_grid);
@@ -124,6 +124,7 @@ TEST(FreeBallStale, MeshVerticesEditedInPlaceAfterTheBallsWereFound) {
       compute_balls(ps, sc.cs);
       const Vec3<StaleS> t(1.5, 0.25, 0);
       sc.bvh.set_vertices(sc.box.V.rowwise() + t.transpose());  // dyadic: the moved box is exact
+      sc.cs.meshes[0].refresh();  // the collider's normals and scale (the step throws without it)
       if (with_grid) {
         DistanceGridConfig<StaleS> cfg;
         cfg.resolution = 8;

@@ -25,8 +25,8 @@ template <class S> struct Particle {
   /// shapes, sides, strategies, mesh addresses and mesh revisions, and of this particle's radius):
   /// a step whose digest differs drops the ball, so adding, removing or moving colliders, editing
   /// a mesh's vertices in place (MeshBvh::set_vertices, which takes a new MeshBvh::revision) or
-  /// growing the radius needs no reset. (After set_vertices a collider's distance grid and wide
-  /// tree must be rebuilt from the edited mesh anyway: they hold copies.) A convex shape's
+  /// growing the radius needs no reset. (After set_vertices the collider needs refresh(), and its
+  /// distance grid and wide tree a rebuild from the edited mesh: they hold copies.) A convex shape's
   /// parameters are seen only through its scale and clearance at seven points: after editing one
   /// in place, set free_radius = 0.
   std::uint64_t free_key = 0;
