@@ -285,6 +285,32 @@ TEST(MeshBvhInput, BadInputThrowsWithReason) {
   EXPECT_TRUE(all_finite(m.mesh().V));
 }
 
+TEST(BvhMeshBvh, RevisionChangesWithEveryEditAndFollowsCopies) {
+  // the stamp the particles' free-ball cache reads to see set_vertices() at the same address
+  const auto mesh = random_soup<double>(20, 5);
+  MeshBvh<Aabb<double>> a(mesh);
+  const MeshBvh<Aabb<double>> b(mesh);
+  EXPECT_NE(a.revision(), 0u);
+  EXPECT_NE(a.revision(), b.revision());  // two constructions of the same mesh: two stamps
+  const std::uint64_t r0 = a.revision();
+  a.set_vertices(mesh.V * 2.0);
+  const std::uint64_t r1 = a.revision();
+  EXPECT_NE(r1, r0);
+  EXPECT_NE(r1, b.revision());
+  a.set_vertices(mesh.V);  // the old coordinates again: still a new stamp (no content comparison)
+  EXPECT_NE(a.revision(), r1);
+  EXPECT_NE(a.revision(), r0);
+  const MeshBvh<Aabb<double>> c = a;  // a copy holds the same contents
+  EXPECT_EQ(c.revision(), a.revision());
+  a = b;
+  EXPECT_EQ(a.revision(), b.revision());
+  // a failed edit leaves the stamp (and the tree) as they were
+  Vertices<double> nan = mesh.V;
+  nan(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(a.set_vertices(nan), InvalidInput);
+  EXPECT_EQ(a.revision(), b.revision());
+}
+
 TEST(BvhSingleTree, TraverseVisitsExactlyTheOverlappingPrimitives) {
   const auto mesh = random_soup<double>(1000, 3);
   MeshBvh<Sphere<double>> m(mesh);

@@ -8,7 +8,9 @@
 // 2. A needle capsule (2^42 times longer than wide) 0.003 beside a box, within the tolerance of the
 //    size (1e-10 of 1.7e10), was given a depth of 1.7e5 along a normal off by rounding.
 // 3. A penetration whose bracket rounding left open says limit_reached: it was returned without the
-//    flag for coincident cylinders far from the origin (relative gap 0.019 against 1e-10).
+//    flag for coincident cylinders far from the origin (relative gap 0.019 against 1e-10). Those two
+//    configurations are now answered by the parallel-axes closed form (convex/parallel_axes.hpp), so
+//    the flag itself is reached with tolerances below what rounding lets a solver close.
 #include "impact/convex/query.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/random.hpp"
@@ -16,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
 
 namespace {
@@ -100,9 +103,9 @@ TEST(ConvexFuzzFindings, BracketsCloseAtTheBound) {
   expect_closed_brackets<float>(Cylinder<float>(0.4f, 0.5f), flat_box, 1e-4f, poses, 4);
 }
 
-// Two configurations the fuzzer found: the solver stops without progress (no iteration bound) with
-// a bracket wider than its tolerance. Either the bracket is within the tolerance or the result
-// says limit_reached; a silent open bracket is the defect.
+// Two configurations the fuzzer found: the solver stopped without progress (no iteration bound)
+// with a bracket wider than its tolerance. Either the bracket is within the tolerance or the result
+// says limit_reached; a silent open bracket is the defect. The bracket holds the true depth.
 void expect_closed_or_flagged(double r, const impact::Vec3<double>& ta, const impact::Vec3<double>& tb, double depth) {
   const Cylinder<double> a(r, r), b(r, r);
   RigidTransform<double> pa, pb;
@@ -115,16 +118,60 @@ void expect_closed_or_flagged(double r, const impact::Vec3<double>& ta, const im
   ASSERT_TRUE(c.intersecting);
   const double tolerance = 2 * options.relative_tolerance * impact::detail::query_scale<double>(a, b);
   EXPECT_TRUE(c.depth_gap <= tolerance || c.limit_reached) << "gap " << c.depth_gap << " tolerance " << tolerance;
-  // the bracket [depth - depth_gap, depth] holds the true depth, open or not
   EXPECT_GE(c.depth, depth * (1 - 1e-12));
   EXPECT_LE(c.depth - c.depth_gap, depth * (1 + 1e-12));
 }
 
-TEST(ConvexFuzzFindings, OpenBracketIsFlagged) {
+TEST(ConvexFuzzFindings, FuzzFoundCylindersClosedOrFlagged) {
   expect_closed_or_flagged(0.00189971923828125, impact::Vec3<double>(-16, -16, -16), impact::Vec3<double>(-16, -16, -16),
                            2 * 0.00189971923828125);  // coincident: across the radius
   expect_closed_or_flagged(28.125, impact::Vec3<double>(-8, -8, -8), impact::Vec3<double>(-8, -8, -28.75),
                            2 * 28.125 - 20.75);  // side by side, offset across their axes
+}
+
+// A tolerance the solver cannot reach (below the rounding of the support points for the own EPA;
+// below libccd's EPA tolerance, epa_relative_tolerance, for libccd) leaves brackets open without an
+// iteration bound being hit: each such result must say limit_reached, and some of them must get the
+// flag from penetration_unchecked's check rather than from the solver (else this test would not
+// reach that check). Open or not, the bracket holds the depth found with the default tolerance.
+template <class S, class A, class B>
+void expect_open_brackets_flagged(const A& a, const B& b, bool libccd, S tolerance, std::uint64_t seed) {
+  impact::test::Rng rng(seed);
+  const int poses = 60;  // a few milliseconds, also under the sanitizers
+  impact::ConvexQueryOptions<S> tight;
+  tight.libccd_penetration = libccd;
+  tight.relative_tolerance = tolerance;
+  const impact::ConvexQueryOptions<S> reference_options;
+  const S scale = impact::detail::query_scale<S>(a, b);
+  const S slack = libccd ? S(100) : S(2);
+  int intersecting = 0, flagged_by_check = 0;
+  for (int k = 0; k < poses; ++k) {
+    RigidTransform<S> pa, pb;
+    pa.R = rng.rotation().cast<S>();
+    pb.R = rng.rotation().cast<S>();
+    pb.t = rng.vec(-0.3, 0.3).cast<S>();
+    const auto c = impact::convex_penetration(a, pa, b, pb, tight);
+    const auto reference = impact::convex_penetration(a, pa, b, pb, reference_options);
+    if (!c.intersecting || !reference.intersecting || reference.limit_reached) continue;
+    ++intersecting;
+    if (!c.refined && c.depth_gap > slack * tolerance * scale) { EXPECT_TRUE(c.limit_reached) << "pose " << k << " gap " << c.depth_gap; }
+    if (c.limit_reached && !impact::detail::penetration_by_method(a, pa, b, pb, tight).limit_reached) ++flagged_by_check;
+    const S margin = S(4) * reference_options.relative_tolerance * scale + reference.depth_gap;
+    EXPECT_GE(c.depth, reference.depth - margin) << "pose " << k;
+    EXPECT_LE(c.depth - c.depth_gap, reference.depth + margin) << "pose " << k;
+  }
+  EXPECT_GT(intersecting, poses / 2);
+  EXPECT_GT(flagged_by_check, 0) << "of " << intersecting;
+}
+
+TEST(ConvexFuzzFindings, OpenBracketIsFlagged) {
+  const Box<double> box(Eigen::Vector3d(0.5, 0.3, 0.4));
+  const Cone<double> cone(0.4, 0.5);
+  const Cylinder<double> cylinder(0.3, 0.6);
+  expect_open_brackets_flagged<double>(cylinder, box, false, 1e-17, 11);  // the own EPA
+  expect_open_brackets_flagged<double>(box, cone, false, 1e-17, 12);
+  expect_open_brackets_flagged<double>(cylinder, box, true, 1e-14, 13);  // libccd's EPA
+  expect_open_brackets_flagged<double>(cylinder, cone, true, 1e-14, 14);
 }
 
 TEST(ConvexFuzzFindings, NeedleCapsuleBesideABox) {

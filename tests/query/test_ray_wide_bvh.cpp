@@ -430,7 +430,7 @@ TYPED_TEST(WideBvhTest, FloatSlabAtLargeMagnitudes) {
   EXPECT_GT(entered, 200 / kWideSamples);
 }
 
-// float_round_up / float_round_down (the float node test's bounds) against a reference by
+// float_round_up / float_round_down / float_bounds (the float node test's bounds) against a reference by
 // nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends;
 // next_below against std::nextafter.
 TEST(WideBvh, FloatRoundingHelpers) {
@@ -451,6 +451,11 @@ TEST(WideBvh, FloatRoundingHelpers) {
     EXPECT_TRUE(dn == rd && std::signbit(dn) == std::signbit(rd)) << x;
     EXPECT_GE(double(u), x) << x;
     EXPECT_LE(double(dn), x) << x;
+    // float_bounds (the cast's bounds of t_max, from one rounding): both at once, the same bits
+    float bd = 0.0f, bu = 0.0f;
+    detail::float_bounds(x, bd, bu);
+    EXPECT_TRUE(bu == ru && std::signbit(bu) == std::signbit(ru)) << x;
+    EXPECT_TRUE(bd == rd && std::signbit(bd) == std::signbit(rd)) << x;
     // next_below (the bound after a hit) is std::nextafter toward -infinity, in double and float
     const double nd = detail::next_below(x), rnd = std::nextafter(x, -std::numeric_limits<double>::infinity());
     EXPECT_TRUE(nd == rnd && std::signbit(nd) == std::signbit(rnd)) << x;

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Stale free balls (response/particle_step.hpp, Particle::free_center / free_radius): a ball is
 // computed for one collider set and one particle radius; when the set changes between calls (a
-// mesh's pose moves, a collider is added) or the particle's radius grows, a ball kept from before
-// must not let any leg skip its collision tests. Also legs that end exactly on a ball's boundary.
+// mesh's pose moves, its vertices are edited in place, a collider is added) or the particle's
+// radius grows, a ball kept from before must not let any leg skip its collision tests. Also legs that end exactly on a ball's boundary.
 // The oracle is exact: an axis-aligned box mesh (half extents 1, translated by dyadic amounts, so
 // its world coordinates are exact) is closed and two-sided, so every particle keeps its side, and
 // whether a point is inside the box is a comparison of coordinates.
@@ -109,6 +109,27 @@ TEST(FreeBallStale, MeshPoseMovedAfterTheBallsWereFound) {
       // the box jumps by 1.5 along x: its surface now runs through many particles' balls
       const Vec3<StaleS> t(1.5, 0.25, 0);
       sc.cs.meshes[0].motion.pose.t = t;
+      expect_sides_kept(ps, sc.cs, t, 5, one_at_a_time, with_grid ? "grid" : "tree");
+    }
+}
+
+TEST(FreeBallStale, MeshVerticesEditedInPlaceAfterTheBallsWereFound) {
+  // the same MeshBvh (same address, same triangle count) moved by set_vertices: only its
+  // revision tells the step that the balls were found for other coordinates; the collider is
+  // refreshed and, with a grid, the grid rebuilt into the same object, as their contracts ask
+  for (const bool with_grid : {true, false})
+    for (const bool one_at_a_time : {false, true}) {
+      StaleScene sc(with_grid);
+      std::vector<Particle<StaleS>> ps = stale_particles(kStaleParticles, 75);
+      compute_balls(ps, sc.cs);
+      const Vec3<StaleS> t(1.5, 0.25, 0);
+      sc.bvh.set_vertices(sc.box.V.rowwise() + t.transpose());  // dyadic: the moved box is exact
+      sc.cs.meshes[0].refresh();  // the collider's normals and scale (the step throws without it)
+      if (with_grid) {
+        DistanceGridConfig<StaleS> cfg;
+        cfg.resolution = 8;
+        sc.grid = DistanceGrid<StaleS>(sc.bvh, cfg);
+      }
       expect_sides_kept(ps, sc.cs, t, 5, one_at_a_time, with_grid ? "grid" : "tree");
     }
 }

@@ -222,6 +222,16 @@ TYPED_TEST(ParticleValidation, BadCollidersThrow) {
     sc.colliders.meshes[0].wide_tree = &wrong;
     expect_step_rejects(ps, sc.colliders, dt, opt, {"mesh collider 3 wide_tree"});
   }
+  {  // the mesh edited after the collider was made (its pseudo-normals and scale describe the old
+     // surface): rejected until refresh(), which recomputes them
+    Scene<S> sc;
+    sc.slab.set_vertices(sc.slab.mesh().V * S(2));
+    expect_step_rejects(ps, sc.colliders, dt, opt, {"mesh collider 3 mesh", "set_vertices", "refresh()"});
+    sc.colliders.meshes[0].refresh();
+    EXPECT_EQ(sc.colliders.meshes[0].mesh_revision(), sc.slab.revision());
+    EXPECT_EQ(sc.colliders.meshes[0].scale(), S(2) * MeshCollider<Aabb<S>>(Scene<S>().slab).scale());
+    EXPECT_NO_THROW(sc.colliders.validate("refreshed"));
+  }
   {  // advance() with a NaN dt moves nothing
     Scene<S> sc;
     sc.colliders.spheres[0].motion.linear_velocity = Vec3<S>(1, 0, 0);

@@ -26,6 +26,7 @@
 #include "impact/bvh/build_incremental.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/refit.hpp"
+#include "impact/detail/revision.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
 
 namespace impact {
@@ -41,7 +42,7 @@ template <class BV> class MeshBvh {
   using S = typename Traits::Scalar;
 
   /// Validates and copies the mesh, then builds the tree. Throws InvalidInput on bad input.
-  MeshBvh(const Vertices<S>& V, const Faces& F, const MeshBvhConfig& cfg = {}) : mesh_(V, F), cfg_(cfg) {
+  MeshBvh(const Vertices<S>& V, const Faces& F, const MeshBvhConfig& cfg = {}) : mesh_(V, F), cfg_(cfg), revision_(detail::next_revision()) {
     validate_mesh(mesh_.V, mesh_.F);
     build();
   }
@@ -51,6 +52,11 @@ template <class BV> class MeshBvh {
   const TriangleMesh<S>& mesh() const { return mesh_; }
   const MeshBvhConfig& config() const { return cfg_; }
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
+  /// A stamp of this tree's contents: unique in the process to each construction and each
+  /// set_vertices() call (never 0), carried along by copies and assignment (a copy holds the same
+  /// contents). Caches of results computed on the mesh (the particles' free balls) compare it to
+  /// notice an edit in place; O(1).
+  std::uint64_t revision() const { return revision_; }
   /// An upper bound of |x|_inf over the mesh's vertices and the tree's node centres: the scale at
   /// which the mesh queries bound the rounding of moving this mesh by a pose (mesh_collide.hpp).
   S coordinate_bound() const { return coordinate_bound_; }
@@ -103,6 +109,7 @@ template <class BV> class MeshBvh {
     refit(tree_, fitter([this](std::int32_t k) { return triangle(k); }), mode);
     update_coordinate_bound();
     mark_repeats();
+    revision_ = detail::next_revision();
   }
 
  private:
@@ -179,6 +186,7 @@ template <class BV> class MeshBvh {
   std::vector<std::int32_t> ids_;  // leaf position -> row of F
   std::vector<bool> repeats_;      // repeats_previous() by leaf position; empty when none repeats
   S coordinate_bound_ = 0;
+  std::uint64_t revision_ = 0;  // revision()
 };
 
 }  // namespace impact

@@ -106,19 +106,25 @@ template <class S, int W = 4> struct WideCast {
   std::int32_t best_block = -1;  // its block and lane
   int best_lane = 0;
   Vec3<S> best_bary = Vec3<S>::Zero();
-  float exit_f, bound_f;  // the float node test's exit bound (a float >= best) and entry bound (<= limit)
+  float exit_f = 0.0f, bound_f = 0.0f;  // the float node test's exit bound (a float >= best) and entry bound (<= limit)
   // after a hit: float keys at or above tie_f may be within rounding of the hit (redecide)
   float tie_f = std::numeric_limits<float>::infinity();
-  PreparedRay<S> pr;
-  bool leaf_seen = false;
+  /// What the triangle tests need of the ray: made at the first leaf (most short casts reach
+  /// none, and then pay nothing for it, not even its default members).
+  struct LeafSetup {
+    PreparedRay<S> pr;
+    BlockTest<S> block_test;
+  };
+  std::optional<LeafSetup> leaf_setup;
   std::optional<WideSlab<S>> slab;  // in S: set up when first needed
-  BlockTest<S> block_test;  // set up at the first leaf
   std::size_t node_tests = 0, triangle_tests = 0;
 
   /// `o_` and `d_` must outlive the cast.
   WideCast(const WideBvh<S, W>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd, bool avx = true)
       : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), float_slab(o_, inv, w.coordinate_bound()),
-        best(t_max_), limit(t_max_), exit_f(float_round_up(double(t_max_))), bound_f(float_round_down(double(t_max_))) {}
+        best(t_max_), limit(t_max_) {
+    float_bounds(double(t_max_), bound_f, exit_f);
+  }
 
   /// The keys in S of a node's children (WideSlab, or the box test for a zero direction component).
   void double_keys(const Node& n, S (&keys)[W]) {
@@ -156,6 +162,7 @@ template <class S, int W = 4> struct WideCast {
         return;
       }
     }
+    PreparedRay<S>& pr = leaf_setup->pr;
     pr.ray.t_max = best;
     const auto h = ray_mesh_triangle_hit(pr, inv, wide.block_triangle(b, c));
     if (h && (best_k < 0 || h->t < best)) record(b, c, h->t, Vec3<S>(h->u, h->v, h->w));
@@ -190,11 +197,12 @@ template <class S, int W = 4> struct WideCast {
   /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
   /// scalar test.
   IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
-    if (!leaf_seen) {
-      pr = PreparedRay<S>(Ray<S>(o, d, t_max));
-      block_test.set(pr, use_avx);
-      leaf_seen = true;
+    if (!leaf_setup) {
+      leaf_setup.emplace();
+      leaf_setup->pr = PreparedRay<S>(Ray<S>(o, d, t_max));
+      leaf_setup->block_test.set(leaf_setup->pr, use_avx);
     }
+    const BlockTest<S>& block_test = leaf_setup->block_test;
     const bool repeats = wide.has_repeats();
     const std::int32_t first = wide.block_first(block);
     typename BlockTest<S>::LaneValues values;  // of the block being tested, when it passes a lane
@@ -265,6 +273,14 @@ template <class S, int W = 4> struct WideCast {
   /// The traversal: nearest child first, the others on the stack with their keys (a fixed array
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
+#if defined(IMPACT_WIDE_AVX)
+    if constexpr (W == 8) {  // the common case in one frame: the AVX loop with the fixed stack
+      if (wide.depth() <= kFixedDepth && use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
+        run_avx_fixed();
+        return;
+      }
+    }
+#endif
     if (wide.depth() <= kFixedDepth) {
       TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;  // W - 1 entries a level at most
       run(stack);
@@ -291,6 +307,11 @@ template <class S, int W = 4> struct WideCast {
   /// The traversal of an 8-wide tree with the AVX node test (compiled for AVX; called when the CPU
   /// has it): the loop of run() with eight children tested at once.
   template <class Stack> IMPACT_WIDE_AVX_TARGET void run_avx(Stack& stack);
+  /// run_avx with the fixed stack of run(), declared in the same frame.
+  IMPACT_WIDE_AVX_TARGET void run_avx_fixed() {
+    TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;
+    run_avx(stack);
+  }
 #endif
 
   template <class Stack> void run(Stack& stack) {

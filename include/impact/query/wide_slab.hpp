@@ -130,21 +130,42 @@ template <class S> class WideSlab {
   S o_[3], inv_[3];
 };
 
-/// The smallest float >= x (x not NaN; +infinity above the float range), without libm.
+/// The smallest float >= x (x not NaN; +infinity above the float range), without libm or
+/// branches: f = float(x) and, when f < x, the next float up, one more unit in the last place of
+/// |f| for a sign bit 0 (+0 becomes the smallest subnormal) or one less for a sign bit 1 (f = -0
+/// is never below x: it is the rounding of x in [-2^-150, 0]).
 inline float float_round_up(double x) {
   const float f = static_cast<float>(x);
-  if (!(double(f) < x)) return f;
-  // the next float up: one more unit in the last place of |f| (f >= 0) or one less (f < 0)
-  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
   std::uint32_t b;
   std::memcpy(&b, &f, sizeof b);
-  b = f > 0.0f ? b + 1 : b - 1;
+  const std::uint32_t below = double(f) < x ? 1u : 0u;
+  b += below - ((below & (b >> 31)) << 1);  // +1, -1 or 0
   float g;
   std::memcpy(&g, &b, sizeof g);
   return g;
 }
 /// The largest float <= x (x not NaN; -infinity below the float range), without libm.
 inline float float_round_down(double x) { return -float_round_up(-x); }
+/// float_round_down(x) and float_round_up(x) from one rounding of x (x not NaN): f = float(x)
+/// is one of them, and the other is its neighbour when f != x.
+inline void float_bounds(double x, float& down, float& up) {
+  const float f = static_cast<float>(x);
+  std::uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  const double fd = double(f);
+  const std::uint32_t below = fd < x ? 1u : 0u, above = fd > x ? 1u : 0u;
+  const std::uint32_t neg = b >> 31;
+  // the neighbour up of f below x (+1 on the bits for a sign bit 0, -1 for 1: +0 becomes the
+  // smallest subnormal) or down of f above x (-1 for a sign bit 0, +1 for 1: -0, the rounding of
+  // x in [-2^-150, 0), becomes the smallest negative subnormal; +0 is never above x)
+  const std::uint32_t ub = b + below - ((below & neg) << 1);
+  const std::uint32_t db = b - above + ((above & neg) << 1);
+  float u, d;
+  std::memcpy(&u, &ub, sizeof u);
+  std::memcpy(&d, &db, sizeof d);
+  up = u;
+  down = d;
+}
 
 /// The largest S below x (x not NaN): std::nextafter(x, -infinity) without libm (the bound of a
 /// cast after a hit).
@@ -303,13 +324,15 @@ template <class S, int W = 4> class WideFloatSlab {
   };
   IMPACT_WIDE_AVX_TARGET Avx avx() const {
     Avx a;
+    // the SSE state's registers hold each value four times already: two of them side by side
+    // (no lambda: it would not be compiled for AVX)
     for (int i = 0; i < 3; ++i) {
-      a.o[i] = _mm256_set1_ps(origin(i));
-      a.inv[i] = _mm256_set1_ps(inverse(i));
+      a.o[i] = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.o[i]), sse_.o[i], 1);
+      a.inv[i] = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.inv[i]), sse_.inv[i], 1);
       a.planes[i] = planes()[i];
       a.planes[3 + i] = planes()[3 + i];
     }
-    a.e = _mm256_set1_ps(e_);
+    a.e = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.e), sse_.e, 1);
     return a;
   }
   /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same operations as the

@@ -33,7 +33,8 @@
 /// meshes, trees, compact and wide trees and grids they point to included), so any number of threads may
 /// step particles against one set at once; step_particles does so itself (StepOptions::threads).
 /// Editing the set (adding colliders, changing poses, advance()) or a mesh it points to
-/// (set_vertices) must not overlap any query.
+/// (set_vertices) must not overlap any query. After set_vertices, call MeshCollider::refresh() (the
+/// steps throw InvalidInput until then) and rebuild its distance grid and wide tree.
 #pragma once
 
 #include "impact/geometry/aabb.hpp"
@@ -424,6 +425,13 @@ template <class BV> struct MeshCollider {
   }
 
   S scale() const { return scale_; }
+  /// The MeshBvh::revision of the mesh the pseudo-normals and scale were computed for: after
+  /// mesh->set_vertices() they describe the old surface, and ColliderSet::validate (every step)
+  /// throws InvalidInput until refresh() is called.
+  std::uint64_t mesh_revision() const { return mesh_revision_; }
+  /// Recomputes the pseudo-normals and scale from the mesh as it is now (after set_vertices; the
+  /// distance grid and wide tree, which hold copies, must be rebuilt by the caller). O(triangles).
+  void refresh() { init(); }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     if (r > S(0)) {
@@ -530,10 +538,12 @@ template <class BV> struct MeshCollider {
       if (len > S(0)) n /= len;
     }
     scale_ = bb.center().cwiseAbs().maxCoeff() + bb.half_diagonal();
+    mesh_revision_ = mesh->revision();
   }
 
   std::vector<Vec3<S>> face_normals_, edge_normals_, vertex_normals_;
   S scale_ = S(0);
+  std::uint64_t mesh_revision_ = 0;  // mesh_revision()
 };
 
 /// All colliders of a scene, one vector per type (planes, spheres, boxes, meshes, then one per
@@ -586,7 +596,8 @@ template <class S, class BV = Aabb<S>, class... Extra> struct ColliderSet {
   /// (validate_pose) and finite velocities (the linear one within CoordinateRange), restitution in [0, 1], friction finite and >= 0, a
   /// strategy and side of the enum; planes with an offset within CoordinateRange and a unit normal (within
   /// rotation_tolerance), spheres with a centre and a radius (>= 0) within CoordinateRange, boxes
-  /// with a centre (validate_pose), rotation axes and half extents (>= 0) within it; meshes with a mesh, and a
+  /// with a centre (validate_pose), rotation axes and half extents (>= 0) within it; meshes with a mesh not
+  /// edited since the collider was made or refreshed (MeshCollider::refresh), and a
   /// compact_tree and a wide_tree built from it when set (same triangle counts). `where` names the caller in the message. O(colliders).
   void validate(const char* where) const {
     // The usual call finds nothing wrong and builds no message: a first pass names nothing, and
@@ -642,6 +653,8 @@ template <class S, class BV = Aabb<S>, class... Extra> struct ColliderSet {
     for (const auto& c : meshes) {
       common(c, "mesh");
       if (c.mesh == nullptr) require(false, where, name("mesh", "mesh") + " is null");
+      if (c.mesh->revision() != c.mesh_revision())
+        require(false, where, name("mesh", "mesh") + " was edited (set_vertices) after the collider was made: call refresh()");
       if (!side_ok(c.side)) require(false, where, name("mesh", "side") + " is not a ColliderSide");
       if (c.compact_tree && c.compact_tree->num_primitives() != static_cast<std::size_t>(c.mesh->num_triangles()))
         require(false, where, name("mesh", "compact_tree") + " was not built from its mesh's tree (primitive counts differ)");

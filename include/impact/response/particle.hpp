@@ -22,11 +22,13 @@ template <class S> struct Particle {
   Vec3<S> free_center = Vec3<S>::Zero();
   S free_radius = S(0);
   /// The collider set and radius the ball was found for (a 64-bit digest of the colliders' poses,
-  /// shapes, sides, strategies and mesh addresses, and of this particle's radius): a step whose
-  /// digest differs drops the ball, so adding, removing or moving colliders or growing the radius
-  /// needs no reset. Editing a mesh's vertices in place (MeshBvh::set_vertices) or a convex
-  /// shape's parameters is not seen: set free_radius = 0 then (a distance grid must be rebuilt
-  /// after such an edit anyway).
+  /// shapes, sides, strategies, mesh addresses and mesh revisions, and of this particle's radius):
+  /// a step whose digest differs drops the ball, so adding, removing or moving colliders, editing
+  /// a mesh's vertices in place (MeshBvh::set_vertices, which takes a new MeshBvh::revision) or
+  /// growing the radius needs no reset. (After set_vertices the collider needs refresh(), and its
+  /// distance grid and wide tree a rebuild from the edited mesh: they hold copies.) A convex shape's
+  /// parameters are seen only through its scale and clearance at seven points: after editing one
+  /// in place, set free_radius = 0.
   std::uint64_t free_key = 0;
 };
 

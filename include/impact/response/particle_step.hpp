@@ -389,8 +389,8 @@ template <class S> struct StepContext {
   bool identity_poses = false;  ///< every backtracking collider's pose is exactly the identity
   /// Digest of what the free balls depend on (Particle::free_key): every collider's effective
   /// strategy and pose, the shapes of planes, spheres and boxes, the sides, each mesh's address,
-  /// triangle count and distance grid, each trailing-type collider's scale and clearance at seven
-  /// points of its frame.
+  /// triangle count, revision (MeshBvh::revision: set_vertices() changes it) and distance grid,
+  /// each trailing-type collider's scale and clearance at seven points of its frame.
   std::uint64_t ball_key = 0;
   template <class BV, class... X> StepContext(const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
     rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
@@ -439,6 +439,7 @@ template <class S> struct StepContext {
     for (const auto& c : colliders.meshes) {
       k.pointer(c.mesh);
       k.word(c.mesh ? static_cast<std::uint64_t>(c.mesh->num_triangles()) : 0u);
+      k.word(c.mesh ? c.mesh->revision() : 0u);  // set_vertices() in place, at the same address
       k.pointer(c.distance_grid);
       k.word(static_cast<std::uint64_t>(c.side));
     }
