@@ -231,6 +231,34 @@ TYPED_TEST(ObbFitTest, OverlapNeverMissesTouchingBoxes) {
   EXPECT_GT(rejected_apart, trials / 2);
 }
 
+// The one-frame test (BvTraits<Obb>::overlap(a, b), the self-collision walk's) decides as the
+// pair frame's test under the identity on every pair: boxes near each other at every offset from
+// the origin, with and without balls, both answers occurring.
+TYPED_TEST(ObbFitTest, OneFrameTestDecidesAsTheIdentityFrame) {
+  using S = TypeParam;
+  Rng rng(12);
+  int accepted = 0, trials = 0;
+  for (double off : {0.0, 1.0, 1e3, 1e6}) {
+    for (int trial = 0; trial < 500; ++trial, ++trials) {
+      Obb<S> a, b;
+      a.axes = rng.rotation().cast<S>();
+      b.axes = rng.rotation().cast<S>();
+      a.center = (rng.vec(-1, 1) * off).cast<S>();
+      b.center = (a.center.template cast<double>() + rng.vec(-1.2, 1.2)).template cast<S>();
+      a.half = rng.vec(0.05, 1).cast<S>();
+      b.half = rng.vec(0.05, 1).cast<S>();
+      a.radius = trial % 3 == 0 ? std::numeric_limits<S>::infinity() : a.half.norm() * S(rng.uniform(0.6, 1.0));
+      b.radius = trial % 5 == 0 ? std::numeric_limits<S>::infinity() : b.half.norm() * S(rng.uniform(0.6, 1.0));
+      const bool one = ObbPairFrame<S>::overlaps_in_one_frame(a, b);
+      ASSERT_EQ(one, ObbPairFrame<S>().overlaps(a, b)) << "offset " << off << " trial " << trial;
+      ASSERT_EQ(one, BvTraits<Obb<S>>::overlap(a, b));
+      accepted += one;
+    }
+  }
+  EXPECT_GT(accepted, trials / 10);
+  EXPECT_LT(accepted, trials - trials / 10);
+}
+
 TYPED_TEST(ObbFitTest, BallsNeverRejectTouchingSets) {
   using S = TypeParam;
   using T = BvTraits<Obb<S>>;

@@ -112,9 +112,7 @@ template <class S_> struct BvTraits<Obb<S_>> {
   }
   static S size(const Obb<S>& a) { return a.half.norm(); }
   static Vec3<S> center(const Obb<S>& a) { return a.center; }
-  static bool overlap(const Obb<S>& a, const Obb<S>& b) {
-    return ObbPairFrame<S>().overlaps(a, b);
-  }
+  static bool overlap(const Obb<S>& a, const Obb<S>& b) { return ObbPairFrame<S>::overlaps_in_one_frame(a, b); }
   /// Separating-axis test (15 axes) of a and xf(b) in a's frame. Conservative under rounding and
   /// for an xf.R that is a rotation only within rotation_tolerance (see ObbPairFrame, which pair
   /// traversals use directly to reuse a's frame across tests).

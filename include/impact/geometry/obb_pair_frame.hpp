@@ -88,6 +88,23 @@ template <class S> class ObbPairFrame {
     return im;
   }
 
+  /// Both boxes in one frame (self-collision; BvTraits<Obb>::overlap without a transform): the
+  /// answer of ObbPairFrame().overlaps(a, b), decision for decision, without forming b's image by
+  /// X = I (its centre, radius and axes are b's own: the products with I are exact, and the
+  /// rounding bound's M = |c_b| + 0 + |c_b| the same). In a self-collision walk about 3 in 4 node
+  /// pairs overlap and reach the 15 axes; skipping the 36 products cut the bunny's and the
+  /// armadillo's self_collide by a quarter (docs/hierarchies.md).
+  static bool overlaps_in_one_frame(const Obb<S>& a, const Obb<S>& b) {
+    Image im;
+    im.center = b.center;
+    im.half = b.half;
+    im.radius = b.radius;
+    im.m = S(2) * b.center.cwiseAbs().maxCoeff();
+    im.axes = b.axes;
+    im.has_axes = true;
+    return ObbPairFrame().overlaps(a, im, b);
+  }
+
   /// May box a (of A's frame) and the image of box b (of B's frame) share a point?
   bool overlaps(const Obb<S>& a, const Obb<S>& b) const {
     Image im = image_centre(b);
