@@ -47,7 +47,7 @@ constexpr const char* kUsage =
     "usage: impact-collide-bench [MESH_A [MESH_B]] [--poses N] [--seed S] [--bv sphere|aabb|obb|all]\n"
     "                            [--split middle|median|sah|bottom-up|incremental] [--leaf N] [--repeat K] [--rounds K] [--json FILE]\n"
     "  --split R   how impact's trees are built (default sah: the best impact structure, the SAH-built OBB tree, in the\n"
-    "              default run; middle is the library's default split)\n"
+    "              default run; middle is the default split of sphere and AABB trees, SAH that of OBB trees)\n"
     "  --repeat K  time each query K times on its pose and keep the least (default 1: one cold query per pose)\n"
     "  --rounds K  pass over all the poses K times and keep each pose's least time (cold queries, preemption filtered)\n";
 

@@ -522,7 +522,7 @@ int main(int argc, char** argv) {
     // one thread: the builders compare with each other (the parallel build has rows of its own)
     const auto one = [](MeshBvhConfig c) { c.build.threads = 1; return c; };
     const std::pair<const char*, MeshBvhConfig> builders[] = {
-        {"middle", one({})},
+        {"middle", [&] { MeshBvhConfig c; c.build.split = SplitRule::SpatialMiddle; return one(c); }()},
         {"median", [&] { MeshBvhConfig c; c.build.split = SplitRule::CentroidMedian; return one(c); }()},
         {"sah", [&] { MeshBvhConfig c; c.build.split = SplitRule::Sah; return one(c); }()},
         {"bottom-up", [&] { MeshBvhConfig c; c.build.method = BuildMethod::BottomUp; return one(c); }()},

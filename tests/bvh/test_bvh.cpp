@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include <type_traits>
+
 using namespace impact;
 using namespace impact::test;
 
@@ -171,14 +173,43 @@ TYPED_TEST(BvhTest, DegenerateSplitsTerminate) {
   check_node(tt, 0, seen, 1, leaves);
 }
 
+// The default split resolves per BV (DefaultSplitRule): SAH for oriented boxes, the middle split
+// for spheres and AABBs. A default-built tree equals, node for node, the tree of the rule named
+// explicitly, and differs from the other rule's on this mesh (so the comparison can fail).
+TYPED_TEST(BvhTest, DefaultSplitIsTheBvsOwn) {
+  using BV = TypeParam;
+  using S = typename BvTraits<BV>::Scalar;
+  constexpr SplitRule expected = std::is_same_v<BV, Obb<S>> ? SplitRule::Sah : SplitRule::SpatialMiddle;
+  static_assert(resolve_split_rule<BV>(SplitRule::Default) == expected);
+  static_assert(resolve_split_rule<BV>(SplitRule::CentroidMedian) == SplitRule::CentroidMedian);
+  EXPECT_EQ(BuildConfig{}.split, SplitRule::Default);
+  const auto m = random_soup<S>(300, 11, 1.0, 0.12);
+  MeshBvhConfig named, other;
+  named.build.split = expected;
+  other.build.split = expected == SplitRule::Sah ? SplitRule::SpatialMiddle : SplitRule::Sah;
+  const MeshBvh<BV> by_default(m), by_name(m, named), by_other(m, other);
+  const auto same_tree = [&](const MeshBvh<BV>& x, const MeshBvh<BV>& y) {
+    if (x.tree().nodes.size() != y.tree().nodes.size()) return false;
+    for (std::size_t i = 0; i < x.tree().nodes.size(); ++i) {
+      const auto &p = x.tree().nodes[i], &q = y.tree().nodes[i];
+      if (p.first != q.first || p.count != q.count || BvTraits<BV>::center(p.bv) != BvTraits<BV>::center(q.bv)) return false;
+    }
+    for (std::int32_t k = 0; k < x.num_triangles(); ++k)
+      if (x.triangle_id(k) != y.triangle_id(k)) return false;
+    return true;
+  };
+  EXPECT_TRUE(same_tree(by_default, by_name));
+  EXPECT_FALSE(same_tree(by_default, by_other));
+}
+
 TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
   using BV = TypeParam;
   using S = typename BvTraits<BV>::Scalar;
   const auto ma = random_soup<S>(300, 11, 1.0, 0.12);
   const auto mb = random_soup<S>(200, 12, 1.0, 0.12);
   MeshBvh<BV> a(ma), b(mb);
-  MeshBvhConfig sah;
-  sah.build.split = SplitRule::Sah;
+  MeshBvhConfig sah;  // the split rule that is not the BV's default (middle for OBB trees, SAH otherwise)
+  sah.build.split = resolve_split_rule<BV>(SplitRule::Default) == SplitRule::Sah ? SplitRule::SpatialMiddle : SplitRule::Sah;
   MeshBvh<BV> a_sah(ma, sah), b_sah(mb, sah);
   MeshBvhConfig bottom_up;
   bottom_up.build.method = BuildMethod::BottomUp;
@@ -196,7 +227,7 @@ TYPED_TEST(BvhTest, PairTraversalMatchesBruteForce) {
     opt.all_pairs = true;
     const auto got = collide(a, pa, b, pb, opt);
     ASSERT_EQ(sorted(got.pairs), expected) << "pose " << pose;
-    ASSERT_EQ(sorted(collide(a_sah, pa, b_sah, pb, opt).pairs), expected) << "pose " << pose << " (SAH)";
+    ASSERT_EQ(sorted(collide(a_sah, pa, b_sah, pb, opt).pairs), expected) << "pose " << pose << " (the other split)";
     ASSERT_EQ(sorted(collide(a_bu, pa, b_bu, pb, opt).pairs), expected) << "pose " << pose << " (bottom-up)";
     ASSERT_EQ(sorted(collide(a_inc, pa, b_inc, pb, opt).pairs), expected) << "pose " << pose << " (incremental)";
     EXPECT_EQ(got.colliding, !expected.empty());

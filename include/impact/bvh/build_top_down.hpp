@@ -2,7 +2,8 @@
 /// \file
 /// Top-down construction: start with every primitive in the root; cut each node across the longest
 /// axis of its primitives' centroid box (at the middle, or at the median: BuildConfig::split), or
-/// where the binned surface-area heuristic is lowest on any axis (SplitRule::Sah);
+/// where the binned surface-area heuristic is lowest on any axis (SplitRule::Sah; by default
+/// oriented-box trees split so and the other BVs at the middle: DefaultSplitRule);
 /// assign each primitive by its centroid; recurse until a node holds at most leaf_size primitives.
 /// Each node's BV is fitted by the caller's `fit` callable around that node's primitives (for a
 /// mesh: around the triangles' vertices), which is tighter than merging the children's BVs.
@@ -237,9 +238,11 @@ void grow_top_down(std::vector<BvhNode<BV>>& nodes, std::int32_t root, const std
 /// coincide are cut; with a TriangleCopyOrder leaves may exceed cfg.leaf_size, holding copies of
 /// one triangle only.
 template <class BV, class Fit, class CopyOrder = NoCopyOrder>
-Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& cfg = {},
+Bvh<BV> build_top_down(const std::vector<Vec3<typename BvTraits<BV>::Scalar>>& centroids, Fit&& fit, const BuildConfig& config = {},
                        const std::vector<Aabb<typename BvTraits<BV>::Scalar>>& boxes = {}, const CopyOrder& copies = {}) {
   using S = typename BvTraits<BV>::Scalar;
+  BuildConfig cfg = config;
+  cfg.split = resolve_split_rule<BV>(config.split);
   if (cfg.leaf_size < 1) throw InvalidInput("build_top_down: leaf_size must be >= 1");
   if (cfg.split == SplitRule::Sah && (cfg.sah_bins < 2 || cfg.sah_bins > 256))
     throw InvalidInput("build_top_down: sah_bins must be in [2, 256]");

@@ -2,8 +2,9 @@
 /// \file
 /// MeshBvh<BV>: a triangle mesh together with its hierarchy, the object every mesh query takes.
 /// Construction validates the arrays (throws InvalidInput on empty meshes, NaN/Inf coordinates,
-/// out-of-range indices), copies them, builds the tree (top-down by default; MeshBvhConfig::build
-/// chooses bottom-up or incremental construction) with each node's BV fitted around
+/// out-of-range indices), copies them, builds the tree (top-down by default, with the BV's default
+/// split: SAH for oriented boxes, the middle split for spheres and AABBs, see DefaultSplitRule;
+/// MeshBvhConfig::build chooses another split, or bottom-up or incremental construction) with each node's BV fitted around
 /// its triangles' vertices, and keeps only the leaf order of the triangles (their rows of F): a
 /// triangle's vertices are read from the copied mesh. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
@@ -138,7 +139,7 @@ template <class BV> class MeshBvh {
     }
     // Build over mesh order, then renumber primitives to leaf positions.
     std::vector<Aabb<S>> boxes;  // the surface-area heuristic and the clustering weigh the triangles' boxes
-    if (cfg_.build.split == SplitRule::Sah || cfg_.build.method != BuildMethod::TopDown) {
+    if (resolve_split_rule<BV>(cfg_.build.split) == SplitRule::Sah || cfg_.build.method != BuildMethod::TopDown) {
       boxes.resize(m);
       for (std::size_t t = 0; t < m; ++t) boxes[t] = Aabb<S>(tris[t].a.cwiseMin(tris[t].b).cwiseMin(tris[t].c), tris[t].a.cwiseMax(tris[t].b).cwiseMax(tris[t].c));
     }

@@ -272,6 +272,15 @@ void settle_certified_contact(const A& a, const RigidTransform<S>& pa, const B& 
   c.depth = std::min(c.depth, depth);
 }
 
+/// A certified contact found in a's frame (a pair's closed form or candidates, run on PairFrame):
+/// its normal and point to the world, then settle_certified_contact.
+template <class S, class A, class B>
+void settle_certified_from_frame(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
+  c.normal = pa.rotate(c.normal);
+  c.point = pa.apply(c.point);
+  settle_certified_contact(a, pa, b, pb, c);
+}
+
 /// libccd's penetration, settled (settle_contact) and certified: EPA's own depth is the distance
 /// to its inner polytope, a lower bound of the true depth, and the overlap along its normal an
 /// upper bound. libccd 2.1's EPA sometimes stops early (on a polytope vertex or edge, or when a
@@ -434,9 +443,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   ConvexContact<S> c;
   if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) {  // parallel axes: closed form
     c.iterations += 1;
-    c.normal = pa.rotate(c.normal);
-    c.point = pa.apply(c.point);
-    settle_certified_contact(a, pa, b, pb, c);
+    settle_certified_from_frame(a, pa, b, pb, c);
     return c;
   }
   bool certified;
@@ -447,9 +454,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   }
   if (certified) {
     c.iterations += 1;
-    c.normal = pa.rotate(c.normal);
-    c.point = pa.apply(c.point);
-    settle_certified_contact(a, pa, b, pb, c);
+    settle_certified_from_frame(a, pa, b, pb, c);
     return c;
   }
   SimplexPoint<S> simplex[4];
@@ -510,9 +515,7 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   const PairFrame<S> f(pa, pb);
   ConvexContact<S> c;
   if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * query_scale<S>(a, b), c)) {
-    c.normal = pa.rotate(c.normal);
-    c.point = pa.apply(c.point);
-    settle_certified_contact(a, pa, b, pb, c);
+    settle_certified_from_frame(a, pa, b, pb, c);
     return c;
   }
   return general_penetration(a, pa, b, pb, o);
@@ -559,9 +562,7 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   ConvexContact<S> cand;
   if (cone_box_contact(a, b, f.R, f.t, tol, cand)) {
     cand.iterations += its;
-    cand.normal = pa.rotate(cand.normal);
-    cand.point = pa.apply(cand.point);
-    settle_certified_contact(a, pa, b, pb, cand);
+    settle_certified_from_frame(a, pa, b, pb, cand);
     return cand;
   }
   const auto local = [&](const Vec3<S>& n) {
@@ -596,11 +597,81 @@ ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, cons
   return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin);
 }
 
+/// The part of capsule a (at pa) that decides its penetration with a shape b whose ball (centre cb
+/// in the world, radius rb, shape_size about interior_point) is small beside a's length: the
+/// capsule cut to the axis window |t - t0| <= L about b's centre's projection t0, L = 2 (rho + rb)
+/// with rho the centre's distance to the axis (and kept where the window passes an end). Returns
+/// false (a as it is) unless the window is less than half of a's segment and holds a point of it.
+/// The boolean follows (the least overlap is >= 0 for both or for neither). With `distance`, also
+/// false unless t0 lies on the segment: then p0's distance to b is at most rho (b holds its centre)
+/// and every point outside the window is farther than L - rb >= rho from b, so the closest points
+/// and the distance are the same too.
+/// Why the depth is the same: the overlap along n of the cut capsule is r + g(n) + (its end's t -
+/// t0) n_z, g(n) = n . p0 - min_b n . x (p0 = the axis point at t0) being Lipschitz with constant
+/// max_b |p0 - x| <= rho + rb =: K. On a side where the window passes the end it equals the whole
+/// capsule's; where it cuts, it is at least r + g(n) + L sin(theta) >= its value at n's projection
+/// n' onto the plane normal to the axis (|n - n'| <= pi/2 sin(theta) and L >= pi/2 K), where the
+/// two agree. So the least overlap, the depth, is the same, and the cut capsule, a subset, touches
+/// b exactly when the whole does. What changes: tolerances relative to the cut length, and no
+/// rounding of the axis' length along a normal that rounding tilted (a capsule 1e9 times longer
+/// than wide across a cone had depths off by 1e-6 of its length that way: GJK's witness points at
+/// 1e9 from each other, 1.5 apart, gave a normal tilted by 3e-7).
+template <class S>
+struct CapsuleCut {
+  Capsule<S> capsule{S(1), S(0)};
+  RigidTransform<S> pose;
+  bool low = false, high = false;  ///< whether the window cuts the segment below, above
+};
+template <class S, class B>
+bool capsule_window(const Capsule<S>& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, CapsuleCut<S>& cut,
+                    bool distance = false) {
+  const S h = a.half_length;
+  const Vec3<S> cb = pa.R.transpose() * (pb.apply(interior_point(b)) - pa.t);  // in a's frame
+  const S rho = std::sqrt(cb.x() * cb.x() + cb.y() * cb.y());
+  const S len = S(2) * (rho + shape_size(b));
+  if (!(S(2) * len < h)) return false;  // also for NaN
+  if (distance && !(std::abs(cb.z()) <= h)) return false;
+  const S t1 = std::max(cb.z() - len, -h), t2 = std::min(cb.z() + len, h);
+  if (!(t1 <= t2)) return false;  // b's ball is more than 2 rho + 2 rb beyond an end
+  cut.capsule.radius = a.radius;
+  cut.capsule.half_length = (t2 - t1) / S(2);
+  cut.pose.R = pa.R;
+  cut.pose.t = pa.t + pa.R.col(2) * ((t1 + t2) / S(2));
+  cut.low = t1 > -h;
+  cut.high = t2 < h;
+  return true;
+}
+
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
-/// core touches b. `flip` swaps the roles back for the caller (b was the round one).
+/// core touches b. `flip` swaps the roles back for the caller (b was the round one). A capsule
+/// much longer than b goes on as the part of it that decides (capsule_window).
 template <class S, class R, class B>
 ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                const ConvexQueryOptions<S>& o, bool flip) {
+  if constexpr (std::is_same_v<R, Capsule<S>>) {
+    CapsuleCut<S> cut;
+    if (capsule_window(a, pa, b, pb, cut)) {
+      ConvexContact<S> c = round_contact(cut.capsule, cut.pose, b, pb, o, false);
+      // The whole capsule overlaps more than the cut one along a normal with a component towards
+      // a cut side, by the length cut off times that component (4e-11 of a tilt, within the cut
+      // query's tolerance, times 4e9). Dropping the component does not raise the cut capsule's
+      // overlap (capsule_window's bound), and there the two agree.
+      const Vec3<S> u = pa.R.col(2);
+      const S nz = c.normal.dot(u);
+      if (c.intersecting && ((nz > S(0) && cut.high) || (nz < S(0) && cut.low))) {
+        const Vec3<S> m = c.normal - nz * u;
+        const S len = m.norm();
+        if (len > S(0)) {
+          const S lower = c.depth - c.depth_gap;
+          c.normal = m / len;
+          settle_contact(a, pa, b, pb, c);
+          c.depth_gap = std::max(c.depth - lower, S(0));
+        }
+      }
+      if (flip) c.normal = -c.normal;
+      return c;
+    }
+  }
   const auto core = core_of(a);
   const S scale = query_scale<S>(a, b);
   const S tol = o.relative_tolerance * scale;
@@ -643,9 +714,9 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
         c.point = (d.point_a + d.point_b) / S(2);
         settle_certified_contact(a, pa, b, pb, c);
         c.depth_gap = std::max(c.depth - std::max(r - apart, S(0)), S(0));
-      } else {
+      } else {  // EPA's depth plus the radius is the overlap along its normal too: settled, the smaller
         c.depth += r;
-        settle_contact(a, pa, b, pb, c);
+        settle_certified_contact(a, pa, b, pb, c);
       }
       if (flip) c.normal = -c.normal;
       return c;
@@ -657,6 +728,10 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
 template <class S, class R, class B>
 ConvexDistance<S> round_distance(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                  const ConvexQueryOptions<S>& o) {
+  if constexpr (std::is_same_v<R, Capsule<S>>) {  // a needle: the part of it that decides
+    CapsuleCut<S> cut;
+    if (capsule_window(a, pa, b, pb, cut, true)) return round_distance(cut.capsule, cut.pose, b, pb, o);
+  }
   const auto core = core_of(a);
   const S tol = o.relative_tolerance * query_scale<S>(a, b);
   ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations);
@@ -772,7 +847,15 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
   } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
   } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
-    // GJK on the core with the radius as margin: stops as soon as the answer is decided.
+    // GJK on the core with the radius as margin: stops as soon as the answer is decided; a needle
+    // capsule as the part of it that decides (capsule_window)
+    if constexpr (std::is_same_v<A, Capsule<S>>) {
+      CapsuleCut<S> cut;
+      if (capsule_window(a, pose_a, b, pose_b, cut)) return intersect_unchecked(cut.capsule, cut.pose, b, pose_b, options, limit_reached);
+    } else if constexpr (std::is_same_v<B, Capsule<S>>) {
+      CapsuleCut<S> cut;
+      if (capsule_window(b, pose_b, a, pose_a, cut)) return intersect_unchecked(a, pose_a, cut.capsule, cut.pose, options, limit_reached);
+    }
     ConvexDistance<S> d;
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
     if constexpr (method == PairMethod::RoundOther) {

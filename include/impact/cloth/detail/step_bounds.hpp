@@ -54,11 +54,14 @@ double Stepper<S>::relative_motion(const Prim& p) const {
 /// time t is at least d(0) - t m and at least d(1) - (1 - t) m, so at least their mean
 /// (d(0) + d(1) - m) / 2 over the whole step. First the start bound alone (d(0) - m, the start
 /// distance cached per candidate: a box bound, then the exact one), then both ends. A margin
-/// covers rounding. Thread-safe per index.
+/// covers rounding. Thread-safe per index. `known` receives m and the exact distances computed
+/// (when it returns -infinity, d(0) always, d(1) unless d(0) <= need), for sample_pair.
 template <class S>
-double Stepper<S>::separation_bound(std::size_t i) {
+double Stepper<S>::separation_bound(std::size_t i, Measured& known) {
   const Prim& p = cand_[i];
   const double m = relative_motion(p), need = h_ + bound_margin_, none = -std::numeric_limits<double>::infinity();
+  known = Measured();
+  known.m = m;
   if (std::isnan(d0_[i])) d0_[i] = start_box_distance(p);
   if (d0_[i] > need + m) return d0_[i] - m;
   if (!d0_exact_[i]) {
@@ -66,8 +69,10 @@ double Stepper<S>::separation_bound(std::size_t i) {
     d0_exact_[i] = 1;
     if (d0_[i] > need + m) return d0_[i] - m;
   }
+  known.d0 = d0_[i];
   if (d0_[i] <= need) return none;  // nothing below can help: each bound is <= d(0)
   const Contact c1 = closest(p, /*start=*/false);
+  known.d1 = c1.dist;
   const double both = 0.5 * (d0_[i] + c1.dist - m);
   if (both > need) return both;
   // Sliding pairs (a large relative motion along the contact, as in resting contact) fail the
@@ -137,13 +142,18 @@ double Stepper<S>::hull_bound(const Prim& p, double need) const {
 /// the step) is `bound`. The margin covers the rounding of the samples' positions and distances
 /// (computed in double from coordinates of magnitude <= scale_, as the other bounds').
 /// Unknown (the search decides): everything else, and pairs closer than h at the start.
-/// Thread-safe.
+/// `known` is what separation_bound measured for the pair: its relative motion, and its
+/// distances at t = 0 and t = 1 where known (NaN otherwise), which are the samples there bit for
+/// bit (a sample's positions (1 - t) x0 + t x1 are x0 and x1 at those times), so they are not
+/// computed again. Thread-safe.
 template <class S>
-typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, CcdResult<S>& r, double& bound) const {
-  const double m = relative_motion(p);
+typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, const Measured& known, CcdResult<S>& r, double& bound) const {
+  const double m = known.m;
   if (!(m <= 32 * h_)) return Sampled::unknown;
   const int n = std::max(2, static_cast<int>(std::ceil(4 * m / h_)));
   auto dist = [&](double t) {
+    if (t == 0.0 && !std::isnan(known.d0)) return known.d0;
+    if (t == 1.0 && !std::isnan(known.d1)) return known.d1;
     auto X = [&](int j) { return Vec3<double>((1 - t) * p0(p.v[j]) + t * p1(p.v[j])); };
     return closest_at(p, X).dist;
   };

@@ -123,7 +123,8 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   parallel_for(todo.size(), opt_.threads, [&](std::size_t i) {
     const std::size_t c = todo[i];
     if (is_excluded(cand_[c])) return;
-    const double bound = separation_bound(c);
+    Measured known;
+    const double bound = separation_bound(c, known);
     if (bound > -std::numeric_limits<double>::infinity()) {
       key_[c] = key_of(cand_[c], bound);
       return;
@@ -133,7 +134,7 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
     // in the impulse passes, as given in the zones and the fail-safe).
     double sampled_bound = 0;
     CcdResult<S> r;
-    const Sampled sp = sample_pair(cand_[c], r, sampled_bound);
+    const Sampled sp = sample_pair(cand_[c], known, r, sampled_bound);
     if (sp == Sampled::miss) {
       key_[c] = key_of(cand_[c], sampled_bound);
       return;

@@ -23,6 +23,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -112,9 +113,16 @@ class Stepper {
   enum class Sampled { hit, miss, unknown };
   double start_box_distance(const Prim& p) const;
   double relative_motion(const Prim& p) const;
-  double separation_bound(std::size_t i);
+  /// What separation_bound computed on the way, for sample_pair: the pair's relative motion and
+  /// its exact distances at the start and at the end of the step (NaN where not computed).
+  struct Measured {
+    double m = 0;
+    double d0 = std::numeric_limits<double>::quiet_NaN();
+    double d1 = std::numeric_limits<double>::quiet_NaN();
+  };
+  double separation_bound(std::size_t i, Measured& known);
   double hull_bound(const Prim& p, double need) const;
-  Sampled sample_pair(const Prim& p, CcdResult<S>& r, double& bound) const;
+  Sampled sample_pair(const Prim& p, const Measured& known, CcdResult<S>& r, double& bound) const;
   Contact closest(const Prim& p, bool start) const;
   template <class Pos>
   static Contact closest_at(const Prim& p, Pos&& X);
