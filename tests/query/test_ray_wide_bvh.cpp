@@ -494,6 +494,47 @@ TYPED_TEST(WideBvhTest, RayInRangeIsValidateRay) {
   EXPECT_GT(rejected, 1000);
 }
 
+// Directions far from unit length at the public casts: shorter than CoordinateRange::min_scale in
+// their largest component (squared norms would underflow) they get InvalidInput; huge ones, up to
+// CoordinateRange::max, give brute force's t over every triangle on the ray with the direction
+// scaled back by the power of two (exactly; t scaled likewise), through the wide and binary trees.
+// (The unchecked casts of particles' legs, which take the short ones: tests/response/test_short_legs.cpp.)
+TYPED_TEST(WideBvhTest, TinyAndHugeDirections) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_torus<S>(S(1), S(0.4), 24, 12);
+  const WideBvh<S> w(m);
+  const MeshBvh<Aabb<S>> mb(m);
+  const CompactBvh cb(mb.tree());
+  test::Rng rng(83);
+  int hits = 0;
+  const int big = std::is_same_v<S, float> ? 28 : 200;  // max = 2^big
+  for (int i = 0; i < 60; ++i) {
+    const Vec3<S> o = (rng.vec(-1.5, 1.5)).template cast<S>();
+    const Vec3<S> u = (rng.vec(-1, 1)).template cast<S>();
+    if (u.cwiseAbs().maxCoeff() < S(0.25)) continue;
+    const Vec3<S> tiny(std::ldexp(u[0], -big - 3), std::ldexp(u[1], -big - 3), std::ldexp(u[2], -big - 3));  // below min_scale
+    EXPECT_THROW(ray_mesh_first_hit(w, Ray<S>(o, tiny, S(1))), InvalidInput);
+    EXPECT_THROW(ray_mesh_first_hit(mb, Ray<S>(o, tiny, S(1))), InvalidInput);
+    EXPECT_THROW(ray_mesh_first_hit(mb, cb, Ray<S>(o, tiny)), InvalidInput);
+    const Vec3<S> h(std::ldexp(u[0], big), std::ldexp(u[1], big), std::ldexp(u[2], big));  // at most max
+    const auto ref = brute_first_t(m, Ray<S>(o, u, S(2)));
+    const Ray<S> ray(o, h, std::ldexp(S(2), -big));
+    const auto a = ray_mesh_first_hit(w, ray);
+    const auto b = ray_mesh_first_hit(mb, ray);
+    const auto c = ray_mesh_first_hit(mb, cb, ray);
+    ASSERT_EQ(ref.has_value(), a.has_value()) << i;
+    ASSERT_EQ(ref.has_value(), b.has_value()) << i;
+    ASSERT_EQ(ref.has_value(), c.has_value()) << i;
+    EXPECT_THROW(ray_mesh_first_hit(w, Ray<S>(o, S(8) * h, S(1))), InvalidInput);  // beyond max
+    if (!ref) continue;
+    ++hits;
+    EXPECT_EQ(a->t, std::ldexp(*ref, -big)) << i;
+    EXPECT_EQ(b->t, std::ldexp(*ref, -big)) << i;
+    EXPECT_EQ(c->t, std::ldexp(*ref, -big)) << i;
+  }
+  EXPECT_GT(hits, 5);
+}
+
 TEST(WideBvh, InvalidInput) {
   const TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 8, 4);
   WideBvhConfig bad;

@@ -7,6 +7,10 @@
 #include "impact/core/types.hpp"
 #include "impact/core/validate.hpp"
 
+#include <cmath>
+#include <limits>
+#include <optional>
+
 namespace impact {
 
 template <class S> struct Ray {
@@ -38,6 +42,37 @@ template <class S> void validate_ray(const Ray<S>& ray, const char* where, const
               " (CoordinateRange, core/validate.hpp)");
   validate_nonnegative_or_inf(ray.t_max, where, (n + ".t_max").c_str());
 }
+
+namespace detail {
+
+/// A cast of a ray whose direction is shorter than CoordinateRange::min_scale in its largest
+/// component (`dmax`): the unchecked casts take such rays (a slow particle's leg), whose squared
+/// norms and products underflow (a squared norm of 0 meant "no hit" however close the surface
+/// was). The ray o + s d, s in [0, t_max], is the same set of points as o + s' (2^k d), s' in
+/// [0, t_max 2^-k]: `cast` runs on that ray, with 2^k bringing dmax into [min_scale,
+/// 2 min_scale) (exact: a power of two) and t_max 2^-k rounded up when inexact (a t_max below
+/// about 2^-148 in double, 2^-5 in float, once 2^k is near its largest), and the hit's t is
+/// scaled back (exact), a hit past t_max dropped. Nothing for a zero or NaN direction.
+/// `cast(const Ray<S>&)` returns a std::optional of a hit with a member `t`; the hit's other
+/// members (point, normal, barycentrics) are those of the same point, left as `cast` made them.
+template <class S, class Cast> auto cast_short_ray(const Ray<S>& ray, S dmax, Cast&& cast) -> decltype(cast(ray)) {
+  if (!(dmax > S(0)) || !(ray.t_max >= S(0))) return std::nullopt;
+  int e = 0;
+  (void)std::frexp(dmax, &e);  // dmax = f 2^e, f in [1/2, 1)
+  int m = 0;
+  (void)std::frexp(CoordinateRange<S>::min_scale, &m);  // min_scale = 2^(m - 1)
+  const int k = m - e;  // dmax 2^k = f 2^m, in [min_scale, 2 min_scale)
+  Ray<S> scaled(ray.origin, Vec3<S>(std::ldexp(ray.direction[0], k), std::ldexp(ray.direction[1], k), std::ldexp(ray.direction[2], k)),
+                std::ldexp(ray.t_max, -k));
+  if (std::ldexp(scaled.t_max, k) < ray.t_max) scaled.t_max = std::nextafter(scaled.t_max, std::numeric_limits<S>::infinity());
+  auto hit = cast(static_cast<const Ray<S>&>(scaled));
+  if (!hit) return hit;
+  hit->t = std::ldexp(hit->t, k);
+  if (hit->t > ray.t_max) return std::nullopt;
+  return hit;
+}
+
+}  // namespace detail
 
 /// The closed segment from p to q.
 template <class S> struct Segment {

@@ -374,7 +374,9 @@ void validate_ray_cast(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>:
   validate_in_range<std::int64_t>(start_node, 0, static_cast<std::int64_t>(mesh.tree().nodes.size()) - 1, where, "start_node");
 }
 
-/// ray_mesh_first_hit without the argument checks (callers that validated them once).
+/// ray_mesh_first_hit without the argument checks (callers that validated them once); the
+/// direction's largest component must be at least CoordinateRange::min_scale (callers with
+/// unvalidated rays, a particle's leg, scale it first: detail::cast_short_ray, geometry/ray.hpp).
 template <class BV>
 std::optional<RayMeshHit<typename BvTraits<BV>::Scalar>> ray_mesh_first_hit_unchecked(const MeshBvh<BV>& mesh,
                                                                                       const Ray<typename BvTraits<BV>::Scalar>& ray,

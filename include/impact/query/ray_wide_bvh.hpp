@@ -455,6 +455,9 @@ IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
 /// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
 /// compare the two: the same answers, triangle included).
+/// The direction's largest component must be at least CoordinateRange::min_scale (else squared
+/// norms underflow and hits are missed): callers with unvalidated rays (a particle's leg) scale
+/// it first (detail::cast_short_ray, geometry/ray.hpp).
 template <class S, int W>
 std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
                                                           RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {

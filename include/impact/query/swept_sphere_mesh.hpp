@@ -60,7 +60,8 @@ inline std::optional<SweptSphereHit<S>> swept_sphere_triangle(const Vec3<S>& o, 
 
 namespace detail {
 
-/// swept_sphere_mesh_first_hit without the argument checks (callers that validated them once).
+/// swept_sphere_mesh_first_hit without the argument checks (callers that validated them once); the
+/// direction as in ray_mesh_first_hit_unchecked (at least CoordinateRange::min_scale).
 template <class BV>
 std::optional<SweptSphereHit<typename BvTraits<BV>::Scalar>> swept_sphere_mesh_first_hit_unchecked(
     const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::Scalar>& ray, typename BvTraits<BV>::Scalar radius,

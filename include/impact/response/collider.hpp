@@ -433,7 +433,20 @@ template <class BV> struct MeshCollider {
   /// distance grid and wide tree, which hold copies, must be rebuilt by the caller). O(triangles).
   void refresh() { init(); }
 
+  /// The first hit of the sphere of radius r (a point for r = 0) moving along o + s d, s in
+  /// [0, t_max], in the mesh's frame. A leg is never validated: a direction shorter than
+  /// CoordinateRange::min_scale (a slow particle), whose squared norms underflow in the casts, is
+  /// cast scaled up by a power of two (detail::cast_short_ray: the same points, the same hit).
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
+    const S dmax = d.cwiseAbs().maxCoeff();
+    if (IMPACT_UNLIKELY(!(dmax >= CoordinateRange<S>::min_scale)))
+      return detail::cast_short_ray(Ray<S>(o, d, t_max), dmax,
+                                    [&](const Ray<S>& leg) { return local_first_hit_in_range(leg.origin, leg.direction, r, leg.t_max); });
+    return local_first_hit_in_range(o, d, r, t_max);
+  }
+
+  /// local_first_hit for a direction of at least CoordinateRange::min_scale in its largest component.
+  std::optional<LocalHit<S>> local_first_hit_in_range(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     if (r > S(0)) {
       const auto h = detail::swept_sphere_mesh_first_hit_unchecked(*mesh, Ray<S>(o, d, t_max), r, RigidTransform<S>());
       if (!h) return std::nullopt;

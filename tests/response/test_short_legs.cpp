@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: MIT
+// A particle's leg is never validated: a slow particle's direction can be far shorter than
+// CoordinateRange::min_scale, where the casts' squared norms underflow (they returned no hit,
+// however close the surface: the particle tunnelled). MeshCollider::local_first_hit casts such a
+// leg scaled up by a power of two (detail::cast_short_ray). Oracle: brute force over every triangle
+// (the narrow phase's per-triangle rule) on the leg with the direction scaled here to components
+// in [-1, 1] (another power of two than the cast's), its t scaled back: exactly the same t, through
+// the binary tree, the compact tree and the wide tree; and a leg crossing a triangle at its middle
+// (a point, or a sphere whose radius scales with the leg) must hit it at t = 1/2.
+#include "impact/bvh/compact_bvh.hpp"
+#include "impact/bvh/wide_bvh.hpp"
+#include "impact/geometry/mesh_generators.hpp"
+#include "impact/query/ray_wide_bvh.hpp"
+#include "impact/response/collider.hpp"
+#include "support/random.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <type_traits>
+#include <vector>
+
+namespace impact {
+namespace {
+
+template <class S> class ShortLegs : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(ShortLegs, Scalars);
+
+template <class S> std::optional<S> brute_first_t(const TriangleMesh<S>& m, const Ray<S>& ray) {
+  const PreparedRay<S> pr(ray);
+  std::optional<S> best;
+  for (int t = 0; t < m.num_triangles(); ++t) {
+    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
+    if (h && (!best || h->t < *best)) best = h->t;
+  }
+  return best;
+}
+
+template <class S> Vec3<S> scaled(const Vec3<S>& v, int k) { return {std::ldexp(v[0], k), std::ldexp(v[1], k), std::ldexp(v[2], k)}; }
+
+// The exponents of the legs' lengths: from just below min_scale down to subnormal directions.
+template <class S> std::vector<int> tiny_exponents() {
+  if constexpr (std::is_same_v<S, float>)
+    return {30, 70, 100, 125, 140};
+  else
+    return {210, 540, 800, 1030, 1060};
+}
+
+TYPED_TEST(ShortLegs, SameHitsAsBruteForceOnTheScaledLeg) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_torus<S>(S(1), S(0.4), 24, 12);
+  const MeshBvh<Aabb<S>> mb(m);
+  const CompactBvh cb(mb.tree());
+  const WideBvh<S> w(m);
+  MeshCollider<Aabb<S>> plain(mb), compact(mb), wide(mb);
+  compact.compact_tree = &cb;
+  wide.wide_tree = &w;
+  test::Rng rng(83);
+  int hits = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Vec3<S> o = (rng.vec(-1.5, 1.5)).template cast<S>();
+    const Vec3<S> u0 = (rng.vec(-1, 1)).template cast<S>();
+    for (int j : tiny_exponents<S>()) {
+      const Vec3<S> d = scaled(u0, -j);  // components may be subnormal
+      const Vec3<S> u = scaled(d, j);    // exactly d 2^j
+      for (bool segment : {false, true}) {
+        const S tu = segment ? S(2) : std::numeric_limits<S>::infinity();
+        const S td = std::ldexp(tu, j);
+        if (segment && !std::isfinite(td)) continue;
+        const auto ref = brute_first_t(m, Ray<S>(o, u, tu));
+        for (const MeshCollider<Aabb<S>>* c : {&plain, &compact, &wide}) {
+          const auto h = c->local_first_hit(o, d, S(0), td);
+          ASSERT_EQ(ref.has_value(), h.has_value()) << i << " " << j << " " << segment;
+          if (!ref) continue;
+          ++hits;
+          EXPECT_EQ(h->t, std::ldexp(*ref, j)) << i << " " << j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(hits, 300);
+}
+
+// A leg from one side of a triangle to the other, centred on it: the hit at t = 1/2 for every
+// length (down to subnormal legs), through the three trees; and a sphere whose radius scales with
+// the leg, while its square stays a normal number.
+TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
+  using S = TypeParam;
+  TriangleMesh<S> m;
+  m.V.resize(3, 3);
+  m.F.resize(1, 3);
+  m.V << S(0), S(-1), S(-1), S(0), S(2), S(-1), S(0), S(-1), S(2);
+  m.F << 0, 1, 2;
+  const MeshBvh<Aabb<S>> mb(m);
+  const CompactBvh cb(mb.tree());
+  const WideBvh<S> w(m);
+  MeshCollider<Aabb<S>> plain(mb), compact(mb), wide(mb);
+  compact.compact_tree = &cb;
+  wide.wide_tree = &w;
+  const int lowest = std::numeric_limits<S>::min_exponent - std::numeric_limits<S>::digits;  // denorm_min = 2^(lowest)
+  for (int j = 0; -j - 1 >= lowest; j += 7) {
+    const S len = std::ldexp(S(1), -j);
+    const Vec3<S> o(-len / S(2), S(0.1), S(0.2));
+    const Vec3<S> d(len, S(0), S(0));
+    for (const MeshCollider<Aabb<S>>* c : {&plain, &compact, &wide}) {
+      const auto h = c->local_first_hit(o, d, S(0), S(1));
+      ASSERT_TRUE(h.has_value()) << j;
+      EXPECT_EQ(h->t, S(0.5)) << j;
+    }
+    // a sphere of radius 16 len touching the triangle at the leg's middle, while r * r stays normal
+    const S r = std::ldexp(S(1), 4 - j);
+    if (r < std::sqrt(std::numeric_limits<S>::min())) continue;
+    const Vec3<S> os(-r - len / S(2), S(0.1), S(0.2));  // exact: the two terms 5 bits apart
+    const auto s = plain.local_first_hit(os, d, r, S(1));
+    ASSERT_TRUE(s.has_value()) << j;
+    EXPECT_NEAR(double(s->t), 0.5, 1e-3) << j;
+  }
+}
+
+}  // namespace
+}  // namespace impact
