@@ -11,6 +11,16 @@
 //    flag for coincident cylinders far from the origin (relative gap 0.019 against 1e-10). Those two
 //    configurations are now answered by the parallel-axes closed form (convex/parallel_axes.hpp), so
 //    the flag itself is reached with tolerances below what rounding lets a solver close.
+// 4. Round shapes whose cores meet (a sphere centred on a capsule's segment, capsules whose
+//    segments cross or overlap) got the line of the poses' origins as their normal, along a
+//    segment: moving b by the depth along it left the shapes overlapping (fuzz_convex).
+// 5. A capsule whose core is apart from the other shape got the witnesses' difference divided by
+//    GJK's distance as its normal, not unit by 1.4e-3 in float (2.5e-9 in double), and a depth
+//    that much too deep (fuzz_convex).
+// 6. GJK stalled (no progress) 0.11 from the origin, 2.5e-4 of the size, on a float cylinder and
+//    cone that are apart: the penetration called them touching (fuzz_convex).
+// 7. GJK's distance stalled (no progress) at 1.5e-4 on a float box and cone that overlap, with no
+//    separating plane found, and returned that as the distance without a flag (fuzz_convex).
 #include "impact/convex/query.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/random.hpp"
@@ -172,6 +182,142 @@ TEST(ConvexFuzzFindings, OpenBracketIsFlagged) {
   expect_open_brackets_flagged<double>(box, cone, false, 1e-17, 12);
   expect_open_brackets_flagged<double>(cylinder, box, true, 1e-14, 13);  // libccd's EPA
   expect_open_brackets_flagged<double>(cylinder, cone, true, 1e-14, 14);
+}
+
+// Cores that meet: the depth is ra + rb, and moving b by it along the normal makes the shapes touch
+// (distance 0 at the depth, positive just beyond it): the normal is perpendicular to the segments.
+template <class A, class B>
+void expect_core_contact_separates(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb, double depth,
+                                   const char* what) {
+  SCOPED_TRACE(what);
+  const auto c = impact::convex_penetration(a, pa, b, pb);
+  ASSERT_TRUE(c.intersecting);
+  EXPECT_NEAR(c.depth, depth, 1e-14);
+  const double scale = impact::detail::query_scale<double>(a, b);
+  RigidTransform<double> touching = pb, beyond = pb;
+  touching.t += c.depth * c.normal;
+  beyond.t += (c.depth + 1e-9 * scale) * c.normal;
+  EXPECT_LE(impact::convex_penetration(a, pa, b, touching).depth, 1e-12 * scale);
+  EXPECT_FALSE(impact::convex_intersect(a, pa, b, beyond));
+  EXPECT_GT(impact::convex_distance(a, pa, b, beyond).distance, 0.0);
+}
+
+TEST(ConvexFuzzFindings, MeetingCoresGetANormalAcrossTheSegments) {
+  const Capsule<double> capsule(0.25, 1.0), short_capsule(0.5, 0.0);
+  const impact::Sphere<double> sphere(impact::Vec3<double>::Zero(), 0.5);
+  impact::test::Rng rng(21);
+  for (int k = 0; k < 8; ++k) {
+    RigidTransform<double> pa, pb;
+    pa.R = rng.rotation();
+    pa.t = rng.vec(-2, 2);
+    // the sphere's centre on the capsule's segment: at the capsule's origin, and off it along the axis
+    pb.t = pa.t + (k % 2 == 0 ? 0.0 : 0.5) * pa.R.col(2);
+    expect_core_contact_separates(capsule, pa, sphere, pb, 0.75, "sphere on the segment");
+    expect_core_contact_separates(sphere, pb, capsule, pa, 0.75, "the same, swapped");
+    expect_core_contact_separates(short_capsule, pb, capsule, pa, 0.75, "a capsule of length 0 on the segment");
+    // two capsules: crossing segments, and collinear overlapping ones
+    RigidTransform<double> crossing = pa, collinear = pa;
+    crossing.R = pa.R * Eigen::AngleAxisd(1.0, impact::Vec3<double>::UnitX()).toRotationMatrix();
+    collinear.t = pa.t + 0.5 * pa.R.col(2);
+    expect_core_contact_separates(capsule, pa, capsule, crossing, 0.5, "crossing segments");
+    expect_core_contact_separates(capsule, pa, capsule, collinear, 0.5, "collinear segments");
+  }
+}
+
+template <class S>
+RigidTransform<S> pose_of(const double (&r)[9], const double (&t)[3]) {
+  RigidTransform<S> p;
+  p.R << S(r[0]), S(r[1]), S(r[2]), S(r[3]), S(r[4]), S(r[5]), S(r[6]), S(r[7]), S(r[8]);
+  p.t << S(t[0]), S(t[1]), S(t[2]);
+  return p;
+}
+
+// Finding 5: a capsule 0.0001 (core distance) short of a cylinder's surface, far from the origin.
+template <class S>
+impact::ConvexContact<S> capsule_beside_cylinder() {
+  const Cylinder<S> a(S(0.068359375), S(0.077880859375));
+  const Capsule<S> b(S(0.310546875), S(0.039794921875));
+  const auto pa = pose_of<S>({-0.10169491171836853, -0.91525423526763916, 0.38983049988746643, 0.98305082321166992, -0.1525423675775528,
+                              -0.10169491171836853, 0.1525423675775528, 0.37288135290145874, 0.91525423526763916},
+                             {0.11328125, 0.03125, 3.9921875});
+  const auto pb = pose_of<S>({-0.012345679104328156, -0.93827158212661743, 0.34567901492118835, 0.54320985078811646, 0.28395062685012817,
+                              0.79012346267700195, -0.83950614929199219, 0.19753086566925049, 0.50617283582687378},
+                             {0.0703125, -0.0078125, 4.07421875});
+  return impact::convex_penetration(a, pa, b, pb);
+}
+
+TEST(ConvexFuzzFindings, RoundContactNormalIsUnit) {
+  const auto d = capsule_beside_cylinder<double>();
+  const auto f = capsule_beside_cylinder<float>();
+  ASSERT_TRUE(d.intersecting);
+  ASSERT_TRUE(f.intersecting);
+  EXPECT_NEAR(d.normal.norm(), 1.0, 1e-14);
+  EXPECT_NEAR(f.normal.norm(), 1.0f, 1e-6f);
+  // the float depth within the rounding of coordinates near 4 (the normal from witnesses 1e-4
+  // apart), not 5e-4 too deep as before
+  EXPECT_NEAR(double(f.depth), d.depth, 2e-4);
+}
+
+// Finding 6: a cylinder and a cone 0.1087 apart (in double), 256 sizes of the cone from the origin.
+template <class S>
+void cylinder_cone_apart(bool& penetrating, bool& intersect, S& distance) {
+  const Cylinder<S> a(S(360), S(22.5));
+  const Cone<S> b(S(8), S(32));
+  const auto pa = pose_of<S>({-0.1304347813129425, -0.26086956262588501, -0.95652174949645996, -0.017391303554177284, 0.96521741151809692,
+                              -0.26086956262588501, 0.99130433797836304, -0.017391303554177284, -0.1304347813129425},
+                             {-228, -256, -224});
+  const auto pb = pose_of<S>({0, -1, 0, 0, 0, 1, -1, 0, 0}, {-256, -256, -256});
+  penetrating = impact::convex_penetration(a, pa, b, pb).intersecting;
+  intersect = impact::convex_intersect(a, pa, b, pb);
+  distance = impact::convex_distance(a, pa, b, pb).distance;
+}
+
+TEST(ConvexFuzzFindings, StalledGjkIsNotTouching) {
+  bool pen_d = true, int_d = true, pen_f = true, int_f = true;
+  double dist_d = 0;
+  float dist_f = 0;
+  cylinder_cone_apart<double>(pen_d, int_d, dist_d);
+  cylinder_cone_apart<float>(pen_f, int_f, dist_f);
+  EXPECT_NEAR(dist_d, 0.108696, 1e-5);
+  EXPECT_NEAR(double(dist_f), dist_d, 1e-4);
+  EXPECT_FALSE(pen_d);
+  EXPECT_FALSE(int_d);
+  EXPECT_FALSE(pen_f);
+  EXPECT_FALSE(int_f);
+}
+
+// Finding 7: a small box and a long thin cone that overlap by 6.9e-5, 100 box sizes from the origin.
+template <class S>
+impact::ConvexDistance<S> box_cone_overlapping(bool& intersect, impact::ConvexContact<S>& contact) {
+  const Box<S> a(impact::Vec3<S>(S(0.002166748046875), S(0.002777099609375), S(0.001739501953125)));
+  const Cone<S> b(S(0.0024261474609375), S(0.1552734375));
+  const auto pa = pose_of<S>({-0.9272727370262146, -0.18181818723678589, 0.32727271318435669, 0.32727271318435669, -0.81818181276321411,
+                              0.47272726893424988, 0.18181818723678589, 0.54545456171035767, 0.81818181276321411},
+                             {-0.2509765625, 0.26025390625, 0.255859375});
+  const auto pb = pose_of<S>({-0.15942029654979706, 0.057971015572547913, -0.98550724983215332, 0.63768118619918823, 0.76811593770980835,
+                              -0.057971015572547913, 0.75362318754196167, -0.63768118619918823, -0.15942029654979706},
+                             {-0.265625, 0.25830078125, 0.25830078125});
+  intersect = impact::convex_intersect(a, pa, b, pb);
+  contact = impact::convex_penetration(a, pa, b, pb);
+  return impact::convex_distance(a, pa, b, pb);
+}
+
+TEST(ConvexFuzzFindings, StalledDistanceIsFlagged) {
+  bool int_d = false, int_f = false;
+  impact::ConvexContact<double> pen_d;
+  impact::ConvexContact<float> pen_f;
+  const auto d = box_cone_overlapping<double>(int_d, pen_d);
+  const auto f = box_cone_overlapping<float>(int_f, pen_f);
+  EXPECT_TRUE(int_d);
+  EXPECT_TRUE(int_f);
+  ASSERT_TRUE(pen_d.intersecting);
+  ASSERT_TRUE(pen_f.intersecting);
+  EXPECT_NEAR(pen_d.depth, 6.8725e-5, 1e-8);
+  EXPECT_NEAR(double(pen_f.depth), pen_d.depth, 1e-7);
+  EXPECT_EQ(d.distance, 0.0);
+  // float: a distance within the tolerance of 0, or one that says it is not converged
+  const float tolerance = 1e-5f * impact::detail::query_scale<float>(Box<float>(impact::Vec3<float>::Constant(0.002f)), Cone<float>(0.0024f, 0.155f));
+  EXPECT_TRUE(f.distance <= 4 * tolerance || f.limit_reached) << f.distance;
 }
 
 TEST(ConvexFuzzFindings, NeedleCapsuleBesideABox) {

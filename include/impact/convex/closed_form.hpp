@@ -124,18 +124,44 @@ inline CorePoints<S> core_points(const Capsule<S>& a, const RigidTransform<S>& p
   return {cp.point_a, cp.point_b};
 }
 
-/// The normal used when two cores meet (the direction is then not defined by the core points):
-/// the cross product of two capsule axes, else the line of the poses' origins, else +z.
+/// The world axis of a round shape's core: a capsule's when its segment has a length, else zero.
 template <class S>
-inline Vec3<S> core_fallback_normal(const RigidTransform<S>& pa, const RigidTransform<S>& pb, bool both_segments) {
-  if (both_segments) {
-    Vec3<S> n = pa.R.col(2).cross(pb.R.col(2));
+inline Vec3<S> core_axis(const Sphere<S>&, const RigidTransform<S>&) {
+  return Vec3<S>::Zero();
+}
+template <class S>
+inline Vec3<S> core_axis(const Capsule<S>& c, const RigidTransform<S>& p) {
+  return c.half_length > S(0) ? Vec3<S>(p.R.col(2)) : Vec3<S>::Zero();
+}
+
+/// The normal used when two cores meet (the core points coincide and give no direction). Moving b
+/// by ra + rb along it must make the shapes touch, so it is perpendicular to every segment core:
+/// the cross product of two axes that are not parallel; else, with one axis (or two parallel
+/// ones), the line of the poses' origins without its component along the axis, or any direction
+/// perpendicular to the axis when that line runs along it; else (two points) the line of the
+/// origins, or +z. (Any other direction needs a longer move along a segment: fuzzing found a
+/// sphere centred on a capsule's axis given the capsule's axis as its normal.)
+template <class S, class A, class B>
+inline Vec3<S> core_fallback_normal(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
+  const Vec3<S> ua = core_axis(a, pa), ub = core_axis(b, pb);
+  const bool has_a = ua.squaredNorm() > S(0), has_b = ub.squaredNorm() > S(0);
+  const Vec3<S> d = pb.t - pa.t;
+  if (has_a && has_b) {
+    Vec3<S> n = ua.cross(ub);
     if (n.squaredNorm() > S(1e-12)) {
       n.normalize();
-      return n.dot(pb.t - pa.t) >= S(0) ? n : Vec3<S>(-n);
+      return n.dot(d) >= S(0) ? n : Vec3<S>(-n);
     }
   }
-  const Vec3<S> d = pb.t - pa.t;
+  if (has_a || has_b) {
+    const Vec3<S> axis = (has_a ? ua : ub).normalized();
+    Vec3<S> across = d - axis.dot(d) * axis;
+    across -= axis.dot(across) * axis;  // twice: perpendicular to rounding of its own length
+    if (across.squaredNorm() > S(1e-12) * d.squaredNorm()) return across.normalized();
+    int least = 0;  // else the axis crossed with the coordinate axis it is least along
+    axis.cwiseAbs().minCoeff(&least);
+    return axis.cross(Vec3<S>::Unit(least)).normalized();
+  }
   if (d.squaredNorm() > S(0)) return d.normalized();
   return Vec3<S>::UnitZ();
 }
@@ -147,6 +173,29 @@ inline S round_radius(const Sphere<S>& s) {
 template <class S>
 inline S round_radius(const Capsule<S>& s) {
   return s.radius;
+}
+
+/// Length of a round shape's core: a capsule's segment, 0 for a sphere.
+template <class S>
+inline S core_length(const Sphere<S>&) {
+  return S(0);
+}
+template <class S>
+inline S core_length(const Capsule<S>& c) {
+  return S(2) * c.half_length;
+}
+
+/// Penetration of two round shapes (spheres, capsules) from the closest points of their cores.
+/// Cores closer than the rounding of those points (64 epsilons of the coordinates and the
+/// segments' lengths) meet: the line between the points is noise there, and the normal is
+/// core_fallback_normal's (perpendicular to the segments), with the depth ra + rb.
+template <class S, class A, class B>
+inline ConvexContact<S> round_pair_contact(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
+  const CorePoints<S> q = core_points(a, pa, b, pb);
+  const S reach = std::max({q.a.cwiseAbs().maxCoeff(), q.b.cwiseAbs().maxCoeff(), core_length(a), core_length(b)});
+  const S noise = S(64) * std::numeric_limits<S>::epsilon() * reach;
+  const bool meet = (q.b - q.a).squaredNorm() <= noise * noise;
+  return balls_contact(q.a, round_radius(a), meet ? q.a : q.b, round_radius(b), core_fallback_normal(a, pa, b, pb));
 }
 
 /// Does the sphere (world centre c, radius r) touch or overlap the box? (The boolean of

@@ -12,8 +12,9 @@
 /// true distance d* satisfy d - tolerance <= d* <= d (d is the length of a vector of the Minkowski
 /// difference, an upper bound; the stopping test bounds the gap), and the witness points are points
 /// of the two sets (convex combinations of support points) d apart. Sets closer than `tolerance`
-/// may be reported as intersecting (distance 0). When the iteration bound is hit, limit_reached is
-/// set and the best upper bound found so far is returned.
+/// may be reported as intersecting (distance 0). When the iteration bound is hit, or rounding
+/// stalls the solver with its gap still wider than 4 tolerances, limit_reached is set and the best
+/// upper bound found so far is returned.
 #pragma once
 
 #include "impact/convex/signed_volumes.hpp"
@@ -33,7 +34,7 @@ struct ConvexDistance {
   Vec3<S> point_b = Vec3<S>::Zero();  ///< closest point of the second shape (unspecified when intersecting)
   bool intersecting = false;       ///< the shapes touch or overlap (within the tolerance)
   int iterations = 0;              ///< support-point evaluations of each shape
-  bool limit_reached = false;      ///< the iteration bound stopped the solver before its tolerance
+  bool limit_reached = false;      ///< the iteration bound or a rounding stall stopped the solver before its tolerance
 };
 
 namespace detail {
@@ -193,9 +194,13 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
       ++level_steps;
       continue;
     }
-    // a repeated support point or no progress (rounding): v is as close as the arithmetic allows
+    // a repeated support point or no progress (rounding): v is as close as the arithmetic allows.
+    // A stall whose gap |v| - lower is still wider than the tolerance is not converged: the
+    // distance may be anywhere in [lower, |v|], and the result says limit_reached (fuzzing: a
+    // float box and cone that overlap stalled at |v| = 1.5e-4, 5e-4 of the size, with no
+    // separating plane found).
     out.intersecting = step == GjkStep::Inside;
-    converged = true;
+    converged = out.intersecting || len - lower <= S(4) * tolerance;
     break;
   }
   out.limit_reached = !converged;
