@@ -39,6 +39,22 @@ template <class S> std::optional<S> brute_first_t(const TriangleMesh<S>& m, cons
   return best;
 }
 
+// One mesh with its three trees and a collider on each: the binary tree, the compact copy and the
+// wide tree (held here: the colliders point to them).
+template <class S> struct ThreeTrees {
+  explicit ThreeTrees(const TriangleMesh<S>& m) : mb(m), cb(mb.tree()), w(m), plain(mb), compact(mb), wide(mb) {
+    compact.compact_tree = &cb;
+    wide.wide_tree = &w;
+  }
+  ThreeTrees(const ThreeTrees&) = delete;
+  ThreeTrees& operator=(const ThreeTrees&) = delete;
+  const MeshBvh<Aabb<S>> mb;
+  const CompactBvh cb;
+  const WideBvh<S> w;
+  MeshCollider<Aabb<S>> plain, compact, wide;
+  std::vector<const MeshCollider<Aabb<S>>*> all() const { return {&plain, &compact, &wide}; }
+};
+
 template <class S> Vec3<S> scaled(const Vec3<S>& v, int k) { return {std::ldexp(v[0], k), std::ldexp(v[1], k), std::ldexp(v[2], k)}; }
 
 // The exponents of the legs' lengths: from just below min_scale down to subnormal directions.
@@ -52,12 +68,7 @@ template <class S> std::vector<int> tiny_exponents() {
 TYPED_TEST(ShortLegs, SameHitsAsBruteForceOnTheScaledLeg) {
   using S = TypeParam;
   const TriangleMesh<S> m = make_torus<S>(S(1), S(0.4), 24, 12);
-  const MeshBvh<Aabb<S>> mb(m);
-  const CompactBvh cb(mb.tree());
-  const WideBvh<S> w(m);
-  MeshCollider<Aabb<S>> plain(mb), compact(mb), wide(mb);
-  compact.compact_tree = &cb;
-  wide.wide_tree = &w;
+  const ThreeTrees<S> trees(m);
   test::Rng rng(83);
   int hits = 0;
   for (int i = 0; i < 60; ++i) {
@@ -71,7 +82,7 @@ TYPED_TEST(ShortLegs, SameHitsAsBruteForceOnTheScaledLeg) {
         const S td = std::ldexp(tu, j);
         if (segment && !std::isfinite(td)) continue;
         const auto ref = brute_first_t(m, Ray<S>(o, u, tu));
-        for (const MeshCollider<Aabb<S>>* c : {&plain, &compact, &wide}) {
+        for (const MeshCollider<Aabb<S>>* c : trees.all()) {
           const auto h = c->local_first_hit(o, d, S(0), td);
           ASSERT_EQ(ref.has_value(), h.has_value()) << i << " " << j << " " << segment;
           if (!ref) continue;
@@ -94,18 +105,13 @@ TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
   m.F.resize(1, 3);
   m.V << S(0), S(-1), S(-1), S(0), S(2), S(-1), S(0), S(-1), S(2);
   m.F << 0, 1, 2;
-  const MeshBvh<Aabb<S>> mb(m);
-  const CompactBvh cb(mb.tree());
-  const WideBvh<S> w(m);
-  MeshCollider<Aabb<S>> plain(mb), compact(mb), wide(mb);
-  compact.compact_tree = &cb;
-  wide.wide_tree = &w;
+  const ThreeTrees<S> trees(m);
   const int lowest = std::numeric_limits<S>::min_exponent - std::numeric_limits<S>::digits;  // denorm_min = 2^(lowest)
   for (int j = 0; -j - 1 >= lowest; j += 7) {
     const S len = std::ldexp(S(1), -j);
     const Vec3<S> o(-len / S(2), S(0.1), S(0.2));
     const Vec3<S> d(len, S(0), S(0));
-    for (const MeshCollider<Aabb<S>>* c : {&plain, &compact, &wide}) {
+    for (const MeshCollider<Aabb<S>>* c : trees.all()) {
       const auto h = c->local_first_hit(o, d, S(0), S(1));
       ASSERT_TRUE(h.has_value()) << j;
       EXPECT_EQ(h->t, S(0.5)) << j;
@@ -114,7 +120,7 @@ TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
     const S r = std::ldexp(S(1), 4 - j);
     if (r < std::sqrt(std::numeric_limits<S>::min())) continue;
     const Vec3<S> os(-r - len / S(2), S(0.1), S(0.2));  // exact: the two terms 5 bits apart
-    const auto s = plain.local_first_hit(os, d, r, S(1));
+    const auto s = trees.plain.local_first_hit(os, d, r, S(1));
     ASSERT_TRUE(s.has_value()) << j;
     EXPECT_NEAR(double(s->t), 0.5, 1e-3) << j;
   }
