@@ -16,6 +16,7 @@
 #include "impact/query/ray_wide_bvh.hpp"
 #include "impact/response/collider.hpp"
 #include "support/random.hpp"
+#include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -126,6 +127,31 @@ TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
     const auto s = trees.plain.local_first_hit(os, d, r, S(1));
     ASSERT_TRUE(s.has_value()) << j;
     EXPECT_NEAR(double(s->t), 0.5, 1e-3) << j;
+  }
+}
+
+// A mesh collider's sphere below the sweep's resolution (query/swept_sphere_mesh.hpp) never goes
+// through an edge or a vertex, whichever tree the collider holds (the binary, compact or wide
+// tree: spheres are swept on the binary tree): from the centre of a closed unit icosphere towards
+// each vertex and edge midpoint, every leg the point crosses the shell on is hit no later. Before,
+// 104 of 1,122 legs went through for r = 1e-18 (double), 88 for r = 1e-8 (float).
+TYPED_TEST(ShortLegs, TinySpheresNeverTunnelThroughAnyTree) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_icosphere<S>(S(1), 2);
+  const ThreeTrees<S> trees(m);
+  const S r = std::is_same_v<S, float> ? S(1e-8) : S(1e-18);
+  std::vector<Vec3<S>> targets;
+  for (int i = 0; i < m.num_vertices(); ++i) targets.push_back(m.vertex(i));
+  for (int t = 0; t < m.num_triangles(); t += IMPACT_TEST_SANITIZED ? 4 : 1)
+    for (int k = 0; k < 3; ++k) targets.push_back((m.vertex(m.F(t, k)) + m.vertex(m.F(t, (k + 1) % 3))) / S(2));
+  for (const MeshCollider<Aabb<S>>* c : trees.all()) {
+    int misses = 0;
+    for (const Vec3<S>& p : targets) {
+      const auto g = c->local_first_hit(Vec3<S>::Zero(), p, S(0), S(2));
+      const auto h = c->local_first_hit(Vec3<S>::Zero(), p, r, S(2));
+      if (g && (!h || h->t > g->t)) ++misses;
+    }
+    EXPECT_EQ(misses, 0) << targets.size() << " legs";
   }
 }
 
