@@ -155,10 +155,10 @@ TYPED_TEST(ShortLegs, TinySpheresNeverTunnelThroughAnyTree) {
   }
 }
 
-// Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed near the shape's middle) against
-// its first hit on the leg u: the same t scaled by 2^j, bit for bit, and the same normal. Before
-// the scaling, the plane, sphere, box and convex colliders found nothing on such legs (their
-// products of the direction underflowed), whatever lay ahead.
+// Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed
+// near the shape's middle) against its first hit on the leg u: the same t scaled by 2^j, bit for
+// bit, and the same normal. Before the scaling, the plane, sphere, box and convex colliders found
+// nothing on such legs (their products of the direction underflowed), whatever lay ahead.
 template <class S, class C> void expect_scale_free(const C& c, const char* name, test::Rng& rng) {
   int hits = 0;
   for (int i = 0; i < 40; ++i) {
