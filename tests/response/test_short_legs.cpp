@@ -155,6 +155,46 @@ TYPED_TEST(ShortLegs, TinySpheresNeverTunnelThroughAnyTree) {
   }
 }
 
+// The box collider sweeps a sphere over its 12 triangles; a radius far below the coordinates is lost
+// in the sweep's rounding at the edges and corners (and the faces' diagonals). Legs from 26 points
+// around a rotated box, aimed exactly (to rounding) at its corners, its edges' midpoints and its
+// faces' centres (on a diagonal): wherever the point (the exact slab test) hits, the tiny sphere
+// must hit no later.
+TYPED_TEST(ShortLegs, TinySpheresNeverTunnelThroughABoxCollider) {
+  using S = TypeParam;
+  Obb<S> box;
+  box.center = Vec3<S>(S(0.3), S(-0.2), S(0.1));
+  box.axes = Eigen::AngleAxis<S>(S(0.7), Vec3<S>(S(1), S(2), S(2)) / S(3)).toRotationMatrix();
+  box.half = Vec3<S>(S(1), S(0.5), S(0.75));
+  const BoxCollider<S> c(box);
+  const S r = std::is_same_v<S, float> ? S(1e-8) : S(1e-18);
+  std::vector<Vec3<S>> targets;
+  for (int i = 0; i < 27; ++i) {  // every corner, edge midpoint and face centre: the points of {-1, 0, 1}^3 but the centre
+    const Vec3<S> u(S(i % 3 - 1), S(i / 3 % 3 - 1), S(i / 9 - 1));
+    if (i != 13) targets.push_back(box.center + box.axes * u.cwiseProduct(box.half));
+  }
+  int through = 0, late = 0, hits = 0;
+  for (int k = 0; k < 27; ++k) {
+    if (k == 13) continue;
+    const Vec3<S> from = box.center + S(3) * Vec3<S>(S(k % 3 - 1), S(k / 3 % 3 - 1), S(k / 9 - 1)).normalized() +
+                         Vec3<S>(S(0.01) * S(k), S(-0.02), S(0.015));
+    for (const Vec3<S>& p : targets) {
+      const auto g = c.local_first_hit(from, p - from, S(0), S(2));
+      const auto h = c.local_first_hit(from, p - from, r, S(2));
+      if (!g) continue;
+      ++hits;
+      if (!h) {
+        ++through;
+      } else if (h->t > g->t + S(16) * std::numeric_limits<S>::epsilon()) {  // later than the point, beyond rounding
+        ++late;
+      }
+    }
+  }
+  EXPECT_GT(hits, 200);
+  EXPECT_EQ(through, 0) << "of " << hits;
+  EXPECT_EQ(late, 0) << "of " << hits;
+}
+
 // Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed
 // near the shape's middle) against its first hit on the leg u: the same t scaled by 2^j, bit for
 // bit, and the same normal. Before the scaling, the plane, sphere, box and convex colliders found

@@ -53,6 +53,7 @@
 #include "impact/query/swept_sphere_mesh.hpp"
 #include "impact/response/contact.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -332,7 +333,11 @@ template <class S> struct BoxCollider {
     for (int t = 0; t < 12; ++t) tris_[static_cast<std::size_t>(t)] = m.triangle(t);
   }
   // Ray from outside against the box (r = 0: slab test) or the rounded box (r > 0: its 12
-  // triangles grown by r).
+  // triangles grown by r). A radius below the sweep's resolution at these coordinates
+  // (detail::kSweptRadiusResolution, query/swept_sphere_mesh.hpp) is lost in the sweep's rounding
+  // at the edges, corners and the faces' diagonals, where such a sphere went through or hit late
+  // (42 and 84 of 530 legs aimed at them, r = 1e-18): the point's exact slab test runs too and the
+  // earlier hit is kept (the sphere touches no later than its centre crosses).
   std::optional<LocalHit<S>> hit_outside(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     if (r > S(0)) {
       std::optional<LocalHit<S>> best;
@@ -343,6 +348,11 @@ template <class S> struct BoxCollider {
           tb = h->t;
           best = LocalHit<S>{h->t, h->point, h->normal};
         }
+      }
+      const S reach = std::max({o.cwiseAbs().maxCoeff(), Vec3<S>(o + t_max * d).cwiseAbs().maxCoeff(), box.half.maxCoeff()});
+      if (!(r >= detail::kSweptRadiusResolution<S> * reach)) {  // also when the leg's end is not finite
+        const auto point = hit_outside(o, d, S(0), t_max);
+        if (point && (!best || point->t < best->t)) best = point;
       }
       return best;
     }
