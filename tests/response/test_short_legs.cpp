@@ -6,9 +6,12 @@
 // (the narrow phase's per-triangle rule) on the leg with the direction scaled here to components
 // in [-1, 1] (another power of two than the cast's), its t scaled back: exactly the same t, through
 // the binary tree, the compact tree and the wide tree; and a leg crossing a triangle at its middle
-// (a point, or a sphere whose radius scales with the leg) must hit it at t = 1/2.
+// (a point, or a sphere whose radius scales with the leg) must hit it at t = 1/2. The same for
+// the other colliders (plane, sphere, box, the convex shapes): their first hit on a tiny leg is
+// their first hit on the same leg scaled to unit length, t scaled back, exactly.
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/wide_bvh.hpp"
+#include "impact/convex/convex_collider.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
 #include "impact/response/collider.hpp"
@@ -73,7 +76,7 @@ TYPED_TEST(ShortLegs, SameHitsAsBruteForceOnTheScaledLeg) {
   int hits = 0;
   for (int i = 0; i < 60; ++i) {
     const Vec3<S> o = (rng.vec(-1.5, 1.5)).template cast<S>();
-    const Vec3<S> u0 = (rng.vec(-1, 1)).template cast<S>();
+    const Vec3<S> u0 = ((rng.vec(-0.4, 0.4) - o.template cast<double>()) / 2).template cast<S>();  // towards the shape
     for (int j : tiny_exponents<S>()) {
       const Vec3<S> d = scaled(u0, -j);  // components may be subnormal
       const Vec3<S> u = scaled(d, j);    // exactly d 2^j
@@ -124,6 +127,52 @@ TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
     ASSERT_TRUE(s.has_value()) << j;
     EXPECT_NEAR(double(s->t), 0.5, 1e-3) << j;
   }
+}
+
+// Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed near the shape's middle) against
+// its first hit on the leg u: the same t scaled by 2^j, bit for bit, and the same normal. Before
+// the scaling, the plane, sphere, box and convex colliders found nothing on such legs (their
+// products of the direction underflowed), whatever lay ahead.
+template <class S, class C> void expect_scale_free(const C& c, const char* name, test::Rng& rng) {
+  int hits = 0;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3<S> o = (rng.vec(-2, 2)).template cast<S>();
+    const Vec3<S> u0 = ((rng.vec(-0.4, 0.4) - o.template cast<double>()) / 2).template cast<S>();  // towards the shape
+    for (const S r : {S(0), S(0.125)}) {
+      const S tu = S(6);
+      for (int j : tiny_exponents<S>()) {
+        const S td = std::ldexp(tu, j);
+        if (!std::isfinite(td)) continue;
+        const Vec3<S> d = scaled(u0, -j);  // components may be subnormal
+        const Vec3<S> u = scaled(d, j);    // exactly d 2^j
+        const auto ref = c.local_first_hit(o, u, r, tu);
+        const auto h = c.local_first_hit(o, d, r, td);
+        ASSERT_EQ(ref.has_value(), h.has_value()) << name << " " << i << " r " << r << " j " << j;
+        if (!ref) continue;
+        ++hits;
+        EXPECT_EQ(h->t, std::ldexp(ref->t, j)) << name << " " << i << " r " << r << " j " << j;
+        EXPECT_EQ(h->normal, ref->normal) << name << " " << i;
+      }
+    }
+  }
+  EXPECT_GT(hits, 60) << name;  // legs aimed near the shape's middle, 3 times as long as needed: many hit
+}
+
+TYPED_TEST(ShortLegs, EveryColliderAnswersTinyLegs) {
+  using S = TypeParam;
+  test::Rng rng(91);
+  expect_scale_free<S>(PlaneCollider<S>(Plane<S>(Vec3<S>(S(0.6), S(0), S(0.8)), S(0.25))), "plane", rng);
+  expect_scale_free<S>(SphereCollider<S>(Sphere<S>{Vec3<S>(S(0.25), S(0), S(0)), S(1)}), "sphere", rng);
+  expect_scale_free<S>(SphereCollider<S>(Sphere<S>{Vec3<S>(S(0), S(0), S(0)), S(3.5)}, ColliderSide::Inside), "hollow sphere", rng);
+  Obb<S> box;
+  box.center = Vec3<S>(S(0.125), S(-0.25), S(0));
+  box.axes = Eigen::AngleAxis<S>(S(0.5), Vec3<S>(S(0.6), S(0), S(0.8))).toRotationMatrix();
+  box.half = Vec3<S>(S(1), S(0.5), S(0.75));
+  expect_scale_free<S>(BoxCollider<S>(box), "box", rng);
+  expect_scale_free<S>(BoxCollider<S>(box, ColliderSide::Inside), "hollow box", rng);
+  expect_scale_free<S>(ConvexCollider<S, Capsule<S>>(Capsule<S>(S(0.5), S(0.75))), "capsule", rng);
+  expect_scale_free<S>(ConvexCollider<S, Cylinder<S>>(Cylinder<S>(S(0.75), S(0.5))), "cylinder", rng);
+  expect_scale_free<S>(ConvexCollider<S, Cone<S>>(Cone<S>(S(0.75), S(0.75))), "cone", rng);
 }
 
 }  // namespace

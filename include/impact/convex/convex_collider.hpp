@@ -196,6 +196,28 @@ struct ConvexCollider {
   S clearance(const Vec3<S>& q) const { return std::max(point_query(shape, q).distance, S(0)); }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
+    return detail::first_hit_any_leg(o, d, t_max, [&](const Vec3<S>& lo, const Vec3<S>& ld, S lt) { return first_hit_in_range(lo, ld, r, lt); });
+  }
+
+  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
+    const ShapePointQuery<S> pq = point_query(shape, q);
+    if (pq.distance >= r) return std::nullopt;
+    return LocalPenetration<S>{pq.point, pq.normal, pq.point + (r + offset) * pq.normal};
+  }
+
+  /// Throws InvalidInput for an invalid shape (ColliderSet::validate calls it with the collider's name).
+  /// The message naming the collider is built only on failure: a valid shape costs the checks alone.
+  void validate(const char* where, const std::string& name) const {
+    try {
+      validate_shape(shape, where);
+    } catch (const InvalidInput&) {
+      validate_shape(shape, (std::string(where) + ": " + name).c_str());  // the same checks: throw again, with the name
+      throw;
+    }
+  }
+
+ private:
+  std::optional<LocalHit<S>> first_hit_in_range(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     if (!(d.squaredNorm() > S(0))) return std::nullopt;
     const S tol = S(16) * std::numeric_limits<S>::epsilon() *
                   (o.cwiseAbs().maxCoeff() + d.cwiseAbs().maxCoeff() * t_max + scale() + r);
@@ -215,23 +237,6 @@ struct ConvexCollider {
     }
     pq = point_query(shape, Vec3<S>(o + t * d));
     return LocalHit<S>{t, pq.point, pq.normal};  // early, never late
-  }
-
-  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
-    const ShapePointQuery<S> pq = point_query(shape, q);
-    if (pq.distance >= r) return std::nullopt;
-    return LocalPenetration<S>{pq.point, pq.normal, pq.point + (r + offset) * pq.normal};
-  }
-
-  /// Throws InvalidInput for an invalid shape (ColliderSet::validate calls it with the collider's name).
-  /// The message naming the collider is built only on failure: a valid shape costs the checks alone.
-  void validate(const char* where, const std::string& name) const {
-    try {
-      validate_shape(shape, where);
-    } catch (const InvalidInput&) {
-      validate_shape(shape, (std::string(where) + ": " + name).c_str());  // the same checks: throw again, with the name
-      throw;
-    }
   }
 };
 

@@ -12,9 +12,11 @@
 /// true distance d* satisfy d - tolerance <= d* <= d (d is the length of a vector of the Minkowski
 /// difference, an upper bound; the stopping test bounds the gap), and the witness points are points
 /// of the two sets (convex combinations of support points) d apart. Sets closer than `tolerance`
-/// may be reported as intersecting (distance 0). When the iteration bound is hit, or rounding
-/// stalls the solver with its gap still wider than 4 tolerances, limit_reached is set and the best
-/// upper bound found so far is returned.
+/// may be reported as intersecting (distance 0). When rounding stalls the solver with its gap still
+/// wider than 4 tolerances, it runs again from there on the same support points in a wider type
+/// (float in double, double in long double) and returns that run's answer if it converges. When
+/// the iteration bound is hit, or the wider run stalls too, limit_reached is set and the best upper
+/// bound found so far is returned.
 #pragma once
 
 #include "impact/convex/signed_volumes.hpp"
@@ -23,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace impact {
 
@@ -157,6 +160,7 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   S lower = S(0);       // the best lower bound of the distance so far
   int level_steps = 0;  // steps kept without coming nearer (gjk_step's Level)
   GjkSavedSimplex<S> level_saved;  // the nearest simplex a Level step left
+  bool stalled = false;            // rounding stopped the solver with its gap still wide
   while (out.iterations < max_iterations) {
     const S vv = v.squaredNorm();
     if (vv <= tol2 || (stop_within_margin && margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
@@ -201,9 +205,32 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
     // separating plane found).
     out.intersecting = step == GjkStep::Inside;
     converged = out.intersecting || len - lower <= S(4) * tolerance;
+    stalled = !converged;
     break;
   }
   out.limit_reached = !converged;
+  if constexpr (!std::is_same_v<S, long double>) {
+    // A rounding stall with the gap still wide: the simplex was too ill-conditioned for S (a long
+    // thin cone against a small float box stalled at 5e-4 of the size). The same support points are
+    // exact in a wider type, so the query runs again there from v, and its answer, when it
+    // converges, is this one's (distance and witnesses rounded back to S).
+    if (stalled) {
+      using W = std::conditional_t<std::is_same_v<S, float>, double, long double>;
+      const auto wide_a = [&](const Vec3<W>& d) { return Vec3<W>(support_a(Vec3<S>(d.template cast<S>())).template cast<W>()); };
+      const auto wide_b = [&](const Vec3<W>& d) { return Vec3<W>(support_b(Vec3<S>(d.template cast<S>())).template cast<W>()); };
+      const ConvexDistance<W> w = gjk_distance<W>(wide_a, wide_b, Vec3<W>(v.template cast<W>()), W(tolerance), max_iterations,
+                                                  W(margin), stop_within_margin);
+      if (!w.limit_reached) {
+        out.intersecting = w.intersecting;
+        out.distance = S(w.distance);
+        out.point_a = w.point_a.template cast<S>();
+        out.point_b = w.point_b.template cast<S>();
+        out.iterations += w.iterations;
+        out.limit_reached = false;
+        return out;
+      }
+    }
+  }
   if (level_saved.vv < v.squaredNorm()) {  // Level steps came no nearer in the end: back to the nearest
     n = level_saved.n;
     for (int i = 0; i < n; ++i) {

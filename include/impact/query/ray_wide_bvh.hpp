@@ -114,6 +114,7 @@ template <class S, int W = 4> struct WideCast {
   struct LeafSetup {
     PreparedRay<S> pr;
     BlockTest<S> block_test;
+    LeafSetup(const Ray<S>& ray, bool avx) : pr(ray) { block_test.set(pr, avx); }  // made in place
   };
   std::optional<LeafSetup> leaf_setup;
   std::optional<WideSlab<S>> slab;  // in S: set up when first needed
@@ -197,11 +198,7 @@ template <class S, int W = 4> struct WideCast {
   /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
   /// scalar test.
   IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
-    if (!leaf_setup) {
-      leaf_setup.emplace();
-      leaf_setup->pr = PreparedRay<S>(Ray<S>(o, d, t_max));
-      leaf_setup->block_test.set(leaf_setup->pr, use_avx);
-    }
+    if (!leaf_setup) leaf_setup.emplace(Ray<S>(o, d, t_max), use_avx);
     const BlockTest<S>& block_test = leaf_setup->block_test;
     const bool repeats = wide.has_repeats();
     const std::int32_t first = wide.block_first(block);
@@ -274,9 +271,10 @@ template <class S, int W = 4> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
 #if defined(IMPACT_WIDE_AVX)
-    if constexpr (W == 8) {  // the common case in one frame: the AVX loop with the fixed stack
-      if (wide.depth() <= kFixedDepth && use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
-        run_avx_fixed();
+    if constexpr (W == 8) {  // the AVX loop, its stack a local of its own frame (the top in a register)
+      if (use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
+        if (wide.depth() <= kFixedDepth) run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>();
+        else run_avx<TraversalStack<WideEntry, 128>>();
         return;
       }
     }
@@ -305,24 +303,48 @@ template <class S, int W = 4> struct WideCast {
   }
 #if defined(IMPACT_WIDE_AVX)
   /// The traversal of an 8-wide tree with the AVX node test (compiled for AVX; called when the CPU
-  /// has it): the loop of run() with eight children tested at once.
-  template <class Stack> IMPACT_WIDE_AVX_TARGET void run_avx(Stack& stack);
-  /// run_avx with the fixed stack of run(), declared in the same frame.
-  IMPACT_WIDE_AVX_TARGET void run_avx_fixed() {
-    TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;
-    run_avx(stack);
+  /// has it): the loop of run() with eight children tested at once, on a Stack of its own.
+  template <class Stack> IMPACT_WIDE_AVX_TARGET void run_avx();
+  /// descend() for the keys in an AVX register: the same order (by key, ties by the lower slot),
+  /// three or more children ranked without a sort (a child's rank: the entered children with a
+  /// smaller key, or an equal key in a lower slot).
+  template <class Stack>
+  IMPACT_WIDE_AVX_TARGET static void descend_avx(const Node& n, int mask, __m256 keys, Stack& stack, std::int32_t& first, std::int32_t& count) {
+    const int c0 = lowest_bit(mask);
+    const int rest = mask & (mask - 1);
+    if (!rest) {  // one child (the common case)
+      first = n.first[c0];
+      count = n.count[c0];
+      return;
+    }
+    alignas(32) float fk[W];
+    _mm256_store_ps(fk, keys);
+    const int c1 = lowest_bit(rest);
+    if (!(rest & (rest - 1))) {  // two: the nearer first (ties: the lower slot)
+      const bool swap = fk[c0] > fk[c1];
+      const int near = swap ? c1 : c0, far = swap ? c0 : c1;
+      stack.push({fk[far], n.first[far], n.count[far]});
+      first = n.first[near];
+      count = n.count[near];
+      return;
+    }
+    int order[W];
+    int m = 0;
+    for (unsigned bits = static_cast<unsigned>(mask); bits; bits &= bits - 1, ++m) {
+      const int c = lowest_bit(static_cast<int>(bits));
+      const __m256 kc = _mm256_set1_ps(fk[c]);
+      const int before = (_mm256_movemask_ps(_mm256_cmp_ps(keys, kc, _CMP_LT_OQ)) |
+                          (_mm256_movemask_ps(_mm256_cmp_ps(keys, kc, _CMP_EQ_OQ)) & ((1 << c) - 1))) &
+                         mask;
+      order[__builtin_popcount(static_cast<unsigned>(before))] = c;
+    }
+    for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
+    first = n.first[order[0]];
+    count = n.count[order[0]];
   }
 #endif
 
   template <class Stack> void run(Stack& stack) {
-#if defined(IMPACT_WIDE_AVX)
-    if constexpr (W == 8) {
-      if (use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
-        run_avx(stack);
-        return;
-      }
-    }
-#endif
     const Node* nodes = wide.nodes().data();
     std::int32_t first = 0, count = 0;  // the root: an inner node
     std::size_t tests = 0;
@@ -403,8 +425,9 @@ template <class S, int W = 4> struct WideCast {
 #if defined(IMPACT_WIDE_AVX)
 template <class S, int W>
 template <class Stack>
-IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
+IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx() {
   static_assert(W == 8, "the AVX node loop: 8-wide nodes");
+  Stack stack;
   const Node* nodes = wide.nodes().data();
   std::int32_t first = 0, count = 0;  // the root: an inner node
   std::size_t tests = 0;
@@ -420,9 +443,9 @@ IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
       __m256 lo;
       int mask = WideFloatSlab<S, W>::entered_avx(fs, n, exit_v, bound_v, lo);
       if (mask) {
-        float fk[W];
-        _mm256_storeu_ps(fk, lo);
         if (IMPACT_UNLIKELY(_mm256_movemask_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ)) & mask)) {
+          float fk[W];
+          _mm256_storeu_ps(fk, lo);
           mask = redecide(n, fk);
           if (!mask) {
             if (!pop_below(stack, bound, first, count)) {
@@ -431,8 +454,9 @@ IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx(Stack& stack) {
             }
             continue;
           }
+          lo = _mm256_loadu_ps(fk);
         }
-        descend(n, mask, fk, stack, first, count);
+        descend_avx(n, mask, lo, stack, first, count);
         continue;
       }
       if (!pop_below(stack, bound, first, count)) {

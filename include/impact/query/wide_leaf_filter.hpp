@@ -41,8 +41,10 @@ template <class S> class BlockTest {
   /// test passed is hit with a bound t_max unless tt is outside [0, t_max det] (det > 0) or
   /// [t_max det, 0] (det < 0); then t = min(tt / det, t_max) and the barycentrics are e / det, as
   /// detail::finish_ray_hit computes them.
+  /// Left uninitialised (a leaf visit pays only for the lanes it tests): candidates() writes all
+  /// four lanes whenever it passes one, and only a passed lane is read.
   struct alignas(32) LaneValues {
-    S eu[4] = {}, ev[4] = {}, ew[4] = {}, det[4] = {}, tt[4] = {};
+    S eu[4], ev[4], ew[4], det[4], tt[4];  // NOLINT(cppcoreguidelines-pro-type-member-init)
   };
   /// True when candidates() fills LaneValues (S = double with SSE2: the lanes are computed in
   /// the scalar test's operations, no recomputation in double as for float).

@@ -11,7 +11,10 @@
 ///  - first hit: the first t in [0, t_max] at which a sphere of radius r >= 0 (a point for r = 0)
 ///    with centre o + t d touches the surface from the particle's side, with the unit normal
 ///    towards the particle. A particle touching the surface at t = 0 hits only when it moves into
-///    it (d . n < 0), so starting on the surface neither sticks nor tunnels;
+///    it (d . n < 0), so starting on the surface neither sticks nor tunnels. Legs are never
+///    validated (a slow particle's can be shorter than CoordinateRange::min_scale, where squared
+///    norms underflow): every collider answers them on the same points with the direction scaled
+///    by a power of two (detail::first_hit_any_leg);
 ///  - penetration (projection): whether a particle ended on the wrong side or within r of the
 ///    surface, the closest surface point, the normal towards the allowed side, and where to put
 ///    the centre (surface point + (r + offset) normal).
@@ -107,6 +110,18 @@ template <class S> struct LocalPenetration {
 
 namespace detail {
 template <class S> inline S sq(S x) { return x * x; }
+
+/// A collider's first hit for any leg o + s d, s in [0, t_max]: `in_range(o, d, t_max)` answers
+/// legs whose direction has a component of at least CoordinateRange::min_scale; a shorter one (a
+/// slow particle, whose squared norms and products underflow: the colliders read that as "no
+/// motion, no hit", and the particle tunnelled) is answered on the same points with the direction
+/// scaled up by a power of two (cast_short_ray: t scaled back exactly).
+template <class S, class InRange>
+std::optional<LocalHit<S>> first_hit_any_leg(const Vec3<S>& o, const Vec3<S>& d, S t_max, InRange&& in_range) {
+  const S dmax = d.cwiseAbs().maxCoeff();
+  if (IMPACT_LIKELY(dmax >= CoordinateRange<S>::min_scale)) return in_range(o, d, t_max);
+  return cast_short_ray(Ray<S>(o, d, t_max), dmax, [&](const Ray<S>& leg) { return in_range(leg.origin, leg.direction, leg.t_max); });
+}
 }  // namespace detail
 
 /// Half-space n . x <= d (in the local frame) as a solid: particles stay on the normal's side.
@@ -125,6 +140,17 @@ template <class S> struct PlaneCollider {
   S clearance(const Vec3<S>& q) const { return std::max(plane.signed_distance(q), S(0)); }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
+    return detail::first_hit_any_leg(o, d, t_max, [&](const Vec3<S>& lo, const Vec3<S>& ld, S lt) { return first_hit_in_range(lo, ld, r, lt); });
+  }
+  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
+    const S s = plane.signed_distance(q);
+    if (s >= r) return std::nullopt;
+    const Vec3<S> p = q - s * plane.normal;
+    return LocalPenetration<S>{p, plane.normal, p + (r + offset) * plane.normal};
+  }
+
+ private:
+  std::optional<LocalHit<S>> first_hit_in_range(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     const S s0 = plane.signed_distance(o) - r;
     const S dn = plane.normal.dot(d);
     if (!(dn < S(0))) return std::nullopt;
@@ -134,12 +160,6 @@ template <class S> struct PlaneCollider {
       if (t > t_max) return std::nullopt;
     }
     return LocalHit<S>{t, o + t * d - (r + std::min(s0, S(0))) * plane.normal, plane.normal};
-  }
-  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
-    const S s = plane.signed_distance(q);
-    if (s >= r) return std::nullopt;
-    const Vec3<S> p = q - s * plane.normal;
-    return LocalPenetration<S>{p, plane.normal, p + (r + offset) * plane.normal};
   }
 };
 
@@ -163,6 +183,24 @@ template <class S> struct SphereCollider {
   }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
+    return detail::first_hit_any_leg(o, d, t_max, [&](const Vec3<S>& lo, const Vec3<S>& ld, S lt) { return first_hit_in_range(lo, ld, r, lt); });
+  }
+  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
+    const Vec3<S> m = q - sphere.center;
+    const S len = m.norm();
+    const Vec3<S> u = len > S(0) ? Vec3<S>(m / len) : Vec3<S>::UnitZ();
+    if (side == ColliderSide::Inside) {
+      if (len <= sphere.radius - r) return std::nullopt;
+      const Vec3<S> p = sphere.center + sphere.radius * u;
+      return LocalPenetration<S>{p, -u, p - (r + offset) * u};
+    }
+    if (len >= sphere.radius + r) return std::nullopt;
+    const Vec3<S> p = sphere.center + sphere.radius * u;
+    return LocalPenetration<S>{p, u, p + (r + offset) * u};
+  }
+
+ private:
+  std::optional<LocalHit<S>> first_hit_in_range(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
     const Vec3<S> m = o - sphere.center;
     const S mm = m.squaredNorm(), md = m.dot(d), dd = d.squaredNorm();
     if (!(dd > S(0))) return std::nullopt;
@@ -196,19 +234,6 @@ template <class S> struct SphereCollider {
     const Vec3<S> n = (m + t * d) / re;
     return LocalHit<S>{t, sphere.center + sphere.radius * n, n};
   }
-  std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& q, const Vec3<S>&, S r, S offset) const {
-    const Vec3<S> m = q - sphere.center;
-    const S len = m.norm();
-    const Vec3<S> u = len > S(0) ? Vec3<S>(m / len) : Vec3<S>::UnitZ();
-    if (side == ColliderSide::Inside) {
-      if (len <= sphere.radius - r) return std::nullopt;
-      const Vec3<S> p = sphere.center + sphere.radius * u;
-      return LocalPenetration<S>{p, -u, p - (r + offset) * u};
-    }
-    if (len >= sphere.radius + r) return std::nullopt;
-    const Vec3<S> p = sphere.center + sphere.radius * u;
-    return LocalPenetration<S>{p, u, p + (r + offset) * u};
-  }
 };
 
 /// An oriented box: solid (side Outside) or a hollow container (side Inside). Axis-aligned boxes
@@ -238,14 +263,8 @@ template <class S> struct BoxCollider {
     return (q - q.cwiseMax(-box.half).cwiseMin(box.half)).norm();
   }
 
-  std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& ow, const Vec3<S>& dw, S r, S t_max) const {
-    const Vec3<S> o = box.axes.transpose() * (ow - box.center), d = box.axes.transpose() * dw;
-    std::optional<LocalHit<S>> h = side == ColliderSide::Inside ? hit_inside(o, d, r, t_max) : hit_outside(o, d, r, t_max);
-    if (h) {
-      h->point = box.center + box.axes * h->point;
-      h->normal = box.axes * h->normal;
-    }
-    return h;
+  std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
+    return detail::first_hit_any_leg(o, d, t_max, [&](const Vec3<S>& lo, const Vec3<S>& ld, S lt) { return first_hit_in_range(lo, ld, r, lt); });
   }
   std::optional<LocalPenetration<S>> local_penetration(const Vec3<S>& qw, const Vec3<S>&, S r, S offset) const {
     const Vec3<S> q = box.axes.transpose() * (qw - box.center);
@@ -299,6 +318,15 @@ template <class S> struct BoxCollider {
   }
 
  private:
+  std::optional<LocalHit<S>> first_hit_in_range(const Vec3<S>& ow, const Vec3<S>& dw, S r, S t_max) const {
+    const Vec3<S> o = box.axes.transpose() * (ow - box.center), d = box.axes.transpose() * dw;
+    std::optional<LocalHit<S>> h = side == ColliderSide::Inside ? hit_inside(o, d, r, t_max) : hit_outside(o, d, r, t_max);
+    if (h) {
+      h->point = box.center + box.axes * h->point;
+      h->normal = box.axes * h->normal;
+    }
+    return h;
+  }
   void init() {
     const TriangleMesh<S> m = make_box<S>(box.half.cwiseMax(Vec3<S>::Constant(std::numeric_limits<S>::min())));
     for (int t = 0; t < 12; ++t) tris_[static_cast<std::size_t>(t)] = m.triangle(t);
@@ -438,11 +466,7 @@ template <class BV> struct MeshCollider {
   /// CoordinateRange::min_scale (a slow particle), whose squared norms underflow in the casts, is
   /// cast scaled up by a power of two (detail::cast_short_ray: the same points, the same hit).
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
-    const S dmax = d.cwiseAbs().maxCoeff();
-    if (IMPACT_UNLIKELY(!(dmax >= CoordinateRange<S>::min_scale)))
-      return detail::cast_short_ray(Ray<S>(o, d, t_max), dmax,
-                                    [&](const Ray<S>& leg) { return local_first_hit_in_range(leg.origin, leg.direction, r, leg.t_max); });
-    return local_first_hit_in_range(o, d, r, t_max);
+    return detail::first_hit_any_leg(o, d, t_max, [&](const Vec3<S>& lo, const Vec3<S>& ld, S lt) { return local_first_hit_in_range(lo, ld, r, lt); });
   }
 
   /// local_first_hit for a direction of at least CoordinateRange::min_scale in its largest component.

@@ -38,7 +38,7 @@ struct Prim {
 template <class S>
 struct StepBuffers {
   std::vector<Prim> cand, found;
-  std::vector<Aabb<S>> ebox, gbox, tbox, old_gbox, old_tbox, edge_boxes;
+  std::vector<Aabb<S>> ebox, gbox, tbox, old_gbox, old_tbox;
   std::vector<double> d0, path, key, toi;
   std::vector<std::uint8_t> d0_exact, changed, status;
   std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo, run;

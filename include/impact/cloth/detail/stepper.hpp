@@ -99,7 +99,6 @@ class Stepper {
   Aabb<S> triangle_envelope(std::size_t f) const;
   void refit_tree();
   void refit_grown(const std::vector<std::int32_t>& tris);
-  void owned_edge_boxes(std::size_t f);
   template <class Visit>
   void self_pairs(Visit&& visit);
   template <class Visit>
@@ -181,7 +180,6 @@ class Stepper {
   std::vector<Aabb<S>>& tbox_ = buf_.tbox;
   std::vector<Aabb<S>>& old_gbox_ = buf_.old_gbox;  // gbox_, tbox_ before the current re-gathering
   std::vector<Aabb<S>>& old_tbox_ = buf_.old_tbox;
-  std::vector<Aabb<S>>& edge_boxes_ = buf_.edge_boxes;  // per triangle and edge k: the grown envelope of an owned edge
   std::vector<std::uint8_t> grown_tri_;       // regather's triangles with a grown vertex (all 0 between calls)
   std::vector<std::uint8_t> grown_node_;      // grown_pairs: tree nodes above such a triangle (all 0 between calls)
   std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // grown_pairs walk
