@@ -73,17 +73,23 @@ template <class BVA, class BVB, class NodeOverlap, class Visit, class Order = de
 bool traverse_pair_nodes(const Bvh<BVA>& a, const Bvh<BVB>& b, NodeOverlap&& overlap, Visit&& visit, std::int32_t start_a = 0,
                          std::int32_t start_b = 0, const Order& order = {}) {
   if (a.empty() || b.empty()) return true;
-  detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
-  stack.push({start_a, start_b});
-  while (!stack.empty()) {
-    const auto [i, j] = stack.pop();
+  // One node pair: its test, with the children (adjacent) of both nodes fetched while it runs (one
+  // of the two pairs of children is read next whenever the test passes).
+  const auto passes = [&](std::int32_t i, std::int32_t j) {
     const auto& na = a.nodes[static_cast<std::size_t>(i)];
     const auto& nb = b.nodes[static_cast<std::size_t>(j)];
-    // the children (adjacent) of both nodes, fetched while the test runs: one of the two pairs of
-    // children is read next whenever the test passes
     if (!na.is_leaf()) detail::prefetch_bytes(&a.nodes[static_cast<std::size_t>(na.first)], 2 * sizeof(na));
     if (!nb.is_leaf()) detail::prefetch_bytes(&b.nodes[static_cast<std::size_t>(nb.first)], 2 * sizeof(nb));
-    if (!overlap(na, nb)) continue;
+    return overlap(na, nb);
+  };
+  // The first pair is tested before the stack exists: a query decided there (most poses of two
+  // meshes near each other are, at the roots) pays for nothing else. Same tests, same order.
+  if (!passes(start_a, start_b)) return true;
+  detail::TraversalStack<std::pair<std::int32_t, std::int32_t>> stack;
+  if (!detail::visit_or_split(a, b, start_a, start_b, stack, visit, order)) return false;
+  while (!stack.empty()) {
+    const auto [i, j] = stack.pop();
+    if (!passes(i, j)) continue;
     if (!detail::visit_or_split(a, b, i, j, stack, visit, order)) return false;
   }
   return true;

@@ -66,7 +66,7 @@ template <class S> class ObbPairFrame {
   /// only when a test needs them (most pairs are rejected by the balls first): image_centre(b)
   /// leaves them out, and overlaps(a, im, b) fills them in on first use.
   struct Image {
-    Mat3<S> axes = Mat3<S>::Zero();    ///< fl(X B), when has_axes
+    Mat3<S> axes;                      ///< fl(X B), when has_axes (not set up before: most tests end at the balls)
     Vec3<S> center = Vec3<S>::Zero();  ///< fl(X c_b + t)
     Vec3<S> half = Vec3<S>::Zero();    ///< b's half extents
     S radius = 0;                      ///< b's ball radius stretched by X's defect (infinite: no ball)

@@ -219,14 +219,17 @@ template <class BV> struct MeshNodeOverlap {
   using S = typename BvTraits<BV>::Scalar;
   static constexpr bool kSphere = std::is_same_v<BV, Sphere<S>>;
   static constexpr bool kObb = std::is_same_v<BV, Obb<S>>;
+  static constexpr bool kPadded = kSphere || std::is_same_v<BV, Aabb<S>>;
   struct NoFrame {
     explicit NoFrame(const RigidTransform<S>&) {}
   };
+  struct Unused {};  // a member this BV's test does not use: nothing to set up per query
   const MeshBvh<BV>& a;
   const MeshBvh<BV>& b;
-  RigidTransform<S> b_to_a, a_to_b;
+  const RigidTransform<S>& b_to_a;  ///< the query's own (it outlives the node test)
+  std::conditional_t<kSphere, RigidTransform<S>, Unused> a_to_b;
   std::uint64_t* tests;
-  PosePad<S> pad;
+  std::conditional_t<kPadded, PosePad<S>, Unused> pad;
   /// oriented boxes: X's defect bounded once for every pair of validated poses
   /// (ObbPairFrame::validated_product_defect: x must be relative_transform of two poses that passed
   /// validate_pose, as in collide and collides)
@@ -235,7 +238,7 @@ template <class BV> struct MeshNodeOverlap {
   /// oriented boxes: the image of the last node of B tested, reused while the walk splits A's
   /// nodes against it (a query's own object: never shared between threads); its axes are computed
   /// by the first test that gets past the balls
-  mutable std::conditional_t<kObb, typename ObbPairFrame<S>::Image, NoImage> image_b{};
+  mutable std::conditional_t<kObb, typename ObbPairFrame<S>::Image, NoImage> image_b;
   mutable const BvhNode<BV>* imaged_b = nullptr;
 
   template <class B = BV, std::enable_if_t<std::is_same_v<B, Obb<S>>, int> = 0>
@@ -246,11 +249,19 @@ template <class BV> struct MeshNodeOverlap {
   static NoFrame make_frame(const RigidTransform<S>& x) {
     return NoFrame(x);
   }
+  template <class B = BV, std::enable_if_t<std::is_same_v<B, Sphere<S>>, int> = 0>
+  static RigidTransform<S> make_inverse(const RigidTransform<S>& x) {
+    return x.inverse();
+  }
+  template <class B = BV, std::enable_if_t<!std::is_same_v<B, Sphere<S>>, int> = 0>
+  static Unused make_inverse(const RigidTransform<S>&) {
+    return {};
+  }
 
   MeshNodeOverlap(const MeshBvh<BV>& a_, const MeshBvh<BV>& b_, const RigidTransform<S>& x, std::uint64_t* counter)
-      : a(a_), b(b_), b_to_a(x), a_to_b(kSphere ? x.inverse() : RigidTransform<S>{}), tests(counter), frame(make_frame(x)) {
+      : a(a_), b(b_), b_to_a(x), a_to_b(make_inverse(x)), tests(counter), frame(make_frame(x)) {
     // oriented boxes bound the rounding and the defect of the transform in their own test
-    if constexpr (kSphere || std::is_same_v<BV, Aabb<S>>) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
+    if constexpr (kPadded) pad = PosePad<S>(x, a_.coordinate_bound(), b_.coordinate_bound());
   }
 
   bool leaf_touches(const MeshBvh<BV>& m, const BvhNode<BV>& leaf, const Vec3<S>& c, S r) const {
