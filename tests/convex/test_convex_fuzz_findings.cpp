@@ -349,4 +349,35 @@ TEST(ConvexFuzzFindings, NeedleCapsuleBesideABox) {
   EXPECT_FALSE(impact::convex_intersect(box, pb, needle, pn, options));
 }
 
+// Finding 8 (random inputs, 200,000 of them): a capsule deep inside a much larger cylinder, 2^22
+// from the origin. EPA on the segment core against the cylinder needs about 130 to 420 support
+// points there (the swept cylinder's side is curved one way and flat the other), and its polytope
+// held 128: it stopped with its bracket 2.6e-4 of the depth wide and said limit_reached (122 such
+// double penetrations in those inputs, mostly capsules in cylinders). The polytope now holds 1024
+// vertices and the default iteration bound is 512: the bracket closes.
+TEST(ConvexFuzzFindings, DeepCapsuleInCylinderConverges) {
+  const Capsule<double> a(322, 35.625);
+  const Cylinder<double> b(41984, 65024);
+  const auto pa = pose_of<double>({0.9152542372881356, -0.38983050847457634, 0.10169491525423727, -0.15254237288135597, -0.10169491525423746,
+                                   0.98305084745762716, -0.3728813559322034, -0.9152542372881356, -0.15254237288135619},
+                                  {4194016, 4194256, 4193856});
+  const auto pb = pose_of<double>({0.21212121212121215, -0.67878787878787872, 0.70303030303030301, 0.48484848484848481, -0.55151515151515151,
+                                   -0.67878787878787872, 0.84848484848484851, 0.48484848484848481, 0.21212121212121215},
+                                  {4194336, 4194128, 4193856});
+  const impact::ConvexQueryOptions<double> options;
+  const double size = impact::detail::query_scale<double>(a, b);
+  const auto c = impact::convex_penetration(a, pa, b, pb, options);
+  ASSERT_TRUE(c.intersecting);
+  EXPECT_FALSE(c.limit_reached) << "iterations " << c.iterations;
+  EXPECT_LE(c.depth_gap, 1e-6 * size) << "depth " << c.depth;  // issue 15's bound on the depth's error
+  EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12);
+  // the depth is an upper bound: b moved out by it along the normal touches a at most by rounding
+  RigidTransform<double> moved = pb;
+  moved.t += c.depth * c.normal;
+  const auto after = impact::convex_penetration(a, pa, b, moved, options);
+  if (after.intersecting) {
+    EXPECT_LE(after.depth, 1e-6 * size);
+  }
+}
+
 }  // namespace

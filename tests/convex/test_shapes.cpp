@@ -147,13 +147,20 @@ TEST(ConvexShapes, InvalidParametersThrow) {
     EXPECT_THROW(Cylinder<double>(1.0, bad), InvalidInput) << bad;
     EXPECT_THROW(Cone<double>(bad, 1.0), InvalidInput) << bad;
     EXPECT_THROW(Cone<double>(1.0, bad), InvalidInput) << bad;
-    EXPECT_THROW(Box<double>(V3(1, bad, 1)), InvalidInput) << bad;
+    for (int axis = 0; axis < 3; ++axis) {  // every axis: the validation's fast path must not pass a bad one
+      V3 h(1, 1, 1);
+      h[axis] = bad;
+      EXPECT_THROW(Box<double>{h}, InvalidInput) << bad << " on axis " << axis;
+    }
     EXPECT_THROW(impact::validate_shape(Sphere<double>(V3::Zero(), bad), "t"), InvalidInput) << bad;
   }
   for (double bad : {nan, inf, -1.0}) EXPECT_THROW(Capsule<double>(1.0, bad), InvalidInput) << bad;
   EXPECT_NO_THROW(Capsule<double>(1.0, 0.0));  // a capsule of zero length is a sphere
   EXPECT_THROW(Capsule<double>(1e300, 1.0), InvalidInput);  // beyond CoordinateRange
   EXPECT_THROW(Cylinder<float>(1e30f, 1.0f), InvalidInput);
+  EXPECT_THROW(Box<double>(V3(1, 1e300, 1)), InvalidInput);  // beyond CoordinateRange
+  EXPECT_THROW(Box<double>(V3(1, 1, 1e-14)), InvalidInput);  // numerically flat
+  EXPECT_NO_THROW(Box<double>(V3(1, 1, 1e-12)));             // just above kMaxFlatness (2.3e-13)
   EXPECT_THROW(impact::validate_shape(Sphere<double>(V3(nan, 0, 0), 1.0), "t"), InvalidInput);
   try {
     Cone<double>(1.0, -2.0);

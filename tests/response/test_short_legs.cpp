@@ -16,6 +16,7 @@
 #include "impact/query/ray_wide_bvh.hpp"
 #include "impact/response/collider.hpp"
 #include "support/random.hpp"
+#include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -129,10 +130,35 @@ TYPED_TEST(ShortLegs, CrossingLegHitsAtItsMiddle) {
   }
 }
 
-// Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed near the shape's middle) against
-// its first hit on the leg u: the same t scaled by 2^j, bit for bit, and the same normal. Before
-// the scaling, the plane, sphere, box and convex colliders found nothing on such legs (their
-// products of the direction underflowed), whatever lay ahead.
+// A mesh collider's sphere below the sweep's resolution (query/swept_sphere_mesh.hpp) never goes
+// through an edge or a vertex, whichever tree the collider holds (the binary, compact or wide
+// tree: spheres are swept on the binary tree): from the centre of a closed unit icosphere towards
+// each vertex and edge midpoint, every leg the point crosses the shell on is hit no later. Before,
+// 104 of 1,122 legs went through for r = 1e-18 (double), 88 for r = 1e-8 (float).
+TYPED_TEST(ShortLegs, TinySpheresNeverTunnelThroughAnyTree) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = make_icosphere<S>(S(1), 2);
+  const ThreeTrees<S> trees(m);
+  const S r = std::is_same_v<S, float> ? S(1e-8) : S(1e-18);
+  std::vector<Vec3<S>> targets;
+  for (int i = 0; i < m.num_vertices(); ++i) targets.push_back(m.vertex(i));
+  for (int t = 0; t < m.num_triangles(); t += IMPACT_TEST_SANITIZED ? 4 : 1)
+    for (int k = 0; k < 3; ++k) targets.push_back((m.vertex(m.F(t, k)) + m.vertex(m.F(t, (k + 1) % 3))) / S(2));
+  for (const MeshCollider<Aabb<S>>* c : trees.all()) {
+    int misses = 0;
+    for (const Vec3<S>& p : targets) {
+      const auto g = c->local_first_hit(Vec3<S>::Zero(), p, S(0), S(2));
+      const auto h = c->local_first_hit(Vec3<S>::Zero(), p, r, S(2));
+      if (g && (!h || h->t > g->t)) ++misses;
+    }
+    EXPECT_EQ(misses, 0) << targets.size() << " legs";
+  }
+}
+
+// Every collider's first hit on a tiny leg (the direction u 2^-j, t_max scaled up by 2^j; u aimed
+// near the shape's middle) against its first hit on the leg u: the same t scaled by 2^j, bit for
+// bit, and the same normal. Before the scaling, the plane, sphere, box and convex colliders found
+// nothing on such legs (their products of the direction underflowed), whatever lay ahead.
 template <class S, class C> void expect_scale_free(const C& c, const char* name, test::Rng& rng) {
   int hits = 0;
   for (int i = 0; i < 40; ++i) {

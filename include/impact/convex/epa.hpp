@@ -90,7 +90,7 @@ struct EpaSettings {
 
 namespace detail {
 
-inline constexpr int kEpaMaxVertices = 128;
+inline constexpr int kEpaMaxVertices = 1024;
 inline constexpr int kEpaMaxFaces = 4 * kEpaMaxVertices;
 inline constexpr int kNewtonSteps = 16;
 

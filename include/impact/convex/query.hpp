@@ -74,7 +74,7 @@ namespace impact {
 template <class S>
 struct ConvexQueryOptions {
   /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000.
-  int max_iterations = 128;
+  int max_iterations = 512;
   /// Tolerance of the iterative solvers relative to the larger shape's size (shape_size()); in
   /// (0, 0.1]. The default is 1e-10 for double, 1e-5 for float.
   S relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-10);

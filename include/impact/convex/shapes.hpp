@@ -142,6 +142,11 @@ void validate_shape(const Cone<S>& s, const char* where) {
 }
 template <class S>
 void validate_shape(const Box<S>& s, const char* where) {
+  constexpr S range = CoordinateRange<S>::max;  // the common case first (comparisons are false for NaN)
+  const S x = s.half.x(), y = s.half.y(), z = s.half.z();
+  if (IMPACT_LIKELY(x > S(0) && y > S(0) && z > S(0) && x <= range && y <= range && z <= range &&
+                    std::min({x, y, z}) >= kMaxFlatness<S> * std::max({x, y, z})))
+    return;
   validate_coordinates(s.half, where, "box.half");
   if (!(s.half.minCoeff() > S(0))) throw InvalidInput(std::string(where) + ": box.half must be > 0 on every axis");
   detail::validate_not_flat(s.half.minCoeff(), s.half.maxCoeff(), where, "box");
