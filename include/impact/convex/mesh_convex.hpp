@@ -27,11 +27,17 @@
 ///              itself meets the triangle (within the tolerance): EPA as below
 ///   box        boolean and penetration: the 13 separating axes (exact depth for the polytope
 ///              pair; triangle_box_contact); distance: GJK
+///   hull       penetration: the separating axes of the pair (convex/triangle_hull_sat.hpp: the
+///              exact polytope depth; hulls of more than 128 faces: EPA as below); else as others
 ///   others     boolean: GJK with margin 0 (stops as soon as a separating plane or a simplex
 ///              within the tolerance is found); distance: GJK (convex/gjk_distance.hpp);
 ///              penetration: the own EPA (convex/epa.hpp), certified as convex_penetration's;
 ///              cylinders and cones first try the shortcut of convex/deepest_point.hpp (one point
 ///              of the triangle decides, certified by the ball about it: most contacts, no EPA)
+/// Needles: a capsule or cylinder much longer than a triangle meets it through the part of its
+/// axis that decides (needle_window: as capsule_window of convex/query.hpp), so the solvers see
+/// coordinates of the triangle's size, not the needle's length (the capsule's contact normal,
+/// the cylinder's boolean, distance and contact; tests/convex/test_needle_mesh.cpp).
 /// GJK and EPA run in the shape's frame (the triangle moved there: three rotations per triangle
 /// instead of two per support call).
 /// The distance query walks nearest node first (traverse_nearest) and skips a node whose lower
@@ -83,6 +89,7 @@
 #include "impact/bvh/traverse.hpp"
 #include "impact/convex/query.hpp"
 #include "impact/convex/deepest_point.hpp"
+#include "impact/convex/triangle_hull_sat.hpp"
 #include "impact/convex/triangle_shape.hpp"
 #include "impact/geometry/obb.hpp"
 #include "impact/narrow/closest_point.hpp"
@@ -109,9 +116,9 @@ struct MeshConvexOptions {
   /// the deepest-point shortcut for cylinders and cones (convex/deepest_point.hpp); true runs one
   /// libccd MPR per triangle (ccdMPRPenetration, as FCL does), settled along MPR's direction:
   /// translating the shape by depth * normal still leaves them touching, but the depth can exceed
-  /// the least one and is not certified (depth_gap = depth). About 1.2x faster than the default on
-  /// the bench's hulls; slower on its cylinders and cones (2-3x), where the shortcut answers most
-  /// triangles.
+  /// the least one and is not certified (depth_gap = depth). About 1.3x faster than the default
+  /// (the separating axes) on the bench's hulls; slower on its cylinders and cones (2-3x), where
+  /// the shortcut answers most triangles.
   bool fast_contacts = false;
 };
 
@@ -306,71 +313,181 @@ ConvexContact<S> triangle_box_contact(const Triangle<S>& tri, const Box<S>& box,
   return out;
 }
 
+/// A needle's window: capsule or cylinder a (placed in the mesh frame by pa) much longer than
+/// triangle tri, cut to the part of it that decides the pair (as capsule_window of
+/// convex/query.hpp does for shape pairs, whose argument this follows). The window is the axis
+/// interval |t - t0| <= L about the projection t0 of the triangle's centroid, L = 2 (rho + rb)
+/// for a capsule and 2 (rho + rb + r) for a cylinder (rho the centroid's distance to the axis,
+/// rb the triangle's size about it, r the radius), kept where it passes an end, and at least 2 r
+/// long for a cylinder. False (a as it is) unless the window is less than half the segment and
+/// holds a point of it; with `distance` also unless t0 lies on the segment.
+/// Why a cylinder's window needs the radius more: along a unit n at angle theta from the plane
+/// normal to the axis the cut cylinder overlaps the triangle by r cos(theta) + g(n) + L sin(theta)
+/// on a cut side (g as for the capsule, Lipschitz with constant K = rho + rb), which is at least
+/// r + g(n') at n's projection n' when (L - pi/2 K) sin(theta) >= r (1 - cos(theta)), true for
+/// L >= pi/2 K + r. So the least overlap (the depth, or minus the distance) is the whole
+/// cylinder's, and the solvers see coordinates of the triangle's size instead of the needle's
+/// length (GJK on a cylinder 1e8 times longer than wide called pairs 1.8 deep apart).
+/// `low`, `high`: whether the window cuts the axis below, above.
+template <class S>
+struct NeedleWindow {
+  RigidTransform<S> pose, to_shape;
+  S half_length = S(0);
+  bool low = false, high = false;
+};
+template <class S>
+bool needle_window(const Capsule<S>& a, const RigidTransform<S>& pa, const Triangle<S>& tri, bool distance, NeedleWindow<S>& w) {
+  CapsuleCut<S> cut;
+  if (!capsule_window(a, pa, TriangleShape<S>(tri), RigidTransform<S>(), cut, distance)) return false;
+  w.pose = cut.pose;
+  w.half_length = cut.capsule.half_length;
+  w.low = cut.low;
+  w.high = cut.high;
+  w.to_shape = w.pose.inverse();
+  return true;
+}
+template <class S>
+bool needle_window(const Cylinder<S>& a, const RigidTransform<S>& pa, const Triangle<S>& tri, bool distance, NeedleWindow<S>& w) {
+  const S h = a.half_length, r = a.radius;
+  if (!(S(8) * r < h)) return false;  // the window is at least 4 r long
+  const TriangleShape<S> t(tri);
+  const Vec3<S> cb = pa.R.transpose() * (interior_point(t) - pa.t);  // in a's frame
+  const S rho = std::sqrt(cb.x() * cb.x() + cb.y() * cb.y());
+  const S len = S(2) * (rho + shape_size(t) + r);
+  if (!(S(2) * len < h)) return false;  // also for NaN
+  if (distance && !(std::abs(cb.z()) <= h)) return false;
+  S t1 = std::max(cb.z() - len, -h), t2 = std::min(cb.z() + len, h);
+  if (!(t1 <= t2)) return false;
+  w.low = t1 > -h;
+  w.high = t2 < h;
+  if (t2 - t1 < S(2) * r) {  // the window passes an end (both ends when it is 2 len >= 4 r long)
+    if (w.high) {
+      t2 = t1 + S(2) * r;
+    } else {
+      t1 = t2 - S(2) * r;
+    }
+  }
+  w.half_length = (t2 - t1) / S(2);
+  w.pose.R = pa.R;
+  w.pose.t = pa.t + pa.R.col(2) * ((t1 + t2) / S(2));
+  w.to_shape = w.pose.inverse();
+  return true;
+}
+
 /// The per-triangle tests: triangle t (mesh frame) against `shape` placed in the mesh frame by
 /// `pose`. Boolean, distance and penetration, the triangle as a (see the file comment).
 template <class S, class Shape>
 struct TriangleConvexTests {
+  /// The shape as the solvers see it: the query's, or a needle's window (needle_window).
+  struct Placed {
+    const Shape& shape;
+    const RigidTransform<S>& pose;
+    const RigidTransform<S>& to_shape;  // the mesh frame into the shape's: GJK and EPA run there
+    S size;
+  };
+
   const Shape& shape;
   const RigidTransform<S>& pose;
   const ConvexQueryOptions<S>& options;
   S shape_size_;
-  RigidTransform<S> to_shape;  // the mesh frame into the shape's: GJK and EPA run there
+  RigidTransform<S> to_shape;  // the mesh frame into the shape's
 
   bool fast = false;  // MeshConvexOptions::fast_contacts
 
   TriangleConvexTests(const Shape& s, const RigidTransform<S>& p, const ConvexQueryOptions<S>& o, bool fast_contacts = false)
       : shape(s), pose(p), options(o), shape_size_(shape_size(s)), to_shape(p.inverse()), fast(fast_contacts) {}
 
-  S tolerance(const TriangleShape<S>& t) const { return options.relative_tolerance * std::max(shape_size_, shape_size(t)); }
+  Placed whole() const { return Placed{shape, pose, to_shape, shape_size_}; }
+
+  S tolerance(const Placed& ps, const TriangleShape<S>& t) const { return options.relative_tolerance * std::max(ps.size, shape_size(t)); }
 
   /// The triangle in the shape's frame: three rotations per triangle instead of two per support
   /// call of the shape in the iterative solvers.
-  TriangleShape<S> in_shape_frame(const Triangle<S>& tri) const {
-    return TriangleShape<S>(to_shape.apply(tri.a), to_shape.apply(tri.b), to_shape.apply(tri.c));
+  static TriangleShape<S> in_shape_frame(const Placed& ps, const Triangle<S>& tri) {
+    return TriangleShape<S>(ps.to_shape.apply(tri.a), ps.to_shape.apply(tri.b), ps.to_shape.apply(tri.c));
   }
 
   /// GJK in the shape's frame; witness points in the mesh frame.
-  ConvexDistance<S> gjk_pair(const Triangle<S>& tri, S margin) const {
-    const TriangleShape<S> t = in_shape_frame(tri);
+  ConvexDistance<S> gjk_pair(const Placed& ps, const Triangle<S>& tri, S margin) const {
+    const TriangleShape<S> t = in_shape_frame(ps, tri);
     const auto sa = [&t](const Vec3<S>& d) { return support(t, d); };
-    const auto sb = [this](const Vec3<S>& d) { return support(shape, d); };
+    const auto sb = [&ps](const Vec3<S>& d) { return support(ps.shape, d); };
     ConvexDistance<S> r =
-        gjk_distance<S>(sa, sb, Vec3<S>(interior_point(t) - interior_point(shape)), tolerance(t), options.max_iterations, margin);
-    r.point_a = pose.apply(r.point_a);
-    r.point_b = pose.apply(r.point_b);
+        gjk_distance<S>(sa, sb, Vec3<S>(interior_point(t) - interior_point(ps.shape)), tolerance(ps, t), options.max_iterations, margin);
+    r.point_a = ps.pose.apply(r.point_a);
+    r.point_b = ps.pose.apply(r.point_b);
     return r;
   }
 
   /// The own EPA in the shape's frame, settled as general_penetration settles it (the point onto
   /// the mid plane, the depth the overlap along the normal when smaller); false when it met a
   /// degenerate Minkowski difference. The contact in the mesh frame.
-  bool epa_pair(const Triangle<S>& tri, ConvexContact<S>& c) const {
-    const TriangleShape<S> t = in_shape_frame(tri);
+  bool epa_pair(const Placed& ps, const Triangle<S>& tri, ConvexContact<S>& c) const {
+    const TriangleShape<S> t = in_shape_frame(ps, tri);
     const auto sa = [&t](const Vec3<S>& d) { return support(t, d); };
-    const auto sb = [this](const Vec3<S>& d) { return support(shape, d); };
+    const auto sb = [&ps](const Vec3<S>& d) { return support(ps.shape, d); };
     const bool refine = options.newton_refinement && !(is_polytope_v<Shape, S>);
     int shortcut_calls = 0;
     if constexpr (std::is_same_v<Shape, Cylinder<S>> || std::is_same_v<Shape, Cone<S>>) {  // one point of the triangle decides (convex/deepest_point.hpp)
-      if (triangle_deepest_point_contact(t, shape, options.relative_tolerance * query_scale<S>(t, shape), c)) {
-        c.normal = pose.rotate(c.normal);
-        c.point = pose.apply(c.point);
+      if (triangle_deepest_point_contact(t, ps.shape, options.relative_tolerance * query_scale<S>(t, ps.shape), c)) {
+        c.normal = ps.pose.rotate(c.normal);
+        c.point = ps.pose.apply(c.point);
         return true;
       }
       shortcut_calls = c.iterations;
     }
     bool failed = false;
-    c = own_epa_in_frame(sa, sb, interior_point(t), interior_point(shape), query_scale<S>(t, shape), options, refine, failed);
+    c = own_epa_in_frame(sa, sb, interior_point(t), interior_point(ps.shape), query_scale<S>(t, ps.shape), options, refine, failed);
     c.iterations += shortcut_calls;
     if (failed) return false;
     if (c.intersecting) {
       const S depth = c.depth;
       const RigidTransform<S> identity;
-      settle_contact(t, identity, shape, identity, c);
+      settle_contact(t, identity, ps.shape, identity, c);
       c.depth = std::min(c.depth, depth);
-      c.normal = pose.rotate(c.normal);
-      c.point = pose.apply(c.point);
+      c.normal = ps.pose.rotate(c.normal);
+      c.point = ps.pose.apply(c.point);
     }
     return true;
+  }
+
+  /// A needle's contact found on its window: a normal with a component along the axis towards a
+  /// side the window cuts is projected onto the plane normal to the axis (the whole needle
+  /// overlaps more than the window along it, by the length cut off times that component; at the
+  /// projection the two agree and the window's overlap is not larger: needle_window), then
+  /// settled there.
+  void settle_on_window(const Placed& ps, const NeedleWindow<S>& w, const Triangle<S>& tri, ConvexContact<S>& c) const {
+    if (!c.intersecting) return;
+    const Vec3<S> u = w.pose.R.col(2);
+    const S nz = c.normal.dot(u);
+    if (!((nz > S(0) && w.high) || (nz < S(0) && w.low))) return;
+    const Vec3<S> m = c.normal - nz * u;
+    const S len = m.norm();
+    if (!(len > S(0))) return;
+    const S lower = c.depth - c.depth_gap;
+    c.normal = m / len;
+    const RigidTransform<S> identity;
+    settle_contact(TriangleShape<S>(tri), identity, ps.shape, ps.pose, c);
+    c.depth_gap = std::max(c.depth - lower, S(0));
+  }
+
+  /// Runs f(placed) on the needle's window of tri when there is one (capsules and cylinders far
+  /// longer than the triangle: needle_window), else on the whole shape. `settle`: a contact's
+  /// normal made normal to the axis where the window cuts (settle_on_window).
+  template <class F>
+  auto on_needle(const Triangle<S>& tri, bool distance, F&& f) const {
+    if constexpr (std::is_same_v<Shape, Capsule<S>> || std::is_same_v<Shape, Cylinder<S>>) {
+      NeedleWindow<S> w;
+      if (needle_window(shape, pose, tri, distance, w)) {
+        Shape cut = shape;
+        cut.half_length = w.half_length;  // a part of a valid shape, at least 2 r long for a cylinder
+        const Placed ps{cut, w.pose, w.to_shape, shape_size(cut)};
+        auto out = f(ps);
+        if constexpr (std::is_same_v<decltype(out), ConvexContact<S>>) settle_on_window(ps, w, tri, out);
+        return out;
+      }
+    }
+    return f(whole());
   }
 
   bool intersect(const Triangle<S>& tri, bool& limit) const {
@@ -382,7 +499,7 @@ struct TriangleConvexTests {
     } else if constexpr (std::is_same_v<Shape, Box<S>>) {
       return triangle_box_contact(tri, shape, pose, false).intersecting;
     } else {
-      const ConvexDistance<S> d = gjk_pair(tri, S(0));
+      const ConvexDistance<S> d = on_needle(tri, false, [&](const Placed& ps) { return gjk_pair(ps, tri, S(0)); });
       limit = limit || d.limit_reached;
       return d.intersecting;
     }
@@ -397,7 +514,7 @@ struct TriangleConvexTests {
       const auto q = closest_points_segment_triangle(capsule_segment(shape, pose), tri);
       return triangle_ball_distance(q.on_segment, shape.radius, q.on_triangle, q.squared_distance);
     } else {
-      return gjk_pair(tri, S(-1));
+      return on_needle(tri, true, [&](const Placed& ps) { return gjk_pair(ps, tri, S(-1)); });
     }
   }
 
@@ -412,11 +529,27 @@ struct TriangleConvexTests {
       settle_contact(TriangleShape<S>(tri), identity, shape, pose, c);
       return c;
     } else {
+      if constexpr (std::is_same_v<Shape, ConvexHull<S>>) {  // the separating axes of the pair (convex/triangle_hull_sat.hpp)
+        if (!fast && !options.libccd_penetration && use_triangle_hull_sat(shape)) {
+          ConvexContact<S> c = triangle_hull_sat(in_shape_frame(whole(), tri).triangle, shape);
+          c.normal = pose.rotate(c.normal);
+          c.point = pose.apply(c.point);
+          return c;
+        }
+      }
       const TriangleShape<S> t(tri);
       if constexpr (std::is_same_v<Shape, Capsule<S>>) {
         const auto q = closest_points_segment_triangle(capsule_segment(shape, pose), tri);
-        const S tol = tolerance(t);
-        if (q.squared_distance > tol * tol) return triangle_ball_contact(tri, q.on_segment, shape.radius, q.on_triangle, q.squared_distance);
+        const S tol = tolerance(whole(), t);
+        if (q.squared_distance > tol * tol) {
+          if (q.squared_distance > shape.radius * shape.radius) return ConvexContact<S>();
+          // a contact: its normal from the needle's window when there is one (the closest points
+          // on a segment 1e9 times longer than the radius tilt the normal by up to 4e-6 along it)
+          return on_needle(tri, false, [&](const Placed& ps) {
+            const auto w = closest_points_segment_triangle(capsule_segment(ps.shape, ps.pose), tri);
+            return triangle_ball_contact(tri, w.on_segment, shape.radius, w.on_triangle, w.squared_distance);
+          });
+        }
       }
       // the general pair, or a capsule whose core meets the triangle
       const RigidTransform<S> identity;
@@ -429,9 +562,11 @@ struct TriangleConvexTests {
       }
       if constexpr (pair_method<S, TriangleShape<S>, Shape>() == PairMethod::General) {
         if (options.libccd_penetration) return penetration_unchecked(t, identity, shape, pose, options);
-        ConvexContact<S> c;
-        if (epa_pair(tri, c)) return c;
-        return epa(t, identity, shape, pose, options);  // a degenerate Minkowski difference: libccd, as the pairwise query
+        return on_needle(tri, false, [&](const Placed& ps) {
+          ConvexContact<S> c;
+          if (epa_pair(ps, tri, c)) return c;
+          return epa(t, identity, ps.shape, ps.pose, options);  // a degenerate Minkowski difference: libccd, as the pairwise query
+        });
       } else {
         return penetration_unchecked(t, identity, shape, pose, options);  // a capsule through its core, as the pairwise query
       }
