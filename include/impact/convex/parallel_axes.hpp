@@ -26,7 +26,9 @@
 /// of its copy with the axis exactly parallel (b is that copy rotated by the angle between the
 /// axes about its centre), minus rounding. Accepted when the two are within the tolerance: exactly
 /// parallel axes up to rounding (the same orientation, and any tilt below about 1e-11 rad at the
-/// default tolerance); otherwise the caller goes on to its other methods.
+/// default tolerance); otherwise the caller goes on to its other methods, and when those stop with
+/// their bracket open it calls this again with their bracket's width as the tolerance and keeps the
+/// narrower bracket (convex/query.hpp, narrow_by_parallel_axes: coaxial pairs tilted by 1e-9 rad).
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.

@@ -413,6 +413,25 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
   return epa(a, pa, b, pb, o);
 }
 
+/// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
+/// penetration: when it stopped with its bracket open (a coaxial pair's least-overlap normals form
+/// a circle EPA cannot close: about 515 support calls and a bracket of 7.5e-5 of the size at a tilt
+/// of 1e-9 rad), the parallel-axes closed form certifies a bracket of about twice the tilt times
+/// b's reach (convex/parallel_axes.hpp). The narrower of the two is kept; limit_reached stays set
+/// unless it is within the tolerance.
+template <class S, class A, class B>
+void narrow_by_parallel_axes(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                             const ConvexQueryOptions<S>& o, ConvexContact<S>& g) {
+  if (!g.intersecting || !g.limit_reached) return;
+  const PairFrame<S> f(pa, pb);
+  ConvexContact<S> p;
+  if (!parallel_axes_contact(a, b, f.R, f.t, g.depth_gap, p) || !(p.depth_gap < g.depth_gap)) return;
+  settle_certified_from_frame(a, pa, b, pb, p);
+  p.iterations += g.iterations;
+  p.limit_reached = !(p.depth_gap <= o.relative_tolerance * query_scale<S>(a, b));
+  g = p;
+}
+
 /// A cylinder and a cylinder or cone: the overlap along the line between their centres (a negative
 /// one separates them: no contact; 85-90 % of the bench's separated poses end here), then
 /// the certified candidates of convex/cylinder_pair.hpp (caps, rulings, a ruling or a side against
@@ -504,6 +523,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
                                            : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
   g.iterations += 1 + c.iterations;
+  narrow_by_parallel_axes(a, pa, b, pb, o, g);
   return g;
 }
 
@@ -518,7 +538,9 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
     settle_certified_from_frame(a, pa, b, pb, c);
     return c;
   }
-  return general_penetration(a, pa, b, pb, o);
+  ConvexContact<S> g = general_penetration(a, pa, b, pb, o);
+  narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  return g;
 }
 
 /// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
