@@ -44,8 +44,31 @@
 namespace impact {
 namespace detail {
 
-/// Faces of a hull up to which box_hull_sat keeps its per-face values on the stack.
+/// Faces of a hull up to which the separating-axis passes (box_hull_sat, triangle_hull_sat) keep
+/// their per-face values on the stack.
 inline constexpr std::size_t kSatStackFaces = 256;
+
+/// Per-face scratch of a separating-axis pass over a hull's faces: each face's overlap `f` and the
+/// signs of its normal against the other shape's edges (bit k set, as a number 0..7), on the stack
+/// for up to kSatStackFaces faces, on the heap beyond.
+template <class S>
+struct SatFaceScratch {
+  explicit SatFaceScratch(std::size_t faces) {
+    if (faces > kSatStackFaces) {
+      heap_f.resize(faces);
+      heap_signs.resize(faces);
+      f = heap_f.data();
+      signs = heap_signs.data();
+    }
+  }
+  SatFaceScratch(const SatFaceScratch&) = delete;
+  SatFaceScratch& operator=(const SatFaceScratch&) = delete;
+  std::array<S, kSatStackFaces> stack_f;
+  std::array<S, kSatStackFaces> stack_signs;
+  std::vector<S> heap_f, heap_signs;
+  S* f = stack_f.data();
+  S* signs = stack_signs.data();
+};
 
 /// Hulls of at most this many faces meet a box by box_hull_sat, larger ones by GJK + EPA: the
 /// test's work grows with the faces and edges, EPA's with the log of them. Callgrind per query on
@@ -147,17 +170,9 @@ ConvexContact<S> box_hull_sat(const Box<S>& a, const RigidTransform<S>& pa, cons
   // over the planes that the compiler vectorises, keeping the signs of u_k . m for the edges.
   const std::size_t nf = b.faces.size();
   if (b.face_planes.size() != 4 * nf) return out;  // not built by convex_hull(): the caller checks
-  std::array<S, kSatStackFaces> stack_f;
-  std::array<S, kSatStackFaces> stack_signs;  // bit k set (as a number 0..7): u_k . m < 0
-  std::vector<S> heap_f, heap_signs;
-  S* fs = stack_f.data();
-  S* signs = stack_signs.data();
-  if (nf > kSatStackFaces) {
-    heap_f.resize(nf);
-    heap_signs.resize(nf);
-    fs = heap_f.data();
-    signs = heap_signs.data();
-  }
+  SatFaceScratch<S> scratch(nf);  // signs: bit k set when u_k . m < 0
+  S* const fs = scratch.f;
+  S* const signs = scratch.signs;
   {
     const S* nx = b.face_planes.data();
     const S* ny = nx + nf;

@@ -86,17 +86,9 @@ ConvexContact<S> triangle_hull_sat(const Triangle<S>& t, const ConvexHull<S>& b)
   // compiler vectorises, keeping the signs of m . e_k for the edges.
   const std::size_t nf = b.faces.size();
   if (b.face_planes.size() != 4 * nf || nf == 0) return out;  // not built by convex_hull(): the caller checks
-  std::array<S, kSatStackFaces> stack_f;
-  std::array<S, kSatStackFaces> stack_signs;  // bit k set (as a number 0..7): m . e_k < 0
-  std::vector<S> heap_f, heap_signs;
-  S* fs = stack_f.data();
-  S* signs = stack_signs.data();
-  if (nf > kSatStackFaces) {
-    heap_f.resize(nf);
-    heap_signs.resize(nf);
-    fs = heap_f.data();
-    signs = heap_signs.data();
-  }
+  SatFaceScratch<S> scratch(nf);  // signs: bit k set when m . e_k < 0
+  S* const fs = scratch.f;
+  S* const signs = scratch.signs;
   {
     const S* nx = b.face_planes.data();
     const S* ny = nx + nf;
