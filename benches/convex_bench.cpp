@@ -406,6 +406,7 @@ int main(int argc, char** argv) {
   const auto pair = [&](const std::string& name, const auto& a, const auto& b, int np, double mt, std::vector<Row>& out) {
     if (wanted(name)) run_pair(name, a, b, np, mt, out);
   };
+  // every unordered pair of the six shapes (21)
   pair("sphere-sphere", z.sphere, z.sphere, n_poses, min_time, rows);
   pair("sphere-capsule", z.sphere, z.capsule, n_poses, min_time, rows);
   pair("capsule-capsule", z.capsule, z.capsule, n_poses, min_time, rows);
@@ -415,10 +416,16 @@ int main(int argc, char** argv) {
   pair("sphere-cylinder", z.sphere, z.cylinder, n_poses, min_time, rows);
   pair("capsule-cylinder", z.capsule, z.cylinder, n_poses, min_time, rows);
   pair("cylinder-cylinder", z.cylinder, z.cylinder, n_poses, min_time, rows);
+  pair("cylinder-box", z.cylinder, z.box, n_poses, min_time, rows);
+  pair("sphere-cone", z.sphere, z.cone, n_poses, min_time, rows);
+  pair("capsule-cone", z.capsule, z.cone, n_poses, min_time, rows);
   pair("cylinder-cone", z.cylinder, z.cone, n_poses, min_time, rows);
+  pair("cone-cone", z.cone, z.cone, n_poses, min_time, rows);
   pair("cone-box", z.cone, z.box, n_poses, min_time, rows);
   pair("sphere-hull", z.sphere, z.hull, n_poses, min_time, rows);
   pair("capsule-hull", z.capsule, z.hull, n_poses, min_time, rows);
+  pair("cylinder-hull", z.cylinder, z.hull, n_poses, min_time, rows);
+  pair("cone-hull", z.cone, z.hull, n_poses, min_time, rows);
   pair("box-hull", z.box, z.hull, n_poses, min_time, rows);
   pair("hull-hull", z.hull, z.hull, n_poses, min_time, rows);
   const auto mesh_row = [&](const std::string& name, const TriangleMesh<double>& m, const auto& s, int np, double mt, std::vector<Row>& out) {

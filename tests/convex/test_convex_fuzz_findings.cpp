@@ -21,6 +21,9 @@
 //    cone that are apart: the penetration called them touching (fuzz_convex).
 // 7. GJK's distance stalled (no progress) at 1.5e-4 on a float box and cone that overlap, with no
 //    separating plane found, and returned that as the distance without a flag (fuzz_convex).
+// 8. EPA's polytope too small for deep capsules in large cylinders (random inputs).
+// 9. A sphere centred on the axis of a needle cone (9,000 times longer than wide) was called
+//    touching, with the sphere's radius as its depth along an arbitrary normal (fuzz_convex).
 #include "impact/convex/query.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/random.hpp"
@@ -28,6 +31,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -378,6 +382,54 @@ TEST(ConvexFuzzFindings, DeepCapsuleInCylinderConverges) {
   if (after.intersecting) {
     EXPECT_LE(after.depth, 1e-6 * size);
   }
+}
+
+// Finding 9 (fuzz_convex, a 10-minute run): a ball centred on the axis of a cone 9,000 times
+// longer than wide. EPA's GJK stalled on the triangle through the axis, which holds the origin:
+// its closest point came out 2.8e-16 away along the axis (rounding of the thin triangle), the
+// distance solver returned the same, and the pair was taken as touching: depth = the radius along
+// an arbitrary normal, which left the shapes overlapping by 5.7 % of the radius once b moved out by
+// it. A stall is now taken as apart only when a plane separates the shapes beyond rounding. The
+// true depth: the radius plus the centre's distance to the cone's side, (R / 2) cos(half angle).
+// The same for a capsule of zero length (its own path, GJK on the core and EPA).
+template <class B>
+void expect_needle_cone_depth(const B& ball, double r) {
+  const Cone<double> cone(3.3294782042503357e-08, 0.0002994537353515625);
+  const auto pa = pose_of<double>({-0.3333333333333337, 0.66666666666666685, 0.66666666666666685, 0.66666666666666685, -0.3333333333333337,
+                                   0.66666666666666685, 0.66666666666666685, 0.66666666666666685, -0.3333333333333337},
+                                  {-0.0019550323486328125, -1.9073486328125e-06, -1.9073486328125e-06});
+  const auto pb = pose_of<double>({0, 0, 1, 1, 0, 0, 0, 1, 0}, {-0.0019550323486328125, -1.9073486328125e-06, -1.9073486328125e-06});
+  const double half_angle = std::atan(cone.radius / (2 * cone.half_length));
+  const double truth = r + cone.radius / 2 * std::cos(half_angle);
+  const double size = impact::detail::query_scale<double>(cone, ball);
+  const impact::ConvexQueryOptions<double> options;
+  for (const bool swap : {false, true}) {
+    const auto c = swap ? impact::convex_penetration(ball, pb, cone, pa, options) : impact::convex_penetration(cone, pa, ball, pb, options);
+    ASSERT_TRUE(c.intersecting) << "swap " << swap;
+    EXPECT_NEAR(c.depth, truth, 1e-6 * size) << "swap " << swap;  // was r: 1.7e-8 short, 3.7e-5 of the size
+    EXPECT_GE(c.depth, truth - 1e-12 * size) << "swap " << swap;  // an upper bound
+    EXPECT_LE(c.depth - c.depth_gap, truth + 1e-12 * size) << "swap " << swap;
+    // the normal leaves through the cone's side: its axial part is sin(half angle) (was 0.33)
+    EXPECT_NEAR(std::abs(c.normal.dot(pa.R.col(2))), std::sin(half_angle), 1e-6) << "swap " << swap;
+    // b moved out by the depth along the normal (a is the cone unless swapped)
+    RigidTransform<double> cone_moved = pa, ball_moved = pb;
+    if (swap) {
+      cone_moved.t += c.depth * c.normal;
+    } else {
+      ball_moved.t += c.depth * c.normal;
+    }
+    const auto after = swap ? impact::convex_penetration(ball, pb, cone, cone_moved, options)
+                            : impact::convex_penetration(cone, pa, ball, ball_moved, options);
+    if (after.intersecting) {
+      EXPECT_LE(after.depth, 1e-6 * size) << "swap " << swap;  // was 7.0e-6, 1.5e-2 of the size
+    }
+  }
+}
+
+TEST(ConvexFuzzFindings, BallOnTheAxisOfANeedleCone) {
+  const double r = 0.00012159347534179688;
+  expect_needle_cone_depth(impact::Sphere<double>{impact::Vec3<double>::Zero(), r}, r);
+  expect_needle_cone_depth(Capsule<double>(r, 0), r);
 }
 
 }  // namespace

@@ -330,6 +330,117 @@ inline ConvexDistance<S> sphere_cylinder_distance(const Vec3<S>& c, S r, const C
   return out;
 }
 
+/// A point q (in a cone's frame) against the solid cone, worked in q's meridian half-plane (rho =
+/// q's distance to the axis, z), where the cone is the triangle apex A = (0, h), rim B = (R, -h),
+/// base centre (0, -h). Inside: the nearer of the side line and the base plane. Outside: the
+/// region of the nearest feature (the side's interior, the base's interior, the apex, the rim;
+/// the axis edge of the triangle is not the cone's boundary and never nearest from rho >= 0). On
+/// a face the outward direction is the face's normal, not the difference of nearly equal points
+/// (which rounding turns into any direction for a point within rounding of the face: fuzzing-like
+/// tests found normals along which the overlap was the whole cone's length); at the apex and the
+/// rim it is the line from the vertex, which the region test keeps in the vertex's normal cone.
+template <class S>
+struct ConePoint {
+  S distance = S(0);  ///< from q to the cone (0 inside or on it)
+  S side = S(0);      ///< inside: distance to the side (the cone's lateral surface)
+  S base = S(0);      ///< inside: distance to the base plane
+  Vec3<S> radial;     ///< unit, from the axis towards q (+x of the frame when q is on the axis)
+  Vec3<S> outward;    ///< unit: outside, from the closest point towards q; inside, the exit direction
+  Vec3<S> closest;    ///< the closest point of the cone (q itself inside)
+};
+
+template <class S>
+inline ConePoint<S> cone_point(const Cone<S>& cone, const Vec3<S>& q) {
+  ConePoint<S> c;
+  const S R = cone.radius, h = cone.half_length;
+  const S rho = std::sqrt(q.x() * q.x() + q.y() * q.y());
+  c.radial = rho > S(0) ? Vec3<S>(q.x() / rho, q.y() / rho, S(0)) : Vec3<S>(Vec3<S>::UnitX());
+  const Vec3<S> down(S(0), S(0), S(-1));
+  // the side line through A and B: unit direction d = (R, -2h) / len, outward normal m = (2h, R) / len
+  const S len = std::sqrt(R * R + S(4) * h * h);
+  const S mr = S(2) * h / len, mz = R / len;
+  const Vec3<S> side_out = mr * c.radial + Vec3<S>(S(0), S(0), mz);
+  const S dz = q.z() - h;                         // q - A in meridian coordinates: (rho, dz)
+  const S s = mr * rho + mz * dz;                 // signed distance to the side line (> 0 outside)
+  const S b = -(q.z() + h);                       // signed distance to the base plane (> 0 below)
+  const S t = (R * rho - S(2) * h * dz) / len;    // q's projection on the side, from A towards B
+  // Nearest to a vertex (vr, vz) of the meridian triangle, e = q - vertex. The direction is e
+  // written as alpha m + beta g (m the side's normal, g = (0, gz) the other face's normal at the
+  // vertex: the base's (0, -1) at the rim, the axis (0, 1) at the apex) with both coefficients
+  // clamped at 0: the vertex's normal cone. Rounding can put e, when it is as small as rounding,
+  // outside that cone, and along such a direction the cone's support is another vertex.
+  const auto vertex = [&](S er, S ez, S vr, S vz, S gz) {
+    c.distance = std::sqrt(er * er + ez * ez);
+    const S alpha = std::max(er / mr, S(0));
+    const S beta = std::max((ez - alpha * mz) * gz, S(0));
+    const S nr = alpha * mr, nz = alpha * mz + beta * gz;
+    const S n = std::sqrt(nr * nr + nz * nz);
+    c.outward = n > S(0) ? Vec3<S>((nr / n) * c.radial + Vec3<S>(S(0), S(0), nz / n)) : down;
+    c.closest = vr * c.radial + Vec3<S>(S(0), S(0), vz);
+  };
+  if (s <= S(0) && b <= S(0)) {  // inside or on the boundary: leave by the nearer face (the base on a tie)
+    c.side = -s;
+    c.base = -b;
+    c.outward = c.side < c.base ? side_out : down;
+    c.closest = q;
+  } else if (b > S(0) && rho <= R) {  // below the base
+    c.distance = b;
+    c.outward = down;
+    c.closest = Vec3<S>(q.x(), q.y(), -h);
+  } else if (s > S(0) && t <= S(0)) {  // beyond the apex
+    vertex(rho, dz, S(0), h, S(1));
+  } else if (s > S(0) && t < len) {  // beside the side
+    c.distance = s;
+    c.outward = side_out;
+    c.closest = q - s * side_out;
+  } else {  // beyond the rim
+    vertex(rho - R, q.z() + h, R, -h, S(-1));
+  }
+  return c;
+}
+
+/// Does the sphere (world centre c, radius r) touch or overlap the cone?
+template <class S>
+inline bool sphere_cone_overlap(const Vec3<S>& c, S r, const Cone<S>& cone, const RigidTransform<S>& pb) {
+  return cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t))).distance <= r;
+}
+
+/// Sphere (world centre c, radius r) against a cone (cone_point), as sphere_cylinder_contact:
+/// centre outside, normal from the centre towards its closest point of the cone, depth r -
+/// distance; centre inside or on the boundary, it leaves through the nearer of the side and the
+/// base (the base on a tie; a centre on the axis leaves the side along +x of the cone's frame:
+/// every direction round the axis is as near), depth r + that distance.
+template <class S>
+inline ConvexContact<S> sphere_cone_contact(const Vec3<S>& c, S r, const Cone<S>& cone, const RigidTransform<S>& pb) {
+  ConvexContact<S> out;
+  const ConePoint<S> cp = cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t)));
+  if (cp.distance > r) return out;
+  out.intersecting = true;
+  if (cp.distance > S(0)) {  // outside
+    out.normal = pb.rotate(Vec3<S>(-cp.outward));
+    out.depth = r - cp.distance;
+    out.point = (c + r * out.normal + pb.apply(cp.closest)) / S(2);
+    return out;
+  }
+  const S gap = std::min(cp.side, cp.base);
+  const Vec3<S> exit_dir = pb.rotate(cp.outward);
+  out.normal = -exit_dir;
+  out.depth = r + gap;
+  out.point = c + (gap - r) / S(2) * exit_dir;
+  return out;
+}
+
+template <class S>
+inline ConvexDistance<S> sphere_cone_distance(const Vec3<S>& c, S r, const Cone<S>& cone, const RigidTransform<S>& pb) {
+  ConvexDistance<S> out;
+  const ConePoint<S> cp = cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t)));
+  out.intersecting = cp.distance <= r;
+  out.distance = std::max(cp.distance - r, S(0));
+  out.point_b = pb.apply(cp.closest);
+  out.point_a = c - r * pb.rotate(cp.outward);
+  return out;
+}
+
 /// Box–box by the 15 separating axes: not intersecting when one separates them, else the axis of
 /// least overlap gives the normal and depth (exact for polytopes: the least overlap over these axes
 /// is the penetration depth); the contact point is the midpoint of the deepest features' centres.

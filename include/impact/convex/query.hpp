@@ -17,6 +17,9 @@
 ///   sphere – cylinder                 closed form: the closest point of the cylinder (a radial
 ///                                     and an axial clamp), or, centre inside, the nearer of side
 ///                                     and caps
+///   sphere – cone                     closed form in the centre's meridian plane: the closest
+///                                     point of the cone's side or base, or, centre inside, the
+///                                     nearer of side and base
 ///   box – box                         separating axes (boolean, penetration); GJK for distance
 ///   sphere/capsule – other            GJK distance between the core and the other shape, minus
 ///                                     the radius (exact up to GJK's tolerance; a capsule's segment
@@ -149,6 +152,8 @@ enum class PairMethod {
   BoxSphere,   ///< the same with the roles swapped (the result swapped back)
   SphereCylinder,  ///< closed form (closest point of the cylinder, or the nearer of side and caps)
   CylinderSphere,  ///< the same with the roles swapped
+  SphereCone,  ///< closed form (closest point of the cone's meridian triangle, or the nearer of side and base)
+  ConeSphere,  ///< the same with the roles swapped
   BoxBox,      ///< separating axes (boolean, penetration); GJK for distance
   RoundOther,  ///< a sphere or capsule against any other shape: GJK on its core, EPA when the core touches
   OtherRound,  ///< the same with b the sphere or capsule
@@ -164,6 +169,8 @@ constexpr PairMethod pair_method() {
   if (box_a && sphere_b) return PairMethod::BoxSphere;
   if (sphere_a && std::is_same_v<B, Cylinder<S>>) return PairMethod::SphereCylinder;
   if (std::is_same_v<A, Cylinder<S>> && sphere_b) return PairMethod::CylinderSphere;
+  if (sphere_a && std::is_same_v<B, Cone<S>>) return PairMethod::SphereCone;
+  if (std::is_same_v<A, Cone<S>> && sphere_b) return PairMethod::ConeSphere;
   if (box_a && box_b) return PairMethod::BoxBox;
   if (is_round_v<A, S>) return PairMethod::RoundOther;
   if (is_round_v<B, S>) return PairMethod::OtherRound;
@@ -805,6 +812,10 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
     return sphere_cylinder_contact(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::CylinderSphere) {
     return swapped(sphere_cylinder_contact(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (method == PairMethod::SphereCone) {
+    return sphere_cone_contact(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::ConeSphere) {
+    return swapped(sphere_cone_contact(pose_b.apply(b.center), b.radius, a, pose_a));
   } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, true);
   } else if constexpr (method == PairMethod::RoundOther) {
@@ -869,6 +880,10 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     return sphere_cylinder_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::CylinderSphere) {
     return sphere_cylinder_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
+  } else if constexpr (method == PairMethod::SphereCone) {
+    return sphere_cone_overlap(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::ConeSphere) {
+    return sphere_cone_overlap(pose_b.apply(b.center), b.radius, a, pose_a);
   } else if constexpr (method == PairMethod::BoxBox) {
     return box_box_contact(a, pose_a, b, pose_b, false).intersecting;
   } else if constexpr (method == PairMethod::RoundOther || method == PairMethod::OtherRound) {
@@ -925,6 +940,10 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
     return sphere_cylinder_distance(pose_a.apply(a.center), a.radius, b, pose_b);
   } else if constexpr (method == PairMethod::CylinderSphere) {
     return swapped(sphere_cylinder_distance(pose_b.apply(b.center), b.radius, a, pose_a));
+  } else if constexpr (method == PairMethod::SphereCone) {
+    return sphere_cone_distance(pose_a.apply(a.center), a.radius, b, pose_b);
+  } else if constexpr (method == PairMethod::ConeSphere) {
+    return swapped(sphere_cone_distance(pose_b.apply(b.center), b.radius, a, pose_a));
   } else if constexpr (method == PairMethod::RoundOther) {
     return round_distance(a, pose_a, b, pose_b, options);
   } else if constexpr (method == PairMethod::OtherRound) {
