@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "support/sanitizer.hpp"
@@ -267,6 +268,50 @@ TEST(WideBvh8, AvxSetUpMatchesTheSlab) {
 #else
   GTEST_SKIP() << "the AVX node test is not compiled in";
 #endif
+}
+
+// The public 8-wide cast in double folds its argument check into the AVX set-up (a ray its float
+// test takes is in range): it must throw InvalidInput exactly for the rays validate_ray rejects,
+// and give the other node tests' answer on the others. Components at and around the float test's
+// limits (2^60 for the origin and 1 / d) and CoordinateRange's (2^200, 2^-200), zero, infinite, NaN.
+TEST(WideBvh8, PublicCastThrowsExactlyForInvalidRays) {
+  const TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 16, 8);
+  const WideBvh<double, 8> w(m);
+  test::Rng rng(97);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double specials[] = {0.0, -0.0, 1.0, -3.0, inf, -inf, std::numeric_limits<double>::quiet_NaN(), 0x1p59, -0x1p60, 0x1p61,
+                             0x1p-59, 0x1p-61, -0x1p-62, 0x1p200, -0x1p201, 0x1p-200, 0x1p-201, std::numeric_limits<double>::denorm_min()};
+  const int ns = static_cast<int>(sizeof(specials) / sizeof(specials[0]));
+  int accepted = 0, rejected = 0, hits = 0;
+  for (int i = 0; i < 4000 / kWide8Samples; ++i) {
+    auto value = [&] { return rng.index(3) == 0 ? specials[rng.index(static_cast<std::uint64_t>(ns))] : rng.uniform(-2, 2); };
+    Ray<double> ray(Vec3<double>(value(), value(), value()), Vec3<double>(value(), value(), value()), value());
+    if (i % 2 == 0) ray.origin = Vec3<double>(rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), value());
+    if (i % 3 != 0) ray.t_max = i % 5 == 0 ? inf : rng.uniform(0, 3);
+    bool invalid = false;
+    try {
+      validate_ray(ray, "test");
+    } catch (const InvalidInput&) {
+      invalid = true;
+    }
+    if (invalid) {
+      EXPECT_THROW(ray_mesh_first_hit(w, ray), InvalidInput) << i;
+      ++rejected;
+      continue;
+    }
+    ++accepted;
+    std::optional<RayMeshHit<double>> a;
+    EXPECT_NO_THROW(a = ray_mesh_first_hit(w, ray)) << i;
+    const auto b = detail::ray_wide_first_hit_unchecked(w, ray, static_cast<const RigidTransform<double>*>(nullptr), nullptr, true, false);
+    ASSERT_EQ(a.has_value(), b.has_value()) << i;
+    if (!a) continue;
+    ++hits;
+    EXPECT_EQ(a->t, b->t) << i;
+    EXPECT_EQ(a->triangle, b->triangle) << i;
+  }
+  EXPECT_GT(accepted, 400 / kWide8Samples);
+  EXPECT_GT(rejected, 400 / kWide8Samples);
+  EXPECT_GT(hits, 20 / kWide8Samples);
 }
 
 }  // namespace

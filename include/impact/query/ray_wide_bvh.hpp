@@ -270,14 +270,23 @@ template <class S, int W = 4> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
 #if defined(IMPACT_WIDE_AVX)
-    if constexpr (W == 8) {  // the AVX loop, its stack a local of its own frame (the top in a register)
-      if (use_simd && use_avx && wide_avx_available()) {
-        if (wide.depth() <= kFixedDepth ? run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>()
-                                        : run_avx<TraversalStack<WideEntry, 128>>())
-          return;
-      }
+    if constexpr (W == 8) {
+      if (use_simd && use_avx && wide_avx_available() && run_avx_loop()) return;
     }
 #endif
+    run_without_avx();
+  }
+#if defined(IMPACT_WIDE_AVX)
+  /// The AVX loop (8-wide; call only when wide_avx_available()), its stack a local of its own
+  /// frame (the top in a register). False, having done nothing, when its float test cannot take
+  /// the ray: then run_without_avx().
+  bool run_avx_loop() {
+    return wide.depth() <= kFixedDepth ? run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>()
+                                       : run_avx<TraversalStack<WideEntry, 128>>();
+  }
+#endif
+  /// The traversal with the SSE or scalar node test.
+  void run_without_avx() {
     const WideFloatSlab<S, W> float_slab(o, inv, wide.coordinate_bound());
     slab_error = float_slab.absolute_error();
     if (wide.depth() <= kFixedDepth) {
@@ -487,15 +496,12 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
 }
 #endif
 
-/// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
-/// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
-/// without a pose comes here directly).
+/// The hit of a finished cast (the ray `ray`, `d` its direction in the mesh's frame); counts
+/// its work into `stats` when not null.
 template <class S, int W>
-std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
-                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
-  if (wide.empty()) return std::nullopt;
-  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
-  cast.run();
+std::optional<RayMeshHit<S>> wide_cast_hit(const WideCast<S, W>& cast, const Ray<S>& ray, const Vec3<S>& d, const RigidTransform<S>* pose,
+                                           RayMeshStats* stats) {
+  const WideBvh<S, W>& wide = cast.wide;
   if (stats) {
     stats->node_tests += W * cast.node_tests;
     stats->triangle_tests += cast.triangle_tests;
@@ -511,6 +517,18 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
   hit.normal = pose ? Vec3<S>(pose->R * nrm) : nrm;
   hit.front_face = d.dot(nrm) < S(0);
   return hit;
+}
+
+/// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
+/// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
+/// without a pose comes here directly, but for the 8-wide tree in double with AVX).
+template <class S, int W>
+std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
+                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+  if (wide.empty()) return std::nullopt;
+  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
+  cast.run();
+  return wide_cast_hit(cast, ray, d, pose, stats);
 }
 
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
@@ -550,6 +568,23 @@ std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const
 
 /// The same first hit with the ray in the mesh's own frame (no pose to check or apply).
 template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const Ray<S>& ray) {
+#if defined(IMPACT_WIDE_AVX)
+  if constexpr (W == 8 && std::is_same_v<S, double>) {
+    // The argument check folded into the AVX cast's set-up: its float test takes a ray only when
+    // every origin component is within 2^60 and every 1 / d component within [2^-60, 2^60]
+    // (WideFloatSlab::avx_state), which implies ray_in_range but for t_max (all three direction
+    // components finite, at least 2^-60 > min_scale and at most about 2^60 < max; NaN fails).
+    // Only a ray it does not take is checked, then cast with the other node tests.
+    if (ray.t_max >= S(0) && !wide.empty() && detail::wide_avx_available()) {
+      detail::WideCast<S, W> cast(wide, ray.origin, ray.direction, ray.t_max, true, true);
+      if (!cast.run_avx_loop()) {
+        if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
+        cast.run_without_avx();
+      }
+      return detail::wide_cast_hit(cast, ray, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
+    }
+  }
+#endif
   if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
   // (ray_in_range: a non-zero direction and t_max >= 0, the unchecked cast's own checks)
   return detail::ray_wide_cast(wide, ray, ray.origin, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
