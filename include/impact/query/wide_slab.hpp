@@ -344,7 +344,8 @@ template <class S, int W = 4> class WideFloatSlab {
   /// origin and of `inv`, the same e and plane offsets, so the same keys bit for bit (tested
   /// against WideFloatSlab(o, inv, coordinate_bound).avx()). False when the slab would not be
   /// usable(); else `e` gets absolute_error(). Compiled for AVX (call only when
-  /// wide_avx_available()).
+  /// wide_avx_available()). Its limits (2^60) are within CoordinateRange<double>: the public 8-wide
+  /// cast relies on them as its argument check (ray_mesh_first_hit, query/ray_wide_bvh.hpp).
   IMPACT_WIDE_AVX_TARGET static bool avx_state(const Vec3<double>& o, const Vec3<double>& inv, double coordinate_bound, Avx& a, float& e) {
     static_assert(std::is_same_v<S, double>, "avx_state: a ray in double");
     const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
