@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "support/sanitizer.hpp"
@@ -214,6 +215,103 @@ TYPED_TEST(WideBvh8Test, FloatSlabIsConservative) {
   if (detail::wide_avx_available()) {
     EXPECT_GT(avx_checked, 1000 / kWide8Samples);
   }
+}
+
+// The 8-wide AVX cast's one-pass set-up in double (WideFloatSlab::avx_state) against the slab
+// object: the same usability (rays beyond its range, zero and tiny direction components,
+// origins off the float grid far from the origin), the same absolute error and, node by node,
+// the same mask and keys bit for bit (a wrong axis, sign or rounding in the set-up changes them).
+TEST(WideBvh8, AvxSetUpMatchesTheSlab) {
+#if defined(IMPACT_WIDE_AVX)
+  if (!detail::wide_avx_available()) GTEST_SKIP() << "no AVX";
+  test::Rng rng(71);
+  int usable = 0, unusable = 0, keys_checked = 0;
+  for (int i = 0; i < 6000 / kWide8Samples; ++i) {
+    const double scale = std::ldexp(1.0, int(rng.integer(70)));
+    Vec3<double> o = rng.vec(-1, 1) * scale, d = rng.vec(-1, 1) * std::ldexp(1.0, int(rng.integer(70)));
+    if (i % 7 == 0) d[int(rng.index(3))] = 0.0;                      // an infinite 1 / d
+    if (i % 11 == 0) o[int(rng.index(3))] = std::ldexp(1.0, 61);     // beyond the float test's range
+    if (i % 13 == 0) o[int(rng.index(3))] += std::ldexp(1.0, 45);    // far off the float grid
+    const Vec3<double> inv = detail::safe_inverse(d);
+    const double bound_c = i % 17 == 0 ? std::ldexp(1.0, 61) : 4 * scale;
+    const detail::WideFloatSlab<double, 8> fs(o, inv, bound_c);
+    WideBvhNode8 n;
+    const int used = 1 + int(rng.index(8));
+    for (int c = 0; c < used; ++c) {
+      const Eigen::Vector3d m = o + rng.vec(-1.5, 1.5) * scale, h = rng.vec(0.0, 0.8) * scale;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const float exit = i % 3 == 0 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 2);
+    const float bound = i % 2 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 1.5);
+    float direct[8], object[8], e = -1.0f;
+    const int md = detail::WideFloatSlab<double, 8>::entered_avx_from_ray(o, inv, bound_c, n, exit, bound, direct, e);
+    ASSERT_EQ(md >= 0, fs.usable()) << i;
+    if (md < 0) {
+      EXPECT_EQ(e, 0.0f) << i;
+      ++unusable;
+      continue;
+    }
+    ++usable;
+    EXPECT_EQ(e, fs.absolute_error()) << i;
+    const int mo = fs.entered_avx(n, exit, bound, object);
+    ASSERT_EQ(md, mo) << i;
+    for (int c = 0; c < 8; ++c)
+      if ((mo >> c) & 1) {
+        EXPECT_EQ(direct[c], object[c]) << i << " " << c;
+        ++keys_checked;
+      }
+  }
+  EXPECT_GT(usable, 1000 / kWide8Samples);
+  EXPECT_GT(unusable, 1000 / kWide8Samples);
+  EXPECT_GT(keys_checked, 1000 / kWide8Samples);
+#else
+  GTEST_SKIP() << "the AVX node test is not compiled in";
+#endif
+}
+
+// The public 8-wide cast in double folds its argument check into the AVX set-up (a ray its float
+// test takes is in range): it must throw InvalidInput exactly for the rays validate_ray rejects,
+// and give the other node tests' answer on the others. Components at and around the float test's
+// limits (2^60 for the origin and 1 / d) and CoordinateRange's (2^200, 2^-200), zero, infinite, NaN.
+TEST(WideBvh8, PublicCastThrowsExactlyForInvalidRays) {
+  const TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 16, 8);
+  const WideBvh<double, 8> w(m);
+  test::Rng rng(97);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double specials[] = {0.0, -0.0, 1.0, -3.0, inf, -inf, std::numeric_limits<double>::quiet_NaN(), 0x1p59, -0x1p60, 0x1p61,
+                             0x1p-59, 0x1p-61, -0x1p-62, 0x1p200, -0x1p201, 0x1p-200, 0x1p-201, std::numeric_limits<double>::denorm_min()};
+  const int ns = static_cast<int>(sizeof(specials) / sizeof(specials[0]));
+  int accepted = 0, rejected = 0, hits = 0;
+  for (int i = 0; i < 4000 / kWide8Samples; ++i) {
+    auto value = [&] { return rng.index(3) == 0 ? specials[rng.index(static_cast<std::uint64_t>(ns))] : rng.uniform(-2, 2); };
+    Ray<double> ray(Vec3<double>(value(), value(), value()), Vec3<double>(value(), value(), value()), value());
+    if (i % 2 == 0) ray.origin = Vec3<double>(rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), value());
+    if (i % 3 != 0) ray.t_max = i % 5 == 0 ? inf : rng.uniform(0, 3);
+    bool invalid = false;
+    try {
+      validate_ray(ray, "test");
+    } catch (const InvalidInput&) {
+      invalid = true;
+    }
+    if (invalid) {
+      EXPECT_THROW(ray_mesh_first_hit(w, ray), InvalidInput) << i;
+      ++rejected;
+      continue;
+    }
+    ++accepted;
+    std::optional<RayMeshHit<double>> a;
+    EXPECT_NO_THROW(a = ray_mesh_first_hit(w, ray)) << i;
+    const auto b = detail::ray_wide_first_hit_unchecked(w, ray, static_cast<const RigidTransform<double>*>(nullptr), nullptr, true, false);
+    ASSERT_EQ(a.has_value(), b.has_value()) << i;
+    if (!a) continue;
+    ++hits;
+    EXPECT_EQ(a->t, b->t) << i;
+    EXPECT_EQ(a->triangle, b->triangle) << i;
+  }
+  EXPECT_GT(accepted, 400 / kWide8Samples);
+  EXPECT_GT(rejected, 400 / kWide8Samples);
+  EXPECT_GT(hits, 20 / kWide8Samples);
 }
 
 }  // namespace

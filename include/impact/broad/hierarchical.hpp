@@ -8,6 +8,7 @@
 #include "impact/broad/broad_phase.hpp"
 #include "impact/broad/dynamic_pairs.hpp"
 #include "impact/broad/dynamic_tree.hpp"
+#include "impact/broad/moved_objects.hpp"
 #include "impact/broad/static_candidates.hpp"
 
 #include <algorithm>
@@ -37,47 +38,41 @@ class HierarchicalBroadPhase {
   explicit HierarchicalBroadPhase(const DynamicTreeOptions& opt = {}) : static_(opt), dynamic_(opt) {}
 
   void insert(std::int32_t slot, const ObjectTable<S>& t) {
-    grow(slot);
-    const auto s = static_cast<std::size_t>(slot);
+    objects_.grow(slot);
     const bool st = t.is_static(slot);
-    leaf_[s] = (st ? static_ : dynamic_).insert(slot, t.box(s), t.active(slot), st);
+    objects_.set_leaf(slot, (st ? static_ : dynamic_).insert(slot, t.box(slot), t.active(slot), st));
     if (st) {
-      near_static_changed(t.box(s));
+      near_static_changed(t.box(slot));
       return;
     }
     cache_.add(slot, t.active(slot));
     pairs_.add();
-    dynamic_.mark_fresh(leaf_[s]);
+    dynamic_.mark_fresh(objects_.leaf(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
+    const std::int32_t leaf = objects_.leaf(slot);
+    objects_.set_leaf(slot, DynamicTree<S>::null);
     if (t.is_static(slot)) {
-      near_static_changed(static_.box(leaf_[s]));
-      static_.remove(leaf_[s]);
-      leaf_[s] = DynamicTree<S>::null;
+      near_static_changed(static_.box(leaf));
+      static_.remove(leaf);
       return;
     }
-    dynamic_.remove(leaf_[s]);
-    leaf_[s] = DynamicTree<S>::null;
+    dynamic_.remove(leaf);
     pairs_.remove(pos_of(slot));
     cache_.remove(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
     if (t.is_static(slot)) {
       // The leaf still holds the box of the last update: every box the object had since is
       // queried when it is set, so the dynamic objects near any of them are invalidated.
-      if (!moved_flag_[s]) near_static_changed(static_.box(leaf_[s]));
+      if (!objects_.moved(slot)) near_static_changed(static_.box(objects_.leaf(slot)));
       near_static_changed(t.box(slot));
     }
-    if (!moved_flag_[s]) {
-      moved_flag_[s] = 1;
-      moved_.push_back(slot);
-    }
+    objects_.mark_moved(slot);
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
     cache_.set_active(pos_of(slot), t.active(slot));
-    dynamic_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
+    dynamic_.set_active(objects_.leaf(slot), t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
     if (t.is_static(slot))
@@ -97,7 +92,7 @@ class HierarchicalBroadPhase {
     const Aabb<S>* bounds = root == DynamicTree<S>::null ? nullptr : &static_.box(root);
     cache_.update(t, bounds, threads, st, [&](std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& cs) {
       static_.query(
-          dynamic_.box(leaf_[static_cast<std::size_t>(a)]),
+          dynamic_.box(objects_.leaf(a)),
           [&](std::int32_t b) {
             if (t.accepts(a, b))
               cand.push_back(b);
@@ -144,52 +139,27 @@ class HierarchicalBroadPhase {
   /// The position of dynamic object `slot` in cache_.
   std::size_t pos_of(std::int32_t slot) const { return cache_.pos_of(slot); }
 
-  void grow(std::int32_t slot) {
-    const auto n = static_cast<std::size_t>(slot) + 1;
-    if (n > leaf_.size()) {
-      leaf_.resize(n, DynamicTree<S>::null);
-      moved_flag_.resize(n, 0);
-    }
-  }
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
-    const std::size_t n = moved_.size();
-    for (std::size_t k = 0; k < n; ++k) {
-      if (k + 8 < n) {  // this loop's scattered reads for the object 8 ahead, and its leaf for the one 4 ahead
-        const auto f = static_cast<std::size_t>(moved_[k + 8]);
-        detail::prefetch(&leaf_[f]);
-        detail::prefetch(&moved_flag_[f]);
-        detail::prefetch(&t.box(moved_[k + 8]));
-      }
-      if (k + 4 < n) {
-        const std::int32_t l = leaf_[static_cast<std::size_t>(moved_[k + 4])];
-        if (l != DynamicTree<S>::null) detail::prefetch(t.is_static(moved_[k + 4]) ? &static_.box(l) : &dynamic_.box(l));
-      }
-      const std::int32_t slot = moved_[k];
-      moved_flag_[static_cast<std::size_t>(slot)] = 0;
-      const std::int32_t leaf = leaf_[static_cast<std::size_t>(slot)];
-      if (leaf == DynamicTree<S>::null || !t.alive(slot)) continue;
-      ++st.refits;
-      if (t.is_static(slot)) {
-        if (static_.update(leaf, t.box(slot))) ++st.reinserts;
-        continue;
-      }
-      cache_.moved(pos_of(slot));
-      if (dynamic_.update(leaf, t.box(slot))) {
-        ++st.reinserts;
-        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
-        pairs_.drop(pos_of(slot));        // and find its dynamic pairs again
-        dynamic_.mark_fresh(leaf);
-      }
-    }
-    moved_.clear();
+    objects_.drain(
+        t,
+        [&](std::int32_t slot, std::int32_t leaf) -> const Aabb<S>& {
+          return t.is_static(slot) ? static_.box(leaf) : dynamic_.box(leaf);
+        },
+        [&](std::int32_t slot, std::int32_t leaf) {
+          if (!t.alive(slot)) return;
+          if (t.is_static(slot)) {
+            ++st.refits;
+            if (static_.update(leaf, t.box(slot))) ++st.reinserts;
+            return;
+          }
+          detail::refit_moved_dynamic(dynamic_, cache_, pairs_, t, slot, leaf, st);
+        });
     if (static_.maybe_rebuild()) ++st.rebuilds;
     if (dynamic_.maybe_rebuild()) ++st.rebuilds;
   }
 
   DynamicTree<S> static_, dynamic_;
-  std::vector<std::int32_t> leaf_;      // slot -> leaf in its tree
-  std::vector<std::uint8_t> moved_flag_;
-  std::vector<std::int32_t> moved_;
+  MovedObjects<S> objects_;  // slot -> leaf in its tree, and the objects moved since the last update
   StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
   DynamicPairs<S> pairs_;      // per dynamic object (by its position in cache_), its dynamic pairs of fat boxes
 };

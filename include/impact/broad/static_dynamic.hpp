@@ -26,6 +26,7 @@
 
 #include "impact/broad/dynamic_pairs.hpp"
 #include "impact/broad/dynamic_tree.hpp"
+#include "impact/broad/moved_objects.hpp"
 #include "impact/broad/static_candidates.hpp"
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/traverse.hpp"
@@ -42,42 +43,36 @@ class StaticDynamicBroadPhase {
       : dyn_(tree), static_leaf_size_(static_leaf_size) {}
 
   void insert(std::int32_t slot, const ObjectTable<S>& t) {
-    grow(slot);
-    const auto s = static_cast<std::size_t>(slot);
+    objects_.grow(slot);
     if (t.is_static(slot)) {
       static_dirty_ = true;
       return;
     }
-    leaf_[s] = dyn_.insert(slot, t.box(s), t.active(slot));
+    objects_.set_leaf(slot, dyn_.insert(slot, t.box(slot), t.active(slot)));
     cache_.add(slot, t.active(slot));
     pairs_.add();
-    dyn_.mark_fresh(leaf_[s]);
+    dyn_.mark_fresh(objects_.leaf(slot));
   }
   void remove(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
     if (t.is_static(slot)) {
       static_dirty_ = true;  // candidates naming it are dropped by the rebuild
       return;
     }
-    dyn_.remove(leaf_[s]);
-    leaf_[s] = DynamicTree<S>::null;
+    dyn_.remove(objects_.leaf(slot));
+    objects_.set_leaf(slot, DynamicTree<S>::null);
     pairs_.remove(pos_of(slot));
     cache_.remove(slot);
   }
   void moved(std::int32_t slot, const ObjectTable<S>& t) {
-    const auto s = static_cast<std::size_t>(slot);
     if (t.is_static(slot)) {
       static_dirty_ = true;
       return;
     }
-    if (!moved_flag_[s]) {
-      moved_flag_[s] = 1;
-      moved_.push_back(slot);
-    }
+    objects_.mark_moved(slot);
   }
   void activity_changed(std::int32_t slot, const ObjectTable<S>& t) {
     cache_.set_active(pos_of(slot), t.active(slot));
-    dyn_.set_active(leaf_[static_cast<std::size_t>(slot)], t.active(slot));
+    dyn_.set_active(objects_.leaf(slot), t.active(slot));
   }
   void filter_changed(std::int32_t slot, const ObjectTable<S>& t) {
     if (t.is_static(slot))
@@ -119,7 +114,7 @@ class StaticDynamicBroadPhase {
  private:
   /// Static-tree query of dynamic object a with its fat box: its accepted candidates.
   void query_static(const ObjectTable<S>& t, std::int32_t a, std::vector<std::int32_t>& cand, BroadPhaseStats& st) const {
-    const Aabb<S>& fat = dyn_.box(leaf_[static_cast<std::size_t>(a)]);
+    const Aabb<S>& fat = dyn_.box(objects_.leaf(a));
     traverse(
         static_tree_,
         [&](const Aabb<S>& bv) {
@@ -141,42 +136,10 @@ class StaticDynamicBroadPhase {
   /// The position of dynamic object `slot` in cache_.
   std::size_t pos_of(std::int32_t slot) const { return cache_.pos_of(slot); }
 
-  void grow(std::int32_t slot) {
-    const auto n = static_cast<std::size_t>(slot) + 1;
-    if (n > leaf_.size()) {
-      leaf_.resize(n, DynamicTree<S>::null);
-      moved_flag_.resize(n, 0);
-    }
-  }
-
   void flush(const ObjectTable<S>& t, BroadPhaseStats& st) {
-    const std::size_t n = moved_.size();
-    for (std::size_t k = 0; k < n; ++k) {
-      if (k + 8 < n) {  // this loop's scattered reads for the object 8 ahead, and its leaf for the one 4 ahead
-        const auto f = static_cast<std::size_t>(moved_[k + 8]);
-        detail::prefetch(&leaf_[f]);
-        detail::prefetch(&moved_flag_[f]);
-        detail::prefetch(&t.box(moved_[k + 8]));
-      }
-      if (k + 4 < n) {
-        const std::int32_t l = leaf_[static_cast<std::size_t>(moved_[k + 4])];
-        if (l != DynamicTree<S>::null) detail::prefetch(&dyn_.box(l));
-      }
-      const std::int32_t slot = moved_[k];
-      const auto s = static_cast<std::size_t>(slot);
-      moved_flag_[s] = 0;
-      const std::int32_t leaf = leaf_[s];
-      if (leaf == DynamicTree<S>::null) continue;  // removed (or now static) since it moved
-      ++st.refits;
-      cache_.moved(pos_of(slot));
-      if (dyn_.update(leaf, t.box(s))) {
-        ++st.reinserts;
-        cache_.invalidate(pos_of(slot));  // the fat box changed: query the static tree again
-        pairs_.drop(pos_of(slot));        // and find its dynamic pairs again
-        dyn_.mark_fresh(leaf);
-      }
-    }
-    moved_.clear();
+    objects_.drain(
+        t, [&](std::int32_t, std::int32_t leaf) -> const Aabb<S>& { return dyn_.box(leaf); },
+        [&](std::int32_t slot, std::int32_t leaf) { detail::refit_moved_dynamic(dyn_, cache_, pairs_, t, slot, leaf, st); });
     if (dyn_.maybe_rebuild()) ++st.rebuilds;
     if (static_dirty_) {
       rebuild_static(t);
@@ -211,9 +174,7 @@ class StaticDynamicBroadPhase {
   Bvh<Aabb<S>> static_tree_;
   std::vector<std::int32_t> static_slots_;  // static tree primitive id -> slot
   bool static_dirty_ = false;
-  std::vector<std::int32_t> leaf_;      // slot -> dynamic tree leaf
-  std::vector<std::uint8_t> moved_flag_;
-  std::vector<std::int32_t> moved_;
+  MovedObjects<S> objects_;  // slot -> dynamic tree leaf, and the dynamic objects moved since the last update
   StaticCandidates<S> cache_;  // the dynamic objects, each with its static candidates and hits
   DynamicPairs<S> pairs_;      // per dynamic object (by its position in cache_), its dynamic pairs of fat boxes
 };

@@ -100,7 +100,7 @@ template <class S, int W = 4> struct WideCast {
   const S t_max;
   const bool use_simd;
   const bool use_avx;  // the 8-wide AVX node test and the AVX leaf test when the CPU has AVX
-  const WideFloatSlab<S, W> float_slab;
+  float slab_error = 0.0f;  // the float node test's absolute error (WideFloatSlab::absolute_error; 0 when it is not used)
   S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
   std::int32_t best_k = -1;     // leaf-order position of the best hit
   std::int32_t best_block = -1;  // its block and lane
@@ -122,8 +122,7 @@ template <class S, int W = 4> struct WideCast {
 
   /// `o_` and `d_` must outlive the cast.
   WideCast(const WideBvh<S, W>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd, bool avx = true)
-      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), float_slab(o_, inv, w.coordinate_bound()),
-        best(t_max_), limit(t_max_) {
+      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), best(t_max_), limit(t_max_) {
     float_bounds(double(t_max_), bound_f, exit_f);
   }
 
@@ -191,7 +190,7 @@ template <class S, int W = 4> struct WideCast {
     limit = next_below(best);
     exit_f = float_round_up(double(best));
     bound_f = float_round_down(double(limit));
-    const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(float_slab.absolute_error()));
+    const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(slab_error));
     tie_f = float_round_down(double(best) - slack);
   }
   /// The triangles of a leaf (its blocks from `block`): four at a time through the block test
@@ -271,20 +270,31 @@ template <class S, int W = 4> struct WideCast {
   /// when the tree's depth bounds it, else a stack with a heap overflow).
   void run() {
 #if defined(IMPACT_WIDE_AVX)
-    if constexpr (W == 8) {  // the AVX loop, its stack a local of its own frame (the top in a register)
-      if (use_simd && use_avx && float_slab.usable() && wide_avx_available()) {
-        if (wide.depth() <= kFixedDepth) run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>();
-        else run_avx<TraversalStack<WideEntry, 128>>();
-        return;
-      }
+    if constexpr (W == 8) {
+      if (use_simd && use_avx && wide_avx_available() && run_avx_loop()) return;
     }
 #endif
+    run_without_avx();
+  }
+#if defined(IMPACT_WIDE_AVX)
+  /// The AVX loop (8-wide; call only when wide_avx_available()), its stack a local of its own
+  /// frame (the top in a register). False, having done nothing, when its float test cannot take
+  /// the ray: then run_without_avx().
+  bool run_avx_loop() {
+    return wide.depth() <= kFixedDepth ? run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>()
+                                       : run_avx<TraversalStack<WideEntry, 128>>();
+  }
+#endif
+  /// The traversal with the SSE or scalar node test.
+  void run_without_avx() {
+    const WideFloatSlab<S, W> float_slab(o, inv, wide.coordinate_bound());
+    slab_error = float_slab.absolute_error();
     if (wide.depth() <= kFixedDepth) {
       TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;  // W - 1 entries a level at most
-      run(stack);
+      run(stack, float_slab);
     } else {
       TraversalStack<WideEntry, 128> stack;
-      run(stack);
+      run(stack, float_slab);
     }
   }
   static constexpr int kFixedDepth = 40;
@@ -303,8 +313,10 @@ template <class S, int W = 4> struct WideCast {
   }
 #if defined(IMPACT_WIDE_AVX)
   /// The traversal of an 8-wide tree with the AVX node test (compiled for AVX; called when the CPU
-  /// has it): the loop of run() with eight children tested at once, on a Stack of its own.
-  template <class Stack> IMPACT_WIDE_AVX_TARGET void run_avx();
+  /// has it): the loop of run() with eight children tested at once, on a Stack of its own, the
+  /// float test's state made in the same frame (in double by WideFloatSlab::avx_state, in one
+  /// pass). False, having done nothing, when the float test cannot take the ray.
+  template <class Stack> IMPACT_WIDE_AVX_TARGET bool run_avx();
   /// descend() for the keys in an AVX register: the same order (by key, ties by the lower slot),
   /// three or more children ranked without a sort (a child's rank: the entered children with a
   /// smaller key, or an equal key in a lower slot).
@@ -344,7 +356,7 @@ template <class S, int W = 4> struct WideCast {
   }
 #endif
 
-  template <class Stack> void run(Stack& stack) {
+  template <class Stack> void run(Stack& stack, const WideFloatSlab<S, W>& float_slab) {
     const Node* nodes = wide.nodes().data();
     std::int32_t first = 0, count = 0;  // the root: an inner node
     std::size_t tests = 0;
@@ -425,13 +437,21 @@ template <class S, int W = 4> struct WideCast {
 #if defined(IMPACT_WIDE_AVX)
 template <class S, int W>
 template <class Stack>
-IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx() {
+IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
   static_assert(W == 8, "the AVX node loop: 8-wide nodes");
+  typename WideFloatSlab<S, W>::Avx fs;  // in registers for the node loop
+  if constexpr (std::is_same_v<S, double>) {
+    if (!WideFloatSlab<S, W>::avx_state(o, inv, double(wide.coordinate_bound()), fs, slab_error)) return false;
+  } else {
+    const WideFloatSlab<S, W> float_slab(o, inv, wide.coordinate_bound());
+    if (!float_slab.usable()) return false;
+    slab_error = float_slab.absolute_error();
+    fs = float_slab.avx();
+  }
   Stack stack;
   const Node* nodes = wide.nodes().data();
   std::int32_t first = 0, count = 0;  // the root: an inner node
   std::size_t tests = 0;
-  const typename WideFloatSlab<S, W>::Avx fs = float_slab.avx();  // in registers for the node loop
   for (;;) {
     const __m256 exit_v = _mm256_set1_ps(exit_f), bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
     const float bound = bound_f;
@@ -470,32 +490,18 @@ IMPACT_WIDE_AVX_TARGET void WideCast<S, W>::run_avx() {
     }
     if (done) {
       node_tests += tests;
-      return;
+      return true;
     }
   }
 }
 #endif
 
-/// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
-/// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
-/// compare the two: the same answers, triangle included).
-/// The direction's largest component must be at least CoordinateRange::min_scale (else squared
-/// norms underflow and hits are missed): callers with unvalidated rays (a particle's leg) scale
-/// it first (detail::cast_short_ray, geometry/ray.hpp).
+/// The hit of a finished cast (the ray `ray`, `d` its direction in the mesh's frame); counts
+/// its work into `stats` when not null.
 template <class S, int W>
-std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
-                                                          RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
-  if (wide.empty()) return std::nullopt;
-  Vec3<S> posed_o, posed_d;  // the ray in the mesh's frame when posed (else the caller's, not copied)
-  if (pose) {
-    posed_o = pose->R.transpose() * (ray.origin - pose->t);
-    posed_d = pose->R.transpose() * ray.direction;
-  }
-  const Vec3<S>& o = pose ? posed_o : ray.origin;
-  const Vec3<S>& d = pose ? posed_d : ray.direction;
-  if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
-  cast.run();
+std::optional<RayMeshHit<S>> wide_cast_hit(const WideCast<S, W>& cast, const Ray<S>& ray, const Vec3<S>& d, const RigidTransform<S>* pose,
+                                           RayMeshStats* stats) {
+  const WideBvh<S, W>& wide = cast.wide;
   if (stats) {
     stats->node_tests += W * cast.node_tests;
     stats->triangle_tests += cast.triangle_tests;
@@ -511,6 +517,38 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& w
   hit.normal = pose ? Vec3<S>(pose->R * nrm) : nrm;
   hit.front_face = d.dot(nrm) < S(0);
   return hit;
+}
+
+/// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
+/// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
+/// without a pose comes here directly, but for the 8-wide tree in double with AVX).
+template <class S, int W>
+std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
+                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+  if (wide.empty()) return std::nullopt;
+  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
+  cast.run();
+  return wide_cast_hit(cast, ray, d, pose, stats);
+}
+
+/// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
+/// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
+/// compare the two: the same answers, triangle included).
+/// The direction's largest component must be at least CoordinateRange::min_scale (else squared
+/// norms underflow and hits are missed): callers with unvalidated rays (a particle's leg) scale
+/// it first (detail::cast_short_ray, geometry/ray.hpp).
+template <class S, int W>
+std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
+                                                          RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+  Vec3<S> posed_o, posed_d;  // the ray in the mesh's frame when posed (else the caller's, not copied)
+  if (pose) {
+    posed_o = pose->R.transpose() * (ray.origin - pose->t);
+    posed_d = pose->R.transpose() * ray.direction;
+  }
+  const Vec3<S>& o = pose ? posed_o : ray.origin;
+  const Vec3<S>& d = pose ? posed_d : ray.direction;
+  if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
+  return ray_wide_cast(wide, ray, o, d, pose, stats, use_simd, use_avx);
 }
 
 }  // namespace detail
@@ -530,8 +568,26 @@ std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const
 
 /// The same first hit with the ray in the mesh's own frame (no pose to check or apply).
 template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const Ray<S>& ray) {
+#if defined(IMPACT_WIDE_AVX)
+  if constexpr (W == 8 && std::is_same_v<S, double>) {
+    // The argument check folded into the AVX cast's set-up: its float test takes a ray only when
+    // every origin component is within 2^60 and every 1 / d component within [2^-60, 2^60]
+    // (WideFloatSlab::avx_state), which implies ray_in_range but for t_max (all three direction
+    // components finite, at least 2^-60 > min_scale and at most about 2^60 < max; NaN fails).
+    // Only a ray it does not take is checked, then cast with the other node tests.
+    if (ray.t_max >= S(0) && !wide.empty() && detail::wide_avx_available()) {
+      detail::WideCast<S, W> cast(wide, ray.origin, ray.direction, ray.t_max, true, true);
+      if (!cast.run_avx_loop()) {
+        if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
+        cast.run_without_avx();
+      }
+      return detail::wide_cast_hit(cast, ray, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
+    }
+  }
+#endif
   if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
-  return detail::ray_wide_first_hit_unchecked(wide, ray, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
+  // (ray_in_range: a non-zero direction and t_max >= 0, the unchecked cast's own checks)
+  return detail::ray_wide_cast(wide, ray, ray.origin, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
 }
 
 }  // namespace impact

@@ -150,9 +150,13 @@ inline float float_round_down(double x) { return -float_round_up(-x); }
 /// is one of them, and the other is its neighbour when f != x.
 inline void float_bounds(double x, float& down, float& up) {
   const float f = static_cast<float>(x);
+  const double fd = double(f);
+  if (fd == x) {  // x is a float (a cast's t_max of 1 or infinity): both bounds
+    down = up = f;
+    return;
+  }
   std::uint32_t b;
   std::memcpy(&b, &f, sizeof b);
-  const double fd = double(f);
   const std::uint32_t below = fd < x ? 1u : 0u, above = fd > x ? 1u : 0u;
   const std::uint32_t neg = b >> 31;
   // the neighbour up of f below x (+1 on the bits for a sign bit 0, -1 for 1: +0 becomes the
@@ -335,6 +339,40 @@ template <class S, int W = 4> class WideFloatSlab {
     a.e = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.e), sse_.e, 1);
     return a;
   }
+  /// The Avx state of a ray in double made directly, in one pass of 256-bit AVX over the three
+  /// axes (no SSE state, no object): the constructor's checks, the same float roundings of the
+  /// origin and of `inv`, the same e and plane offsets, so the same keys bit for bit (tested
+  /// against WideFloatSlab(o, inv, coordinate_bound).avx()). False when the slab would not be
+  /// usable(); else `e` gets absolute_error(). Compiled for AVX (call only when
+  /// wide_avx_available()). Its limits (2^60) are within CoordinateRange<double>: the public 8-wide
+  /// cast relies on them as its argument check (ray_mesh_first_hit, query/ray_wide_bvh.hpp).
+  IMPACT_WIDE_AVX_TARGET static bool avx_state(const Vec3<double>& o, const Vec3<double>& inv, double coordinate_bound, Avx& a, float& e) {
+    static_assert(std::is_same_v<S, double>, "avx_state: a ray in double");
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+    // (x, y, z, 0) and (1/dx, 1/dy, 1/dz, 1): the fourth lane passes every check and adds 0 to e
+    const __m256d vo = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(o.data())), _mm_load_sd(o.data() + 2), 1);
+    const __m256d vi = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(inv.data())), _mm_set_pd(1.0, inv[2]), 1);
+    const __m256d ao = _mm256_and_pd(vo, abs_mask), ai = _mm256_and_pd(vi, abs_mask);
+    const __m256d big = _mm256_set1_pd(0x1p60);
+    const __m256d in = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(ao, big, _CMP_LE_OQ), _mm256_cmp_pd(ai, big, _CMP_LE_OQ)),
+                                     _mm256_cmp_pd(ai, _mm256_set1_pd(0x1p-60), _CMP_GE_OQ));
+    const __m128 of = _mm256_cvtpd_ps(vo), invf = _mm256_cvtpd_ps(vi);
+    const __m256d err = _mm256_mul_pd(_mm256_and_pd(_mm256_sub_pd(vo, _mm256_cvtps_pd(of)), abs_mask), ai);
+    const __m128d e2 = _mm_max_pd(_mm256_castpd256_pd128(err), _mm256_extractf128_pd(err, 1));
+    const double ed = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
+    if (!((_mm256_movemask_pd(in) == 15) & (coordinate_bound <= 0x1p60) & (ed <= 0x1p40))) {
+      e = 0.0f;
+      return false;
+    }
+    e = float_round_up(ed * (1.0 + 0x1p-16) + 0x1p-100);
+    const __m256 o2 = _mm256_insertf128_ps(_mm256_castps128_ps256(of), of, 1);
+    const __m256 i2 = _mm256_insertf128_ps(_mm256_castps128_ps256(invf), invf, 1);
+    a.o[0] = _mm256_permute_ps(o2, 0x00), a.o[1] = _mm256_permute_ps(o2, 0x55), a.o[2] = _mm256_permute_ps(o2, 0xAA);
+    a.inv[0] = _mm256_permute_ps(i2, 0x00), a.inv[1] = _mm256_permute_ps(i2, 0x55), a.inv[2] = _mm256_permute_ps(i2, 0xAA);
+    a.e = _mm256_set1_ps(e);
+    std::memcpy(a.planes, kPlaneOffsets.at[_mm256_movemask_pd(vi) & 7], sizeof a.planes);
+    return true;
+  }
   /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same operations as the
   /// SSE and scalar tests, lane by lane (no FMA), so the same keys and mask bit for bit.
   IMPACT_WIDE_AVX_TARGET static int entered_avx(const Avx& a, const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) {
@@ -350,6 +388,17 @@ template <class S, int W = 4> class WideFloatSlab {
     const __m256 hi = _mm256_add_ps(_mm256_mul_ps(t1, _mm256_set1_ps(kHigh)), a.e);
     keys = lo;
     return _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(lo, hi, _CMP_LE_OQ), _mm256_cmp_ps(lo, bound, _CMP_LE_OQ)));
+  }
+  /// entered_avx() on the state made by avx_state (for the tests that compare it with the
+  /// object's): the mask, or -1 when avx_state says the slab is not usable; `e` as avx_state.
+  IMPACT_WIDE_AVX_TARGET static int entered_avx_from_ray(const Vec3<double>& o, const Vec3<double>& inv, double coordinate_bound,
+                                                         const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8], float& e) {
+    Avx a;
+    if (!avx_state(o, inv, coordinate_bound, a, e)) return -1;
+    __m256 lo;
+    const int m = entered_avx(a, n, _mm256_set1_ps(t_max_up), _mm256_set1_ps(bound), lo);
+    _mm256_storeu_ps(keys, lo);
+    return m;
   }
   /// entered() through entered_avx (call only when wide_avx_available()).
   IMPACT_WIDE_AVX_TARGET int entered_avx(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
