@@ -547,7 +547,8 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   return g;
 }
 
-/// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
+/// A cone (a) and a box (b): planes normal to the line between the centres and to the box's axes
+/// (separating: no contact), GJK until it encloses the origin or separates them (no contact), then
 /// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
 /// deepest point, a corner or an edge of the box through the cone's side or base), else
 /// EPA from GJK's tetrahedron, stopped early by the local certificate of
@@ -573,6 +574,12 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
         return c;
       }
     }
+  }
+  // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
+  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale)) {
+    ConvexContact<S> c;
+    c.iterations = 1;
+    return c;
   }
   SimplexPoint<S> simplex[4];
   int its = 1;
