@@ -7,8 +7,8 @@
 ///      negative one is a separating plane (no contact; 85 % of the bench's separated poses);
 ///   2. either centre inside the other cylinder: they intersect;
 ///   3. the closest points p, q of the two axis segments: when both lie strictly inside their
-///      segments (the axes more than about 6 degrees from parallel, so that rounding moves p and q
-///      by at most about 100 epsilons of the size), q - p is normal to both axes, so the planes
+///      segments (the axes more than about 6 degrees from parallel, 18 in float, so that rounding
+///      moves p and q by at most about 100 epsilons of the size, 10 in float), q - p is normal to both axes, so the planes
 ///      normal to it through p + r_a (q - p) / |q - p| and q - r_b (q - p) / |q - p| support the
 ///      infinite cylinders, and the finite ones intersect exactly when |q - p| <= r_a + r_b;
 ///      otherwise a point of both proves an intersection (q in a, p in b, their midpoint in both,
@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace impact::detail {
 
@@ -64,12 +65,13 @@ bool cylinder_pair_intersect(const Cylinder<S>& a, const Cylinder<S>& b, const M
   const Vec3<S> v = R.col(2);
   const S ha = a.half_length, hb = b.half_length;
   const S uv = v.z(), ut = t.z(), vt = v.dot(t), den = S(1) - uv * uv;
+  const S skew = std::is_same_v<S, float> ? S(0.1) : S(0.01);  // rounding moves p, q by ~ eps |t| / den
   S s = S(0), r = S(0);
-  if (den > S(0.01)) s = std::clamp((ut - uv * vt) / den, -ha, ha);
+  if (den > skew) s = std::clamp((ut - uv * vt) / den, -ha, ha);
   r = std::clamp(uv * s - vt, -hb, hb);
   s = std::clamp(uv * r + ut, -ha, ha);
   const Vec3<S> p(S(0), S(0), s), q = t + r * v, pq = q - p;
-  if (den > S(0.01) && std::abs(s) < ha && std::abs(r) < hb) {
+  if (den > skew && std::abs(s) < ha && std::abs(r) < hb) {
     // both interior: q - p is normal to both axes (the lines' common normal)
     const S reach = a.radius + b.radius;
     return pq.squaredNorm() <= reach * reach;
