@@ -28,7 +28,10 @@
 #include "impact/bvh/build_top_down.hpp"
 #include "impact/bvh/refit.hpp"
 #include "impact/detail/revision.hpp"
+#include "impact/geometry/obb_slabs.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
+
+#include <type_traits>
 
 namespace impact {
 
@@ -64,6 +67,11 @@ template <class BV> class MeshBvh {
   /// Heap bytes held by this object beyond sizeof(*this): the copied mesh (V, F), the tree's nodes
   /// and primitive permutation, the triangles' rows of F in leaf order (capacities, not sizes).
   std::size_t memory_bytes() const { return mesh_bytes() + tree_bytes(); }
+  /// Oriented-box trees: the mesh's vertices' slabs along the ten diagonal directions of the root
+  /// box's axes (fit_obb_slabs), measured at construction and at every set_vertices(), in the
+  /// root's frame. The mesh queries try them on the root pair when its 15 axes fail (a 26-sided
+  /// polytope around the mesh instead of its box). Invalid (never used) for the other BVs.
+  const ObbSlabs<S>& root_slabs() const { return root_slabs_; }
   /// The part of memory_bytes() held by the copied mesh arrays V and F.
   std::size_t mesh_bytes() const {
     return static_cast<std::size_t>(mesh_.V.size()) * sizeof(S) + static_cast<std::size_t>(mesh_.F.size()) * sizeof(int);
@@ -109,6 +117,7 @@ template <class BV> class MeshBvh {
     mesh_.V = V;
     refit(tree_, fitter([this](std::int32_t k) { return triangle(k); }), mode);
     update_coordinate_bound();
+    update_root_slabs();
     mark_repeats();
     revision_ = detail::next_revision();
   }
@@ -153,7 +162,16 @@ template <class BV> class MeshBvh {
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
     tree_.nodes.shrink_to_fit();
     update_coordinate_bound();
+    update_root_slabs();
     mark_repeats();
+  }
+  /// root_slabs() of the current vertices and root box (every vertex row: a superset of the
+  /// triangles' corners, so the slabs hold every triangle).
+  void update_root_slabs() {
+    root_slabs_ = ObbSlabs<S>();
+    if constexpr (std::is_same_v<BV, Obb<S>>) {
+      if (!tree_.nodes.empty()) root_slabs_ = fit_obb_slabs(tree_.nodes.front().bv, mesh_.V.data(), static_cast<std::size_t>(mesh_.V.rows()));
+    }
   }
   /// repeats_previous() of every leaf position: stored only when some triangle repeats the one
   /// before it in its leaf (after set_vertices, copies that moved apart are no longer marked).
@@ -187,6 +205,7 @@ template <class BV> class MeshBvh {
   std::vector<std::int32_t> ids_;  // leaf position -> row of F
   std::vector<bool> repeats_;      // repeats_previous() by leaf position; empty when none repeats
   S coordinate_bound_ = 0;
+  ObbSlabs<S> root_slabs_;  // root_slabs(): valid for oriented-box trees only
   std::uint64_t revision_ = 0;  // revision()
 };
 

@@ -20,6 +20,9 @@
 ///       a line: 8 samples of the angle, then Newton) or the cone's apex, n the radial direction
 ///       through it; the cone's side against the cylinder's rim point deepest below it (the same
 ///       minimisation of 2h rho + R z over the rim).
+/// When the best candidate's point of the cone lies inside the cylinder but a ball about it is cut
+/// by another face of the cylinder, the cone's points deepest across those faces join it in the
+/// lower bound of convex/cylinder_pair_points.hpp (the depth of the cylinder against their hull).
 /// At the true contact of these kinds the two bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance, the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
@@ -31,6 +34,7 @@
 #pragma once
 
 #include "impact/convex/closed_form.hpp"
+#include "impact/convex/cylinder_pair_points.hpp"
 #include "impact/convex/deepest_point.hpp"
 #include "impact/convex/shapes.hpp"
 
@@ -123,6 +127,8 @@ struct CandidateBounds {
       point = x;
     }
   }
+  /// A certified lower bound found apart from the candidates.
+  void raise(S lb) { lower = std::max(lower, lb); }
   /// Certified within `tolerance`: `out` set as the contact functions below say.
   bool finish(S tolerance, ConvexContact<S>& out) const {
     out.iterations = calls;
@@ -241,7 +247,8 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
 /// normals (2h u + R axis) / L, L = sqrt(4h^2 + R^2), u radial): a's caps against b's deepest point,
 /// b's base against a's, b's apex and base rim against a's rulings, a ruling of each (n normal to
 /// a's axis and a side normal of b: up to two directions), and b's side against the point of a's
-/// rims deepest below it.
+/// rims deepest below it; then, when undecided and the best candidate's point of b lies in a, the
+/// bound from b's points (cylinder_points_bound; 1 to 4 more support calls of b).
 template <class S>
 bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
                            ConvexContact<S>& out) {
@@ -329,6 +336,13 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
   if (!decided()) rulings();
   if (!decided()) base_rim();
   if (!decided()) rims_of_a();
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best candidate's point of b, when inside a: with b's points deepest across a's faces
+    // that are nearer to it than the depth (convex/cylinder_pair_points.hpp)
+    const Vec3<S> x = sb(Vec3<S>(-k.normal));
+    ++k.calls;
+    if (inside_ball(a, x).rho >= S(0)) k.raise(cylinder_points_bound(a, x, k.upper, tolerance, sb, k.calls));
+  }
   return k.finish(tolerance, out);
 }
 

@@ -7,8 +7,10 @@
 /// under X (a slightly stretched or skewed box), with the defect of X bounded once per frame.
 #pragma once
 
+#include "impact/core/config.hpp"
 #include "impact/core/types.hpp"
 #include "impact/geometry/obb.hpp"
+#include "impact/geometry/obb_slabs.hpp"
 #include "impact/geometry/rotation_defect.hpp"
 #include "impact/geometry/transform.hpp"
 
@@ -154,6 +156,37 @@ template <class S> class ObbPairFrame {
     // stage above
     const S stretch = S(1) + S(2) * g + S(64) * eps;
     return obb_overlap<S>(a.half, R, tb, b.half, slack, g, (a.radius + ball_pad) * stretch);
+  }
+
+  /// overlaps(a, b, b_box), then, when it finds no separation, a fourth stage with `slabs_a` (the
+  /// slabs of the points box a bounds, measured in a's frame) or `slabs_b` (those of b's points, in
+  /// b_box's frame): their ten diagonal directions each (obb_slabs_separate), with the bounds of
+  /// the rounding and of X's defect taken once per term of a direction, and the points' spread by
+  /// X's defect (at most g sum(half_b) from a rigid image) on b's. Its terms (R, tb and the
+  /// bounds) are those of overlaps(), formed again (about 60 instructions): the stage runs once per
+  /// query at most, and the walk's node test keeps its code as it was (with the stage folded into
+  /// it, GCC 12 left obb_overlap out of line and the test's code changed on every node pair).
+  IMPACT_NOINLINE bool overlaps_with_slabs(const Obb<S>& a, Image& b, const Obb<S>& b_box, const ObbSlabs<S>* slabs_a,
+                                           const ObbSlabs<S>* slabs_b) const {
+    if (!overlaps(a, b, b_box)) return false;
+    if (!slabs_a && !slabs_b) return true;
+    constexpr S eps = std::numeric_limits<S>::epsilon();
+    const Vec3<S> d = b.center - a.center;
+    const S M = a.center.cwiseAbs().maxCoeff() + b.m;
+    const S ball_pad = S(64) * eps * (S(3) * M + a.radius + b.radius);
+    const S g = defect_;
+    Vec3<S> tb;
+    for (int i = 0; i < 3; ++i) tb[i] = a.axes(0, i) * d[0] + a.axes(1, i) * d[1] + a.axes(2, i) * d[2];
+    const S E = std::abs(tb[0]) + std::abs(tb[1]) + std::abs(tb[2]) + a.half.sum() + b.half.sum();
+    const S slack = S(64) * eps * (S(3) * M + E) + S(2) * g * E + std::numeric_limits<S>::denorm_min();
+    Mat3<S> R;  // b's axes were formed by overlaps(): it got past the balls
+    for (int i = 0; i < 3; ++i) {
+      const S u = a.axes(0, i), v = a.axes(1, i), w = a.axes(2, i);
+      for (int j = 0; j < 3; ++j) R(i, j) = u * b.axes(0, j) + v * b.axes(1, j) + w * b.axes(2, j);
+    }
+    const S stretch = S(1) + S(2) * g + S(64) * eps;
+    return !obb_slabs_separate<S>(a.half, R, tb, b.half, slack, g, (a.radius + ball_pad) * stretch, b.radius + ball_pad,
+                                  g * b.half.sum() * (S(1) + S(8) * eps), slabs_a, slabs_b);
   }
 
  private:

@@ -581,6 +581,7 @@ template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const 
         if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
         cast.run_without_avx();
       }
+      if (cast.best_k < 0) return std::nullopt;  // (most short casts: no call for the hit)
       return detail::wide_cast_hit(cast, ray, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
     }
   }

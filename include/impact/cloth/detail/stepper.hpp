@@ -11,6 +11,7 @@
 
 #include "impact/bvh/traverse.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/detail/kept_proofs.hpp"
 #include "impact/cloth/detail/relax_contacts.hpp"
 #include "impact/cloth/detail/step_system.hpp"
 #include "impact/cloth/step_options.hpp"
@@ -128,17 +129,11 @@ class Stepper {
   void note_moves();
   double path_sum(const Prim& p) const;
   /// The key of a candidate just proved farther than need = h + bound_margin_ over the step by a
-  /// lower bound L on its distance (separation_bound): while the end positions of its vertices
-  /// move by e_k in all since, a point of either primitive moves by at most t times a convex
-  /// combination of the e_k at time t, so the pair's distance stays above L - sum e_k over the
-  /// whole step, and the proof holds while sum e_k <= L - need. Each e_k is at most the growth of
-  /// the vertex's path length (triangle inequality over the noted moves), so the proof holds while
-  /// the sum of the four path lengths stays at most the key: that sum now plus L - need. The
-  /// factors 1 -/+ 1e-12 cover the rounding of the path lengths (a sum of at most moves_cap_
-  /// norms each, relative error under 1e-12; kept() stops keeping proofs beyond that).
-  double key_of(const Prim& p, double bound) const { return path_sum(p) * (1 - 1e-12) + (bound - (h_ + bound_margin_)); }
-  /// Whether candidate c's last proof still holds (key_of).
-  bool kept(std::size_t c) const { return moves_noted_ <= moves_cap_ && path_sum(cand_[c]) * (1 + 1e-12) <= key_[c]; }
+  /// lower bound `bound` on its distance (separation_bound, sample_pair): kept_proofs.hpp.
+  double key_of(const Prim& p, double bound) const { return proof_key(path_sum(p), bound - (h_ + bound_margin_)); }
+  /// Whether candidate c's last proof still holds (kept_proofs.hpp; the path lengths' rounding
+  /// bound assumes at most moves_cap_ noted moves, beyond which no proof is kept).
+  bool kept(std::size_t c) const { return moves_noted_ <= moves_cap_ && proof_holds(path_sum(cand_[c]), key_[c]); }
 
   // step_passes.hpp: the CCD passes
   CcdResult<S> ccd(const Prim& p, bool static_start);
