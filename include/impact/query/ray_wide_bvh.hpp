@@ -496,12 +496,36 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
 }
 #endif
 
-/// The hit of a finished cast (the ray `ray`, `d` its direction in the mesh's frame); counts
-/// its work into `stats` when not null.
-template <class S, int W>
-std::optional<RayMeshHit<S>> wide_cast_hit(const WideCast<S, W>& cast, const Ray<S>& ray, const Vec3<S>& d, const RigidTransform<S>* pose,
-                                           RayMeshStats* stats) {
-  const WideBvh<S, W>& wide = cast.wide;
+/// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
+/// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
+/// without a pose comes here directly, but for the 8-wide tree in double with AVX).
+/// With kCheckRay (the public 8-wide cast in double without a pose, when the CPU has AVX; `ray`
+/// not yet checked but for t_max >= 0): the AVX loop first, and ray_in_range (validate_ray) only
+/// for a ray its float test does not take (WideFloatSlab::avx_state's limits imply the rest).
+template <bool kCheckRay = false, class S, int W>
+std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
+                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+  if (wide.empty()) {
+    if constexpr (kCheckRay) {
+      if (!ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
+    }
+    return std::nullopt;
+  }
+  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
+#if defined(IMPACT_WIDE_AVX)
+  if constexpr (kCheckRay && W == 8) {
+    if (!cast.run_avx_loop()) {
+      if (!ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
+      cast.run_without_avx();
+    }
+    if (cast.best_k < 0) return std::nullopt;  // (most short casts)
+  } else {
+    cast.run();
+  }
+#else
+  static_assert(!kCheckRay, "the folded argument check needs the AVX cast");
+  cast.run();
+#endif
   if (stats) {
     stats->node_tests += W * cast.node_tests;
     stats->triangle_tests += cast.triangle_tests;
@@ -517,18 +541,6 @@ std::optional<RayMeshHit<S>> wide_cast_hit(const WideCast<S, W>& cast, const Ray
   hit.normal = pose ? Vec3<S>(pose->R * nrm) : nrm;
   hit.front_face = d.dot(nrm) < S(0);
   return hit;
-}
-
-/// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
-/// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
-/// without a pose comes here directly, but for the 8-wide tree in double with AVX).
-template <class S, int W>
-std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
-                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
-  if (wide.empty()) return std::nullopt;
-  WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
-  cast.run();
-  return wide_cast_hit(cast, ray, d, pose, stats);
 }
 
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
@@ -575,15 +587,8 @@ template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const 
     // (WideFloatSlab::avx_state), which implies ray_in_range but for t_max (all three direction
     // components finite, at least 2^-60 > min_scale and at most about 2^60 < max; NaN fails).
     // Only a ray it does not take is checked, then cast with the other node tests.
-    if (ray.t_max >= S(0) && !wide.empty() && detail::wide_avx_available()) {
-      detail::WideCast<S, W> cast(wide, ray.origin, ray.direction, ray.t_max, true, true);
-      if (!cast.run_avx_loop()) {
-        if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
-        cast.run_without_avx();
-      }
-      if (cast.best_k < 0) return std::nullopt;  // (most short casts: no call for the hit)
-      return detail::wide_cast_hit(cast, ray, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
-    }
+    if (ray.t_max >= S(0) && detail::wide_avx_available())
+      return detail::ray_wide_cast<true>(wide, ray, ray.origin, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
   }
 #endif
   if (!detail::ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
