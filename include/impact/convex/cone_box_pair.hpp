@@ -18,7 +18,14 @@
 /// lower); otherwise (an edge of the box against the rim, a contact near an edge of either whose
 /// nearest boundary is not the contact's) the caller runs EPA.
 /// Over the bench's 175 intersecting cone–box poses the candidates certify 100 (measured with
-/// impact-convex-bench's poses).
+/// impact-convex-bench's poses). The overlaps are computed in closed form (a face's from the cone's
+/// support point in the box's frame, the others from h_B(-n) = -n . t + sum_i e_i |R_i . n|), not
+/// from the box's support point: 3,549 -> 3,450 callgrind instructions per cone–box penetration on
+/// the bench's 2000 poses.
+/// cone_box_apart_along_box_axes, run before GJK, separates 92 of the 172 separated poses that the
+/// line between the centres leaves (3,450 -> 3,386). Where the candidates fail (239 of the 362
+/// intersecting poses go on to EPA), the commonest case is a box edge across the cone's side (90):
+/// the edge candidate's upper bound is the depth on all 90, but its ball is cut, by the base on 56.
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.
@@ -31,6 +38,22 @@
 
 namespace impact::detail {
 
+/// Whether a plane normal to one of the box's axes separates cone a (its frame) and box b (placed by
+/// R, t there) by more than `margin`: the cone's extent along a unit u is [-h_A(-u), h_A(u)] with
+/// h_A(u) = max(h u_z, r |u_xy| - h u_z) (one square root per axis for both signs), the box's
+/// [u . t - e_i, u . t + e_i]. Exact up to rounding.
+template <class S>
+bool cone_box_apart_along_box_axes(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, S margin) {
+  const S r = a.radius, h = a.half_length;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<S> u = R.col(i);
+    const S rim = r * std::sqrt(u.x() * u.x() + u.y() * u.y()), hz = h * u.z(), c = u.dot(t);
+    const S up = std::max(hz, rim - hz), down = std::max(-hz, rim + hz);  // h_A(u), h_A(-u)
+    if (up < c - b.half[i] - margin || down < -c - b.half[i] - margin) return true;
+  }
+  return false;
+}
+
 /// The certified contact of cone a and box b when one of the candidates of the file comment decides
 /// it within `tolerance`, in a's frame (b placed by R, t there): true and `out` set (normal from a
 /// towards b, depth, depth_gap, the deciding point (the caller moves it onto the plane midway
@@ -38,26 +61,34 @@ namespace impact::detail {
 /// separated pair is never certified (a lower bound needs a point of one inside the other).
 template <class S>
 bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance, ConvexContact<S>& out) {
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
-  const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
+  // the box's axes scaled by its half extents (its corners are t +- hc[0] +- hc[1] +- hc[2]), and the
+  // overlap along unit n with h_B(-n) = -n . t + sum_i e_i |R_i . n| (no support point of the box)
+  const Vec3<S> hc[3] = {Vec3<S>(b.half.x() * R.col(0)), Vec3<S>(b.half.y() * R.col(1)), Vec3<S>(b.half.z() * R.col(2))};
+  const auto overlap = [&](const Vec3<S>& n) {
+    const Vec3<S> m = R.transpose() * n;
+    return n.dot(support(a, n)) - n.dot(t) + b.half.x() * std::abs(m.x()) + b.half.y() * std::abs(m.y()) + b.half.z() * std::abs(m.z());
+  };
   CandidateBounds<S> k;
-  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lb) { k.offer(n, overlap(n), x, lb); };
-  // the box's faces: the cone's deepest point across each, in the box's frame
+  // the box's faces: the cone's deepest point x across each, in the box's frame y (the overlap
+  // along the face's inward normal s R_i is e_i + s y_i)
   for (int i = 0; i < 3; ++i) {
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> n = s * R.col(i);
       const Vec3<S> x = support(a, n);
-      const InsideBall<S> ball = inside_ball(b, Vec3<S>(R.transpose() * (x - t)));
-      if (ball.rho > S(0)) offer(n, x, ball.rho);
+      const Vec3<S> y = R.transpose() * (x - t);
+      const InsideBall<S> ball = inside_ball(b, y);
+      if (ball.rho > S(0)) k.offer(n, b.half[i] + s * y[i], x, ball.rho);
     }
   }
   if (k.upper - k.lower <= tolerance) return k.finish(tolerance, out);
   // the box's corners inside the cone, pushed out through its nearest side or base
   for (int v = 0; v < 8; ++v) {
-    const Vec3<S> corner((v & 1) ? b.half.x() : -b.half.x(), (v & 2) ? b.half.y() : -b.half.y(), (v & 4) ? b.half.z() : -b.half.z());
-    const Vec3<S> x = R * corner + t;
+    const Vec3<S> x = t + ((v & 1) ? hc[0] : Vec3<S>(-hc[0])) + ((v & 2) ? hc[1] : Vec3<S>(-hc[1])) + ((v & 4) ? hc[2] : Vec3<S>(-hc[2]));
     const InsideBall<S> ball = inside_ball(a, x);
-    if (ball.rho > S(0)) offer(Vec3<S>(-ball.push), x, ball.rho);
+    if (ball.rho > S(0)) {
+      const Vec3<S> n = -ball.push;
+      k.offer(n, overlap(n), x, ball.rho);
+    }
   }
   if (k.upper - k.lower <= tolerance) return k.finish(tolerance, out);
   // an edge of the box across the cone's side: n the side normal orthogonal to the edge (2h u . e
@@ -72,16 +103,16 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
       const S ux = along * e.x() - sign * across * e.y(), uy = along * e.y() + sign * across * e.x();
       const Vec3<S> n(S(2) * h * ux / len, S(2) * h * uy / len, r / len);
       const Vec3<S> d = R.transpose() * n;  // the box's deepest edge along -n: the corner signs off axis i
-      Vec3<S> corner(d.x() > S(0) ? -b.half.x() : b.half.x(), d.y() > S(0) ? -b.half.y() : b.half.y(), d.z() > S(0) ? -b.half.z() : b.half.z());
-      corner[i] = -b.half[i];
-      const Vec3<S> p0 = R * corner + t, ev = (S(2) * b.half[i]) * e;
+      Vec3<S> p0 = t;
+      for (int j = 0; j < 3; ++j) p0 += (j == i || d[j] > S(0)) ? Vec3<S>(-hc[j]) : hc[j];
+      const Vec3<S> ev = S(2) * hc[i];
       const S qp = -uy * p0.x() + ux * p0.y(), qe = -uy * ev.x() + ux * ev.y();
       if (!(std::abs(qe) > S(0))) continue;
       const S s = -qp / qe;
       if (!(s >= S(0) && s <= S(1))) continue;
       const Vec3<S> x = p0 + s * ev;
       const InsideBall<S> ball = inside_ball(a, x);
-      if (ball.rho > S(0)) offer(n, x, ball.rho);
+      if (ball.rho > S(0)) k.offer(n, overlap(n), x, ball.rho);
     }
   }
   return k.finish(tolerance, out);

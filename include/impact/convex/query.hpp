@@ -31,6 +31,9 @@
 ///   hull – hull                       penetration: the line between the centres (apart: done),
 ///                                     then as the other pairs;
 ///                                     boolean and distance as the other pairs below
+///   cylinder – cylinder               boolean: separating and proving tests on the centres and
+///                                     the axes, then GJK (convex/cylinder_intersect.hpp);
+///                                     distance and penetration as the other pairs below
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: cylinders and cones with
 ///                                     parallel axes in closed form (convex/parallel_axes.hpp);
@@ -59,6 +62,7 @@
 #include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/convex_hull.hpp"
+#include "impact/convex/cylinder_intersect.hpp"
 #include "impact/convex/cylinder_pair.hpp"
 #include "impact/convex/epa.hpp"
 #include "impact/convex/polytope_sat.hpp"
@@ -85,7 +89,7 @@ struct ConvexQueryOptions {
   /// epa_tolerance is its square times the size squared), used with libccd_penetration; in (0, 0.1].
   /// The own EPA stops at relative_tolerance.
   S epa_relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-8);
-  CcdAlgorithm boolean_algorithm = CcdAlgorithm::Mpr;     ///< libccd algorithm of general boolean tests
+  CcdAlgorithm boolean_algorithm = CcdAlgorithm::Mpr;     ///< libccd algorithm of general boolean tests (cylinder–cylinder has its own)
   CcdAlgorithm penetration_algorithm = CcdAlgorithm::Gjk; ///< libccd algorithm of general penetrations (GJK+EPA)
   /// General penetrations through libccd (penetration_algorithm) instead of the library's own EPA
   /// with Newton refinement (convex/epa.hpp), which is the default; libccd also answers when the
@@ -550,7 +554,8 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   return g;
 }
 
-/// A cone (a) and a box (b): GJK until it encloses the origin or separates them (no contact), then
+/// A cone (a) and a box (b): planes normal to the line between the centres and to the box's axes
+/// (separating: no contact), GJK until it encloses the origin or separates them (no contact), then
 /// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
 /// deepest point, a corner or an edge of the box through the cone's side or base), else
 /// EPA from GJK's tetrahedron, stopped early by the local certificate of
@@ -576,6 +581,12 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
         return c;
       }
     }
+  }
+  // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
+  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale)) {
+    ConvexContact<S> c;
+    c.iterations = 1;
+    return c;
   }
   SimplexPoint<S> simplex[4];
   int its = 1;
@@ -907,6 +918,13 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     }
     if (limit_reached) *limit_reached = d.limit_reached;
     return d.intersecting;
+  } else if constexpr (std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, Cylinder<S>>) {  // convex/cylinder_intersect.hpp
+    const PairFrame<S> f(pose_a, pose_b);
+    const S scale = query_scale<S>(a, b);
+    bool limit = false;
+    const bool hit = cylinder_pair_intersect(a, b, f.R, f.t, scale, options.relative_tolerance * scale, options.max_iterations, limit);
+    if (limit_reached) *limit_reached = limit;
+    return hit;
   } else {
     return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
   }
