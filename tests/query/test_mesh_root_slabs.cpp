@@ -70,8 +70,8 @@ TriangleMesh<double> random_polytope(Rng& rng, int n) {
 }  // namespace
 
 template <class S> class RootSlabsTest : public ::testing::Test {};
-using Scalars = ::testing::Types<float, double>;
-TYPED_TEST_SUITE(RootSlabsTest, Scalars);
+using RootSlabScalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(RootSlabsTest, RootSlabScalars);
 
 // The corner polytope and a box of half extents 0.5 whose lowest corner along (1, 1, 1) is moved
 // onto the polytope's highest, (2.5, 1.75, 1.25): the root boxes overlap (and their balls), only
