@@ -121,8 +121,9 @@ TEST(ConeBoxPair, CertifiedDepthsAgainstTheOracle) {
     ++compared;
     ++((f.R.transpose() * k.normal).cwiseAbs().maxCoeff() > 1 - 1e-12 ? face : body);
   }
-  EXPECT_GT(face, 5);
-  EXPECT_GT(body, 5);
+  // both kinds of candidate certified (24 cases under the sanitizers: one or two of each)
+  EXPECT_GT(face, IMPACT_TEST_SANITIZED ? 0 : 5);
+  EXPECT_GT(body, IMPACT_TEST_SANITIZED ? 0 : 5);
   EXPECT_EQ(compared, certified);
 }
 
