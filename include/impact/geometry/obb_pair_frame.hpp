@@ -167,9 +167,10 @@ template <class S> class ObbPairFrame {
   /// bounds) are those of overlaps(), formed again (about 60 instructions): the stage runs once per
   /// query at most, and the walk's node test keeps its code as it was (with the stage folded into
   /// it, GCC 12 left obb_overlap out of line and the test's code changed on every node pair).
+  template <int EdgeAxes = 3>
   IMPACT_NOINLINE bool overlaps_with_slabs(const Obb<S>& a, Image& b, const Obb<S>& b_box, const ObbSlabs<S>* slabs_a,
                                            const ObbSlabs<S>* slabs_b) const {
-    if (!overlaps(a, b, b_box)) return false;
+    if (!overlaps<EdgeAxes>(a, b, b_box)) return false;
     if (!slabs_a && !slabs_b) return true;
     constexpr S eps = std::numeric_limits<S>::epsilon();
     const Vec3<S> d = b.center - a.center;
