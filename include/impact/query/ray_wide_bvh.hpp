@@ -247,7 +247,12 @@ template <class S, int W = 4> struct WideCast {
     }
   }
   /// One block of leaf_avx (a function of its own: the ray's values are read from the test at
-  /// each block, not hoisted out of a loop and spilled).
+  /// each block, not hoisted out of a loop and spilled). hits_avx decides against the best B as
+  /// the block begins; after a hit of this block lowered it to B' < B, test_lane would keep a
+  /// later lane exactly when its depth check passes against B', its box is entered before B'
+  /// and max(min(q, B'), entry) < B' (q = tt / det): that needs q < B' and entry < B', and then
+  /// the value is hits_avx's max(min(q, B), entry) and the box test against B' agrees with the
+  /// one against B. So the depth re-check and th < B' give test_lane's answer.
   template <class T> IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
     typename BlockTest<S>::LaneHits h;  // of the block, when it hits a lane
     int m = lane_test->hits_avx(blk, lanes, best, h);
