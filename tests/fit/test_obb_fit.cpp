@@ -259,6 +259,76 @@ TYPED_TEST(ObbFitTest, OneFrameTestDecidesAsTheIdentityFrame) {
   EXPECT_LT(accepted, trials - trials / 10);
 }
 
+// The edge axes obb_overlap tries (EdgeAxes: a_i x b_j for i, j < EdgeAxes) only leave out
+// separations: with fewer, every pair the full test accepts is accepted (random pairs near each
+// other, at every offset from the origin, with and without balls, and corner-on-face touching
+// pairs through the pair frame the mesh walks use); each count tries axes the smaller one does
+// not (some pairs rejected by 2 and accepted by 1, rejected by 3 and accepted by 2).
+TYPED_TEST(ObbFitTest, FewerEdgeAxesOnlyAcceptMore) {
+  using S = TypeParam;
+  Rng rng(13);
+  int cut_by_2_only = 0, cut_by_3_only = 0, accepted = 0, trials = 0;
+  for (double off : {0.0, 1.0, 1e3, 1e6}) {
+    for (int trial = 0; trial < 1500; ++trial, ++trials) {
+      Obb<S> a, b;
+      a.axes = rng.rotation().cast<S>();
+      b.axes = rng.rotation().cast<S>();
+      a.center = (rng.vec(-1, 1) * off).cast<S>();
+      b.center = (a.center.template cast<double>() + rng.vec(-0.8, 0.8)).template cast<S>();
+      // flat boxes, as a surface's patches are: the last axis the thinnest (fit_obb's order)
+      a.half = Vec3<S>(S(rng.uniform(0.3, 1)), S(rng.uniform(0.1, 0.6)), S(rng.uniform(0.001, 0.1)));
+      b.half = Vec3<S>(S(rng.uniform(0.3, 1)), S(rng.uniform(0.1, 0.6)), S(rng.uniform(0.001, 0.1)));
+      a.radius = trial % 3 == 0 ? std::numeric_limits<S>::infinity() : a.half.norm() * S(rng.uniform(0.7, 1.0));
+      b.radius = trial % 4 == 0 ? std::numeric_limits<S>::infinity() : b.half.norm() * S(rng.uniform(0.7, 1.0));
+      const RigidTransform<S> xf = random_pose(rng, Eigen::Vector3d::Constant(-off), Eigen::Vector3d::Constant(off)).cast<S>();
+      const Obb<S> b_moved = BvTraits<Obb<S>>::transformed(b, xf.inverse());  // xf b_moved holds b
+      const ObbPairFrame<S> frame(xf);
+      auto im3 = frame.image_centre(b_moved), im2 = im3, im1 = im3;
+      const bool all3 = frame.template overlaps<3>(a, im3, b_moved);
+      const bool two = frame.template overlaps<2>(a, im2, b_moved);
+      const bool one = frame.template overlaps<1>(a, im1, b_moved);
+      ASSERT_TRUE(!all3 || two) << "offset " << off << " trial " << trial;
+      ASSERT_TRUE(!two || one) << "offset " << off << " trial " << trial;
+      ASSERT_EQ(all3, frame.overlaps(a, b_moved));  // the default tries all nine
+      // the same boxes in one frame, through obb_overlap itself
+      const Mat3<S> R = a.axes.transpose() * b.axes;
+      const Vec3<S> t = a.axes.transpose() * (b.center - a.center);
+      const bool box3 = obb_overlap<S, 3>(a.half, R, t, b.half), box2 = obb_overlap<S, 2>(a.half, R, t, b.half);
+      ASSERT_TRUE(!box3 || box2);
+      cut_by_2_only += one && !two;
+      cut_by_3_only += two && !all3;
+      accepted += all3;
+    }
+  }
+  EXPECT_GT(cut_by_2_only, 0);
+  EXPECT_GT(cut_by_3_only, 0);
+  EXPECT_GT(accepted, trials / 10);
+  // touching: b's corner exactly on a's face (as OverlapNeverMissesTouchingBoxes), seen through
+  // a random pose, is accepted with two edge axes per box, as with three
+  for (double off : {0.0, 1.0, 1e3, 1e6}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      Obb<S> a, b;
+      a.axes = rng.rotation().cast<S>();
+      a.center = (rng.vec(-1, 1) * off).cast<S>();
+      a.half = rng.vec(0.1, 1).cast<S>();
+      b.axes = rng.rotation().cast<S>();
+      b.half = rng.vec(0.1, 1).cast<S>();
+      const Vec3L on_face = a.center.template cast<long double>() +
+                            a.axes.template cast<long double>() *
+                                Vec3L(static_cast<long double>(a.half[0]), (long double)rng.uniform(-1, 1) * a.half[1], (long double)rng.uniform(-1, 1) * a.half[2]);
+      const Vec3L n = a.axes.col(0).template cast<long double>();
+      Vec3L h;
+      for (int k = 0; k < 3; ++k) h[k] = (b.axes.col(k).template cast<long double>().dot(n) > 0 ? -1 : 1) * (long double)b.half[k];
+      b.center = (on_face - b.axes.template cast<long double>() * h).template cast<S>();
+      const RigidTransform<S> xf = random_pose(rng, Eigen::Vector3d::Constant(-off), Eigen::Vector3d::Constant(off)).cast<S>();
+      const Obb<S> b_moved = BvTraits<Obb<S>>::transformed(b, xf.inverse());
+      const ObbPairFrame<S> frame(xf);
+      auto im = frame.image_centre(b_moved);
+      ASSERT_TRUE(frame.template overlaps<2>(a, im, b_moved)) << "offset " << off << " trial " << trial;
+    }
+  }
+}
+
 TYPED_TEST(ObbFitTest, BallsNeverRejectTouchingSets) {
   using S = TypeParam;
   using T = BvTraits<Obb<S>>;

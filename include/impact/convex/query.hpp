@@ -34,6 +34,10 @@
 ///   cylinder – cylinder               boolean: separating and proving tests on the centres and
 ///                                     the axes, then GJK (convex/cylinder_intersect.hpp);
 ///                                     distance and penetration as the other pairs below
+///   cylinder – box                    boolean: separating planes and common points, then GJK;
+///                                     penetration: separating planes, the certified candidates,
+///                                     else GJK and EPA with the local certificate
+///                                     (convex/cylinder_box_pair.hpp); distance as below
 ///   other pairs                       boolean: libccd MPR (default) or GJK; distance: GJK
 ///                                     (gjk_distance.hpp); penetration: cylinders and cones with
 ///                                     parallel axes in closed form (convex/parallel_axes.hpp);
@@ -65,6 +69,7 @@
 #include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/cone_cone_pair.hpp"
 #include "impact/convex/convex_hull.hpp"
+#include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/cylinder_intersect.hpp"
 #include "impact/convex/cylinder_pair.hpp"
 #include "impact/convex/epa.hpp"
@@ -680,6 +685,58 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   return g;
 }
 
+/// A cylinder (a) and a box (b): the planes of convex/cylinder_box_pair.hpp (the line between the
+/// centres, the box's axes, the cylinder's axis, normal to the axis and a box edge; separating: no
+/// contact), the certified candidates of convex/cylinder_box_pair.hpp (a certified lower bound is
+/// positive, so it proves the intersection: no GJK; before GJK saves 4 % of the instructions on
+/// the bench's poses), else GJK until it encloses the origin or separates them, and EPA from its
+/// tetrahedron seeded with the best candidate's direction and stopped early by the local
+/// certificate on cylinder_box_terms (the overlap's exact terms, so no check of a branch).
+template <class S>
+ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
+                                          const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * scale;
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = f.t.norm();
+    if (len > S(0) && cylinder_box_overlap(a, b, f.R, f.t, Vec3<S>(f.t / len)) < -margin) {
+      ConvexContact<S> c;
+      c.iterations = 1;
+      return c;
+    }
+  }
+  if (cylinder_box_apart(a, b, f.R, f.t, margin)) {
+    ConvexContact<S> c;
+    c.iterations = 1;
+    return c;
+  }
+  ConvexContact<S> cand;
+  if (cylinder_box_contact(a, b, f.R, f.t, tol, cand)) {
+    cand.iterations += 1;
+    settle_certified_from_frame(a, pa, b, pb, cand);
+    return cand;
+  }
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  bool limit = false, failed = false;
+  if (!gjk_enclose(sa, sb, Vec3<S>(-f.t), scale, o.max_iterations, simplex, its, limit, failed)) {
+    if (limit || failed) return general_penetration(a, pa, b, pb, o);
+    ConvexContact<S> none;
+    none.iterations = its + cand.iterations;
+    return none;
+  }
+  const OverlapTerms<S> terms = cylinder_box_terms(a, b, f.R, f.t);
+  const auto local = [&](const Vec3<S>& n) { return local_certificate(terms, n); };
+  const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
+  g.iterations += cand.iterations;
+  return g;
+}
+
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
 /// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
 /// when the segment stays clear of the cylinder (GJK otherwise).
@@ -900,6 +957,10 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration) return cone_box_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cone<S>>) {
       if (!options.libccd_penetration) return swapped(cone_box_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, Box<S>>) {
+      if (!options.libccd_penetration) return cylinder_box_penetration(a, pose_a, b, pose_b, options);
+    } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cylinder<S>>) {
+      if (!options.libccd_penetration) return swapped(cylinder_box_penetration(b, pose_b, a, pose_a, options));
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, ConvexHull<S>>) {  // separating axes
       if (!options.libccd_penetration && use_box_hull_sat(b)) return box_hull_sat(a, pose_a, b, pose_b);
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Box<S>>) {
@@ -979,6 +1040,19 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     const S scale = query_scale<S>(a, b);
     bool limit = false;
     const bool hit = cylinder_pair_intersect(a, b, f.R, f.t, scale, options.relative_tolerance * scale, options.max_iterations, limit);
+    if (limit_reached) *limit_reached = limit;
+    return hit;
+  } else if constexpr ((std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, Box<S>>) ||
+                       (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cylinder<S>>)) {  // convex/cylinder_box_pair.hpp
+    const S scale = query_scale<S>(a, b);
+    bool limit = false, hit;
+    if constexpr (std::is_same_v<A, Cylinder<S>>) {
+      const PairFrame<S> f(pose_a, pose_b);
+      hit = cylinder_box_intersect(a, b, f.R, f.t, scale, options.relative_tolerance * scale, options.max_iterations, limit);
+    } else {
+      const PairFrame<S> f(pose_b, pose_a);
+      hit = cylinder_box_intersect(b, a, f.R, f.t, scale, options.relative_tolerance * scale, options.max_iterations, limit);
+    }
     if (limit_reached) *limit_reached = limit;
     return hit;
   } else {

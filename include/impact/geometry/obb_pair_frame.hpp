@@ -118,8 +118,9 @@ template <class S> class ObbPairFrame {
   /// A's three face axes against b's ball (its image lies within radius of its centre, so its
   /// extent along any unit axis is at most the radius: no product with b's axes needed yet); then
   /// the 15 axes, with each volume's extent on an axis the lesser of its box's and its ball's (each
-  /// node bounds the box cut by the ball).
-  bool overlaps(const Obb<S>& a, Image& b, const Obb<S>& b_box) const {
+  /// node bounds the box cut by the ball). `EdgeAxes` as for obb_overlap: the edge axes a_i x b_j
+  /// tried are those with i, j < EdgeAxes (the walks of the mesh queries take 2).
+  template <int EdgeAxes = 3> bool overlaps(const Obb<S>& a, Image& b, const Obb<S>& b_box) const {
     constexpr S eps = std::numeric_limits<S>::epsilon();
     const Vec3<S> d = b.center - a.center;
     const S M = a.center.cwiseAbs().maxCoeff() + b.m;
@@ -155,7 +156,7 @@ template <class S> class ObbPairFrame {
     // of unit length, A's axes orthonormal within rounding); b's ball on A's face axes was the
     // stage above
     const S stretch = S(1) + S(2) * g + S(64) * eps;
-    return obb_overlap<S>(a.half, R, tb, b.half, slack, g, (a.radius + ball_pad) * stretch);
+    return obb_overlap<S, EdgeAxes>(a.half, R, tb, b.half, slack, g, (a.radius + ball_pad) * stretch);
   }
 
   /// overlaps(a, b, b_box), then, when it finds no separation, a fourth stage with `slabs_a` (the

@@ -222,6 +222,12 @@ template <class BV> struct MeshNodeOverlap {
   static constexpr bool kSphere = std::is_same_v<BV, Sphere<S>>;
   static constexpr bool kObb = std::is_same_v<BV, Obb<S>>;
   static constexpr bool kPadded = kSphere || std::is_same_v<BV, Aabb<S>>;
+  /// Oriented boxes: the edge axes the walk's node test tries, a_i x b_j for i, j < 2 (obb_overlap;
+  /// the in-plane axes of the fitted boxes). The five left out rejected 119 of the bunny's 26,822
+  /// node tests (1,000 boolean queries); without them the walk tests 1.4 % more node pairs at 10 %
+  /// fewer instructions in all (env/rob: 5.3 % more pairs, 5.4 % fewer instructions). The root
+  /// pair keeps all nine (first_overlap).
+  static constexpr int kObbEdgeAxes = 2;
   struct NoFrame {
     explicit NoFrame(const RigidTransform<S>&) {}
   };
@@ -316,7 +322,7 @@ template <class BV> struct MeshNodeOverlap {
         first_test = false;
         return first_overlap(na, nb);
       }
-      return frame.overlaps(na.bv, image_b, nb.bv);
+      return frame.template overlaps<kObbEdgeAxes>(na.bv, image_b, nb.bv);
     } else {
       return BvTraits<BV>::overlap(na.bv, nb.bv, b_to_a);  // other BVs bound their own rounding (see their traits)
     }

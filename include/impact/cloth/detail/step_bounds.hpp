@@ -7,6 +7,7 @@
 /// Part of cloth_collision_step's internals (stepper.hpp); not part of the interface.
 #pragma once
 
+#include "impact/cloth/detail/hull_proofs.hpp"
 #include "impact/cloth/detail/stepper.hpp"
 
 #include <algorithm>
@@ -53,9 +54,10 @@ double Stepper<S>::relative_motion(const Prim& p) const {
 /// convex combination of vertex-pair displacement differences, at most m long), the distance at
 /// time t is at least d(0) - t m and at least d(1) - (1 - t) m, so at least their mean
 /// (d(0) + d(1) - m) / 2 over the whole step. First the start bound alone (d(0) - m, the start
-/// distance cached per candidate: a box bound, then the exact one), then both ends. A margin
-/// covers rounding. Thread-safe per index. `known` receives m and the exact distances computed
-/// (when it returns -infinity, d(0) always, d(1) unless d(0) <= need), for sample_pair.
+/// distance cached per candidate: a box bound, then the exact one), then both ends, then
+/// separating directions on pieces of the step (split_bound). A margin covers rounding. Thread-safe per index. `known` receives m and the exact distances computed
+/// (when it returns -infinity, d(0) always, d(1) unless d(0) <= need) and the directions of
+/// the closest points where it computed them, for split_bound and sample_pair.
 template <class S>
 double Stepper<S>::separation_bound(std::size_t i, Measured& known) {
   const Prim& p = cand_[i];
@@ -65,64 +67,56 @@ double Stepper<S>::separation_bound(std::size_t i, Measured& known) {
   if (std::isnan(d0_[i])) d0_[i] = start_box_distance(p);
   if (d0_[i] > need + m) return d0_[i] - m;
   if (!d0_exact_[i]) {
-    d0_[i] = closest(p, /*start=*/true).dist;
+    const Contact c0 = closest(p, /*start=*/true);
+    d0_[i] = c0.dist;
     d0_exact_[i] = 1;
+    known.n0 = c0.n, known.has_n0 = true;
     if (d0_[i] > need + m) return d0_[i] - m;
   }
   known.d0 = d0_[i];
   if (d0_[i] <= need) return none;  // nothing below can help: each bound is <= d(0)
   const Contact c1 = closest(p, /*start=*/false);
   known.d1 = c1.dist;
+  known.n1 = c1.n;
   const double both = 0.5 * (d0_[i] + c1.dist - m);
   if (both > need) return both;
   // Sliding pairs (a large relative motion along the contact, as in resting contact) fail the
-  // bounds above; a separating direction fixed over the step proves them (hull_bound).
-  return hull_bound(p, need);
+  // bounds above; separating directions on pieces of the step prove most of them (split_bound).
+  return split_bound(p, known);
 }
 
-/// Whether the convex hull of the pair's vertex offsets x_i - x_j (i of the first primitive,
-/// j of the second) at the start and at the end of the step stays farther than `need` from the
-/// origin. Every offset between a point of the first primitive and a point of the second at any
-/// time t is a convex combination of those (positions are linear in t, points are convex
-/// combinations of vertices), so the pair's distance stays above `need` over the whole step.
-/// The hull's distance from the origin is approached from both sides by Gilbert's algorithm
-/// (a point x of the hull: |x| bounds it from above; for n = x / |x|, min_k n . o_k from
-/// below): it stops with that lower bound (a lower bound on the pair's distance over the step)
-/// once it exceeds `need`, with -infinity once |x| does not (no fixed direction can separate by
-/// `need` then) or after a bounded number of steps. Rounding (|n| = 1 up to an ulp, the dot
-/// products) is covered by the margin in `need`.
+/// A lower bound on the pair's distance over the step from the separating directions of its
+/// closest points on the pieces of a bisection of the step (split_direction_bound in
+/// hull_proofs.hpp, which says why it holds; down to 2^-split_depth_ of the step, each piece
+/// also tried by the relative-motion bound of its two ends), for a pair that the bounds before it
+/// in separation_bound could not prove: returned when it exceeds need = h + bound_margin_, else
+/// -infinity. It needs the distances at both ends (`known`), farther than need; the directions
+/// there are those separation_bound measured, or the start's closest points again when d(0) was
+/// cached by an earlier pass. Pairs sliding far along a contact were left to sample_pair, whose
+/// samples are h / 4 of relative motion apart (tens of closest points each); a few pieces of the
+/// step give them a separating direction each. The rounding of the pieces' positions, of the
+/// directions' lengths and of the dot products is covered by the margin in need, as for
+/// sample_pair.
 template <class S>
-double Stepper<S>::hull_bound(const Prim& p, double need) const {
-  const double none = -std::numeric_limits<double>::infinity();
-  const int split = p.ee ? 2 : 1;
-  Vec3<double> o[8];
-  int k = 0;
-  for (int i = 0; i < split; ++i)
-    for (int j = split; j < 4; ++j) {
-      o[k++] = p0(p.v[i]) - p0(p.v[j]);
-      o[k++] = p1(p.v[i]) - p1(p.v[j]);
-    }
-  Vec3<double> x = o[0];
-  for (int q = 1; q < k; ++q)
-    if (o[q].squaredNorm() < x.squaredNorm()) x = o[q];
-  for (int it = 0; it < 24; ++it) {
-    const double len = x.norm();
-    if (!(len > need)) return none;
-    const Vec3<double> n = x / len;
-    int best = 0;
-    double lb = n.dot(o[0]);
-    for (int q = 1; q < k; ++q) {
-      const double d = n.dot(o[q]);
-      if (d < lb) lb = d, best = q;
-    }
-    if (lb > need) return lb;
-    // the hull's point nearest the origin on the segment from x to the offset found
-    const Vec3<double> d = o[best] - x;
-    const double dd = d.squaredNorm();
-    if (!(dd > 0)) return none;
-    x += std::clamp(-x.dot(d) / dd, 0.0, 1.0) * d;
+double Stepper<S>::split_bound(const Prim& p, const Measured& known) const {
+  const double need = h_ + bound_margin_, none = -std::numeric_limits<double>::infinity();
+  if (!(known.d0 > need) || !(known.d1 > need)) return none;
+  Vec3<double> a[4], b[4];
+  for (int k = 0; k < 4; ++k) a[k] = p0(p.v[k]), b[k] = p1(p.v[k]);
+  auto sample = [&](double, const Vec3<double>* X) {
+    const Contact c = closest_at(p, [&](int k) { return X[k]; });
+    PairSample s;
+    s.dist = c.dist, s.n = c.n;
+    return s;
+  };
+  PairSample s0, s1;
+  if (known.has_n0) {
+    s0.dist = known.d0, s0.n = known.n0;
+  } else {
+    s0 = sample(0.0, a);
   }
-  return none;
+  s1.dist = known.d1, s1.n = known.n1;
+  return split_direction_bound(a, b, p.ee != 0, need, known.m, split_depth_, s0, s1, sample);
 }
 
 /// Clear hits and clear misses without the CCD's search, in every stage. A hit only gives a

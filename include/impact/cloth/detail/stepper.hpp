@@ -11,6 +11,7 @@
 
 #include "impact/bvh/traverse.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/detail/hull_proofs.hpp"
 #include "impact/cloth/detail/kept_proofs.hpp"
 #include "impact/cloth/detail/relax_contacts.hpp"
 #include "impact/cloth/detail/step_system.hpp"
@@ -115,13 +116,17 @@ class Stepper {
   double relative_motion(const Prim& p) const;
   /// What separation_bound computed on the way, for sample_pair: the pair's relative motion and
   /// its exact distances at the start and at the end of the step (NaN where not computed).
+  /// The directions of the closest points (second primitive to first) at t = 0 (where computed:
+  /// has_n0) and t = 1 (where d1 is), for split_bound.
   struct Measured {
     double m = 0;
     double d0 = std::numeric_limits<double>::quiet_NaN();
     double d1 = std::numeric_limits<double>::quiet_NaN();
+    Vec3<double> n0 = Vec3<double>::UnitZ(), n1 = Vec3<double>::UnitZ();
+    bool has_n0 = false;
   };
   double separation_bound(std::size_t i, Measured& known);
-  double hull_bound(const Prim& p, double need) const;
+  double split_bound(const Prim& p, const Measured& known) const;
   Sampled sample_pair(const Prim& p, const Measured& known, CcdResult<S>& r, double& bound) const;
   Contact closest(const Prim& p, bool start) const;
   template <class Pos>
@@ -163,6 +168,7 @@ class Stepper {
   double band_ = 0;      // the impulses' and zones' CCD locates hits within h + band_ (ccd_at)
   bool precise_ = true;  // the CCD with the options as given (start check, zones, fail-safe)
   double bound_margin_ = 0;
+  int split_depth_ = 5;  // split_bound's pieces: down to 2^-5 of the step
   S slack_ = S(0);
   S near_inflate_ = S(0), ccd_inflate_ = S(0);  // half the proximity distance, h / 2 (rounded up)
   double broad_acc_ = 0;
