@@ -44,8 +44,10 @@
 ///                                     cylinder against cylinder or cone
 ///                                     first through the certified candidates of
 ///                                     convex/cylinder_pair.hpp, cone against box through those of
-///                                     convex/cone_box_pair.hpp, then EPA with the local
-///                                     certificate of convex/cone_box_terms.hpp, else the own EPA (convex/epa.hpp;
+///                                     convex/cone_box_pair.hpp, cone against cone through those
+///                                     of convex/cone_cone_pair.hpp, then EPA with the local
+///                                     certificate of convex/cone_box_terms.hpp or
+///                                     cone_cone_terms, else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
@@ -65,6 +67,7 @@
 #include "impact/convex/closed_form.hpp"
 #include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/cone_box_terms.hpp"
+#include "impact/convex/cone_cone_pair.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/cylinder_intersect.hpp"
@@ -543,18 +546,71 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   return g;
 }
 
-/// Two cones: the closed form of convex/parallel_axes.hpp when their axes are parallel, else the
-/// general penetration.
+/// Two cones: the closed form of convex/parallel_axes.hpp when their axes are parallel; else a
+/// plane normal to the line between the centres (separating: no contact; most separated poses),
+/// GJK until it encloses the origin or separates them (no contact), then the certified candidates
+/// of convex/cone_cone_pair.hpp (bases, apexes, rims against sides, rulings), else EPA from GJK's
+/// tetrahedron, seeded with the best candidate's direction and stopped early by the local
+/// certificate of convex/local_certificate.hpp on the terms of each cone's branch active at EPA's
+/// normal (none where a branch ties: a side ruling); accepted when the true overlap at its normal
+/// is within the tolerance of its lower bound.
 template <class S>
 ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb,
                                        const ConvexQueryOptions<S>& o) {
   const PairFrame<S> f(pa, pb);
-  ConvexContact<S> c;
-  if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * query_scale<S>(a, b), c)) {
-    settle_certified_from_frame(a, pa, b, pb, c);
-    return c;
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = centre_line.norm();
+    if (len > S(0)) {
+      const Vec3<S> m = centre_line / len;
+      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) {
+        ConvexContact<S> c;
+        c.iterations = 1;
+        return c;
+      }
+    }
   }
-  ConvexContact<S> g = general_penetration(a, pa, b, pb, o);
+  ConvexContact<S> cand;
+  if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) {
+    cand.iterations += 1;
+    settle_certified_from_frame(a, pa, b, pb, cand);
+    return cand;
+  }
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  bool limit = false, failed = false;
+  if (!gjk_enclose(sa, sb, Vec3<S>(-centre_line), scale, o.max_iterations, simplex, its, limit, failed)) {
+    if (limit || failed) {
+      ConvexContact<S> g = general_penetration(a, pa, b, pb, o);
+      narrow_by_parallel_axes(a, pa, b, pb, o, g);
+      return g;
+    }
+    ConvexContact<S> none;
+    none.iterations = its;
+    return none;
+  }
+  cand = ConvexContact<S>();
+  if (cone_cone_contact(a, b, f.R, f.t, tol, cand)) {
+    cand.iterations += its;
+    settle_certified_from_frame(a, pa, b, pb, cand);
+    return cand;
+  }
+  const auto local = [&](const Vec3<S>& n) {
+    OverlapTerms<S> terms;
+    if (cone_cone_terms(a, b, f.R, f.t, n, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, n);
+      const Vec3<S>& k = lc.normal;
+      if (lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol) return lc;
+    }
+    return LocalCertificate<S>();
+  };
+  const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
+  g.iterations += cand.iterations;
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   return g;
 }
