@@ -321,6 +321,33 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
     skipped += passed ? 0 : 1;
   }
   EXPECT_EQ(todo >> count, 0);
+#if defined(IMPACT_BLOCK_TEST_AVX)
+  if constexpr (std::is_same_v<S, double>) {
+    // the lanes decided and finished at once (hits_avx, set up by set_ray): exactly the lanes the
+    // narrow-phase rule of the cast hits (detail::ray_mesh_triangle_hit: the box entry, the t = 0
+    // rule), with its t, barycentrics and side bit for bit
+    const Vec3<S> inv = detail::safe_inverse(ray.direction);
+    if (detail::wide_avx_available() && inv.allFinite()) {
+      detail::BlockTest<S> lanes_test;
+      lanes_test.set_ray(ray.origin, ray.direction, inv);
+      typename detail::BlockTest<S>::LaneHits h;
+      const int hit_lanes = lanes_test.hits_avx(b, count, ray.t_max, h);
+      for (int c = 0; c < count; ++c) {
+        auto at = [&](int v) { return Vec3<S>(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c])); };
+        const auto r = detail::ray_mesh_triangle_hit(pr, inv, Triangle<S>{at(0), at(1), at(2)});
+        EXPECT_EQ((hit_lanes >> c) & 1, r ? 1 : 0) << "lane " << c;
+        if (r && ((hit_lanes >> c) & 1)) {
+          EXPECT_EQ(h.t[c], r->t) << "lane " << c;
+          EXPECT_EQ(S(h.eu[c] * h.inv_det[c]), r->u) << "lane " << c;
+          EXPECT_EQ(S(h.ev[c] * h.inv_det[c]), r->v) << "lane " << c;
+          EXPECT_EQ(S(h.ew[c] * h.inv_det[c]), r->w) << "lane " << c;
+          EXPECT_EQ(h.det[c] > S(0), r->front) << "lane " << c;
+        }
+      }
+      EXPECT_EQ(hit_lanes >> count, 0);
+    }
+  }
+#endif
   return skipped;
 }
 

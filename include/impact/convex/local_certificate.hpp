@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// A local certificate of the penetration depth of two curved convex shapes whose overlap has a
-/// closed form (cylinder against cylinder or cone), used by EPA (convex/epa.hpp) to stop long
+/// closed form (cylinder against cylinder, cone or box), used by EPA (convex/epa.hpp) to stop long
 /// before its polytope resolves the curved contact.
 ///
 /// The overlap along w (not necessarily unit), f(w) = h_A(w) + h_B(-w), is the support function of
@@ -50,13 +50,15 @@
 namespace impact::detail {
 
 inline constexpr int kLocalNewtonSteps = 12;
+/// The most terms an overlap has: a cylinder's two against a box's three (convex/cylinder_box_pair.hpp).
+inline constexpr int kMaxOverlapTerms = 5;
 
-/// The overlap f(w) of the file comment as terms (at most four disc or abs terms).
+/// The overlap f(w) of the file comment as terms (at most kMaxOverlapTerms disc or abs terms).
 template <class S>
 struct OverlapTerms {
-  Vec3<S> axis[4];
-  S coef[4];
-  bool disc[4];
+  Vec3<S> axis[kMaxOverlapTerms];
+  S coef[kMaxOverlapTerms];
+  bool disc[kMaxOverlapTerms];
   int n = 0;
   Vec3<S> linear = Vec3<S>::Zero();
   S magnitude = S(0);  // sum of |coefficients| and |linear|: the scale of rounding
@@ -136,7 +138,7 @@ inline S least_eigenvalue(S h0, S h1, S h2) {
 template <class S>
 bool certify_at(const OverlapTerms<S>& f, const Vec3<S>& n, LocalCertificate<S>& out) {
   const S kink = S(1e-9);
-  int abs_kink[4], nka = 0;
+  int abs_kink[kMaxOverlapTerms], nka = 0;
   S disc_kink = S(0);  // sum of c sigma over the disc kinks
   bool any_disc_kink = false;
   Vec3<S> e1 = Vec3<S>::Zero();
@@ -152,7 +154,7 @@ bool certify_at(const OverlapTerms<S>& f, const Vec3<S>& n, LocalCertificate<S>&
   const Vec3<S> e2 = n.cross(e1);
   S U = f.linear.dot(n), g[2] = {f.linear.dot(e1), f.linear.dot(e2)}, at_kinks = S(0);
   S m[2][2] = {{S(0), S(0)}, {S(0), S(0)}};
-  S smooth_len[4], smooth_b[4][3];
+  S smooth_len[kMaxOverlapTerms], smooth_b[kMaxOverlapTerms][3];
   int nsd = 0;
   for (int k = 0, j = 0; k < f.n; ++k) {
     const Vec3<S>& a = f.axis[k];
@@ -300,7 +302,7 @@ LocalCertificate<S> local_certificate(const OverlapTerms<S>& f, const Vec3<S>& n
   LocalCertificate<S> out;
   int steps = 0;
   const S near = S(0.1);
-  int abs_near[4], nan = 0;
+  int abs_near[kMaxOverlapTerms], nan = 0;
   for (int k = 0; k < f.n; ++k) {
     const Vec3<S>& a = f.axis[k];
     if (f.disc[k]) {

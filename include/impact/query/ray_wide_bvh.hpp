@@ -188,10 +188,8 @@ template <class S, int W = 4> struct WideCast {
     best_lane = c;
     best_bary = bary;
     limit = next_below(best);
-    exit_f = float_round_up(double(best));
-    bound_f = float_round_down(double(limit));
     const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(slab_error));
-    tie_f = float_round_down(double(best) - slack);
+    float_round_three(double(best), double(limit), double(best) - slack, exit_f, bound_f, tie_f);
   }
   /// The triangles of a leaf (its blocks from `block`): four at a time through the block test
   /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
@@ -225,6 +223,56 @@ template <class S, int W = 4> struct WideCast {
       }
     }
   }
+#if defined(IMPACT_WIDE_AVX)
+  /// leaf() for the AVX loop of a cast in double (compiled for AVX; call only when the CPU has
+  /// it, with SIMD): each block's lanes decided and finished at once (BlockTest::hits_avx: the
+  /// watertight test, the entry into each triangle's box, the t = 0 rule), then taken in lane
+  /// order, a lane after a new hit in the same block re-decided against it, so the same hits as
+  /// leaf() bit for bit. A tree with repeated triangles goes to leaf().
+  IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_avx(std::int32_t block, std::int32_t count) {
+    if (wide.has_repeats()) {
+      leaf(block, count);
+      return;
+    }
+    if (!lane_test) lane_test.emplace(o, d, inv);
+    triangle_tests += static_cast<std::size_t>(count);
+    const bool packed = wide.packed();
+    for (std::int32_t q = 0; q < count; q += 4, ++block) {
+      const int lanes = static_cast<int>(std::min<std::int32_t>(4, count - q));
+      if (packed) {
+        leaf_block_avx(wide.packed_blocks()[static_cast<std::size_t>(block)], block, lanes);
+      } else {
+        leaf_block_avx(wide.full_blocks()[static_cast<std::size_t>(block)], block, lanes);
+      }
+    }
+  }
+  /// One block of leaf_avx (a function of its own: the ray's values are read from the test at
+  /// each block, not hoisted out of a loop and spilled). hits_avx decides against the best B as
+  /// the block begins; after a hit of this block lowered it to B' < B, test_lane would keep a
+  /// later lane exactly when its depth check passes against B', its box is entered before B'
+  /// and max(min(q, B'), entry) < B' (q = tt / det): that needs q < B' and entry < B', and then
+  /// the value is hits_avx's max(min(q, B), entry) and the box test against B' agrees with the
+  /// one against B. So the depth re-check and th < B' give test_lane's answer.
+  template <class T> IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
+    typename BlockTest<S>::LaneHits h;  // of the block, when it hits a lane
+    int m = lane_test->hits_avx(blk, lanes, best, h);
+    bool lowered = false;  // by a lane of this block: later lanes are re-decided against it
+    while (m) {
+      const int c = lowest_bit(m);
+      m &= m - 1;
+      const S th = h.t[c];
+      if (lowered) {  // (hits_avx decided against the best as the block began)
+        const S det = h.det[c], tt = h.tt[c], tmd = best * det;
+        if (det > S(0) ? (tt < S(0) || tt > tmd) : (tt > S(0) || tt < tmd)) continue;
+      }
+      if (best_k >= 0 && !(th < best)) continue;
+      const S inv_det = h.inv_det[c];
+      record(block, c, th, Vec3<S>(S(h.eu[c] * inv_det), S(h.ev[c] * inv_det), S(h.ew[c] * inv_det)));
+      lowered = true;
+    }
+  }
+  std::optional<BlockTest<S>> lane_test;  // leaf_avx's test, made at its first leaf
+#endif
   /// After a hit, at a node whose float keys of entered children are within rounding of it: the
   /// keys in S decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through
   /// a vertex would otherwise open every leaf around it).
@@ -485,7 +533,11 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
       }
     }
     if (!done) {
-      leaf(first, count);
+      if constexpr (std::is_same_v<S, double>) {
+        leaf_avx(first, count);
+      } else {
+        leaf(first, count);
+      }
       done = !pop_below(stack, bound_f, first, count);
     }
     if (done) {

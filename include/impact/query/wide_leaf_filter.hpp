@@ -12,7 +12,11 @@
 #include "impact/core/types.hpp"
 #include "impact/narrow/ray_triangle.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <type_traits>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -67,6 +71,76 @@ template <class S> class BlockTest {
     sx_ = pr.sx, sy_ = pr.sy, sz_ = pr.sz;
     valid_ = pr.valid;
   }
+#if defined(IMPACT_BLOCK_TEST_AVX)
+  /// What hits_avx gives of a block's lanes: the hit's t (raised to the entry into the triangle's
+  /// box), 1 / det, the edge functions, det and the scaled depth tt, as the scalar test and
+  /// detail::mesh_hit_t compute them (the same bits). Only passed lanes are meaningful.
+  struct alignas(32) LaneHits {
+    S t[4], inv_det[4], eu[4], ev[4], ew[4], det[4], tt[4];  // NOLINT(cppcoreguidelines-pro-type-member-init)
+  };
+  /// A test made by set_ray(o, d, inv) (in place, without the zeroing of a value-initialised
+  /// BlockTest()).
+  BlockTest(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) { set_ray(o, d, inv); }
+  /// set(PreparedRay<S>(Ray<S>(o, d))) without the PreparedRay (the same frame, shear and
+  /// roundings), for S = double, with `inv` = safe_inverse(d), finite on every axis (a ray the
+  /// 8-wide AVX cast takes), for the box entries of hits_avx.
+  void set_ray(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) {
+    static_assert(std::is_same_v<S, double>, "set_ray: a ray in double");
+    const S ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
+    const int kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);  // PreparedRay's frame
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    const S dz = d[kz];
+    valid_ = dz != S(0);
+    if (dz < S(0)) std::swap(kx, ky);
+    off_[0] = kx, off_[1] = ky, off_[2] = kz;
+    for (int i = 0; i < 3; ++i) o_[i] = o[off_[i]], box_o_[i] = o[i], box_inv_[i] = inv[i];
+    if (valid_) sx_ = d[kx] / dz, sy_ = d[ky] / dz, sz_ = S(1) / dz;
+    avx_ = true;
+  }
+  /// The lanes of `b` (the first `count`, <= 4) hit with t_max = `t_max` by the narrow-phase rule
+  /// of the wide cast (detail::ray_mesh_triangle_hit: the watertight test, the hit raised to the
+  /// entry into the triangle's box, the t = 0 back-face rule), four at once in 256-bit AVX: bit c
+  /// set when lane c is hit, and then `h` holds its values (LaneHits). For a test made by
+  /// set_ray; compiled for AVX (call only when the CPU has it). The box entry runs
+  /// detail::ray_box_entry's operations on the lanes (no NaN: `inv` is finite), its vertex
+  /// minimum and maximum taken before the subtraction of the origin (rounding is monotone: the
+  /// same values).
+  template <class T> __attribute__((target("avx"))) int hits_avx(const WideTriangleBlock<T>& b, int count, S t_max, LaneHits& h) const {
+    static_assert(std::is_same_v<S, double>, "hits_avx: a ray in double");
+    __m256d eu, ev, ew, det, tt;
+    int m = lanes_avx(b, t_max, (1 << count) - 1, eu, ev, ew, det, tt);
+    if (!m) return 0;
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+    const __m256d zero = _mm256_setzero_pd(), tmax = _mm256_set1_pd(t_max);
+    const __m256d inv_det = _mm256_div_pd(_mm256_set1_pd(1.0), det);
+    const __m256d t = _mm256_min_pd(tmax, _mm256_mul_pd(tt, inv_det));  // std::min(tt / det, t_max)
+    __m256d t0 = zero, t1 = tmax;
+    for (int i = 0; i < 3; ++i) {  // ray_box_entry on the triangles' boxes
+      const __m256d p = load4(b.v[i]), q = load4(b.v[3 + i]), r = load4(b.v[6 + i]);
+      const __m256d o = _mm256_broadcast_sd(box_o_ + i), inv = _mm256_broadcast_sd(box_inv_ + i);
+      const __m256d n = _mm256_mul_pd(_mm256_sub_pd(_mm256_min_pd(_mm256_min_pd(p, q), r), o), inv);
+      const __m256d f = _mm256_mul_pd(_mm256_sub_pd(_mm256_max_pd(_mm256_max_pd(p, q), r), o), inv);
+      const __m256d near = _mm256_min_pd(f, n);  // n > f ? f : n (the swap)
+      __m256d far = _mm256_max_pd(n, f);
+      far = _mm256_add_pd(far, _mm256_mul_pd(_mm256_and_pd(far, abs_mask), _mm256_set1_pd(4.0 * std::numeric_limits<S>::epsilon())));
+      t0 = _mm256_max_pd(near, t0);
+      t1 = _mm256_min_pd(far, t1);
+    }
+    const __m256d th = _mm256_max_pd(t0, t);  // t < entry ? entry : t
+    const __m256d back = _mm256_cmp_pd(det, zero, _CMP_LE_OQ);
+    const __m256d out = _mm256_or_pd(_mm256_cmp_pd(t0, t1, _CMP_GT_OQ), _mm256_and_pd(back, _mm256_cmp_pd(th, zero, _CMP_EQ_OQ)));
+    m &= ~_mm256_movemask_pd(out);
+    _mm256_store_pd(h.t, th);
+    _mm256_store_pd(h.inv_det, inv_det);
+    _mm256_store_pd(h.eu, eu);
+    _mm256_store_pd(h.ev, ev);
+    _mm256_store_pd(h.ew, ew);
+    _mm256_store_pd(h.det, det);
+    _mm256_store_pd(h.tt, tt);
+    return m;
+  }
+#endif
   /// Bit c set when the triangle in lane c of `b` may be hit with t_max = `t_max` (see the class
   /// comment). Lanes at and above `count` (<= 4) are clear.
   /// When kHasValues and the result is not zero, `values` holds the lanes' values (else it is
@@ -102,8 +176,23 @@ template <class S> class BlockTest {
   __attribute__((target("avx"))) static __m256d load4(const double* f) { return _mm256_load_pd(f); }
   /// The double test of the four lanes in 256-bit AVX (no FMA: the scalar test's roundings).
   template <class T> __attribute__((target("avx"))) int candidates_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, LaneValues* values) const {
-    const __m256d o0 = _mm256_set1_pd(o_[0]), o1 = _mm256_set1_pd(o_[1]), o2 = _mm256_set1_pd(o_[2]);
-    const __m256d sx = _mm256_set1_pd(sx_), sy = _mm256_set1_pd(sy_), sz = _mm256_set1_pd(sz_);
+    __m256d eu, ev, ew, det, tt;
+    const int m = lanes_avx(b, t_max, lanes, eu, ev, ew, det, tt);
+    if (m && values) {
+      _mm256_store_pd(values->eu, eu);
+      _mm256_store_pd(values->ev, ev);
+      _mm256_store_pd(values->ew, ew);
+      _mm256_store_pd(values->det, det);
+      _mm256_store_pd(values->tt, tt);
+    }
+    return m;
+  }
+  /// The lanes of `lanes` the double test passes, and its values, in 256-bit AVX.
+  template <class T>
+  __attribute__((target("avx"))) int lanes_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, __m256d& eu_out, __m256d& ev_out, __m256d& ew_out,
+                                               __m256d& det_out, __m256d& tt_out) const {
+    const __m256d o0 = _mm256_broadcast_sd(o_), o1 = _mm256_broadcast_sd(o_ + 1), o2 = _mm256_broadcast_sd(o_ + 2);
+    const __m256d sx = _mm256_broadcast_sd(&sx_), sy = _mm256_broadcast_sd(&sy_), sz = _mm256_broadcast_sd(&sz_);
     const __m256d tmax = _mm256_set1_pd(t_max), zero = _mm256_setzero_pd();
     __m256d px[3], py[3], pz[3];
     for (int v = 0; v < 3; ++v) {
@@ -129,17 +218,11 @@ template <class S> class BlockTest {
     const __m256d out_down = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_GT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_LT_OQ));
     const __m256d miss = _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(neg, pos), _mm256_cmp_pd(det, zero, _CMP_EQ_OQ)),
                                       _mm256_or_pd(_mm256_and_pd(up, out_up), _mm256_andnot_pd(up, out_down)));
-    const int m = ~_mm256_movemask_pd(miss) & lanes;
-    if (m && values) {
-      _mm256_store_pd(values->eu, eu);
-      _mm256_store_pd(values->ev, ev);
-      _mm256_store_pd(values->ew, ew);
-      _mm256_store_pd(values->det, det);
-      _mm256_store_pd(values->tt, tt);
-    }
-    return m;
+    eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
+    return ~_mm256_movemask_pd(miss) & lanes;
   }
   bool avx_ = false;
+  S box_o_[3] = {S(0), S(0), S(0)}, box_inv_[3] = {S(0), S(0), S(0)};  // set_ray's origin and 1 / d (the box entries)
 #endif
 #if defined(__SSE2__)
   /// SSE2 in double: two lanes a register (a float block's coordinates converted exactly).

@@ -171,6 +171,24 @@ inline void float_bounds(double x, float& down, float& up) {
   down = d;
 }
 
+/// float_round_up(a), float_round_down(b) and float_round_down(c) (none NaN) at once: with SSE2
+/// the same roundings on four lanes (a cast's bounds after a hit).
+inline void float_round_three(double a, double b, double c, float& up_a, float& down_b, float& down_c) {
+#if defined(__SSE2__)
+  const __m128d x01 = _mm_set_pd(-b, a), x23 = _mm_set_pd(0.0, -c);  // round_down(x) = -round_up(-x)
+  const __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(x01), _mm_cvtpd_ps(x23));  // float(x), each lane
+  const __m128d below01 = _mm_cmplt_pd(_mm_cvtps_pd(f), x01), below23 = _mm_cmplt_pd(_mm_cvtps_pd(_mm_movehl_ps(f, f)), x23);
+  const __m128i below = _mm_srli_epi32(_mm_castps_si128(_mm_shuffle_ps(_mm_castpd_ps(below01), _mm_castpd_ps(below23), _MM_SHUFFLE(2, 0, 2, 0))), 31);
+  const __m128i bits = _mm_castps_si128(f);
+  const __m128i up = _mm_sub_epi32(_mm_add_epi32(bits, below), _mm_slli_epi32(_mm_and_si128(below, _mm_srli_epi32(bits, 31)), 1));  // float_round_up
+  alignas(16) float r[4];
+  _mm_store_ps(r, _mm_castsi128_ps(up));
+  up_a = r[0], down_b = -r[1], down_c = -r[2];
+#else
+  up_a = float_round_up(a), down_b = float_round_down(b), down_c = float_round_down(c);
+#endif
+}
+
 /// The largest S below x (x not NaN): std::nextafter(x, -infinity) without libm (the bound of a
 /// cast after a hit).
 template <class S> inline S next_below(S x) {
@@ -323,7 +341,7 @@ template <class S, int W = 4> class WideFloatSlab {
   /// The per-ray state of the AVX test of eight children, broadcast to eight lanes (made by
   /// avx() inside a function compiled for AVX).
   struct Avx {
-    __m256 o[3], inv[3], e;
+    __m256 o[3], neg_inv[3], e;  // neg_inv: -(1 / d) rounded to float (the test takes (o - b) (-1 / d), the plane b from memory)
     int planes[6];
   };
   IMPACT_WIDE_AVX_TARGET Avx avx() const {
@@ -332,7 +350,7 @@ template <class S, int W = 4> class WideFloatSlab {
     // (no lambda: it would not be compiled for AVX)
     for (int i = 0; i < 3; ++i) {
       a.o[i] = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.o[i]), sse_.o[i], 1);
-      a.inv[i] = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.inv[i]), sse_.inv[i], 1);
+      a.neg_inv[i] = _mm256_xor_ps(_mm256_insertf128_ps(_mm256_castps128_ps256(sse_.inv[i]), sse_.inv[i], 1), _mm256_set1_ps(-0.0f));
       a.planes[i] = planes()[i];
       a.planes[3 + i] = planes()[3 + i];
     }
@@ -366,21 +384,24 @@ template <class S, int W = 4> class WideFloatSlab {
     }
     e = float_round_up(ed * (1.0 + 0x1p-16) + 0x1p-100);
     const __m256 o2 = _mm256_insertf128_ps(_mm256_castps128_ps256(of), of, 1);
-    const __m256 i2 = _mm256_insertf128_ps(_mm256_castps128_ps256(invf), invf, 1);
+    const __m256 i2 = _mm256_xor_ps(_mm256_insertf128_ps(_mm256_castps128_ps256(invf), invf, 1), _mm256_set1_ps(-0.0f));  // -(1 / d)
     a.o[0] = _mm256_permute_ps(o2, 0x00), a.o[1] = _mm256_permute_ps(o2, 0x55), a.o[2] = _mm256_permute_ps(o2, 0xAA);
-    a.inv[0] = _mm256_permute_ps(i2, 0x00), a.inv[1] = _mm256_permute_ps(i2, 0x55), a.inv[2] = _mm256_permute_ps(i2, 0xAA);
+    a.neg_inv[0] = _mm256_permute_ps(i2, 0x00), a.neg_inv[1] = _mm256_permute_ps(i2, 0x55), a.neg_inv[2] = _mm256_permute_ps(i2, 0xAA);
     a.e = _mm256_set1_ps(e);
     std::memcpy(a.planes, kPlaneOffsets.at[_mm256_movemask_pd(vi) & 7], sizeof a.planes);
     return true;
   }
-  /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same operations as the
-  /// SSE and scalar tests, lane by lane (no FMA), so the same keys and mask bit for bit.
+  /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same keys and mask as
+  /// the SSE and scalar tests bit for bit, lane by lane (no FMA). A plane's parameter is taken as
+  /// (o - b) (-1 / d), which is (b - o) (1 / d) exactly (rounding to nearest is symmetric) but
+  /// for the sign of a zero, which the keys never show: t0 starts at +0 and keeps it on a tie,
+  /// and a zero t1 gives hi = e > 0 whatever its sign. So the plane is an operand from memory.
   IMPACT_WIDE_AVX_TARGET static int entered_avx(const Avx& a, const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) {
     const char* p = reinterpret_cast<const char*>(n.bounds);
     __m256 t0 = _mm256_setzero_ps(), t1 = t_max_up;
     for (int i = 0; i < 3; ++i) {
-      const __m256 lo = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[i])), a.o[i]), a.inv[i]);
-      const __m256 hi = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[3 + i])), a.o[i]), a.inv[i]);
+      const __m256 lo = _mm256_mul_ps(_mm256_sub_ps(a.o[i], _mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[i]))), a.neg_inv[i]);
+      const __m256 hi = _mm256_mul_ps(_mm256_sub_ps(a.o[i], _mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[3 + i]))), a.neg_inv[i]);
       t0 = _mm256_max_ps(lo, t0);
       t1 = _mm256_min_ps(hi, t1);
     }

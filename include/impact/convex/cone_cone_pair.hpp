@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// A certified shortcut for the penetration of two intersecting cones (convex/query.hpp runs it
+/// after GJK has enclosed the origin, before EPA), built as convex/cylinder_pair.hpp and
+/// convex/cone_box_pair.hpp are: with f(n) = h_A(n) + h_B(-n), the overlap along a unit direction
+/// n (the depth is min_n f(n)), each candidate gives an upper bound f(n) at its direction and a
+/// lower bound from balls inside the shapes (a point x of one cone inside the other at distance
+/// rho from its boundary: every separating translation is at least rho long; two balls, one in
+/// each: their own depth). A cone's support along n is its base disc, a side ruling, the apex or a
+/// base rim point, so the candidates are the contacts where at most one side is a corner:
+///   either base against the other cone's deepest point across it (n the base's outward normal);
+///   either apex inside the other, pushed out through the nearest side or base;
+///   either base rim against the other's side: the rim point deepest below that side (the
+///       minimisation of 2h rho + R z over the circle of convex/cylinder_pair.hpp), n the side
+///       normal at its azimuth;
+///   ruling against ruling: n a side normal of a whose opposite is a side normal of b (up to two
+///       directions), the closest points of the two rulings, each with the largest ball inside its
+///       cone tangent there.
+/// At the true contact of these kinds the bounds meet (up to rounding and Newton's last step);
+/// when the best upper and lower bounds are within the tolerance the answer is certified as EPA's
+/// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
+/// contacts whose balls are cut by a nearer face) the caller runs EPA, seeded with the best
+/// candidate's direction and stopped early by the local certificate on cone_cone_terms.
+///
+/// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
+/// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.
+/// Thread safety: pure functions.
+#pragma once
+
+#include "impact/convex/cylinder_pair.hpp"
+#include "impact/convex/deepest_point.hpp"
+#include "impact/convex/local_certificate.hpp"
+#include "impact/convex/shapes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace impact::detail {
+
+/// Adds cone c's support function h_c(w) (c placed by R, t in the terms' frame, its branch at n:
+/// the apex, a linear term, or the base rim, a disc term about the axis plus a linear one) to f, or
+/// h_c(-w) when `negate`. False when the branches tie within 1e-6 of the cone's size at n (n
+/// normal to a side ruling): no term is exact there.
+template <class S>
+bool add_cone_terms(const Cone<S>& c, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, bool negate, OverlapTerms<S>& f) {
+  const S sgn = negate ? S(-1) : S(1);
+  const Vec3<S> z = R.col(2);
+  const S vz = sgn * z.dot(n);  // the axis component of the direction the support is taken along
+  const S apex = c.half_length * vz, rim = c.radius * std::sqrt(std::max(S(1) - vz * vz, S(0))) - c.half_length * vz;
+  if (std::abs(apex - rim) <= S(1e-6) * (c.half_length + c.radius)) return false;
+  // h_c(sgn w) = sgn t . w + (apex: h sgn z . w; rim: r |P_z w| - h sgn z . w)
+  f.linear += sgn * t;
+  if (apex > rim) {
+    f.linear += (sgn * c.half_length) * z;
+  } else {
+    f.linear -= (sgn * c.half_length) * z;
+    f.add(z, c.radius, true);
+  }
+  f.magnitude += c.half_length + t.norm();
+  return true;
+}
+
+/// The overlap of cone a (its frame) and cone b placed by R, t there as the terms of
+/// convex/local_certificate.hpp, each cone's branch the one active along n; false on a tie.
+template <class S>
+bool cone_cone_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+  f = OverlapTerms<S>();
+  return add_cone_terms(a, Mat3<S>(Mat3<S>::Identity()), Vec3<S>(Vec3<S>::Zero()), n, false, f) && add_cone_terms(b, R, t, n, true, f);
+}
+
+/// The outward side normal of cone c (its frame) at the azimuth of x (any azimuth on the axis).
+template <class S>
+Vec3<S> cone_side_normal_at(const Cone<S>& c, const Vec3<S>& x) {
+  const S rxy = std::sqrt(x.x() * x.x() + x.y() * x.y()), len = std::sqrt(S(4) * c.half_length * c.half_length + c.radius * c.radius);
+  const S ux = rxy > S(0) ? x.x() / rxy : S(1), uy = rxy > S(0) ? x.y() / rxy : S(0);
+  return Vec3<S>(S(2) * c.half_length * ux / len, S(2) * c.half_length * uy / len, c.radius / len);
+}
+
+/// A ball inside cone c (its frame) tangent to its side at the side point p (outward normal o
+/// there): the centre p - rho o with rho as large as the base and the axis allow, then cut to the
+/// centre's own distance to the boundary. rho < 0 when p is off the side's extent.
+template <class S>
+InsideBall<S> cone_ball_at_side(const Cone<S>& c, const Vec3<S>& p, const Vec3<S>& o) {
+  const S h = c.half_length, len = std::sqrt(S(4) * h * h + c.radius * c.radius);
+  const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
+  InsideBall<S> out;
+  S rho = std::min((p.z() + h) / (S(1) + c.radius / len), rxy * len / (S(2) * h));
+  if (!(rho >= S(0))) return out;
+  const Vec3<S> centre = p - rho * o;
+  out.rho = std::min(rho, inside_ball(c, centre).rho);
+  out.push = centre;  // the centre, for the caller
+  return out;
+}
+
+/// The certified contact of cones a and b when one of the candidates of the file comment decides it
+/// within `tolerance`, in a's frame (b placed by R, t there): true and `out` set (normal from a
+/// towards b, depth, depth_gap, the deciding point, iterations counts the overlap evaluations); else
+/// false, with out.normal and out.depth the best candidate's direction and overlap (depth infinite
+/// when no candidate applied). Meant for intersecting pairs (a separated pair is never certified).
+template <class S>
+bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance, ConvexContact<S>& out) {
+  const Vec3<S> bz = R.col(2), az_in_b = R.row(2).transpose();
+  const S ra = a.radius, ha = a.half_length, rb = b.radius, hb = b.half_length;
+  const S la = std::sqrt(S(4) * ha * ha + ra * ra), lb = std::sqrt(S(4) * hb * hb + rb * rb);
+  const S margin = std::numeric_limits<S>::epsilon() * S(1024) * (ra + ha + rb + hb + t.norm());
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
+  const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
+  const auto in_b = [&](const Vec3<S>& x) { return Vec3<S>(R.transpose() * (x - t)); };
+  CandidateBounds<S> k;
+  const auto offer = [&](const Vec3<S>& n, const Vec3<S>& x, S lower) { k.offer(n, overlap(n), x, lower); };
+  const auto decided = [&] { return k.upper - k.lower <= tolerance; };
+  {  // a's base (outward normal -z): b's deepest point across it
+    const Vec3<S> n(S(0), S(0), S(-1));
+    const Vec3<S> x = sb(Vec3<S>(-n));
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (ball.rho > S(0)) offer(n, x, ball.rho);
+  }
+  {  // b's base (outward normal -bz): a's deepest point across it
+    const Vec3<S> x = support(a, bz);
+    const InsideBall<S> ball = inside_ball(b, in_b(x));
+    if (ball.rho > S(0)) offer(bz, x, ball.rho);
+  }
+  {  // a's apex inside b, pushed out through b's nearest boundary (b moves along -its outward normal)
+    const Vec3<S> x(S(0), S(0), ha);
+    const InsideBall<S> ball = inside_ball(b, in_b(x));
+    if (ball.rho > S(0)) offer(Vec3<S>(R * ball.push), x, ball.rho);
+  }
+  {  // b's apex inside a, pushed out through a's nearest boundary
+    const Vec3<S> x = t + hb * bz;
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (ball.rho > S(0)) offer(Vec3<S>(-ball.push), x, ball.rho);
+  }
+  const auto rulings = [&] {  // n = a's side normal at azimuth psi with b . n = -rb / lb (-n a side normal of b)
+    const S rho = std::sqrt(bz.x() * bz.x() + bz.y() * bz.y());
+    const S tau = (-rb / lb - ra * bz.z() / la) * la / (S(2) * ha);
+    if (!(rho > S(1e-6) && std::abs(tau) < rho)) return;
+    // psi = base +- spread with cos(base), sin(base) = bz_xy / rho and cos(spread) = tau / rho
+    const S cb = bz.x() / rho, sbase = bz.y() / rho, cs = tau / rho, ss = std::sqrt(std::max(S(1) - cs * cs, S(0)));
+    for (const S sign : {S(1), S(-1)}) {
+      const S cp = cb * cs - sign * sbase * ss, sp = sbase * cs + sign * cb * ss;
+      const Vec3<S> n(S(2) * ha * cp / la, S(2) * ha * sp / la, ra / la);
+      // b's ruling: its azimuth from its side normal -R^T n
+      const Vec3<S> m = -(R.transpose() * n);
+      const S mxy = std::sqrt(m.x() * m.x() + m.y() * m.y());
+      if (!(mxy > S(0))) continue;
+      const Vec3<S> ub(m.x() / mxy, m.y() / mxy, S(0));
+      // the closest points of a's ruling p0 + s d and b's q0 + l e
+      const Vec3<S> p0(S(0), S(0), ha), d(ra * cp, ra * sp, S(-2) * ha);
+      const Vec3<S> q0 = t + hb * bz, e = R * Vec3<S>(rb * ub.x(), rb * ub.y(), S(-2) * hb);
+      const Vec3<S> w = p0 - q0;
+      const S dd = d.dot(d), de = d.dot(e), ee = e.dot(e), dw = d.dot(w), ew = e.dot(w), den = dd * ee - de * de;
+      if (!(den > S(1e-12) * dd * ee)) continue;
+      const S s = (de * ew - ee * dw) / den, l = (dd * ew - de * dw) / den;
+      if (!(s >= S(0) && s <= S(1) && l >= S(0) && l <= S(1))) continue;
+      const Vec3<S> pa = p0 + s * d, pb = q0 + l * e;
+      const InsideBall<S> ball_a = cone_ball_at_side(a, pa, n);
+      const InsideBall<S> ball_b = cone_ball_at_side(b, in_b(pb), Vec3<S>(m / m.norm()));
+      if (!(ball_a.rho >= S(0) && ball_b.rho >= S(0))) continue;
+      const S lower = two_balls_lower(a, b, in_b, ball_a.push, ball_a.rho, Vec3<S>(R * ball_b.push + t), ball_b.rho);
+      offer(n, Vec3<S>((pa + pb) / S(2)), lower);
+    }
+  };
+  const auto rim_of_b = [&] {  // b's base rim against a's side: the rim point deepest below it
+    const Vec3<S> c = t - hb * bz, u = rb * R.col(0), v = rb * R.col(1);
+    if (circle_clear_of_cylinder(c, rb, bz, ra, ha, margin)) return;  // a's bounding cylinder
+    S co, si;
+    circle_minimise(c, u, v, S(2) * ha, ra, ha, co, si);
+    const Vec3<S> x = c + co * u + si * v;
+    const InsideBall<S> ball = inside_ball(a, x);
+    if (ball.rho > S(0)) offer(cone_side_normal_at(a, x), x, ball.rho);
+  };
+  const auto rim_of_a = [&] {  // a's base rim against b's side, in b's frame
+    const Vec3<S> c = in_b(Vec3<S>(S(0), S(0), -ha));
+    if (circle_clear_of_cylinder(c, ra, az_in_b, rb, hb, margin)) return;
+    const Vec3<S> u = ra * R.row(0).transpose(), v = ra * R.row(1).transpose();
+    S co, si;
+    circle_minimise(c, u, v, S(2) * hb, rb, hb, co, si);
+    const Vec3<S> xb = c + co * u + si * v;
+    const InsideBall<S> ball = inside_ball(b, xb);
+    if (ball.rho > S(0)) offer(Vec3<S>(-(R * cone_side_normal_at(b, xb))), Vec3<S>(co * ra, si * ra, -ha), ball.rho);
+  };
+  if (!decided()) rulings();
+  if (!decided()) rim_of_b();
+  if (!decided()) rim_of_a();
+  return k.finish(tolerance, out);
+}
+
+}  // namespace impact::detail

@@ -1,0 +1,256 @@
+// SPDX-License-Identifier: MIT
+// The certified cone–cone candidates (convex/cone_cone_pair.hpp) and the cone–cone penetration
+// (convex/query.hpp: candidates, EPA and the local certificate on cone_cone_terms) against an
+// oracle written here: the penetration depth as the least overlap f(n) = h_a(n) + h_b(-n) over
+// unit directions, each cone's support function in closed form in long double (the apex or the
+// base rim), minimised by Fibonacci samples and grids about the best ones (each moved while it
+// improves, then shrunk). The oracle's minimum is an upper bound of the true depth and every
+// certified lower bound lies below the true depth, so a certificate that certifies a wrong (too
+// large) depth shows as depth - depth_gap above the oracle.
+#include "impact/convex/cone_cone_pair.hpp"
+#include "impact/convex/query.hpp"
+#include "support/random.hpp"
+#include "support/sanitizer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+// (its own namespace: the convex tests build as one unity source, beside test_cone_box_pair.cpp)
+namespace {
+namespace cone_cone_pair_test {
+
+using namespace impact;
+using LD = long double;
+using V3L = Eigen::Matrix<LD, 3, 1>;
+
+// Cone c's support function along n (its frame), long double.
+LD cone_h(const Cone<double>& c, const V3L& n) {
+  const LD h = c.half_length, r = c.radius;
+  return std::max(h * n.z(), r * std::sqrt(n.x() * n.x() + n.y() * n.y()) - h * n.z());
+}
+
+// The overlap along unit n of cone a (its frame) and cone b placed by R, t there, in long double.
+LD overlap_ld(const Cone<double>& a, const Cone<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const V3L& n) {
+  const V3L m = -(R.cast<LD>().transpose() * n);
+  return cone_h(a, n) - t.cast<LD>().dot(n) + cone_h(b, m);
+}
+
+// The least overlap found: 1500 Fibonacci directions, then about each of the 3 best, both axes
+// both ways and `extra` (the normal under test: the search may only find lower overlaps than
+// there) a 13 x 13 grid over a cap (moved to its best point while that improves) shrinking
+// threefold per level to 1e-13 rad.
+LD depth_oracle(const Cone<double>& a, const Cone<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Eigen::Vector3d& extra) {
+  const int samples = IMPACT_TEST_SANITIZED ? 600 : 1500;
+  std::vector<std::pair<LD, V3L>> coarse;
+  const LD golden = LD(M_PI) * (3 - std::sqrt(LD(5)));
+  for (int i = 0; i < samples; ++i) {
+    const LD z = 1 - (2 * i + LD(1)) / samples, rr = std::sqrt(1 - z * z);
+    const V3L n(rr * std::cos(golden * i), rr * std::sin(golden * i), z);
+    coarse.emplace_back(overlap_ld(a, b, R, t, n), n);
+  }
+  std::partial_sort(coarse.begin(), coarse.begin() + 3, coarse.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  const V3L starts[5] = {V3L(0, 0, 1), V3L(0, 0, -1), R.col(2).cast<LD>(), (-R.col(2)).cast<LD>(), extra.cast<LD>()};
+  for (int i = 0; i < 5; ++i) coarse[static_cast<std::size_t>(3 + i)] = {overlap_ld(a, b, R, t, starts[i]), starts[i]};
+  LD best = coarse[0].first;
+  for (int s = 0; s < 8; ++s) {
+    V3L n = coarse[static_cast<std::size_t>(s)].second;
+    LD fn = coarse[static_cast<std::size_t>(s)].first;
+    for (LD cap = LD(0.2); cap > LD(1e-13); cap /= 3) {
+      for (int moves = 0; moves < 64; ++moves) {
+        const V3L e1 = (std::abs(n.x()) < LD(0.6) ? V3L(1, 0, 0) : V3L(0, 1, 0)).cross(n).normalized(), e2 = n.cross(e1);
+        V3L next = n;
+        for (int i = -6; i <= 6; ++i) {
+          for (int j = -6; j <= 6; ++j) {
+            const V3L m = (n + (cap * i / 6) * e1 + (cap * j / 6) * e2).normalized();
+            const LD fm = overlap_ld(a, b, R, t, m);
+            if (fm < fn) {
+              fn = fm;
+              next = m;
+            }
+          }
+        }
+        if (next == n) break;
+        n = next;
+      }
+    }
+    best = std::min(best, fn);
+  }
+  return best;
+}
+
+struct Case {
+  Cone<double> a{0.5, 0.6}, b{0.5, 0.6};
+  RigidTransform<double> pa, pb;
+};
+
+// Cones of varied proportions (every fourth pair the zoo's), b about a, `scale` times the size
+// and `offset` from the origin.
+std::vector<Case> cases(int n, std::uint64_t seed, double scale = 1, double offset = 0, double spread = 0.6) {
+  test::Rng rng(seed);
+  std::vector<Case> out;
+  for (int k = 0; k < n; ++k) {
+    Case c;
+    if (k % 4 != 0) {
+      c.a = Cone<double>(rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
+      c.b = Cone<double>(rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
+    }
+    c.a = Cone<double>(c.a.radius * scale, c.a.half_length * scale);
+    c.b = Cone<double>(c.b.radius * scale, c.b.half_length * scale);
+    const double reach = spread * (shape_size(c.a) + shape_size(c.b));
+    c.pa = {rng.rotation(), Eigen::Vector3d(rng.vec(-scale, scale) + Eigen::Vector3d::Constant(offset))};
+    c.pb = {rng.rotation(), Eigen::Vector3d(c.pa.t + rng.vec(-reach, reach))};
+    out.push_back(c);
+  }
+  return out;
+}
+
+// Each certified candidate: its lower bound below the oracle's depth (an upper bound of the true
+// one), its depth within the tolerance of it, its depth the overlap along its normal. Checked to
+// fail: a's apex pushed out along -push (the wrong way) and the ruling balls' radius doubled.
+TEST(ConeConePair, CertifiedDepthsAgainstTheOracle) {
+  int certified = 0, base = 0, body = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 24 : 120, 915, 1, 0, 0.4)) {
+    const double scale = std::max(shape_size(c.a), shape_size(c.b)), tol = 1e-10 * scale;
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    ConvexContact<double> k;
+    if (!detail::cone_cone_contact(c.a, c.b, f.R, f.t, tol, k)) continue;
+    ++certified;
+    const double oracle = double(depth_oracle(c.a, c.b, f.R, f.t, k.normal));
+    EXPECT_GT(oracle, 0) << "certified a pair the oracle finds apart";
+    EXPECT_LE(k.depth - k.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
+    EXPECT_NEAR(k.depth, oracle, 1e-9 * scale);
+    EXPECT_NEAR(double(overlap_ld(c.a, c.b, f.R, f.t, k.normal.cast<LD>())), k.depth, 1e-12 * scale);
+    const bool on_axis = std::abs(k.normal.z()) > 1 - 1e-12 || std::abs(k.normal.dot(f.R.col(2))) > 1 - 1e-12;
+    ++(on_axis ? base : body);
+  }
+  // both kinds certified: a base against a point, and the side contacts (apex, rim, ruling)
+  EXPECT_GT(body, IMPACT_TEST_SANITIZED ? 0 : 10);
+  EXPECT_EQ(base + body, certified);
+}
+
+// A narrow cone's apex through the other's base, tilted by up to 0.3 rad, 0.02 .. 0.3 of the
+// base's cone deep, both ways round: the base candidate (and the apex's) decide it, certified, and
+// within the tolerance of the oracle. Checked to fail: b's base candidate with its ball's radius
+// doubled.
+TEST(ConeConePair, ApexThroughBase) {
+  test::Rng rng(916);
+  int certified = 0;
+  for (int k = 0; k < (IMPACT_TEST_SANITIZED ? 6 : 24); ++k) {
+    const Cone<double> wide(rng.uniform(0.6, 1.0), rng.uniform(0.3, 0.8)), narrow(rng.uniform(0.05, 0.15), rng.uniform(0.4, 0.8));
+    const double tilt = rng.uniform(0, 0.3), depth = rng.uniform(0.02, 0.3);
+    // narrow's apex at wide's base centre + depth along wide's axis, narrow pointing up (+z) tilted about x
+    const Eigen::Matrix3d tilt_r = Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Vector3d apex(rng.uniform(-0.2, 0.2) * wide.radius, 0, -wide.half_length + depth);
+    const RigidTransform<double> pw{Eigen::Matrix3d(rng.rotation()), rng.vec(-1, 1)};
+    const RigidTransform<double> pn_local{tilt_r, Eigen::Vector3d(apex - tilt_r * Eigen::Vector3d(0, 0, narrow.half_length))};
+    const RigidTransform<double> pn{Eigen::Matrix3d(pw.R * pn_local.R), Eigen::Vector3d(pw.apply(pn_local.t))};
+    const double scale = std::max(shape_size(wide), shape_size(narrow)), tol = 1e-10 * scale;
+    for (const bool wide_first : {true, false}) {
+      const Cone<double>& a = wide_first ? wide : narrow;
+      const Cone<double>& b = wide_first ? narrow : wide;
+      const RigidTransform<double>& pa = wide_first ? pw : pn;
+      const RigidTransform<double>& pb = wide_first ? pn : pw;
+      const detail::PairFrame<double> f(pa, pb);
+      ConvexContact<double> c;
+      if (!detail::cone_cone_contact(a, b, f.R, f.t, tol, c)) continue;
+      ++certified;
+      const double oracle = double(depth_oracle(a, b, f.R, f.t, c.normal));
+      EXPECT_LE(c.depth - c.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
+      EXPECT_NEAR(c.depth, oracle, 1e-9 * scale);
+    }
+  }
+  EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? 6 : 30);
+}
+
+// The terms of one branch of each cone are a lower bound of the overlap everywhere and equal to it
+// along the direction they were built at. Checked to fail: b's linear term with the wrong sign.
+TEST(ConeConePair, TermsBoundTheOverlap) {
+  test::Rng rng(917);
+  int built = 0;
+  for (const Case& c : cases(60, 918)) {
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    for (int k = 0; k < 10; ++k) {
+      const Eigen::Vector3d n = rng.vec(-1, 1).normalized();
+      detail::OverlapTerms<double> terms;
+      if (!detail::cone_cone_terms(c.a, c.b, f.R, f.t, n, terms)) continue;
+      ++built;
+      const auto value = [&](const Eigen::Vector3d& w) {
+        double v = terms.linear.dot(w);
+        for (int i = 0; i < terms.n; ++i) {
+          const double d = terms.axis[i].dot(w);
+          v += terms.coef[i] * (terms.disc[i] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
+        }
+        return v;
+      };
+      EXPECT_NEAR(value(n), double(overlap_ld(c.a, c.b, f.R, f.t, n.cast<LD>())), 1e-12);
+      for (int j = 0; j < 10; ++j) {
+        const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
+        EXPECT_LE(value(m), double(overlap_ld(c.a, c.b, f.R, f.t, m.cast<LD>())) + 1e-12);
+      }
+    }
+  }
+  EXPECT_GT(built, 400);
+}
+
+// The whole query, both argument orders, on every intersecting pose (candidates, EPA with the
+// local certificate): depth within 1e-9 of the size of the oracle's, never a lower bound above it;
+// at the unit size, at 1e-3 and 1e3 of it, and 1e3 from the origin.
+TEST(ConeConePair, PenetrationAgainstTheOracle) {
+  int hits = 0;
+  const double scales[4] = {1, 1e-3, 1e3, 1}, offsets[4] = {0, 0, 0, 1e3};
+  for (int s = 0; s < 4; ++s) {
+    for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 4 : 10, 920 + static_cast<std::uint64_t>(s), scales[s], offsets[s], 0.4)) {
+      const double scale = std::max(shape_size(c.a), shape_size(c.b));
+      const detail::PairFrame<double> f(c.pa, c.pb);
+      const auto p = convex_penetration(c.a, c.pa, c.b, c.pb);
+      const auto q = convex_penetration(c.b, c.pb, c.a, c.pa);
+      const double oracle = double(depth_oracle(c.a, c.b, f.R, f.t, p.intersecting ? Eigen::Vector3d(c.pa.R.transpose() * p.normal) : Eigen::Vector3d(Eigen::Vector3d::UnitZ())));
+      if (std::abs(oracle) < 1e-6 * scale) continue;  // touching: either answer
+      EXPECT_EQ(p.intersecting, oracle > 0);
+      EXPECT_EQ(q.intersecting, oracle > 0);
+      if (oracle < 0 || !p.intersecting || !q.intersecting) continue;
+      ++hits;
+      // the rounding of the pose 1e3 away is about 1e3 eps, i.e. 1e-13 * 1e3 of a unit size
+      const double slack = (1e-12 + 1e-15 * offsets[s]) * scale;
+      for (const auto& r : {p, q}) {
+        EXPECT_LE(r.depth - r.depth_gap, oracle + slack) << "lower bound above the depth";
+        EXPECT_NEAR(r.depth, oracle, 1e-9 * scale + slack);
+        EXPECT_FALSE(r.limit_reached);
+      }
+    }
+  }
+  EXPECT_GT(hits, IMPACT_TEST_SANITIZED ? 2 : 20);
+}
+
+// Float: the same query on float shapes and poses against the double oracle of the float inputs,
+// within float's tolerance (1e-4 of the size) and the certified bracket.
+TEST(ConeConePair, FloatPenetrationAgainstTheOracle) {
+  int hits = 0, certified = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 8 : 24, 930, 1, 0, 0.4)) {
+    const Cone<float> af(float(c.a.radius), float(c.a.half_length)), bf(float(c.b.radius), float(c.b.half_length));
+    const RigidTransform<float> pa{c.pa.R.cast<float>(), c.pa.t.cast<float>()}, pb{c.pb.R.cast<float>(), c.pb.t.cast<float>()};
+    // the oracle on the float inputs as given (double shapes and poses holding the same values)
+    const Cone<double> ad(af.radius, af.half_length), bd(bf.radius, bf.half_length);
+    const RigidTransform<double> pad{pa.R.cast<double>(), pa.t.cast<double>()}, pbd{pb.R.cast<double>(), pb.t.cast<double>()};
+    const detail::PairFrame<double> f(pad, pbd);
+    const double scale = std::max(shape_size(ad), shape_size(bd));
+    const auto p = convex_penetration(af, pa, bf, pb);
+    const double oracle = double(depth_oracle(ad, bd, f.R, f.t, p.intersecting ? Eigen::Vector3d((pa.R.transpose() * p.normal).cast<double>()) : Eigen::Vector3d(Eigen::Vector3d::UnitZ())));
+    if (std::abs(oracle) < 1e-4 * scale) continue;
+    EXPECT_EQ(p.intersecting, oracle > 0);
+    if (oracle < 0 || !p.intersecting) continue;
+    ++hits;
+    EXPECT_LE(double(p.depth - p.depth_gap), oracle + 1e-5 * scale) << "lower bound above the depth";
+    EXPECT_NEAR(double(p.depth), oracle, 1e-4 * scale);
+    const detail::PairFrame<float> ff(pa, pb);
+    ConvexContact<float> k;
+    certified += detail::cone_cone_contact(af, bf, ff.R, ff.t, 1e-5f * float(scale), k);
+  }
+  EXPECT_GT(hits, IMPACT_TEST_SANITIZED ? 2 : 10);
+  EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? -1 : 2);
+}
+
+}  // namespace cone_cone_pair_test
+}  // namespace
