@@ -265,6 +265,10 @@ struct CylinderPoint {
   S distance;        ///< from q to the cylinder (0 inside)
   Vec3<S> outward;   ///< outside: unit, from the closest point towards q
   Vec3<S> closest;   ///< the closest point of the cylinder (q itself inside)
+  /// Inside or on the boundary: how far q is from leaving, and the way out (through the nearer of
+  /// the side and the caps, the caps on a tie: a centre on the rim leaves through the cap).
+  S exit_gap() const { return std::min(side, cap); }
+  Vec3<S> exit_direction() const { return cap <= side ? up : radial; }
 };
 template <class S>
 inline CylinderPoint<S> cylinder_point(const Cylinder<S>& cyl, const Vec3<S>& q) {
@@ -292,42 +296,55 @@ inline bool sphere_cylinder_overlap(const Vec3<S>& c, S r, const Cylinder<S>& cy
   return dr * dr + dz * dz <= r * r;
 }
 
-/// Sphere (world centre c, radius r) against a cylinder (cylinder_point). Centre outside: normal
-/// from the centre towards its closest point of the cylinder, depth r - distance. Centre inside or
-/// on the boundary: it leaves through the nearer of the side and the caps (the caps on a tie, so a
-/// centre on the rim goes through the cap; a centre on the axis nearer the side goes along +x of
-/// the cylinder's frame), depth r + that distance. Normal from the sphere towards the cylinder;
-/// the point midway between the deepest points.
-template <class S>
-inline ConvexContact<S> sphere_cylinder_contact(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
+/// Sphere (world centre c, radius r) against a solid B given by the record `p` of the centre in
+/// B's frame (CylinderPoint, ConePoint: distance, outward, closest, and exit_gap() /
+/// exit_direction() inside). Centre outside: normal from the centre towards its closest point of
+/// B, depth r - distance. Centre inside or on the boundary: it leaves the way the record names,
+/// depth r + that gap. Normal from the sphere towards B; the point midway between the deepest
+/// points.
+template <class S, class Point>
+inline ConvexContact<S> sphere_solid_contact(const Vec3<S>& c, S r, const Point& p, const RigidTransform<S>& pb) {
   ConvexContact<S> out;
-  const CylinderPoint<S> cp = cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t)));
-  if (cp.distance > r) return out;
+  if (p.distance > r) return out;
   out.intersecting = true;
-  if (cp.distance > S(0)) {  // outside
-    out.normal = pb.rotate(Vec3<S>(-cp.outward));
-    out.depth = r - cp.distance;
-    out.point = (c + r * out.normal + pb.apply(cp.closest)) / S(2);
+  if (p.distance > S(0)) {  // outside
+    out.normal = pb.rotate(Vec3<S>(-p.outward));
+    out.depth = r - p.distance;
+    out.point = (c + r * out.normal + pb.apply(p.closest)) / S(2);
     return out;
   }
-  const S gap = std::min(cp.side, cp.cap);
-  const Vec3<S> exit_dir = pb.rotate(cp.cap <= cp.side ? cp.up : cp.radial);  // the exit direction
+  const S gap = p.exit_gap();
+  const Vec3<S> exit_dir = pb.rotate(p.exit_direction());
   out.normal = -exit_dir;  // b moves against the exit direction
   out.depth = r + gap;
-  // deepest points: c + r n (of the sphere), c + gap * exit (the cylinder's face the centre leaves by)
+  // deepest points: c + r n (of the sphere), c + gap * exit (the face the centre leaves by)
   out.point = c + (gap - r) / S(2) * exit_dir;
   return out;
 }
 
+/// The distance and witness points of the sphere and the solid of sphere_solid_contact.
+template <class S, class Point>
+inline ConvexDistance<S> sphere_solid_distance(const Vec3<S>& c, S r, const Point& p, const RigidTransform<S>& pb) {
+  ConvexDistance<S> out;
+  out.intersecting = p.distance <= r;
+  out.distance = std::max(p.distance - r, S(0));
+  out.point_b = pb.apply(p.closest);
+  out.point_a = c - r * pb.rotate(p.outward);
+  return out;
+}
+
+/// Sphere (world centre c, radius r) against a cylinder (cylinder_point), as
+/// sphere_solid_contact: a centre inside leaves through the nearer of the side and the
+/// caps (the caps on a tie, so a centre on the rim goes through the cap; a centre on the axis
+/// nearer the side goes along +x of the cylinder's frame).
+template <class S>
+inline ConvexContact<S> sphere_cylinder_contact(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
+  return sphere_solid_contact(c, r, cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t))), pb);
+}
+
 template <class S>
 inline ConvexDistance<S> sphere_cylinder_distance(const Vec3<S>& c, S r, const Cylinder<S>& cyl, const RigidTransform<S>& pb) {
-  ConvexDistance<S> out;
-  const CylinderPoint<S> cp = cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t)));
-  out.intersecting = cp.distance <= r;
-  out.distance = std::max(cp.distance - r, S(0));
-  out.point_b = pb.apply(cp.closest);
-  out.point_a = c - r * pb.rotate(cp.outward);
-  return out;
+  return sphere_solid_distance(c, r, cylinder_point(cyl, Vec3<S>(pb.R.transpose() * (c - pb.t))), pb);
 }
 
 /// A point q (in a cone's frame) against the solid cone, worked in q's meridian half-plane (rho =
@@ -347,6 +364,9 @@ struct ConePoint {
   Vec3<S> radial;     ///< unit, from the axis towards q (+x of the frame when q is on the axis)
   Vec3<S> outward;    ///< unit: outside, from the closest point towards q; inside, the exit direction
   Vec3<S> closest;    ///< the closest point of the cone (q itself inside)
+  /// Inside or on the boundary: how far q is from leaving, and the way out (`outward`).
+  S exit_gap() const { return std::min(side, base); }
+  Vec3<S> exit_direction() const { return outward; }
 };
 
 template <class S>
@@ -405,40 +425,18 @@ inline bool sphere_cone_overlap(const Vec3<S>& c, S r, const Cone<S>& cone, cons
   return cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t))).distance <= r;
 }
 
-/// Sphere (world centre c, radius r) against a cone (cone_point), as sphere_cylinder_contact:
-/// centre outside, normal from the centre towards its closest point of the cone, depth r -
-/// distance; centre inside or on the boundary, it leaves through the nearer of the side and the
+/// Sphere (world centre c, radius r) against a cone (cone_point), as
+/// sphere_solid_contact: a centre inside leaves through the nearer of the side and the
 /// base (the base on a tie; a centre on the axis leaves the side along +x of the cone's frame:
-/// every direction round the axis is as near), depth r + that distance.
+/// every direction round the axis is as near).
 template <class S>
 inline ConvexContact<S> sphere_cone_contact(const Vec3<S>& c, S r, const Cone<S>& cone, const RigidTransform<S>& pb) {
-  ConvexContact<S> out;
-  const ConePoint<S> cp = cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t)));
-  if (cp.distance > r) return out;
-  out.intersecting = true;
-  if (cp.distance > S(0)) {  // outside
-    out.normal = pb.rotate(Vec3<S>(-cp.outward));
-    out.depth = r - cp.distance;
-    out.point = (c + r * out.normal + pb.apply(cp.closest)) / S(2);
-    return out;
-  }
-  const S gap = std::min(cp.side, cp.base);
-  const Vec3<S> exit_dir = pb.rotate(cp.outward);
-  out.normal = -exit_dir;
-  out.depth = r + gap;
-  out.point = c + (gap - r) / S(2) * exit_dir;
-  return out;
+  return sphere_solid_contact(c, r, cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t))), pb);
 }
 
 template <class S>
 inline ConvexDistance<S> sphere_cone_distance(const Vec3<S>& c, S r, const Cone<S>& cone, const RigidTransform<S>& pb) {
-  ConvexDistance<S> out;
-  const ConePoint<S> cp = cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t)));
-  out.intersecting = cp.distance <= r;
-  out.distance = std::max(cp.distance - r, S(0));
-  out.point_b = pb.apply(cp.closest);
-  out.point_a = c - r * pb.rotate(cp.outward);
-  return out;
+  return sphere_solid_distance(c, r, cone_point(cone, Vec3<S>(pb.R.transpose() * (c - pb.t))), pb);
 }
 
 /// Box–box by the 15 separating axes: not intersecting when one separates them, else the axis of
