@@ -9,16 +9,24 @@
 //    separating-axis test (tests/narrow/int_oracle.hpp) on the posed integer vertices;
 //  - self_collide against every non-adjacent pair of the mesh, decided the same way;
 //  - ray_mesh_first_hit and ray_mesh_any_hit against a loop over every triangle with the narrow
-//    phase's ray test (this checks that the traversal never loses a hit: the same t, exactly).
+//    phase's ray test (this checks that the traversal never loses a hit: the same t, exactly, and
+//    a reported triangle that the ray crosses at that t), through the MeshBvh and through the
+//    wide trees of the ray casts (WideBvh 4-wide, and 8-wide in double: its AVX node test), posed
+//    and in the mesh's frame.
+// Every tree type (sphere, AABB, oriented box) is built with the default configuration and with
+// one more, chosen by a hash of the input (bottom-up or incremental, another split rule, larger
+// leaves), so the inputs of the corpus and the regressions keep their meaning.
 #include "fuzz_input.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/query/mesh_collide.hpp"
 #include "impact/query/ray_mesh.hpp"
+#include "impact/query/ray_wide_bvh.hpp"
 #include "narrow/int_oracle.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -102,10 +110,63 @@ std::string pairs_text(const Pairs& p) {
   return s.empty() ? " none" : s;
 }
 
+/// The first hit of the local ray (lo, ld) over every triangle of m with the narrow phase's test.
+template <class S> std::optional<S> brute_force_first_hit(const impact::TriangleMesh<S>& m, const impact::Vec3<S>& lo,
+                                                          const impact::Vec3<S>& ld, S t_max) {
+  std::optional<S> best;
+  if (ld.squaredNorm() == S(0)) return best;
+  for (int i = 0; i < m.num_triangles(); ++i) {
+    const impact::PreparedRay<S> pr(impact::Ray<S>(lo, ld, best ? *best : t_max));
+    const auto h = impact::detail::ray_mesh_triangle_hit(pr, m.triangle(i));
+    if (h && (!best || h->t < *best)) best = h->t;
+  }
+  return best;
+}
+
+/// A hit agrees with brute force: both none, or the same t and a triangle the ray crosses at it.
+template <class S> void check_hit(const std::optional<impact::RayMeshHit<S>>& hit, const std::optional<S>& best,
+                                  const impact::TriangleMesh<S>& m, const impact::Vec3<S>& lo, const impact::Vec3<S>& ld, S t_max,
+                                  const std::string& where) {
+  if (hit.has_value() != best.has_value() || (hit && hit->t != *best))
+    impact::fuzz::fail(where + ": first hit " + (hit ? hex(hit->t) : "none") + ", brute force " + (best ? hex(*best) : "none"));
+  if (!hit) return;
+  if (hit->triangle < 0 || hit->triangle >= m.num_triangles())
+    impact::fuzz::fail(where + ": hit triangle " + std::to_string(hit->triangle) + " out of range");
+  const auto h = impact::detail::ray_mesh_triangle_hit(impact::PreparedRay<S>(impact::Ray<S>(lo, ld, t_max)), m.triangle(hit->triangle));
+  if (!h || h->t != hit->t)
+    impact::fuzz::fail(where + ": triangle " + std::to_string(hit->triangle) + " is not crossed at " + hex(hit->t));
+}
+
+std::string ray_text(const char* name, const IPoint& o, const IPoint& d) {
+  return std::string(name) + " ray (" + std::to_string(o[0]) + "," + std::to_string(o[1]) + "," + std::to_string(o[2]) + ") dir (" +
+         std::to_string(d[0]) + "," + std::to_string(d[1]) + "," + std::to_string(d[2]) + ")";
+}
+
+/// The wide trees of the ray casts on A, posed by pa and in A's frame, against brute force.
+template <class S, int W> void check_wide(const IntMesh& A, const IntPose& pa, const std::vector<std::pair<IPoint, IPoint>>& rays,
+                                          int leaf_size, const char* name) {
+  const auto ma = to_mesh<S>(A);
+  impact::WideBvhConfig cfg;
+  cfg.leaf_size = leaf_size;
+  const impact::WideBvh<S, W> wide(ma, cfg);
+  const auto pose_a = pa.transform<S>();
+  for (const auto& [o, d] : rays) {
+    const impact::Ray<S> ray{impact::Vec3<S>(S(o[0]), S(o[1]), S(o[2])), impact::Vec3<S>(S(d[0]), S(d[1]), S(d[2]))};
+    if (ray.direction == impact::Vec3<S>::Zero()) continue;  // rejected as in check()
+    // the pose is exact (a signed permutation and an integer translation): so is the local ray
+    const impact::Vec3<S> lo = pose_a.R.transpose() * (ray.origin - pose_a.t), ld = pose_a.R.transpose() * ray.direction;
+    const std::optional<S> best = brute_force_first_hit(ma, lo, ld, ray.t_max);
+    const std::string where = ray_text(name, o, d);
+    check_hit(impact::ray_mesh_first_hit(wide, ray, pose_a), best, ma, lo, ld, ray.t_max, where + " posed");
+    check_hit(impact::ray_mesh_first_hit(wide, impact::Ray<S>(lo, ld, ray.t_max)), best, ma, lo, ld, ray.t_max, where + " local");
+  }
+}
+
 template <class BV, class S> void check(const IntMesh& A, const IntMesh& B, const IntPose& pa, const IntPose& pb,
-                                        const std::vector<std::pair<IPoint, IPoint>>& rays, const char* name) {
+                                        const std::vector<std::pair<IPoint, IPoint>>& rays, const impact::MeshBvhConfig& cfg,
+                                        const char* name) {
   const auto ma = to_mesh<S>(A), mb = to_mesh<S>(B);
-  const impact::MeshBvh<BV> ta(ma), tb(mb);
+  const impact::MeshBvh<BV> ta(ma, cfg), tb(mb, cfg);
   const auto pose_a = pa.transform<S>(), pose_b = pb.transform<S>();
 
   // mesh against mesh
@@ -150,20 +211,9 @@ template <class BV, class S> void check(const IntMesh& A, const IntMesh& B, cons
       continue;
     }
     const impact::Vec3<S> lo = pose_a.R.transpose() * (ray.origin - pose_a.t), ld = pose_a.R.transpose() * ray.direction;
-    std::optional<S> best;
-    if (ld.squaredNorm() != S(0)) {
-      for (int i = 0; i < ma.num_triangles(); ++i) {
-        const impact::PreparedRay<S> pr(impact::Ray<S>(lo, ld, best ? *best : ray.t_max));
-        const auto h = impact::detail::ray_mesh_triangle_hit(pr, ma.triangle(i));
-        if (h && (!best || h->t < *best)) best = h->t;
-      }
-    }
-    const auto first = impact::ray_mesh_first_hit(ta, ray, pose_a);
-    const std::string where = std::string(name) + " ray (" + std::to_string(o[0]) + "," + std::to_string(o[1]) + "," +
-                              std::to_string(o[2]) + ") dir (" + std::to_string(d[0]) + "," + std::to_string(d[1]) + "," +
-                              std::to_string(d[2]) + ")";
-    if (first.has_value() != best.has_value() || (first && first->t != *best))
-      impact::fuzz::fail(where + ": first hit " + (first ? hex(first->t) : "none") + ", brute force " + (best ? hex(*best) : "none"));
+    const std::optional<S> best = brute_force_first_hit(ma, lo, ld, ray.t_max);
+    const std::string where = ray_text(name, o, d);
+    check_hit(impact::ray_mesh_first_hit(ta, ray, pose_a), best, ma, lo, ld, ray.t_max, where);
     if (impact::ray_mesh_any_hit(ta, ray, pose_a) != best.has_value())
       impact::fuzz::fail(where + ": any hit disagrees with brute force");
   }
@@ -201,13 +251,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     IPoint d{in.range(-4, 4), in.range(-4, 4), in.range(-4, 4)};
     rays.emplace_back(o, d);
   }
-  // every generated mesh is valid input (finite, indices in range): MeshBvh must not refuse it
+  // A second build configuration from a hash of the whole input (not read from it: the inputs
+  // kept in the corpus and the regressions decode as before)
+  std::uint32_t hash = 2166136261u;
+  for (std::size_t i = 0; i < size; ++i) hash = (hash ^ data[i]) * 16777619u;
+  impact::MeshBvhConfig other;
+  static const impact::BuildMethod methods[3] = {impact::BuildMethod::TopDown, impact::BuildMethod::BottomUp,
+                                                 impact::BuildMethod::Incremental};
+  static const impact::SplitRule splits[4] = {impact::SplitRule::Default, impact::SplitRule::SpatialMiddle,
+                                              impact::SplitRule::CentroidMedian, impact::SplitRule::Sah};
+  other.build.method = methods[hash % 3];
+  other.build.split = splits[(hash / 3) % 4];
+  other.build.leaf_size = 1 + int((hash / 12) % 4);
+  other.build.sibling_search = (hash / 48) % 2 ? impact::SiblingSearch::Greedy : impact::SiblingSearch::BranchAndBound;
+  other.build.rotations = (hash / 96) % 2 == 0;
+  const int wide_leaf = 1 + int((hash / 192) % 4);
+  // every generated mesh is valid input (finite, indices in range): the trees must not refuse it
+  for (const impact::MeshBvhConfig& cfg : {impact::MeshBvhConfig{}, other}) {
+    if (mode & 64u) {
+      check<impact::Sphere<float>, float>(A, B, pa, pb, rays, cfg, "sphere float");
+      check<impact::Aabb<float>, float>(A, B, pa, pb, rays, cfg, "aabb float");
+      check<impact::Obb<float>, float>(A, B, pa, pb, rays, cfg, "obb float");
+    } else {
+      check<impact::Sphere<double>, double>(A, B, pa, pb, rays, cfg, "sphere double");
+      check<impact::Aabb<double>, double>(A, B, pa, pb, rays, cfg, "aabb double");
+      check<impact::Obb<double>, double>(A, B, pa, pb, rays, cfg, "obb double");
+    }
+  }
   if (mode & 64u) {
-    check<impact::Sphere<float>, float>(A, B, pa, pb, rays, "sphere float");
-    check<impact::Aabb<float>, float>(A, B, pa, pb, rays, "aabb float");
+    check_wide<float, 4>(A, pa, rays, wide_leaf, "wide4 float");
   } else {
-    check<impact::Sphere<double>, double>(A, B, pa, pb, rays, "sphere double");
-    check<impact::Aabb<double>, double>(A, B, pa, pb, rays, "aabb double");
+    check_wide<double, 4>(A, pa, rays, wide_leaf, "wide4 double");
+    check_wide<double, 8>(A, pa, rays, wide_leaf, "wide8 double");
   }
   return 0;
 }
