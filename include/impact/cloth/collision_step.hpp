@@ -88,6 +88,12 @@ class ClothCollisionWorkspace {
 /// NaN/Inf coordinates or masses, negative masses, h <= 0 or NaN, proximity_distance in (0, h),
 /// proximity_rounds < 1, proximity_tolerance <= 0, negative counts or friction; and (StartViolation::Throw) x0 with a tested pair closer than h,
 /// naming the first pairs.
+/// Precondition: x0 intersects nowhere. The start check sees vertex-face and edge-edge pairs
+/// closer than h, which catches every intersection near a triangle's boundary but not an edge
+/// that pierces a triangle farther than h from its edges and vertices; such a start stays as it
+/// is (no pair comes within h, so nothing moves it apart). verify_cloth_state checks a start
+/// exactly. (A start free of intersections stays free: two triangles can only begin to intersect
+/// through a vertex-face or edge-edge contact, which the step keeps at least h apart.)
 /// Returns the statistics; see the file comment for the guarantee.
 template <class S>
 ClothStepStats cloth_collision_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& inverse_mass, const Vertices<S>& x0,
