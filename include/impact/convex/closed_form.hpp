@@ -3,7 +3,9 @@
 /// Closed-form queries for the pairs that have one: sphere–sphere, sphere–capsule, capsule–capsule
 /// (point and segment distances), sphere–box (closest point of the box), sphere–cylinder (closest
 /// point of the cylinder by a radial and an axial clamp), box–box (separating axes: boolean and
-/// penetration). Eigen only; convex/query.hpp picks them before any iterative solver.
+/// penetration). Eigen only; convex/query.hpp picks them before any iterative solver. Also the
+/// one-plane separation test along a given line (separated_along, centre_line_separates) that the
+/// iterative pairs try first.
 ///
 /// Numerical contract: APPROXIMATE, but without iteration: each answer is a few dozen floating
 /// point operations from the inputs, so distances, depths and normals carry only rounding error
@@ -50,6 +52,31 @@ struct ConvexContact {
 };
 
 namespace detail {
+
+/// Whether a plane normal to `line` separates two convex sets given by their support functions
+/// sa, sb (both in one frame): the overlap along m = line / |line|, h_a(m) + h_b(-m), below
+/// -16 eps `scale` (`scale` the larger shape's size; touching, and touching within rounding, do not
+/// separate). One support call each; true is a proof, false says nothing (also for a zero or NaN
+/// line). The early out of the iterative pairs along the line between the centres.
+template <class S, class SupportA, class SupportB>
+bool separated_along(const SupportA& sa, const SupportB& sb, const Vec3<S>& line, S scale) {
+  const S len = line.norm();
+  if (!(len > S(0))) return false;
+  const Vec3<S> m = line / len;
+  return m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale;
+}
+
+/// separated_along() on the line between the interior points of shapes a (at pa) and b (at pb),
+/// in a's frame, at the scale of the larger shape_size().
+template <class S, class A, class B>
+bool centre_line_separates(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
+  const Mat3<S> R = pa.R.transpose() * pb.R;  // in a's frame
+  const Vec3<S> t = pa.R.transpose() * (pb.t - pa.t);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
+  const Vec3<S> line = R * interior_point(b) + t - interior_point(a);
+  return separated_along(sa, sb, line, std::max(shape_size(a), shape_size(b)));
+}
 
 /// Two balls (centres ca, cb; radii ra, rb): the base of every round closed form. `fallback` is the
 /// normal used when the centres coincide.

@@ -27,12 +27,12 @@
 /// Thread safety: pure functions.
 #pragma once
 
+#include "impact/convex/closed_form.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/shapes.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <type_traits>
 
 namespace impact::detail {
@@ -53,11 +53,7 @@ bool cylinder_pair_intersect(const Cylinder<S>& a, const Cylinder<S>& b, const M
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
   // 1. the line between the centres: a plane normal to it separates them by more than rounding
-  const S len = t.norm();
-  if (len > S(0)) {
-    const Vec3<S> m = t / len;
-    if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) return false;
-  }
+  if (separated_along(sa, sb, t, scale)) return false;
   // 2. a centre inside the other
   const Vec3<S> ca = -(R.transpose() * t);  // a's centre in b's frame
   if (point_in_cylinder(a, t) || point_in_cylinder(b, ca)) return true;
@@ -95,11 +91,7 @@ bool cylinder_pair_intersect(const Cylinder<S>& a, const Cylinder<S>& b, const M
       if (point_in_cylinder(a, Vec3<S>(R * y + t))) return true;
     }
   }
-  const S gap = pq.norm();
-  if (gap > S(0)) {  // a plane normal to q - p separates them
-    const Vec3<S> n = pq / gap;
-    if (n.dot(sa(n)) - n.dot(sb(Vec3<S>(-n))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) return false;
-  }
+  if (separated_along(sa, sb, pq, scale)) return false;  // a plane normal to q - p
   // 4. GJK from the axes' closest points, stopped as soon as it decides
   const Vec3<S> first = pq.squaredNorm() > S(0) ? Vec3<S>(-pq) : Vec3<S>(-t);
   const ConvexDistance<S> d = gjk_distance<S>(sa, sb, first, tolerance, max_iterations, tolerance);

@@ -104,22 +104,6 @@ inline void sat_edge_points(const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>&
   pb = q0 + t * d2;
 }
 
-/// Whether the overlap along the line between the shapes' interior points is negative beyond
-/// rounding (16 eps of the larger size): then a plane normal to it separates them. One support
-/// call per shape; exact (a true answer is a proof), an early out for pairs that otherwise run GJK.
-template <class S, class A, class B>
-bool centre_line_separates(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
-  const Mat3<S> R = pa.R.transpose() * pb.R;  // in a's frame
-  const Vec3<S> t = pa.R.transpose() * (pb.t - pa.t);
-  const Vec3<S> line = R * interior_point(b) + t - interior_point(a);
-  const S len = line.norm();
-  if (!(len > S(0))) return false;
-  const Vec3<S> n = line / len;
-  const S top_a = n.dot(support(a, n));
-  const S low_b = n.dot(Vec3<S>(R * support(b, Vec3<S>(-(R.transpose() * n))) + t));
-  return top_a - low_b < -std::numeric_limits<S>::epsilon() * S(16) * std::max(shape_size(a), shape_size(b));
-}
-
 /// Penetration of a box (a, at pa) and a convex hull (b, at pb) by the separating-axis test (see
 /// the file comment). Needs the hull's faces and edges (convex_hull() builds them).
 template <class S>

@@ -432,6 +432,14 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
   return epa(a, pa, b, pb, o);
 }
 
+/// The answer "no contact" of a pair that one plane (one support call of each shape) separated.
+template <class S>
+ConvexContact<S> one_plane_apart() {
+  ConvexContact<S> c;
+  c.iterations = 1;
+  return c;
+}
+
 /// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
 /// penetration: when it stopped with its bracket open (a coaxial pair's least-overlap normals form
 /// a circle EPA cannot close: about 515 support calls and a bracket of 7.5e-5 of the size at a tilt
@@ -465,19 +473,9 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const Vec3<S> centre_b = f.b_to_a(interior_point(b));  // a's centre is its frame's origin
-  {
-    const S len = centre_b.norm();
-    if (len > S(0)) {
-      const Vec3<S> m = centre_b / len;
-      // a plane normal to m separates them (by more than rounding: touching counts as intersecting,
-      // and a pair touching within rounding goes on to GJK, which decides it as before)
-      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) {
-        ConvexContact<S> c;
-        c.iterations = 1;
-        return c;
-      }
-    }
-  }
+  // a plane normal to the line between the centres separates them (by more than rounding: a pair
+  // touching within rounding goes on to GJK, which decides it)
+  if (separated_along(sa, sb, centre_b, scale)) return one_plane_apart<S>();
   ConvexContact<S> c;
   if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) {  // parallel axes: closed form
     c.iterations += 1;
@@ -562,17 +560,8 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
-  {  // a plane normal to the line between the centres separates them (most separated poses)
-    const S len = centre_line.norm();
-    if (len > S(0)) {
-      const Vec3<S> m = centre_line / len;
-      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) {
-        ConvexContact<S> c;
-        c.iterations = 1;
-        return c;
-      }
-    }
-  }
+  // a plane normal to the line between the centres separates them (most separated poses)
+  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
   ConvexContact<S> cand;
   if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) {
     cand.iterations += 1;
@@ -632,23 +621,11 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const Vec3<S> centre_line = f.t - interior_point(a);
-  {  // a plane normal to the line between the centres separates them (most separated poses)
-    const S len = centre_line.norm();
-    if (len > S(0)) {
-      const Vec3<S> m = centre_line / len;
-      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale) {
-        ConvexContact<S> c;
-        c.iterations = 1;
-        return c;
-      }
-    }
-  }
+  // a plane normal to the line between the centres separates them (most separated poses)
+  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
   // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
-  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale)) {
-    ConvexContact<S> c;
-    c.iterations = 1;
-    return c;
-  }
+  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale))
+    return one_plane_apart<S>();
   SimplexPoint<S> simplex[4];
   int its = 1;
   bool limit = false, failed = false;
