@@ -77,22 +77,6 @@ Vec3<S> cone_side_normal_at(const Cone<S>& c, const Vec3<S>& x) {
   return Vec3<S>(S(2) * c.half_length * ux / len, S(2) * c.half_length * uy / len, c.radius / len);
 }
 
-/// A ball inside cone c (its frame) tangent to its side at the side point p (outward normal o
-/// there): the centre p - rho o with rho as large as the base and the axis allow, then cut to the
-/// centre's own distance to the boundary. rho < 0 when p is off the side's extent.
-template <class S>
-InsideBall<S> cone_ball_at_side(const Cone<S>& c, const Vec3<S>& p, const Vec3<S>& o) {
-  const S h = c.half_length, len = std::sqrt(S(4) * h * h + c.radius * c.radius);
-  const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
-  InsideBall<S> out;
-  S rho = std::min((p.z() + h) / (S(1) + c.radius / len), rxy * len / (S(2) * h));
-  if (!(rho >= S(0))) return out;
-  const Vec3<S> centre = p - rho * o;
-  out.rho = std::min(rho, inside_ball(c, centre).rho);
-  out.push = centre;  // the centre, for the caller
-  return out;
-}
-
 /// The certified contact of cones a and b when one of the candidates of the file comment decides it
 /// within `tolerance`, in a's frame (b placed by R, t there): true and `out` set (normal from a
 /// towards b, depth, depth_gap, the deciding point, iterations counts the overlap evaluations); else
@@ -102,7 +86,6 @@ template <class S>
 bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance, ConvexContact<S>& out) {
   const Vec3<S> bz = R.col(2), az_in_b = R.row(2).transpose();
   const S ra = a.radius, ha = a.half_length, rb = b.radius, hb = b.half_length;
-  const S la = std::sqrt(S(4) * ha * ha + ra * ra), lb = std::sqrt(S(4) * hb * hb + rb * rb);
   const S margin = std::numeric_limits<S>::epsilon() * S(1024) * (ra + ha + rb + hb + t.norm());
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
   const auto overlap = [&](const Vec3<S>& n) { return n.dot(support(a, n)) - n.dot(sb(Vec3<S>(-n))); };
@@ -131,36 +114,6 @@ bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, con
     const InsideBall<S> ball = inside_ball(a, x);
     if (ball.rho > S(0)) offer(Vec3<S>(-ball.push), x, ball.rho);
   }
-  const auto rulings = [&] {  // n = a's side normal at azimuth psi with b . n = -rb / lb (-n a side normal of b)
-    const S rho = std::sqrt(bz.x() * bz.x() + bz.y() * bz.y());
-    const S tau = (-rb / lb - ra * bz.z() / la) * la / (S(2) * ha);
-    if (!(rho > S(1e-6) && std::abs(tau) < rho)) return;
-    // psi = base +- spread with cos(base), sin(base) = bz_xy / rho and cos(spread) = tau / rho
-    const S cb = bz.x() / rho, sbase = bz.y() / rho, cs = tau / rho, ss = std::sqrt(std::max(S(1) - cs * cs, S(0)));
-    for (const S sign : {S(1), S(-1)}) {
-      const S cp = cb * cs - sign * sbase * ss, sp = sbase * cs + sign * cb * ss;
-      const Vec3<S> n(S(2) * ha * cp / la, S(2) * ha * sp / la, ra / la);
-      // b's ruling: its azimuth from its side normal -R^T n
-      const Vec3<S> m = -(R.transpose() * n);
-      const S mxy = std::sqrt(m.x() * m.x() + m.y() * m.y());
-      if (!(mxy > S(0))) continue;
-      const Vec3<S> ub(m.x() / mxy, m.y() / mxy, S(0));
-      // the closest points of a's ruling p0 + s d and b's q0 + l e
-      const Vec3<S> p0(S(0), S(0), ha), d(ra * cp, ra * sp, S(-2) * ha);
-      const Vec3<S> q0 = t + hb * bz, e = R * Vec3<S>(rb * ub.x(), rb * ub.y(), S(-2) * hb);
-      const Vec3<S> w = p0 - q0;
-      const S dd = d.dot(d), de = d.dot(e), ee = e.dot(e), dw = d.dot(w), ew = e.dot(w), den = dd * ee - de * de;
-      if (!(den > S(1e-12) * dd * ee)) continue;
-      const S s = (de * ew - ee * dw) / den, l = (dd * ew - de * dw) / den;
-      if (!(s >= S(0) && s <= S(1) && l >= S(0) && l <= S(1))) continue;
-      const Vec3<S> pa = p0 + s * d, pb = q0 + l * e;
-      const InsideBall<S> ball_a = cone_ball_at_side(a, pa, n);
-      const InsideBall<S> ball_b = cone_ball_at_side(b, in_b(pb), Vec3<S>(m / m.norm()));
-      if (!(ball_a.rho >= S(0) && ball_b.rho >= S(0))) continue;
-      const S lower = two_balls_lower(a, b, in_b, ball_a.push, ball_a.rho, Vec3<S>(R * ball_b.push + t), ball_b.rho);
-      offer(n, Vec3<S>((pa + pb) / S(2)), lower);
-    }
-  };
   const auto rim_of_b = [&] {  // b's base rim against a's side: the rim point deepest below it
     const Vec3<S> c = t - hb * bz, u = rb * R.col(0), v = rb * R.col(1);
     if (circle_clear_of_cylinder(c, rb, bz, ra, ha, margin)) return;  // a's bounding cylinder
@@ -180,7 +133,7 @@ bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, con
     const InsideBall<S> ball = inside_ball(b, xb);
     if (ball.rho > S(0)) offer(Vec3<S>(-(R * cone_side_normal_at(b, xb))), Vec3<S>(co * ra, si * ra, -ha), ball.rho);
   };
-  if (!decided()) rulings();
+  if (!decided()) opposite_rulings(a, b, R, t, in_b, offer);  // ruling against ruling
   if (!decided()) rim_of_b();
   if (!decided()) rim_of_a();
   return k.finish(tolerance, out);

@@ -162,6 +162,100 @@ S two_balls_lower(const A& a, const B& b, const InB& in_b, const Vec3<S>& ca, S 
   return lb;
 }
 
+/// The side of a cylinder or cone about its z axis, for the ruling-against-ruling candidate: the
+/// axial and radial components of its unit side normals (cylinder: 0 and 1; cone of base radius R
+/// and half length h: R / L and 2h / L, L = sqrt(4h^2 + R^2)); its ruling at the radial unit
+/// direction (co, si) as the segment p0 + s d, s in [0, 1]; the largest ball inside it tangent to
+/// the side at its point p (outward normal o there): rho < 0 when p is off the side's extent.
+template <class S>
+inline void side_normal(const Cylinder<S>&, S& axial, S& radial) {
+  axial = S(0);
+  radial = S(1);
+}
+template <class S>
+inline void side_normal(const Cone<S>& c, S& axial, S& radial) {
+  const S len = std::sqrt(S(4) * c.half_length * c.half_length + c.radius * c.radius);
+  axial = c.radius / len;
+  radial = S(2) * c.half_length / len;
+}
+template <class S>
+inline void side_ruling(const Cylinder<S>& c, S co, S si, Vec3<S>& p0, Vec3<S>& d) {
+  p0 = Vec3<S>(c.radius * co, c.radius * si, -c.half_length);
+  d = Vec3<S>(S(0), S(0), S(2) * c.half_length);
+}
+template <class S>
+inline void side_ruling(const Cone<S>& c, S co, S si, Vec3<S>& p0, Vec3<S>& d) {
+  p0 = Vec3<S>(S(0), S(0), c.half_length);
+  d = Vec3<S>(c.radius * co, c.radius * si, S(-2) * c.half_length);
+}
+template <class S>
+inline InsideBall<S> ball_at_side(const Cylinder<S>& c, const Vec3<S>& p, const Vec3<S>& o) {
+  InsideBall<S> out;
+  const S rho = cylinder_ball_at_ruling(c, p.z());
+  if (!(rho >= S(0))) return out;
+  out.rho = rho;
+  out.push = p - rho * o;  // the centre
+  return out;
+}
+/// For a cone: the centre p - rho o with rho as large as the base and the axis allow, then cut to
+/// the centre's own distance to the boundary.
+template <class S>
+inline InsideBall<S> ball_at_side(const Cone<S>& c, const Vec3<S>& p, const Vec3<S>& o) {
+  const S h = c.half_length, len = std::sqrt(S(4) * h * h + c.radius * c.radius);
+  const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
+  InsideBall<S> out;
+  const S rho = std::min((p.z() + h) / (S(1) + c.radius / len), rxy * len / (S(2) * h));
+  if (!(rho >= S(0))) return out;
+  const Vec3<S> centre = p - rho * o;
+  out.rho = std::min(rho, inside_ball(c, centre).rho);
+  out.push = centre;
+  return out;
+}
+
+/// Ruling against ruling, for a cylinder or cone a (its frame) and a cylinder or cone b placed by
+/// R, t there (in_b maps a's frame to b's): the directions n that are a side normal of a and whose
+/// opposite is a side normal of b (n = (k cos psi, k sin psi, c) with b's axis w: n . w = -c_b; up
+/// to two, cos(psi - base) = tau / |w_xy| without trigonometric calls); for each whose rulings'
+/// closest points are interior to both, offer(n, the points' midpoint, the lower bound of the two
+/// balls tangent there (two_balls_lower)).
+template <class S, class A, class B, class InB, class Offer>
+void opposite_rulings(const A& a, const B& b, const Mat3<S>& R, const Vec3<S>& t, const InB& in_b, const Offer& offer) {
+  const Vec3<S> bz = R.col(2);
+  S ca, ka, cb_axial, kb;
+  side_normal(a, ca, ka);
+  side_normal(b, cb_axial, kb);
+  const S rho = std::sqrt(bz.x() * bz.x() + bz.y() * bz.y());
+  const S tau = (-cb_axial - ca * bz.z()) / ka;
+  if (!(rho > S(1e-6) && std::abs(tau) < rho)) return;
+  // psi = base +- spread with cos(base), sin(base) = bz_xy / rho and cos(spread) = tau / rho
+  const S cbase = bz.x() / rho, sbase = bz.y() / rho, cs = tau / rho, ss = std::sqrt(std::max(S(1) - cs * cs, S(0)));
+  for (const S sign : {S(1), S(-1)}) {
+    const S cp = cbase * cs - sign * sbase * ss, sp = sbase * cs + sign * cbase * ss;
+    const Vec3<S> n(ka * cp, ka * sp, ca);
+    // b's ruling: its azimuth from its side normal m = -R^T n
+    const Vec3<S> m = -(R.transpose() * n);
+    const S mxy = std::sqrt(m.x() * m.x() + m.y() * m.y());
+    if (!(mxy > S(0))) continue;
+    Vec3<S> p0, d, q0, e;
+    side_ruling(a, cp, sp, p0, d);
+    side_ruling(b, m.x() / mxy, m.y() / mxy, q0, e);
+    q0 = R * q0 + t;
+    e = R * e;
+    // the closest points of a's ruling p0 + s d and b's q0 + l e
+    const Vec3<S> w = p0 - q0;
+    const S dd = d.dot(d), de = d.dot(e), ee = e.dot(e), dw = d.dot(w), ew = e.dot(w), den = dd * ee - de * de;
+    if (!(den > S(1e-12) * dd * ee)) continue;
+    const S s = (de * ew - ee * dw) / den, l = (dd * ew - de * dw) / den;
+    if (!(s >= S(0) && s <= S(1) && l >= S(0) && l <= S(1))) continue;
+    const Vec3<S> pa = p0 + s * d, pb = q0 + l * e;
+    const InsideBall<S> ball_a = ball_at_side(a, pa, n);
+    const InsideBall<S> ball_b = ball_at_side(b, in_b(pb), m);
+    if (!(ball_a.rho >= S(0) && ball_b.rho >= S(0))) continue;
+    offer(n, Vec3<S>((pa + pb) / S(2)),
+          two_balls_lower(a, b, in_b, ball_a.push, ball_a.rho, Vec3<S>(R * ball_b.push + t), ball_b.rho));
+  }
+}
+
 /// The certified contact of cylinders a and b when one of the candidates of the file comment
 /// decides it within `tolerance`, in a's frame (b placed by R, t there): true and `out` set
 /// (normal from a towards b, depth, depth_gap, a point of the contact (the caller moves it onto the
@@ -278,37 +372,6 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
     if (ball.rho > S(0)) offer(bz, x, ball.rho);
   }
   radial_push(Vec3<S>(t + hc * bz));  // b's apex against a's side
-  const auto rulings = [&] {          // n normal to a's axis and -n a side normal of b: u.z = -R bz.z / (2h)
-    const Vec3<S> e1 = R.col(0), e2 = R.col(1);
-    const S rho = std::sqrt(e1.z() * e1.z() + e2.z() * e2.z()), tau = -rc * bz.z() / (S(2) * hc);
-    if (!(rho > S(1e-6) && std::abs(tau) < rho)) return;
-    const S base = std::atan2(e2.z(), e1.z()), spread = std::acos(tau / rho);
-    for (const S psi : {base + spread, base - spread}) {
-      const Vec3<S> u = std::cos(psi) * e1 + std::sin(psi) * e2;
-      Vec3<S> n = -(S(2) * hc * u + rc * bz) / len;
-      n.z() = S(0);
-      n.normalize();
-      // the closest points of a's ruling r_a n + s e_z and b's from its apex p0 along dir (both normal to n)
-      const Vec3<S> p0 = t + hc * bz, dir = t - hc * bz + rc * u - p0;
-      const Vec3<S> w = p0 - n.dot(p0) * n;
-      const S zd = dir.z(), dd = dir.squaredNorm(), det = zd * zd - dd;  // [1, -zd; zd, -dd] [s; l] = [w.z; dir.w]
-      if (!(std::abs(det) > S(1e-12) * dd)) continue;
-      const S l = (dir.dot(w) - zd * w.z()) / det, s = w.z() + zd * l;
-      if (!(l >= S(0) && l <= S(1))) continue;
-      const S rho_a = cylinder_ball_at_ruling(a, s);
-      if (!(rho_a >= S(0))) continue;
-      const Vec3<S> pa = a.radius * n + Vec3<S>(S(0), S(0), s), pb = p0 + l * dir;
-      // b's ball tangent at pb, its centre along n: above the base and not across the axis
-      const Vec3<S> pbb = in_b(pb);
-      S rho_b =
-          std::min((pbb.z() + hc) / (S(1) + rc / len), std::sqrt(pbb.x() * pbb.x() + pbb.y() * pbb.y()) * len / (S(2) * hc));
-      const Vec3<S> cb = pb + rho_b * n;
-      rho_b = std::min(rho_b, inside_ball(b, in_b(cb)).rho);
-      if (!(rho_b >= S(0))) continue;
-      const S lb = two_balls_lower(a, b, in_b, Vec3<S>(pa - rho_a * n), rho_a, cb, rho_b);
-      offer(n, Vec3<S>((pa + pb) / S(2)), lb);
-    }
-  };
   const auto base_rim = [&] {  // b's base rim against a's ruling: the rim point nearest a's axis
     const Vec3<S> c = t - hc * bz, u = rc * R.col(0), v = rc * R.col(1);
     if (circle_clear_of_cylinder(c, rc, bz, a.radius, a.half_length, margin)) return;
@@ -333,7 +396,7 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
     }
   };
   const auto decided = [&] { return k.upper - k.lower <= tolerance; };
-  if (!decided()) rulings();
+  if (!decided()) opposite_rulings(a, b, R, t, in_b, offer);  // a ruling of each
   if (!decided()) base_rim();
   if (!decided()) rims_of_a();
   if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
