@@ -164,6 +164,35 @@ TEST(ConeConePair, ApexThroughBase) {
   EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? 6 : 30);
 }
 
+// A small flat cone deep inside a larger one (centres within 0.25), both argument orders: poses
+// whose rim-against-side candidates (either base rim's point deepest below the other's side) have
+// balls of more than half the best upper bound. Every certified depth within the tolerance of the
+// oracle. Checked to fail: the radius of the ball of b's rim point doubled (rim_of_b: 9 wrong
+// certified depths of the 26 certificates), and that of a's rim point (rim_of_a: 9), which the
+// random poses of CertifiedDepthsAgainstTheOracle did not catch.
+TEST(ConeConePair, SmallConeDeepInsideRimAgainstSide) {
+  test::Rng rng(919);
+  int certified = 0;
+  for (int k = 0; k < (IMPACT_TEST_SANITIZED ? 16 : 30); ++k) {
+    const Cone<double> large(rng.uniform(0.5, 1.0), rng.uniform(0.5, 1.0)), small(rng.uniform(0.1, 0.6), rng.uniform(0.1, 0.2));
+    const RigidTransform<double> pl{rng.rotation(), rng.vec(-1, 1)};
+    const RigidTransform<double> ps{rng.rotation(), Eigen::Vector3d(pl.t + rng.vec(-0.25, 0.25))};
+    const double scale = std::max(shape_size(large), shape_size(small)), tol = 1e-10 * scale;
+    for (const bool large_first : {true, false}) {
+      const Cone<double>& a = large_first ? large : small;
+      const Cone<double>& b = large_first ? small : large;
+      const detail::PairFrame<double> f(large_first ? pl : ps, large_first ? ps : pl);
+      ConvexContact<double> c;
+      if (!detail::cone_cone_contact(a, b, f.R, f.t, tol, c)) continue;
+      ++certified;
+      const double oracle = double(depth_oracle(a, b, f.R, f.t, c.normal));
+      EXPECT_LE(c.depth - c.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
+      EXPECT_NEAR(c.depth, oracle, 1e-9 * scale);
+    }
+  }
+  EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? 8 : 20);
+}
+
 // The terms of one branch of each cone are a lower bound of the overlap everywhere and equal to it
 // along the direction they were built at. Checked to fail: b's linear term with the wrong sign.
 TEST(ConeConePair, TermsBoundTheOverlap) {
