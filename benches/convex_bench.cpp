@@ -150,6 +150,20 @@ Row make_row(const std::string& pair, const char* query, const char* lib, double
 
 volatile double g_sink = 0;
 
+// Each library's penetration query behind a function that is never inlined, so that callgrind can
+// count its instructions alone (docs/convex.md: valgrind --tool=callgrind
+// --toggle-collect='*bench_impact_penetration*', and '*bench_fcl_penetration*' for FCL's).
+template <class A, class B>
+[[gnu::noinline]] ConvexContact<double> bench_impact_penetration(const A& a, const Pose& pa, const B& b, const Pose& pb) {
+  return convex_penetration(a, pa, b, pb);
+}
+#ifdef IMPACT_HAVE_FCL
+[[gnu::noinline]] bool bench_fcl_penetration(const test::FclShapePair& fcl, const Pose& pa, const Pose& pb, double& depth,
+                                             V3& normal, V3& point) {
+  return fcl.penetration(pa, pb, depth, normal, point);
+}
+#endif
+
 template <class A, class B>
 void run_pair(const std::string& name, const A& a, const B& b, int n_poses, double min_time, std::vector<Row>& rows) {
   const double scale = std::max(shape_size(a), shape_size(b));
@@ -169,7 +183,7 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
       const auto& [pa, pb] = poses[i];
       const bool hit = convex_intersect(a, pa, b, pb);
       const auto d = convex_distance(a, pa, b, pb);
-      const auto c = convex_penetration(a, pa, b, pb);
+      const auto c = bench_impact_penetration(a, pa, b, pb);
       if (ref[i].separated || ref[i].intersecting) {
         ++eb.n;
         eb.mismatches += hit != ref[i].intersecting;
@@ -181,8 +195,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     }
     const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + convex_intersect(a, poses[i].first, b, poses[i].second); });
     const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + convex_distance(a, poses[i].first, b, poses[i].second).distance; });
-    const double qp =
-        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + convex_penetration(a, poses[i].first, b, poses[i].second).depth; });
+    const double qp = rate(n, min_time, [&](std::size_t i) {
+      g_sink = g_sink + bench_impact_penetration(a, poses[i].first, b, poses[i].second).depth;
+    });
     add("boolean", "impact", qb, eb);
     add("distance", "impact", qd, ed);
     add("penetration", "impact", qp, ep);
@@ -198,7 +213,7 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
       const double d = fcl.distance(pa, pb, &wa, &wb);
       double depth = 0;
       V3 normal, point;
-      const bool pen = fcl.penetration(pa, pb, depth, normal, point);
+      const bool pen = bench_fcl_penetration(fcl, pa, pb, depth, normal, point);
       if (ref[i].separated || ref[i].intersecting) {
         ++eb.n;
         eb.mismatches += hit != ref[i].intersecting;
@@ -213,8 +228,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     V3 normal, point;
     const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + fcl.collide(poses[i].first, poses[i].second); });
     const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + fcl.distance(poses[i].first, poses[i].second, &wa, &wb); });
-    const double qp =
-        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + fcl.penetration(poses[i].first, poses[i].second, depth, normal, point); });
+    const double qp = rate(n, min_time, [&](std::size_t i) {
+      g_sink = g_sink + bench_fcl_penetration(fcl, poses[i].first, poses[i].second, depth, normal, point);
+    });
     add("boolean", "fcl", qb, eb);
     add("distance", "fcl", qd, ed);
     add("penetration", "fcl", qp, ep);
