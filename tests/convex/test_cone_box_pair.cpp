@@ -1,14 +1,15 @@
 // SPDX-License-Identifier: MIT
 // The certified cone–box candidates (convex/cone_box_pair.hpp) and the cone–box penetration
 // (convex/query.hpp: candidates, EPA and the local certificate on convex/cone_box_terms.hpp)
-// against an oracle written here: the penetration depth as the least overlap
-// f(n) = h_cone(n) + h_box(-n) over unit directions, each support function in closed form in long
-// double (the cone's apex or base rim, the box's centre and three abs terms), minimised by
-// Fibonacci samples and grids about the best ones (each moved while it improves, then shrunk). The oracle's minimum is an upper bound
-// of the true depth, and every certified lower bound lies below the true depth, so a certificate
-// that certifies a wrong (too large) depth shows as depth - depth_gap above the oracle.
+// against an oracle: the penetration depth as the least overlap f(n) = h_cone(n) + h_box(-n)
+// over unit directions, each support function in closed form in long double (the cone's apex or
+// base rim, the box's centre and three abs terms), minimised by test::least_overlap
+// (support/convex_oracle.hpp). The oracle's minimum is an upper bound of the true depth, and every
+// certified lower bound lies below the true depth, so a certificate that certifies a wrong (too
+// large) depth shows as depth - depth_gap above the oracle.
 #include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/query.hpp"
+#include "support/convex_oracle.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
@@ -32,51 +33,23 @@ LD overlap_ld(const Cone<double>& a, const Box<double>& b, const Eigen::Matrix3d
   return cone + box;
 }
 
-// The least overlap found: 1500 Fibonacci directions, then about each of the 3 best, the box's
-// six face normals and `extra` (the normal under test: the search may only find lower overlaps
-// than there) a 13 x 13 grid over a cap (moved to its best point while that improves) shrinking
-// threefold per level to 1e-13 rad.
+// The least overlap by test::least_overlap: the kink circles normal to the box's axes (its edges)
+// and the cone's side normals (where its apex and base rim tie: n_z = r / sqrt(4h^2 + r^2)), the
+// box's six face normals, the cone's axis both ways and `extra` (the normal under test: the search
+// may only find lower overlaps than there) as starts.
 LD depth_oracle(const Cone<double>& a, const Box<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Eigen::Vector3d& extra) {
-  const int samples = 1500;
-  std::vector<std::pair<LD, V3L>> coarse;
-  const LD golden = LD(M_PI) * (3 - std::sqrt(LD(5)));
-  for (int i = 0; i < samples; ++i) {
-    const LD z = 1 - (2 * i + LD(1)) / samples, rr = std::sqrt(1 - z * z);
-    const V3L n(rr * std::cos(golden * i), rr * std::sin(golden * i), z);
-    coarse.emplace_back(overlap_ld(a, b, R, t, n), n);
+  const auto f = [&](const V3L& n) { return overlap_ld(a, b, R, t, n); };
+  std::vector<Eigen::Vector3d> starts;
+  for (int i = 0; i < 3; ++i) {
+    starts.push_back(R.col(i));
+    starts.push_back(-R.col(i));
   }
-  std::partial_sort(coarse.begin(), coarse.begin() + 3, coarse.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  for (int i = 0; i < 3; ++i) {  // the box's face normals and the answer under test start too
-    for (const double sign : {1.0, -1.0}) coarse[static_cast<std::size_t>(3 + 2 * i + (sign < 0))] = {overlap_ld(a, b, R, t, (sign * R.col(i)).cast<LD>()), (sign * R.col(i)).cast<LD>()};
-  }
-  coarse[9] = {overlap_ld(a, b, R, t, extra.cast<LD>()), extra.cast<LD>()};
-  LD best = coarse[0].first;
-  for (int s = 0; s < 10; ++s) {
-    V3L n = coarse[static_cast<std::size_t>(s)].second;
-    LD fn = coarse[static_cast<std::size_t>(s)].first;
-    for (LD cap = LD(0.2); cap > LD(1e-13); cap /= 3) {
-      // the grid about n, moved while it finds a lower value (so that it follows the valleys of f
-      // along its ridges), then shrunk
-      for (int moves = 0; moves < 64; ++moves) {
-        const V3L e1 = (std::abs(n.x()) < LD(0.6) ? V3L(1, 0, 0) : V3L(0, 1, 0)).cross(n).normalized(), e2 = n.cross(e1);
-        V3L next = n;
-        for (int i = -6; i <= 6; ++i) {
-          for (int j = -6; j <= 6; ++j) {
-            const V3L m = (n + (cap * i / 6) * e1 + (cap * j / 6) * e2).normalized();
-            const LD fm = overlap_ld(a, b, R, t, m);
-            if (fm < fn) {
-              fn = fm;
-              next = m;
-            }
-          }
-        }
-        if (next == n) break;
-        n = next;
-      }
-    }
-    best = std::min(best, fn);
-  }
-  return best;
+  starts.push_back(Eigen::Vector3d::UnitZ());
+  starts.push_back(-Eigen::Vector3d::UnitZ());
+  starts.push_back(extra);
+  const double side = a.radius / std::sqrt(4 * a.half_length * a.half_length + a.radius * a.radius);
+  const std::vector<test::KinkCircle> circles = {{R.col(0), 0}, {R.col(1), 0}, {R.col(2), 0}, {Eigen::Vector3d::UnitZ(), side}};
+  return test::least_overlap(f, starts, circles).depth;
 }
 
 struct Case {

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: MIT
 // The certified cone–cone candidates (convex/cone_cone_pair.hpp) and the cone–cone penetration
 // (convex/query.hpp: candidates, EPA and the local certificate on cone_cone_terms) against an
-// oracle written here: the penetration depth as the least overlap f(n) = h_a(n) + h_b(-n) over
-// unit directions, each cone's support function in closed form in long double (the apex or the
-// base rim), minimised by Fibonacci samples and grids about the best ones (each moved while it
-// improves, then shrunk). The oracle's minimum is an upper bound of the true depth and every
-// certified lower bound lies below the true depth, so a certificate that certifies a wrong (too
-// large) depth shows as depth - depth_gap above the oracle.
+// oracle: the penetration depth as the least overlap f(n) = h_a(n) + h_b(-n) over unit
+// directions, each cone's support function in closed form in long double (the apex or the base
+// rim), minimised by test::least_overlap (support/convex_oracle.hpp). The oracle's minimum is an
+// upper bound of the true depth and every certified lower bound lies below the true depth, so a
+// certificate that certifies a wrong (too large) depth shows as depth - depth_gap above the oracle.
 #include "impact/convex/cone_cone_pair.hpp"
 #include "impact/convex/query.hpp"
+#include "support/convex_oracle.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
@@ -37,47 +37,16 @@ LD overlap_ld(const Cone<double>& a, const Cone<double>& b, const Eigen::Matrix3
   return cone_h(a, n) - t.cast<LD>().dot(n) + cone_h(b, m);
 }
 
-// The least overlap found: 1500 Fibonacci directions, then about each of the 3 best, both axes
-// both ways and `extra` (the normal under test: the search may only find lower overlaps than
-// there) a 13 x 13 grid over a cap (moved to its best point while that improves) shrinking
-// threefold per level to 1e-13 rad.
+// The least overlap by test::least_overlap: the kink circles of each cone's side normals (where
+// its apex and base rim tie: n . axis = r / sqrt(4h^2 + r^2), for b along -n), both axes both ways
+// and `extra` (the normal under test: the search may only find lower overlaps than there) as
+// starts.
 LD depth_oracle(const Cone<double>& a, const Cone<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Eigen::Vector3d& extra) {
-  const int samples = IMPACT_TEST_SANITIZED ? 600 : 1500;
-  std::vector<std::pair<LD, V3L>> coarse;
-  const LD golden = LD(M_PI) * (3 - std::sqrt(LD(5)));
-  for (int i = 0; i < samples; ++i) {
-    const LD z = 1 - (2 * i + LD(1)) / samples, rr = std::sqrt(1 - z * z);
-    const V3L n(rr * std::cos(golden * i), rr * std::sin(golden * i), z);
-    coarse.emplace_back(overlap_ld(a, b, R, t, n), n);
-  }
-  std::partial_sort(coarse.begin(), coarse.begin() + 3, coarse.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  const V3L starts[5] = {V3L(0, 0, 1), V3L(0, 0, -1), R.col(2).cast<LD>(), (-R.col(2)).cast<LD>(), extra.cast<LD>()};
-  for (int i = 0; i < 5; ++i) coarse[static_cast<std::size_t>(3 + i)] = {overlap_ld(a, b, R, t, starts[i]), starts[i]};
-  LD best = coarse[0].first;
-  for (int s = 0; s < 8; ++s) {
-    V3L n = coarse[static_cast<std::size_t>(s)].second;
-    LD fn = coarse[static_cast<std::size_t>(s)].first;
-    for (LD cap = LD(0.2); cap > LD(1e-13); cap /= 3) {
-      for (int moves = 0; moves < 64; ++moves) {
-        const V3L e1 = (std::abs(n.x()) < LD(0.6) ? V3L(1, 0, 0) : V3L(0, 1, 0)).cross(n).normalized(), e2 = n.cross(e1);
-        V3L next = n;
-        for (int i = -6; i <= 6; ++i) {
-          for (int j = -6; j <= 6; ++j) {
-            const V3L m = (n + (cap * i / 6) * e1 + (cap * j / 6) * e2).normalized();
-            const LD fm = overlap_ld(a, b, R, t, m);
-            if (fm < fn) {
-              fn = fm;
-              next = m;
-            }
-          }
-        }
-        if (next == n) break;
-        n = next;
-      }
-    }
-    best = std::min(best, fn);
-  }
-  return best;
+  const auto f = [&](const V3L& n) { return overlap_ld(a, b, R, t, n); };
+  const std::vector<Eigen::Vector3d> starts = {Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ(), R.col(2), -R.col(2), extra};
+  const auto side = [](const Cone<double>& c) { return c.radius / std::sqrt(4 * c.half_length * c.half_length + c.radius * c.radius); };
+  const std::vector<test::KinkCircle> circles = {{Eigen::Vector3d::UnitZ(), side(a)}, {R.col(2), -side(b)}};
+  return test::least_overlap(f, starts, circles).depth;
 }
 
 struct Case {

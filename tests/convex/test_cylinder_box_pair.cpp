@@ -1,15 +1,16 @@
 // SPDX-License-Identifier: MIT
 // Cylinder against box (convex/cylinder_box_pair.hpp and the cylinder–box paths of
 // convex/query.hpp): the certified candidates, the whole penetration (candidates, EPA with the
-// local certificate on cylinder_box_terms) and the boolean test, against an oracle written here:
+// local certificate on cylinder_box_terms) and the boolean test, against an oracle:
 // the least overlap f(n) = h_cyl(n) + h_box(-n) over unit directions, both support functions in
 // closed form in long double (h |n_z| + r |P_z n|; the box's centre and three abs terms),
-// minimised by Fibonacci samples and grids about the best ones (each moved while it improves,
-// then shrunk). Its minimum is an upper bound of the true depth and every certified lower bound
-// lies below the true depth, so a certificate of a wrong (too large) depth shows as
-// depth - depth_gap above the oracle; its sign decides the boolean away from touching.
+// minimised by test::least_overlap (support/convex_oracle.hpp). Its minimum is an upper bound of
+// the true depth and every certified lower bound lies below the true depth, so a certificate of a
+// wrong (too large) depth shows as depth - depth_gap above the oracle; its sign decides the
+// boolean away from touching.
 #include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/query.hpp"
+#include "support/convex_oracle.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
@@ -17,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -36,95 +38,24 @@ LD overlap_ld(const Cylinder<double>& a, const Box<double>& b, const Eigen::Matr
   return cyl + box;
 }
 
-struct Least {
-  LD depth = 0;
-  V3L normal = V3L::UnitZ();
-};
+using Least = test::LeastOverlap;
 
-// The least overlap found, as the least of two searches:
-//   on the sphere: 600 Fibonacci directions, then about each of the 3 best, the box's six face
-//   normals, the cylinder's two cap normals and `extra` (the normal under test) a 5 x 5 grid over a
-//   cap, moved to its best point while that improves (up to 32 times), then halved, down to 1e-12 rad;
-//   on the great circles where f has a kink (normal to a box axis: an edge; normal to the
-//   cylinder's axis: its side), where a 2-D grid stalls in the valley: 720 samples of the angle,
-//   then 21 samples about the best 3, shrinking tenfold per level to 1e-15 rad.
+// The least overlap by test::least_overlap: the kink circles normal to the box's axes (its edges)
+// and to the cylinder's axis (its side), the box's six face normals, the cylinder's two cap
+// normals and `extra` (the normal under test) as starts.
 Least depth_oracle(const Cylinder<double>& a, const Box<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
                    const Eigen::Vector3d& extra) {
   const auto f = [&](const V3L& n) { return overlap_ld(a, b, R, t, n); };
-  Least best{f(V3L::UnitZ()), V3L::UnitZ()};
-  const auto keep = [&](LD v, const V3L& n) {
-    if (v < best.depth) best = {v, n};
-  };
-  // the kink circles
-  for (int c = 0; c < 4; ++c) {
-    const V3L axis = c < 3 ? V3L(R.col(c).cast<LD>()) : V3L::UnitZ();
-    const V3L e1 = (std::abs(axis.x()) < LD(0.6) ? V3L(1, 0, 0) : V3L(0, 1, 0)).cross(axis).normalized(), e2 = axis.cross(e1);
-    const auto at = [&](LD phi) { return V3L(std::cos(phi) * e1 + std::sin(phi) * e2); };
-    std::vector<std::pair<LD, LD>> samples;
-    for (int i = 0; i < 720; ++i) {
-      const LD phi = 2 * LD(M_PI) * i / 720;
-      samples.emplace_back(f(at(phi)), phi);
-    }
-    std::partial_sort(samples.begin(), samples.begin() + 3, samples.end());
-    for (int s = 0; s < 3; ++s) {
-      LD phi = samples[static_cast<std::size_t>(s)].second, fp = samples[static_cast<std::size_t>(s)].first;
-      for (LD step = 2 * LD(M_PI) / 720; step > LD(1e-15); step /= 10) {
-        const LD centre = phi;
-        for (int i = -10; i <= 10; ++i) {
-          const LD q = centre + step * i / 10, fq = f(at(q));
-          if (fq < fp) {
-            fp = fq;
-            phi = q;
-          }
-        }
-      }
-      keep(fp, at(phi));
-    }
-  }
-  // the sphere
-  std::vector<std::pair<LD, V3L>> start;
-  const LD golden = LD(M_PI) * (3 - std::sqrt(LD(5)));
-  for (int i = 0; i < 600; ++i) {
-    const LD z = 1 - (2 * i + LD(1)) / 600, rr = std::sqrt(1 - z * z);
-    const V3L n(rr * std::cos(golden * i), rr * std::sin(golden * i), z);
-    start.emplace_back(f(n), n);
-  }
-  std::partial_sort(start.begin(), start.begin() + 3, start.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  start.resize(3);
-  const auto add = [&](const Eigen::Vector3d& n) { start.emplace_back(f(n.cast<LD>()), n.cast<LD>()); };
+  std::vector<Eigen::Vector3d> starts;
   for (int i = 0; i < 3; ++i) {
-    add(R.col(i));
-    add(-R.col(i));
+    starts.push_back(R.col(i));
+    starts.push_back(-R.col(i));
   }
-  add(Eigen::Vector3d::UnitZ());
-  add(-Eigen::Vector3d::UnitZ());
-  add(extra.normalized());
-  for (const auto& s : start) {
-    V3L n = s.second;
-    LD fn = s.first;
-    int moves = 0;
-    for (LD cap = LD(0.1); cap > LD(1e-12);) {
-      const V3L e1 = (std::abs(n.x()) < LD(0.6) ? V3L(1, 0, 0) : V3L(0, 1, 0)).cross(n).normalized(), e2 = n.cross(e1);
-      V3L next = n;
-      for (int i = -2; i <= 2; ++i) {
-        for (int j = -2; j <= 2; ++j) {
-          const V3L m = (n + (cap * i / 2) * e1 + (cap * j / 2) * e2).normalized();
-          const LD fm = f(m);
-          if (fm < fn) {
-            fn = fm;
-            next = m;
-          }
-        }
-      }
-      if (next == n || ++moves == 32) {
-        cap /= 2;
-        moves = 0;
-      }
-      n = next;
-    }
-    keep(fn, n);
-  }
-  return best;
+  starts.push_back(Eigen::Vector3d::UnitZ());
+  starts.push_back(-Eigen::Vector3d::UnitZ());
+  starts.push_back(extra);
+  const std::vector<test::KinkCircle> circles = {{R.col(0), 0}, {R.col(1), 0}, {R.col(2), 0}, {Eigen::Vector3d::UnitZ(), 0}};
+  return test::least_overlap(f, starts, circles);
 }
 
 struct Case {
@@ -192,6 +123,50 @@ TEST(CylinderBoxPair, CertifiedDepthsAgainstTheOracle) {
   EXPECT_GT(face, IMPACT_TEST_SANITIZED ? 0 : 10);
   EXPECT_GT(cap, IMPACT_TEST_SANITIZED ? 0 : 1);
   EXPECT_GT(side, IMPACT_TEST_SANITIZED ? 0 : 5);
+}
+
+// A box face against the cylinder's rim point x, x's ball cut by a neighbouring face by delta
+// (1e-5 .. 6e-5 of the size), the depth delta / 2 below the face's overlap: in the cylinder's
+// frame, the box's corner edge along y at O = (r - A, 0, h - B) inside the cylinder, the box
+// turned by phi about y (axes e1 = (cos phi, 0, sin phi), e3 = (-sin phi, 0, cos phi), extending
+// along +e1, +e3 from O). x = (r, 0, h) is the cylinder's deepest point across the face normal to
+// e1 (overlap a = (x - O) . e1) and lies a - delta from the face normal to e3; with phi =
+// delta / (2A) and B from that, the box's lowest edge is B = a - delta / 2 below the cap, so the
+// depth is at most a - delta / 2 while every face of the box overlaps by at least a. The whole
+// scene is then posed at random. No certificate may claim a face's overlap. Checked to fail: the
+// face candidate's ball radius inflated by 1e-4 (it certifies a, delta / 2 above the oracle).
+TEST(CylinderBoxPair, FaceBallCutByANeighbour) {
+  test::Rng rng(625);
+  int checked = 0;
+  for (int k = 0; k < (IMPACT_TEST_SANITIZED ? 3 : 12); ++k) {
+    const Cylinder<double> cyl(rng.uniform(0.3, 1.0), rng.uniform(0.3, 1.0));
+    const double A = rng.uniform(0.02, 0.1) * cyl.radius, delta = rng.uniform(1e-5, 6e-5), phi = delta / (2 * A);
+    const double c = std::cos(phi), s = std::sin(phi);
+    const double B = (A * (c + s) - delta) / (c - s);  // x's distance to the e3 face is a - delta
+    const Eigen::Vector3d e1(c, 0, s), e3(-s, 0, c), O(cyl.radius - A, 0, cyl.half_length - B);
+    const Box<double> box(Eigen::Vector3d(0.4, 0.2, 0.4));
+    Eigen::Matrix3d Rl;
+    Rl << e1, Eigen::Vector3d::UnitY(), e3;
+    const RigidTransform<double> pa{rng.rotation(), rng.vec(-1, 1)};
+    const RigidTransform<double> pb{Eigen::Matrix3d(pa.R * Rl), pa.apply(Eigen::Vector3d(O + box.half.x() * e1 + box.half.z() * e3))};
+    const double size = std::max(shape_size(cyl), shape_size(box));
+    const detail::PairFrame<double> f(pa, pb);
+    double least_face = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i)
+      for (const double sign : {1.0, -1.0}) least_face = std::min(least_face, double(overlap_ld(cyl, box, f.R, f.t, (sign * f.R.col(i)).cast<LD>())));
+    ConvexContact<double> got;
+    const bool certified = detail::cylinder_box_contact(cyl, box, f.R, f.t, 1e-10 * size, got);
+    const double oracle = double(depth_oracle(cyl, box, f.R, f.t, certified ? got.normal : Eigen::Vector3d(Eigen::Vector3d::UnitZ())).depth);
+    EXPECT_LT(oracle, least_face - delta / 4) << "the construction: the depth below every face's overlap";
+    ++checked;
+    if (certified) {
+      EXPECT_LE(got.depth - got.depth_gap, oracle + 1e-12 * size) << "lower bound above the depth";
+      EXPECT_NEAR(got.depth, oracle, 1e-9 * size);
+    }
+    const auto p = convex_penetration(cyl, pa, box, pb);
+    EXPECT_NEAR(p.depth, oracle, 1e-9 * size);
+  }
+  EXPECT_EQ(checked, IMPACT_TEST_SANITIZED ? 3 : 12);
 }
 
 // The terms of the local certificate are the overlap itself (no branch): equal to the long-double

@@ -93,6 +93,7 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
   if (k.upper - k.lower <= tolerance) return k.finish(tolerance, out);
   // an edge of the box across the cone's side: n the side normal orthogonal to the edge (2h u . e
   // = -r e_z, u the azimuth), the edge the box's deepest along -n, x its point at azimuth u
+  // (box_edge_at_azimuth)
   const S r = a.radius, h = a.half_length, len = std::sqrt(S(4) * h * h + r * r);
   for (int i = 0; i < 3; ++i) {
     const Vec3<S> e = R.col(i);
@@ -102,15 +103,8 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
     for (const S sign : {S(1), S(-1)}) {
       const S ux = along * e.x() - sign * across * e.y(), uy = along * e.y() + sign * across * e.x();
       const Vec3<S> n(S(2) * h * ux / len, S(2) * h * uy / len, r / len);
-      const Vec3<S> d = R.transpose() * n;  // the box's deepest edge along -n: the corner signs off axis i
-      Vec3<S> p0 = t;
-      for (int j = 0; j < 3; ++j) p0 += (j == i || d[j] > S(0)) ? Vec3<S>(-hc[j]) : hc[j];
-      const Vec3<S> ev = S(2) * hc[i];
-      const S qp = -uy * p0.x() + ux * p0.y(), qe = -uy * ev.x() + ux * ev.y();
-      if (!(std::abs(qe) > S(0))) continue;
-      const S s = -qp / qe;
-      if (!(s >= S(0) && s <= S(1))) continue;
-      const Vec3<S> x = p0 + s * ev;
+      Vec3<S> x;
+      if (!box_edge_at_azimuth(R, t, hc, i, n, ux, uy, x)) continue;
       const InsideBall<S> ball = inside_ball(a, x);
       if (ball.rho > S(0)) k.offer(n, overlap(n), x, ball.rho);
     }

@@ -201,22 +201,15 @@ bool cylinder_box_contact(const Cylinder<S>& a, const Box<S>& b, const Mat3<S>& 
   if (decided()) return k.finish(tolerance, out);
   // an edge of the box across the cylinder's side: n normal to the axis and to the edge (both
   // signs), the edge the box's deepest along -n, x its point where its xy projection is along n
+  // (box_edge_at_azimuth)
   for (int i = 0; i < 3; ++i) {
     const S ex = R(0, i), ey = R(1, i), m2 = ex * ex + ey * ey;
     if (!(m2 > S(1e-12))) continue;
     const S inv = S(1) / std::sqrt(m2);
     for (const S sign : {S(1), S(-1)}) {
       const Vec3<S> n(sign * ey * inv, -sign * ex * inv, S(0));
-      const Vec3<S> d = R.transpose() * n;  // the box's deepest edge along -n: the corner signs off axis i
-      Vec3<S> p0 = t;
-      for (int j = 0; j < 3; ++j) p0 += (j == i || d[j] > S(0)) ? Vec3<S>(-hc[j]) : hc[j];
-      const Vec3<S> ev = S(2) * hc[i];
-      // the component of p0 + s ev normal to n in the xy plane (along (-n_y, n_x)) vanishes
-      const S qp = -n.y() * p0.x() + n.x() * p0.y(), qe = -n.y() * ev.x() + n.x() * ev.y();
-      if (!(std::abs(qe) > S(0))) continue;
-      const S s = -qp / qe;
-      if (!(s >= S(0) && s <= S(1))) continue;
-      const Vec3<S> x = p0 + s * ev;
+      Vec3<S> x;
+      if (!box_edge_at_azimuth(R, t, hc, i, n, n.x(), n.y(), x)) continue;
       const InsideBall<S> ball = inside_ball(a, x);
       if (ball.rho > S(0)) k.offer(n, overlap(n), x, ball.rho);
     }

@@ -14,6 +14,8 @@
 /// of the triangle's projection along the axis to the axis, lifted back onto the triangle). When
 /// the best upper and lower bounds are within the tolerance the answer is certified as EPA's is
 /// (depth = the upper bound, depth_gap = upper - lower); otherwise the caller runs EPA.
+/// Also the pieces the cylinder–box and cone–box candidates share: inside_ball of a box, and
+/// box_edge_at_azimuth (a box edge across the side of a solid of revolution).
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a lower bound up to the rounding of rho.
@@ -92,6 +94,28 @@ InsideBall<S> inside_ball(const Box<S>& b, const Vec3<S>& x) {
     }
   }
   return out;
+}
+
+/// A box edge across the side of a solid of revolution about z (cylinder or cone, in its frame):
+/// of the box's four edges along its axis i (the box placed by R, t, with hc[j] its axis j scaled
+/// by its half extent), the one deepest along -n (its corner signs off axis i those of -R^T n),
+/// and that edge's point x where it crosses the plane through z at azimuth (ux, uy) (its xy
+/// projection along (ux, uy) or opposite). False when the edge is parallel to that plane or
+/// crosses it beyond its ends. Used by the edge candidates of cone_box_pair.hpp and
+/// cylinder_box_pair.hpp, whose normals n differ (a side normal of each at that azimuth).
+template <class S>
+bool box_edge_at_azimuth(const Mat3<S>& R, const Vec3<S>& t, const Vec3<S> (&hc)[3], int i, const Vec3<S>& n, S ux, S uy, Vec3<S>& x) {
+  const Vec3<S> d = R.transpose() * n;
+  Vec3<S> p0 = t;
+  for (int j = 0; j < 3; ++j) p0 += (j == i || d[j] > S(0)) ? Vec3<S>(-hc[j]) : hc[j];
+  const Vec3<S> ev = S(2) * hc[i];
+  // the component of p0 + s ev along (-uy, ux) (normal to the plane) vanishes
+  const S qp = -uy * p0.x() + ux * p0.y(), qe = -uy * ev.x() + ux * ev.y();
+  if (!(std::abs(qe) > S(0))) return false;
+  const S s = -qp / qe;
+  if (!(s >= S(0) && s <= S(1))) return false;
+  x = p0 + s * ev;
+  return true;
 }
 
 /// The certified contact of triangle t (a) and shape b (a Cylinder or Cone), both in b's frame,

@@ -88,6 +88,27 @@ struct WideEntry {
   std::int32_t first, count;
 };
 
+/// The pending children of the AVX node loop when the tree's depth bounds them (N entries at
+/// most: IMPACT_ASSERT): TraversalStack's interface with the top kept as a pointer, so a push is
+/// three stores and a pop one decrement, and the loop holds one register for it, not an index
+/// and its scaled copy.
+template <int N> class WideFixedStack {
+ public:
+  WideFixedStack() : top_(slots_) {}  // the slots stay uninitialised
+  WideFixedStack(const WideFixedStack&) = delete;
+  WideFixedStack& operator=(const WideFixedStack&) = delete;
+  void push(const WideEntry& e) {
+    IMPACT_ASSERT(top_ < slots_ + N);
+    *top_++ = e;
+  }
+  bool empty() const { return top_ == slots_; }
+  WideEntry pop() { return *--top_; }
+
+ private:
+  WideEntry slots_[N];
+  WideEntry* top_;
+};
+
 /// The state of one cast through a WideBvh (ray_wide_first_hit_unchecked), shared by its node
 /// loop and its leaves: the best hit so far and the bounds derived from it, the ray prepared for
 /// the triangle test (at the first leaf: most short casts reach none).
@@ -329,7 +350,7 @@ template <class S, int W = 4> struct WideCast {
   /// frame (the top in a register). False, having done nothing, when its float test cannot take
   /// the ray: then run_without_avx().
   bool run_avx_loop() {
-    return wide.depth() <= kFixedDepth ? run_avx<TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None>>()
+    return wide.depth() <= kFixedDepth ? run_avx<WideFixedStack<(W - 1) * kFixedDepth>>()
                                        : run_avx<TraversalStack<WideEntry, 128>>();
   }
 #endif
@@ -381,8 +402,9 @@ template <class S, int W = 4> struct WideCast {
     _mm256_store_ps(fk, keys);
     const int c1 = lowest_bit(rest);
     if (!(rest & (rest - 1))) {  // two: the nearer first (ties: the lower slot)
-      const bool swap = fk[c0] > fk[c1];
-      const int near = swap ? c1 : c0, far = swap ? c0 : c1;
+      // chosen by a mask, not a jump: which of two boxes a ray enters first is a coin toss
+      const int swap = -static_cast<int>(fk[c0] > fk[c1]);
+      const int near = c0 ^ ((c0 ^ c1) & swap), far = c0 ^ c1 ^ near;
       stack.push({fk[far], n.first[far], n.count[far]});
       first = n.first[near];
       count = n.count[near];
@@ -499,7 +521,6 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
   Stack stack;
   const Node* nodes = wide.nodes().data();
   std::int32_t first = 0, count = 0;  // the root: an inner node
-  std::size_t tests = 0;
   for (;;) {
     const __m256 exit_v = _mm256_set1_ps(exit_f), bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
     const float bound = bound_f;
@@ -507,7 +528,7 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
     while (count == 0) {
       const Node& n = nodes[first];
       prefetch_references(n);
-      ++tests;
+      ++node_tests;  // (in memory: the loop has more live integers than registers)
       __m256 lo;
       int mask = WideFloatSlab<S, W>::entered_avx(fs, n, exit_v, bound_v, lo);
       if (mask) {
@@ -540,10 +561,7 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
       }
       done = !pop_below(stack, bound_f, first, count);
     }
-    if (done) {
-      node_tests += tests;
-      return true;
-    }
+    if (done) return true;
   }
 }
 #endif

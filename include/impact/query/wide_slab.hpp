@@ -408,7 +408,9 @@ template <class S, int W = 4> class WideFloatSlab {
     const __m256 lo = _mm256_sub_ps(_mm256_mul_ps(t0, _mm256_set1_ps(kLow)), a.e);
     const __m256 hi = _mm256_add_ps(_mm256_mul_ps(t1, _mm256_set1_ps(kHigh)), a.e);
     keys = lo;
-    return _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(lo, hi, _CMP_LE_OQ), _mm256_cmp_ps(lo, bound, _CMP_LE_OQ)));
+    // lo <= hi and lo <= bound as one comparison with min(hi, bound): neither is NaN (a usable
+    // ray's products are finite or infinite, and no sum adds opposite infinities)
+    return _mm256_movemask_ps(_mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ));
   }
   /// entered_avx() on the state made by avx_state (for the tests that compare it with the
   /// object's): the mask, or -1 when avx_state says the slab is not usable; `e` as avx_state.
