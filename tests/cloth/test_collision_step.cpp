@@ -11,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+#include <string>
+
 namespace {
 
 using namespace impact;
@@ -174,6 +177,140 @@ TYPED_TEST(ClothStep, BadInputThrowsAndModifiesNothing) {
     obs.kinematic.push_back({&floor.V, &floor.V, &badF});
     expect_throw([&] { cloth_collision_step(F, w, x0, x1, obs, opt); }, "obstacle index");
   }
+}
+
+// The start check's exact intersection test (cloth/detail/start_intersections.hpp): an edge
+// through a triangle's interior with every vertex-face and edge-edge pair far farther apart than
+// h is seen by no distance, only by the triangle pair's exact test; it throws naming the two
+// triangles, or is listed with StartViolation::Report. Non-adjacent, sharing a vertex (the
+// opposite edge through the other triangle), and against an obstacle.
+TYPED_TEST(ClothStep, IntersectingStartThrowsNamingTheTriangles) {
+  using S = TypeParam;
+  const S h = S(1e-3);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = h;
+  const ClothObstacles<S> none;
+  auto expect_intersecting_start = [&](const Faces& F, const Vertices<S>& x0, const ClothObstacles<S>& obs, const std::string& named) {
+    // the oracles: verify_cloth_state's exact test sees the intersection, no pair is within 100 h
+    const auto rep = verify_cloth_state(F, x0, obs, ObstacleTime::Start);
+    EXPECT_EQ(rep.intersections, 1u);
+    EXPECT_GT(cloth_test::sampled_min_distance(combine(F, x0, x0, obs), 1), 100 * double(h));
+    Vertices<S> x1 = x0;
+    x1.col(2).array() -= S(0.01);
+    const Vertices<S> keep = x1;
+    Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(x0.rows());
+    try {
+      cloth_collision_step(F, w, x0, x1, obs, opt);
+      ADD_FAILURE() << "no throw for " << named;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("intersects"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(x1 == keep);
+    auto o = opt;
+    o.on_start_violation = StartViolation::Report;
+    const auto st = cloth_collision_step(F, w, x0, x1, obs, o);
+    ASSERT_EQ(st.start_intersections.size(), 1u);
+    EXPECT_TRUE(st.start_violations.empty());
+  };
+  // Triangle 0 in z = 0; triangle 1 upright, its edges (3,4) and (4,5) through 0's interior.
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  const Vertices<S> x0 = rows<S>({{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, {0, -0.2, 0.5}, {0, -0.2, -0.5}, {0.1, -0.2, 0.6}});
+  expect_intersecting_start(F, x0, none, "triangle 0 (0,1,2) and triangle 1 (3,4,5)");
+  // Sharing vertex 0: the edge (3,4) opposite it passes through triangle 0's interior.
+  const Faces Fv = (Faces(2, 3) << 0, 1, 2, 0, 3, 4).finished();
+  const Vertices<S> xv = rows<S>({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, 1}, {0.5, 0.5, -1}});
+  expect_intersecting_start(Fv, xv, none, "triangle 0 (0,1,2) and triangle 1 (0,3,4)");
+  // Against a kinematic obstacle (triangle 1, vertices 3-5): the obstacle's edge through the cloth.
+  const Faces Fc = (Faces(1, 3) << 0, 1, 2).finished();
+  const Vertices<S> xc = x0.topRows(3);
+  const Vertices<S> ob = x0.bottomRows(3);
+  const Faces Fo = (Faces(1, 3) << 0, 1, 2).finished();
+  ClothObstacles<S> obs;
+  obs.kinematic.push_back({&ob, &ob, &Fo});
+  expect_intersecting_start(Fc, xc, obs, "triangle 0 (0,1,2) and triangle 1 (3,4,5)");
+  // The same triangle twice (a duplicated face): it shares every point with itself.
+  const Faces Fd = (Faces(2, 3) << 0, 1, 2, 1, 2, 0).finished();
+  expect_intersecting_start(Fd, xc, none, "triangle 0 (0,1,2) and triangle 1 (1,2,0)");
+}
+
+// Starts that touch within the thickness band but do not intersect: a flat sheet (adjacent
+// triangles coplanar), a second sheet 1.5 h above it, an upright triangle standing 1.5 h above
+// the top sheet's interior, and one whose edge crosses the sheet's plane 1.5 h beyond its
+// border. Nothing throws, in float and double; 0.7 h closer, a start pair is closer than h.
+TYPED_TEST(ClothStep, TouchingAndNearStartsDoNotThrow) {
+  using S = TypeParam;
+  const S h = S(1e-3);
+  const auto g = make_grid<S>(4, 4, S(1));
+  const Eigen::Index n = g.V.rows(), m = g.F.rows();
+  Faces F(2 * m + 2, 3);
+  F.topRows(m) = g.F;
+  F.middleRows(m, m) = g.F.array() + int(n);
+  Vertices<S> x0(2 * n + 6, 3);
+  x0.topRows(n) = g.V;
+  x0.middleRows(n, n) = g.V;
+  x0.middleRows(n, n).col(2).array() += S(1.5) * h;
+  const S top = S(1.5) * h, edge = g.V.col(0).maxCoeff();
+  // upright over the interior, its lowest vertex 1.5 h above the top sheet
+  x0.row(2 * n) << S(0.3), S(0.3), top + S(1.5) * h;
+  x0.row(2 * n + 1) << S(0.3), S(0.35), S(0.5);
+  x0.row(2 * n + 2) << S(0.35), S(0.3), S(0.5);
+  // an edge down through the sheets' plane 1.5 h beyond their border x = edge
+  x0.row(2 * n + 3) << edge + S(1.5) * h, S(0.5), S(0.5);
+  x0.row(2 * n + 4) << edge + S(1.5) * h, S(0.5), S(-0.5);
+  x0.row(2 * n + 5) << edge + S(0.3), S(0.5), S(0.5);
+  F.row(2 * m) << int(2 * n), int(2 * n + 1), int(2 * n + 2);
+  F.row(2 * m + 1) << int(2 * n + 3), int(2 * n + 4), int(2 * n + 5);
+  const ClothObstacles<S> none;
+  EXPECT_EQ(verify_cloth_state(F, x0, none, ObstacleTime::Start).intersections, 0u);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = h;
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(x0.rows());
+  Vertices<S> x1 = x0;
+  EXPECT_NO_THROW(cloth_collision_step(F, w, x0, x1, none, opt));
+  for (Eigen::Index v : {Eigen::Index(2 * n), Eigen::Index(2 * n + 3)}) {
+    Vertices<S> closer = x0;
+    closer(v, v == 2 * n ? 2 : 0) -= S(0.7) * h;
+    if (v == 2 * n + 3) closer(v + 1, 0) -= S(0.7) * h;
+    Vertices<S> x1c = closer;
+    EXPECT_THROW(cloth_collision_step(F, w, closer, x1c, none, opt), InvalidInput) << v;
+  }
+}
+
+// Random triangle pairs (a third sharing a vertex) around a triangle, h = 0.01: whenever the exact
+// verify_cloth_state finds them intersecting at x0, the step throws; when it throws for an
+// intersection, verify_cloth_state finds one; when it does not throw, no pair is within h.
+TYPED_TEST(ClothStep, StartCheckAgreesWithExactVerification) {
+  using S = TypeParam;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1, 1);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(0.01);
+  const ClothObstacles<S> none;
+  int pierced = 0, intersecting = 0;
+  for (int it = 0; it < 300; ++it) {
+    const bool shared = it % 3 == 0;
+    const Faces F = shared ? (Faces(2, 3) << 0, 1, 2, 0, 3, 4).finished() : (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+    Vertices<S> x0(shared ? 5 : 6, 3);
+    for (Eigen::Index i = 0; i < x0.rows(); ++i)
+      for (int k = 0; k < 3; ++k) x0(i, k) = S(i < 3 && k == 2 ? 0.1 * U(rng) : U(rng));
+    const bool hit = verify_cloth_state(F, x0, none, ObstacleTime::Start).intersections > 0;
+    intersecting += hit;
+    Vertices<S> x1 = x0;
+    Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(x0.rows());
+    try {
+      cloth_collision_step(F, w, x0, x1, none, opt);
+      EXPECT_FALSE(hit) << it;
+      EXPECT_GE(cloth_test::sampled_min_distance(combine(F, x0, x0, none), 1), 0.01) << it;
+    } catch (const InvalidInput& e) {
+      if (std::string(e.what()).find("intersects") != std::string::npos) {
+        ++pierced;
+        EXPECT_TRUE(hit) << it << ": " << e.what();
+      }
+    }
+  }
+  EXPECT_GE(intersecting, 60);
+  EXPECT_GE(pierced, 30);
 }
 
 // A floor rising 0.5 in one step pushes a resting cloth triangle (A) far out of the envelope the

@@ -5,8 +5,8 @@
 // kinematic obstacle sheet (still or moving); the thickness 2^-3 .. 2^-7; every stage switched,
 // both zone methods, few passes and rounds (so the zones and the fail-safe are reached); float or
 // double (the grid, the velocities and the thickness are exact in both). A start
-// closer than the thickness is InvalidInput (the default StartViolation::Throw) and ends the run,
-// as does a start that intersects (the step's precondition; see below).
+// closer than the thickness is InvalidInput (the default StartViolation::Throw) and ends the run;
+// so must a start that intersects (checked against verify_cloth_state: accepting one is a finding).
 // Checked against oracles independent of the step (tests/cloth/cloth_oracles.hpp, verify_state):
 //  - the corrected end positions are finite, and pinned vertices end where they were scripted to;
 //  - when the step reports collision_free: no triangle pair intersects at the end (exact
@@ -130,18 +130,19 @@ template <class S> int run(impact::fuzz::Input& in, std::uint8_t mode) {
   opt.friction = S(in.byte() % 4) / 4;
   opt.separation_margin = S(in.byte() % 3) / 8;
 
-  // The step's precondition beyond its start check: x0 intersects nowhere. The start check sees
-  // vertex-face and edge-edge pairs closer than h; an edge piercing a triangle far from its
-  // boundary (every such pair farther than h) is an intersecting start it cannot see, and stays.
-  if (impact::verify_cloth_state(F, x0, obstacles, impact::ObstacleTime::Start).intersections != 0) return 0;
+  // An intersecting start must be refused: the start check tests the triangle pairs it gathers
+  // exactly, so an edge piercing a triangle far from its boundary (every vertex-face and edge-edge
+  // pair farther than h) is an InvalidInput too. The oracle is the independent exact check.
+  const bool start_intersects = impact::verify_cloth_state(F, x0, obstacles, impact::ObstacleTime::Start).intersections != 0;
 
   Vertices<S> x = x1;
   impact::ClothStepStats stats;
   try {
     stats = impact::cloth_collision_step(F, inverse_mass, x0, x, obstacles, opt);
   } catch (const impact::InvalidInput&) {
-    return 0;  // a start closer than h (or a degenerate input): refused, nothing to check
+    return 0;  // a start closer than h, an intersecting start or a degenerate input: refused
   }
+  if (start_intersects) fail("an intersecting start was accepted", h);
 
   for (int i = 0; i < nv; ++i) {
     if (!x.row(i).allFinite()) fail("vertex " + std::to_string(i) + " ends non-finite", h);

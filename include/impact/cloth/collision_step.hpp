@@ -86,14 +86,20 @@ class ClothCollisionWorkspace {
 /// refit instead of rebuilding between steps.
 /// Throws InvalidInput, with nothing modified, on: sizes that do not match, out-of-range indices,
 /// NaN/Inf coordinates or masses, negative masses, h <= 0 or NaN, proximity_distance in (0, h),
-/// proximity_rounds < 1, proximity_tolerance <= 0, negative counts or friction; and (StartViolation::Throw) x0 with a tested pair closer than h,
-/// naming the first pairs.
-/// Precondition: x0 intersects nowhere. The start check sees vertex-face and edge-edge pairs
-/// closer than h, which catches every intersection near a triangle's boundary but not an edge
-/// that pierces a triangle farther than h from its edges and vertices; such a start stays as it
-/// is (no pair comes within h, so nothing moves it apart). verify_cloth_state checks a start
-/// exactly. (A start free of intersections stays free: two triangles can only begin to intersect
-/// through a vertex-face or edge-edge contact, which the step keeps at least h apart.)
+/// proximity_rounds < 1, proximity_tolerance <= 0, negative counts or friction; and
+/// (StartViolation::Throw) an x0 that is not a valid start:
+///  - two triangles intersect (cloth against itself or an obstacle; adjacent triangles may share
+///    only their common vertex or edge, as in verify_cloth_state): the message names the two
+///    triangles (cloth triangles 0..m-1, then each obstacle's). The start's gathering tests each
+///    triangle pair it visits exactly (the library's exact predicates) when a cheap, rounding-safe
+///    filter cannot rule out an edge of one passing through the other with its ends more than
+///    h / 2 from the other's plane; every other intersection has a vertex-face or edge-edge pair
+///    within h / 2, which the next check reports (cloth/detail/start_intersections.hpp);
+///  - a tested vertex-face or edge-edge pair closer than h: the message names the first pairs.
+/// With StartViolation::Report both are listed (start_intersections, start_violations) and the
+/// step proceeds; it cannot undo an intersection. A start free of intersections stays free: two
+/// triangles can only begin to intersect through a vertex-face or edge-edge contact, which the
+/// step keeps at least h apart.
 /// Returns the statistics; see the file comment for the guarantee.
 template <class S>
 ClothStepStats cloth_collision_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& inverse_mass, const Vertices<S>& x0,

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace impact {
@@ -171,6 +172,11 @@ struct ClothStepStats {
   std::vector<ClothPair> unresolved;
   /// With StartViolation::Report: the pairs closer than h at x0 (excluded from the step).
   std::vector<ClothPair> start_violations;
+  /// With StartViolation::Report: the triangle pairs (cloth triangles 0..m-1, then each
+  /// obstacle's, as in verify_cloth_state) that intersect at x0 with an edge of one through the
+  /// other and no vertex-face or edge-edge pair within h / 2 (an intersection with a closer pair
+  /// shows in start_violations). The step cannot undo them: they stay.
+  std::vector<std::pair<std::int32_t, std::int32_t>> start_intersections;
 };
 
 }  // namespace impact

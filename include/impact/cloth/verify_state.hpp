@@ -21,6 +21,7 @@
 #pragma once
 
 #include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/detail/start_intersections.hpp"
 #include "impact/cloth/step_options.hpp"
 #include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/predicates.hpp"
@@ -53,57 +54,6 @@ struct ClothStateReport {
   std::size_t triangle_pairs = 0;                         ///< pairs examined
 };
 
-namespace detail::cloth {
-
-template <class S>
-bool adjacent_pair_intersects(const Vec3<S>* A, const Vec3<S>* B, const int* ia, const int* ib) {
-  using namespace detail::tri_tri;
-  int sa[3], sb[3], ns = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (ia[i] == ib[j]) sa[ns] = i, sb[ns] = j, ++ns;
-  if (ns >= 3) return true;  // the same triangle twice
-  double a[3][3], b[3][3];
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) a[i][k] = double(A[i][k]), b[i][k] = double(B[i][k]);
-  const double* ta[3] = {a[0], a[1], a[2]};
-  const double* tb[3] = {b[0], b[1], b[2]};
-  if (degenerate_3d(ta) || degenerate_3d(tb)) return false;
-  if (ns == 2) {
-    const int oa = 3 - sa[0] - sa[1], ob = 3 - sb[0] - sb[1];
-    const double* v = a[sa[0]];
-    const double* w = a[sa[1]];
-    if (orient3d_double(v, w, a[oa], b[ob]) != 0) return false;
-    const Proj pr = drop_axis(injective_axis(ta));
-    return pr.o2(v, w, a[oa]) * pr.o2(v, w, b[ob]) > 0;
-  }
-  // ns == 1: shared vertex.
-  const int va = sa[0], vb = sb[0];
-  auto opposite_meets = [](const double (&x)[3][3], int vx, const Vec3<S>* Y) {
-    const Vec3<S> p = Vec3<S>(S(x[(vx + 1) % 3][0]), S(x[(vx + 1) % 3][1]), S(x[(vx + 1) % 3][2]));
-    const Vec3<S> q = Vec3<S>(S(x[(vx + 2) % 3][0]), S(x[(vx + 2) % 3][1]), S(x[(vx + 2) % 3][2]));
-    return triangles_intersect(Triangle<S>(p, q, q), Triangle<S>(Y[0], Y[1], Y[2]));
-  };
-  if (opposite_meets(a, va, B) || opposite_meets(b, vb, A)) return true;
-  // An edge (v, x_i) of X lying in Y's plane and pointing into Y's corner at v.
-  auto edge_in_corner = [](const double (&x)[3][3], int vx, const double (&y)[3][3], int vy) {
-    const double* ty[3] = {y[0], y[1], y[2]};
-    const double* v = y[vy];
-    const double* y1 = y[(vy + 1) % 3];
-    const double* y2 = y[(vy + 2) % 3];
-    const Proj pr = drop_axis(injective_axis(ty));
-    const int oy = pr.o2(v, y1, y2);
-    for (int k = 1; k <= 2; ++k) {
-      const double* e = x[(vx + k) % 3];
-      if (orient3d_double(v, y1, y2, e) != 0) continue;
-      if (pr.o2(v, y1, e) * oy >= 0 && pr.o2(v, e, y2) * oy >= 0) return true;
-    }
-    return false;
-  };
-  return edge_in_corner(a, va, b, vb) || edge_in_corner(b, vb, a, va);
-}
-
-}  // namespace detail::cloth
 
 /// Checks the cloth at positions `x` (triangles F) against itself and the obstacles at `when`.
 /// Throws InvalidInput on bad arrays (as cloth_collision_step would). O((n + pairs) log n).

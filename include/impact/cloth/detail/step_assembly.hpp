@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace impact::detail::cloth {
@@ -102,7 +103,9 @@ void Stepper<S>::assemble(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic,
   stats_.broad.ms += ms_since(t0);
 }
 
-/// Gathers the candidates of the current motion, classifies the start and throws on violations.
+/// Gathers the candidates of the current motion, classifies the start and throws on violations:
+/// triangle pairs that intersect at x0 (the gathering's exact test, check_pierce), then pairs
+/// closer than h.
 template <class S>
 void Stepper<S>::check_start() {
   gather();
@@ -128,6 +131,24 @@ void Stepper<S>::check_start() {
       const auto r = ccd(p, /*static_start=*/true);
       if (r.hit) bad.push_back(p);
     }
+  }
+  std::sort(pierced_.begin(), pierced_.end());
+  if (!pierced_.empty()) {
+    if (opt_.on_start_violation == StartViolation::Throw) {
+      std::string msg = "cloth_collision_step: x0 intersects itself or an obstacle (" + std::to_string(pierced_.size()) +
+                        " triangle pair(s) with an edge of one through the other, with no vertex-face or edge-edge pair within h / 2): ";
+      for (std::size_t i = 0; i < std::min<std::size_t>(pierced_.size(), 8); ++i) {
+        const auto& t = pierced_[i];
+        auto tri = [&](std::int32_t f) {
+          return "triangle " + std::to_string(f) + " (" + std::to_string(sys_.F(f, 0)) + "," + std::to_string(sys_.F(f, 1)) + "," +
+                 std::to_string(sys_.F(f, 2)) + ")";
+        };
+        msg += (i ? ", " : "") + tri(t.first) + " and " + tri(t.second);
+      }
+      if (pierced_.size() > 8) msg += ", ...";
+      throw InvalidInput(msg);
+    }
+    stats_.start_intersections = pierced_;
   }
   if (!bad.empty()) {
     if (opt_.on_start_violation == StartViolation::Throw) {

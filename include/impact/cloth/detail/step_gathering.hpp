@@ -130,7 +130,11 @@ void Stepper<S>::gather() {
   old_tbox_ = tbox_;
   refit_tree();
   cand_.clear();
-  self_pairs([&](std::int32_t fa, std::int32_t fb) { pairs_of(fa, fb, cand_); });
+  start_planes();
+  self_pairs([&](std::int32_t fa, std::int32_t fb) {
+    pairs_of(fa, fb, cand_);
+    check_pierce(fa, fb);
+  });
   // Per candidate: a lower bound on its distance at x0 (NaN: not known yet), the pass stamp;
   // the vertex -> candidate index is built when first needed.
   refill(d0_, cand_.size(), std::numeric_limits<double>::quiet_NaN());
@@ -455,6 +459,49 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
       out.push_back(p);
     }
   }
+}
+
+/// Each triangle's plane at x0 for check_pierce's filter (pierce_plane at g = h / 2).
+template <class S>
+void Stepper<S>::start_planes() {
+  const Faces& F = sys_.F;
+  plane0_.resize(static_cast<std::size_t>(F.rows()));
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    double x[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) x[i][k] = double(sys_.X0(F(f, i), k));
+    plane0_[std::size_t(f)] = pierce_plane(x[0], x[1], x[2], h_ / 2, scale_);
+  }
+}
+
+/// The start check's exact intersection test of the triangle pair (fa, fb) (not both obstacle)
+/// at x0, run on the pairs the gathering visits: every pair of triangles that meet at x0 is among
+/// them (their grown envelopes hold their start positions). Only pairs that may_pierce lets
+/// through at h / 2 (a triangle with vertices more than h / 2 on both sides of the other's
+/// plane; each triangle's plane computed once per step, start_planes) get the exact test
+/// (triangle_pair_intersects); any other intersecting pair has a vertex-face or edge-edge pair
+/// within h / 2 (cloth/detail/start_intersections.hpp), which check_start's conservative CCD at
+/// minimum separation h reports (the margin covers its rounding). Triangles sharing an edge are
+/// skipped (their intersections have a pair at distance 0), the same triangle twice reported.
+template <class S>
+void Stepper<S>::check_pierce(std::int32_t fa, std::int32_t fb) {
+  if (sys_.tri_obstacle[std::size_t(fa)] && sys_.tri_obstacle[std::size_t(fb)]) return;
+  const Faces& F = sys_.F;
+  const int ia[3] = {F(fa, 0), F(fa, 1), F(fa, 2)}, ib[3] = {F(fb, 0), F(fb, 1), F(fb, 2)};
+  int shared = 0;
+  for (int i = 0; i < 3; ++i) shared += (ia[i] == ib[0]) + (ia[i] == ib[1]) + (ia[i] == ib[2]);
+  if (shared >= 3) {  // the same triangle twice
+    pierced_.push_back({std::min(fa, fb), std::max(fa, fb)});
+    return;
+  }
+  if (shared == 2) return;  // sharing an edge: an intersection has a pair at distance 0 (start_intersections.hpp)
+  double a[3][3], b[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) a[i][k] = double(sys_.X0(ia[i], k)), b[i][k] = double(sys_.X0(ib[i], k));
+  if (!may_pierce(plane0_[std::size_t(fa)], a, plane0_[std::size_t(fb)], b)) return;
+  const Vec3<S> A[3] = {sys_.X0.row(ia[0]).transpose(), sys_.X0.row(ia[1]).transpose(), sys_.X0.row(ia[2]).transpose()};
+  const Vec3<S> B[3] = {sys_.X0.row(ib[0]).transpose(), sys_.X0.row(ib[1]).transpose(), sys_.X0.row(ib[2]).transpose()};
+  if (triangle_pair_intersects(A, B, ia, ib)) pierced_.push_back({std::min(fa, fb), std::max(fa, fb)});
 }
 
 /// Whether some vertex moved since the last CCD pass left its envelope.

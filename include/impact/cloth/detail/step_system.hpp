@@ -7,6 +7,7 @@
 #pragma once
 
 #include "impact/ccd/mesh_ccd.hpp"
+#include "impact/cloth/detail/start_intersections.hpp"
 #include "impact/cloth/step_options.hpp"
 #include "impact/core/types.hpp"
 
@@ -43,6 +44,7 @@ struct StepBuffers {
   std::vector<std::uint8_t> d0_exact, changed, status;
   std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo, run;
   std::vector<CcdResult<S>> res;
+  std::vector<PiercePlane> plane0;
   Vertices<S> x1_seen;
 };
 

@@ -14,6 +14,7 @@
 #include "impact/cloth/detail/hull_proofs.hpp"
 #include "impact/cloth/detail/kept_proofs.hpp"
 #include "impact/cloth/detail/relax_contacts.hpp"
+#include "impact/cloth/detail/start_intersections.hpp"
 #include "impact/cloth/detail/step_system.hpp"
 #include "impact/cloth/step_options.hpp"
 #include "impact/cloth/zone_projection.hpp"
@@ -106,6 +107,8 @@ class Stepper {
   template <class Visit>
   void grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit);
   void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out, bool only_new = false) const;
+  void start_planes();
+  void check_pierce(std::int32_t fa, std::int32_t fb);
   bool escaped() const;
   void build_incidence();
 
@@ -193,6 +196,10 @@ class Stepper {
   std::size_t inc_n_ = 0;  // candidates covered by the vertex -> candidate index
   std::uint32_t stamp_now_ = 0;
   std::vector<Near> near_;
+  // The start's intersecting triangle pairs that the filter of check_pierce let through (sorted
+  // by check_start).
+  std::vector<std::pair<std::int32_t, std::int32_t>> pierced_;
+  std::vector<PiercePlane>& plane0_ = buf_.plane0;  // per triangle, at x0 (start_planes)
   // The contact set: the proximity pairs' constraints (stage 1), then the CCD impulses' hits.
   std::vector<ZoneConstraint> contacts_;
   std::vector<Hit> last_hits_;
