@@ -70,6 +70,7 @@
 #include "impact/convex/cone_cone_pair.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_box_pair.hpp"
+#include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/cylinder_intersect.hpp"
 #include "impact/convex/cylinder_pair.hpp"
 #include "impact/convex/epa.hpp"
@@ -714,6 +715,68 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   return g;
 }
 
+/// A cylinder (a) and a convex hull (b): a plane normal to the line between the centres, then the
+/// candidates of convex/cylinder_hull_pair.hpp (the hull's face planes, which also separate most
+/// of the separated poses left; faces, caps and edges across the side, certified by a ball inside
+/// one shape; a certified lower bound is positive, so it proves the intersection: no GJK), else
+/// GJK until it encloses the origin or separates them, and EPA from its tetrahedron seeded with
+/// the best candidate's direction and stopped early by the local certificate on
+/// cylinder_hull_terms (the hull's vertex or edge at EPA's normal), accepted when the true overlap
+/// at its normal is within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b,
+                                           const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_b = f.b_to_a(interior_point(b));
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = centre_b.norm();
+    if (len > S(0)) {
+      const Vec3<S> m = centre_b / len;
+      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -margin) {
+        ConvexContact<S> c;
+        c.iterations = 1;
+        return c;
+      }
+    }
+  }
+  ConvexContact<S> cand;
+  const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
+  if (verdict == CylinderHullVerdict::Apart) {
+    ConvexContact<S> c;
+    c.iterations = 1;
+    return c;
+  }
+  if (verdict == CylinderHullVerdict::Certified) {
+    cand.iterations += 1;
+    settle_certified_from_frame(a, pa, b, pb, cand);
+    return cand;
+  }
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  bool limit = false, failed = false;
+  if (!gjk_enclose(sa, sb, Vec3<S>(-centre_b), scale, o.max_iterations, simplex, its, limit, failed)) {
+    if (limit || failed) return general_penetration(a, pa, b, pb, o);
+    ConvexContact<S> none;
+    none.iterations = its + cand.iterations;
+    return none;
+  }
+  const auto local = [&](const Vec3<S>& n) {
+    const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
+    const Vec3<S>& k = lc.normal;
+    if (lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol) return lc;
+    return LocalCertificate<S>();
+  };
+  const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, its, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, its, NoLocalCertificate{}, seed);
+  g.iterations += cand.iterations;
+  return g;
+}
+
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
 /// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
 /// when the segment stays clear of the cylinder (GJK otherwise).
@@ -938,6 +1001,10 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration) return cylinder_box_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, Cylinder<S>>) {
       if (!options.libccd_penetration) return swapped(cylinder_box_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, ConvexHull<S>>) {
+      if (!options.libccd_penetration && use_cylinder_hull_candidates(b)) return cylinder_hull_penetration(a, pose_a, b, pose_b, options);
+    } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Cylinder<S>>) {
+      if (!options.libccd_penetration && use_cylinder_hull_candidates(a)) return swapped(cylinder_hull_penetration(b, pose_b, a, pose_a, options));
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, ConvexHull<S>>) {  // separating axes
       if (!options.libccd_penetration && use_box_hull_sat(b)) return box_hull_sat(a, pose_a, b, pose_b);
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Box<S>>) {

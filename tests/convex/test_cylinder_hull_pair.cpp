@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: MIT
+// Cylinder against convex hull (convex/cylinder_hull_pair.hpp and the cylinder–hull path of
+// convex/query.hpp): the certified candidates, the local certificate's terms and the whole
+// penetration, against an oracle: the least overlap f(n) = h |n_z| + r |P_z n| + max_v (-n . v)
+// over unit directions (the hull's support by a scan of all its vertices, in long double),
+// minimised by test::least_overlap (support/convex_oracle.hpp) with the kink circle of the
+// cylinder's side, then again with the circles of the hull's edges whose ends both lie near the
+// first minimiser's supporting plane (an edge against the rim: a valley along its arc). Its
+// minimum is an upper bound of the true depth and every certified lower bound lies below the
+// true depth, so a certificate of a wrong (too large) depth shows as depth - depth_gap above the
+// oracle.
+#include "impact/convex/cylinder_hull_pair.hpp"
+#include "impact/convex/query.hpp"
+#include "support/convex_oracle.hpp"
+#include "support/random.hpp"
+#include "support/sanitizer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+// a named namespace: the convex tests build as one unity file
+namespace cylinder_hull_pair_test {
+
+using namespace impact;
+using LD = long double;
+using V3L = Eigen::Matrix<LD, 3, 1>;
+
+// The hulls: the zoo's (40 points of an ellipsoid, climbed), 8 random points (fewer than
+// kHullClimbMinVertices: scanned), a slab of 24 points (its big faces merged polygons).
+const std::vector<ConvexHull<double>>& hulls() {
+  static const std::vector<ConvexHull<double>> h = [] {
+    std::vector<ConvexHull<double>> out;
+    out.push_back(test::zoo().hull);
+    test::Rng rng(640);
+    Vertices<double> p(8, 3);
+    for (int i = 0; i < 8; ++i) p.row(i) = Eigen::Vector3d(rng.vec(-0.5, 0.5)).transpose();
+    out.push_back(convex_hull(p));
+    Vertices<double> q(24, 3);
+    for (int i = 0; i < 24; ++i) {
+      const Eigen::Vector3d v(rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4), i % 2 ? 0.15 : -0.15);
+      q.row(i) = v.transpose();
+    }
+    out.push_back(convex_hull(q));
+    return out;
+  }();
+  return h;
+}
+
+// The hull's vertices placed by R, t in a's frame, long double.
+std::vector<V3L> placed(const ConvexHull<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  std::vector<V3L> out;
+  for (Eigen::Index i = 0; i < b.vertices.rows(); ++i) {
+    const Eigen::Vector3d v = b.vertices.row(i).transpose();
+    out.push_back(R.cast<LD>() * v.cast<LD>() + t.cast<LD>());
+  }
+  return out;
+}
+
+// The overlap along unit n of cylinder a (its frame) and the hull's placed vertices, long double.
+LD overlap_ld(const Cylinder<double>& a, const std::vector<V3L>& v, const V3L& n) {
+  LD hull = -std::numeric_limits<LD>::infinity();
+  for (const V3L& x : v) hull = std::max(hull, -n.dot(x));
+  return LD(a.half_length) * std::abs(n.z()) + LD(a.radius) * std::sqrt(n.x() * n.x() + n.y() * n.y()) + hull;
+}
+
+// The oracle of the file comment; `extra` (the normal under test) starts both passes.
+test::LeastOverlap depth_oracle(const Cylinder<double>& a, const ConvexHull<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                                const Eigen::Vector3d& extra) {
+  const std::vector<V3L> v = placed(b, R, t);
+  const auto f = [&](const V3L& n) { return overlap_ld(a, v, n); };
+  const std::vector<Eigen::Vector3d> starts = {Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ(), extra};
+  std::vector<test::KinkCircle> circles = {{Eigen::Vector3d::UnitZ(), 0}};
+  test::LeastOverlap best = test::least_overlap(f, starts, circles, IMPACT_TEST_SANITIZED ? 200 : 400);
+  // the edges whose ends both lie within 0.02 of the size of the support plane along -n
+  const V3L d = -best.normal;
+  LD top = -std::numeric_limits<LD>::infinity();
+  for (const V3L& x : v) top = std::max(top, d.dot(x));
+  circles.clear();
+  const LD near = LD(0.02) * LD(std::max(shape_size(a), shape_size(b)));
+  for (const HullEdge& e : b.edges) {
+    const std::size_t i0 = static_cast<std::size_t>(e.v0), i1 = static_cast<std::size_t>(e.v1);
+    if (d.dot(v[i0]) >= top - near && d.dot(v[i1]) >= top - near) circles.push_back({(v[i1] - v[i0]).cast<double>(), 0});
+  }
+  if (circles.empty()) return best;
+  const std::vector<Eigen::Vector3d> again = {best.normal.cast<double>(), extra};
+  const test::LeastOverlap second = test::least_overlap(f, again, circles, 50);
+  return second.depth < best.depth ? second : best;
+}
+
+struct Case {
+  Cylinder<double> cyl{0.4, 0.5};
+  int hull = 0;
+  RigidTransform<double> pa, pb;
+};
+
+// Cylinders of varied proportions (every fourth the zoo's) against the hulls in turn, b about a,
+// `scale` times the size and `offset` from the origin.
+std::vector<Case> cases(int n, std::uint64_t seed, double scale = 1, double offset = 0) {
+  test::Rng rng(seed);
+  std::vector<Case> out;
+  for (int k = 0; k < n; ++k) {
+    Case c;
+    if (k % 4 != 0) c.cyl = Cylinder<double>(rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
+    c.hull = k % 3;
+    const double reach = 0.6 * (shape_size(c.cyl) + shape_size(hulls()[static_cast<std::size_t>(c.hull)]));
+    c.pa = {rng.rotation(), Eigen::Vector3d(rng.vec(-1, 1) + Eigen::Vector3d::Constant(offset / scale))};
+    c.pb = {rng.rotation(), Eigen::Vector3d(c.pa.t + rng.vec(-reach, reach))};
+    c.cyl = Cylinder<double>(c.cyl.radius * scale, c.cyl.half_length * scale);
+    c.pa.t *= scale;
+    c.pb.t *= scale;
+    out.push_back(c);
+  }
+  return out;
+}
+
+// A hull scaled by s (vertices and planes).
+ConvexHull<double> scaled(const ConvexHull<double>& h, double s) {
+  Vertices<double> p = h.vertices * s;
+  return convex_hull(p);
+}
+
+// Each certified candidate: its lower bound below the oracle's depth (an upper bound of the true
+// one), its depth within 1e-9 of the size of it and the overlap along its normal; every kind
+// certified (a hull face, a cap, the side against an edge). Checked to fail: the face ball's
+// radius taken as the distance to the contact face alone (not the least over the faces).
+TEST(CylinderHullPair, CertifiedDepthsAgainstTheOracle) {
+  int face = 0, cap = 0, side = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 30 : 150, 641)) {
+    const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
+    const double size = std::max(shape_size(c.cyl), shape_size(h)), tol = 1e-10 * size;
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    ConvexContact<double> k;
+    const auto verdict = detail::cylinder_hull_candidates(c.cyl, h, f.R, f.t, 1e-15, tol, k);
+    if (verdict != detail::CylinderHullVerdict::Certified) continue;
+    const test::LeastOverlap o = depth_oracle(c.cyl, h, f.R, f.t, k.normal);
+    const double oracle = double(o.depth);
+    EXPECT_GT(oracle, 0) << "certified a pair the oracle finds apart";
+    EXPECT_LE(k.depth - k.depth_gap, oracle + 1e-12 * size) << "lower bound above the depth";
+    EXPECT_NEAR(k.depth, oracle, 1e-9 * size);
+    EXPECT_NEAR(double(overlap_ld(c.cyl, placed(h, f.R, f.t), k.normal.cast<LD>())), k.depth, 1e-12 * size);
+    if (std::abs(k.normal.z()) > 1 - 1e-12) {
+      ++cap;
+    } else if (std::abs(k.normal.z()) < 1e-12) {
+      ++side;
+    } else {
+      ++face;
+    }
+  }
+  EXPECT_GT(face, IMPACT_TEST_SANITIZED ? 0 : 2);
+  EXPECT_GT(cap, IMPACT_TEST_SANITIZED ? 0 : 2);
+  EXPECT_GT(side, IMPACT_TEST_SANITIZED ? 0 : 2);
+}
+
+// The local certificate's terms: at most the overlap everywhere, equal to it along the direction
+// they were built at. Checked to fail: the edge's abs term with twice its coefficient.
+TEST(CylinderHullPair, TermsBoundTheOverlap) {
+  test::Rng rng(642);
+  for (const Case& c : cases(30, 643)) {
+    const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    const std::vector<V3L> v = placed(h, f.R, f.t);
+    for (int j = 0; j < 6; ++j) {
+      const Eigen::Vector3d n = rng.vec(-1, 1).normalized();
+      const detail::OverlapTerms<double> terms = detail::cylinder_hull_terms(c.cyl, h, f.R, f.t, n);
+      const auto value = [&](const Eigen::Vector3d& w) {
+        double s = terms.linear.dot(w);
+        for (int k = 0; k < terms.n; ++k) {
+          const double d = terms.axis[k].dot(w);
+          s += terms.coef[k] * (terms.disc[k] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
+        }
+        return s;
+      };
+      EXPECT_NEAR(value(n), double(overlap_ld(c.cyl, v, n.cast<LD>())), 1e-12);
+      for (int i = 0; i < 10; ++i) {
+        const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
+        EXPECT_LE(value(m), double(overlap_ld(c.cyl, v, m.cast<LD>())) + 1e-12);
+      }
+    }
+  }
+}
+
+// The whole penetration, both argument orders, in S: the same boolean as the oracle away from
+// touching, depth within `close` of the size of the oracle's, never a lower bound above it.
+template <class S>
+void check_against_oracle(int count, double scale, double offset, std::uint64_t seed, double close) {
+  int hits = 0, apart = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 8 : count, seed, scale, offset)) {
+    const ConvexHull<double> hd = scale == 1 ? hulls()[static_cast<std::size_t>(c.hull)] : scaled(hulls()[static_cast<std::size_t>(c.hull)], scale);
+    const ConvexHull<S> hs = convex_hull(Vertices<S>(hd.vertices.cast<S>()));
+    const Cylinder<S> cyl(S(c.cyl.radius), S(c.cyl.half_length));
+    const RigidTransform<S> pa{c.pa.R.cast<S>(), c.pa.t.cast<S>()}, pb{c.pb.R.cast<S>(), c.pb.t.cast<S>()};
+    // the oracle on the shapes and poses as S holds them
+    const RigidTransform<double> qa{pa.R.template cast<double>(), pa.t.template cast<double>()},
+        qb{pb.R.template cast<double>(), pb.t.template cast<double>()};
+    const ConvexHull<double> hq = convex_hull(Vertices<double>(hs.vertices.template cast<double>()));
+    const Cylinder<double> cd(double(cyl.radius), double(cyl.half_length));
+    const detail::PairFrame<double> f(qa, qb);
+    const double size = std::max(shape_size(cd), shape_size(hq));
+    const auto p = convex_penetration(cyl, pa, hs, pb);
+    const auto q = convex_penetration(hs, pb, cyl, pa);
+    const Eigen::Vector3d extra = p.intersecting ? Eigen::Vector3d(qa.R.transpose() * p.normal.template cast<double>()) : Eigen::Vector3d::UnitZ();
+    const double oracle = double(depth_oracle(cd, hq, f.R, f.t, extra).depth);
+    if (std::abs(oracle) < std::max(1e-5, 10 * close) * size) continue;  // touching: either answer
+    EXPECT_EQ(p.intersecting, oracle > 0);
+    EXPECT_EQ(q.intersecting, oracle > 0);
+    if (oracle < 0) ++apart;
+    if (oracle < 0 || !p.intersecting || !q.intersecting) continue;
+    ++hits;
+    for (const auto& r : {p, q}) {
+      EXPECT_LE(double(r.depth - r.depth_gap), oracle + close * size) << "lower bound above the depth";
+      EXPECT_NEAR(double(r.depth), oracle, close * size);
+      EXPECT_FALSE(r.limit_reached);
+    }
+  }
+  EXPECT_GT(hits, IMPACT_TEST_SANITIZED ? 1 : count / 5);
+  EXPECT_GT(apart, IMPACT_TEST_SANITIZED ? -1 : count / 20);
+}
+
+TEST(CylinderHullPair, PenetrationAgainstTheOracle) {
+  check_against_oracle<double>(60, 1, 0, 644, 1e-9);
+  check_against_oracle<float>(24, 1, 0, 645, 2e-4);
+}
+
+TEST(CylinderHullPair, ScaledAndTranslated) {
+  check_against_oracle<double>(15, 1e-3, 0, 646, 1e-9);
+  check_against_oracle<double>(15, 1e3, 0, 647, 1e-9);
+  check_against_oracle<double>(15, 1, 1e3, 648, 1e-9);
+}
+
+}  // namespace cylinder_hull_pair_test
