@@ -99,6 +99,26 @@ TEST(ConeConePair, CertifiedDepthsAgainstTheOracle) {
   EXPECT_EQ(base + body, certified);
 }
 
+// cone_cone_contact on (x, y) and on (y, x): each certified depth's lower bound below the oracle's
+// depth and the depth within 1e-9 of the size of it. Returns how many of the two were certified.
+int check_certified_both_orders(const Cone<double>& x, const RigidTransform<double>& px, const Cone<double>& y,
+                                const RigidTransform<double>& py) {
+  const double scale = std::max(shape_size(x), shape_size(y)), tol = 1e-10 * scale;
+  int certified = 0;
+  for (const bool x_first : {true, false}) {
+    const Cone<double>& a = x_first ? x : y;
+    const Cone<double>& b = x_first ? y : x;
+    const detail::PairFrame<double> f(x_first ? px : py, x_first ? py : px);
+    ConvexContact<double> c;
+    if (!detail::cone_cone_contact(a, b, f.R, f.t, tol, c)) continue;
+    ++certified;
+    const double oracle = double(depth_oracle(a, b, f.R, f.t, c.normal));
+    EXPECT_LE(c.depth - c.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
+    EXPECT_NEAR(c.depth, oracle, 1e-9 * scale);
+  }
+  return certified;
+}
+
 // A narrow cone's apex through the other's base, tilted by up to 0.3 rad, 0.02 .. 0.3 of the
 // base's cone deep, both ways round: the base candidate (and the apex's) decide it, certified, and
 // within the tolerance of the oracle. Checked to fail: b's base candidate with its ball's radius
@@ -115,20 +135,7 @@ TEST(ConeConePair, ApexThroughBase) {
     const RigidTransform<double> pw{Eigen::Matrix3d(rng.rotation()), rng.vec(-1, 1)};
     const RigidTransform<double> pn_local{tilt_r, Eigen::Vector3d(apex - tilt_r * Eigen::Vector3d(0, 0, narrow.half_length))};
     const RigidTransform<double> pn{Eigen::Matrix3d(pw.R * pn_local.R), Eigen::Vector3d(pw.apply(pn_local.t))};
-    const double scale = std::max(shape_size(wide), shape_size(narrow)), tol = 1e-10 * scale;
-    for (const bool wide_first : {true, false}) {
-      const Cone<double>& a = wide_first ? wide : narrow;
-      const Cone<double>& b = wide_first ? narrow : wide;
-      const RigidTransform<double>& pa = wide_first ? pw : pn;
-      const RigidTransform<double>& pb = wide_first ? pn : pw;
-      const detail::PairFrame<double> f(pa, pb);
-      ConvexContact<double> c;
-      if (!detail::cone_cone_contact(a, b, f.R, f.t, tol, c)) continue;
-      ++certified;
-      const double oracle = double(depth_oracle(a, b, f.R, f.t, c.normal));
-      EXPECT_LE(c.depth - c.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
-      EXPECT_NEAR(c.depth, oracle, 1e-9 * scale);
-    }
+    certified += check_certified_both_orders(wide, pw, narrow, pn);
   }
   EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? 6 : 30);
 }
@@ -146,18 +153,7 @@ TEST(ConeConePair, SmallConeDeepInsideRimAgainstSide) {
     const Cone<double> large(rng.uniform(0.5, 1.0), rng.uniform(0.5, 1.0)), small(rng.uniform(0.1, 0.6), rng.uniform(0.1, 0.2));
     const RigidTransform<double> pl{rng.rotation(), rng.vec(-1, 1)};
     const RigidTransform<double> ps{rng.rotation(), Eigen::Vector3d(pl.t + rng.vec(-0.25, 0.25))};
-    const double scale = std::max(shape_size(large), shape_size(small)), tol = 1e-10 * scale;
-    for (const bool large_first : {true, false}) {
-      const Cone<double>& a = large_first ? large : small;
-      const Cone<double>& b = large_first ? small : large;
-      const detail::PairFrame<double> f(large_first ? pl : ps, large_first ? ps : pl);
-      ConvexContact<double> c;
-      if (!detail::cone_cone_contact(a, b, f.R, f.t, tol, c)) continue;
-      ++certified;
-      const double oracle = double(depth_oracle(a, b, f.R, f.t, c.normal));
-      EXPECT_LE(c.depth - c.depth_gap, oracle + 1e-12 * scale) << "lower bound above the depth";
-      EXPECT_NEAR(c.depth, oracle, 1e-9 * scale);
-    }
+    certified += check_certified_both_orders(large, pl, small, ps);
   }
   EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? 8 : 20);
 }
