@@ -135,6 +135,30 @@ constexpr PairMethod pair_method() {
   return PairMethod::General;
 }
 
+/// The order in which the general solvers (GJK, EPA, libccd) see a pair of shape types: a pair
+/// whose b ranks lower than its a runs them on (b, a) and turns the answer back (swapped). So each
+/// unordered pair of types instantiates those solvers once, not twice (they are most of a
+/// program's compile time and code size), and (b, a) gets exactly the mirror image of (a, b)'s
+/// answer. The ranks follow the certified paths' order (cylinder before cone before box before hull).
+template <class T, class S>
+constexpr int general_rank() {
+  if constexpr (std::is_same_v<T, TriangleShape<S>>) {
+    return 0;
+  } else if constexpr (std::is_same_v<T, Cylinder<S>>) {
+    return 1;
+  } else if constexpr (std::is_same_v<T, Cone<S>>) {
+    return 2;
+  } else if constexpr (std::is_same_v<T, Box<S>>) {
+    return 3;
+  } else if constexpr (std::is_same_v<T, ConvexHull<S>>) {
+    return 4;
+  } else {
+    return 5;
+  }
+}
+template <class S, class A, class B>
+inline constexpr bool general_swapped_v = general_rank<B, S>() < general_rank<A, S>();
+
 /// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
 /// penetration: when it stopped with its bracket open (a coaxial pair's least-overlap normals form
 /// a circle EPA cannot close: about 515 support calls and a bracket of 7.5e-5 of the size at a tilt
@@ -527,7 +551,11 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, ConvexHull<S>>) {
       if (!options.libccd_penetration && centre_line_separates(a, pose_a, b, pose_b)) return ConvexContact<S>{};
     }
-    return general_penetration(a, pose_a, b, pose_b, options);
+    if constexpr (general_swapped_v<S, A, B>) {
+      return swapped(general_penetration(b, pose_b, a, pose_a, options));
+    } else {
+      return general_penetration(a, pose_a, b, pose_b, options);
+    }
   }
 }
 
@@ -615,7 +643,12 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     if (limit_reached) *limit_reached = limit;
     return hit;
   } else {
-    return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
+    const CcdSettings settings = ccd_settings(options, query_scale<S>(a, b));
+    if constexpr (general_swapped_v<S, A, B>) {
+      return ccd_intersect(b, pose_b, a, pose_a, options.boolean_algorithm, settings, limit_reached);
+    } else {
+      return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, settings, limit_reached);
+    }
   }
 }
 }  // namespace detail
@@ -657,7 +690,11 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
     return swapped(round_distance(b, pose_b, a, pose_a, options));
   } else {  // BoxBox and General: GJK
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
-    return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
+    if constexpr (general_swapped_v<S, A, B>) {
+      return swapped(gjk(b, pose_b, interior_point(b), a, pose_a, interior_point(a), tol, options.max_iterations));
+    } else {
+      return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
+    }
   }
 }
 
