@@ -136,10 +136,10 @@ constexpr PairMethod pair_method() {
 }
 
 /// The order in which the general solvers (GJK, EPA, libccd) see a pair of shape types: a pair
-/// whose b ranks lower than its a runs them on (b, a) and turns the answer back (swapped). So each
-/// unordered pair of types instantiates those solvers once, not twice (they are most of a
-/// program's compile time and code size), and (b, a) gets exactly the mirror image of (a, b)'s
-/// answer. The ranks follow the certified paths' order (cylinder before cone before box before hull).
+/// whose b ranks lower than its a runs them on (b, a) and turns the answer back (swapped). So (b, a)
+/// gets exactly the mirror image of (a, b)'s answer, and each unordered pair of types instantiates
+/// those solvers once. The ranks follow the certified paths' order (cylinder before cone before box
+/// before hull).
 template <class T, class S>
 constexpr int general_rank() {
   if constexpr (std::is_same_v<T, TriangleShape<S>>) {
