@@ -832,7 +832,7 @@ TEST(ConvexQuery, MprAndGjkBooleansAgree) {
 template <class A, class B>
 void check_mirror(const char* name, const A& a, const B& b, const ConvexQueryOptions<double>& o, std::uint64_t seed) {
   int hits = 0;
-  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 12 : 40, 0.8 * (shape_size(a) + shape_size(b)), seed)) {
+  for (const auto& [pa, pb] : convex_poses(40, 0.6 * (shape_size(a) + shape_size(b)), seed)) {  // a few ms, also sanitized
     EXPECT_EQ(convex_intersect(a, pa, b, pb, o), convex_intersect(b, pb, a, pa, o)) << name;
     const auto d = convex_distance(a, pa, b, pb, o), e = convex_distance(b, pb, a, pa, o);
     EXPECT_EQ(d.intersecting, e.intersecting) << name;
@@ -848,7 +848,7 @@ void check_mirror(const char* name, const A& a, const B& b, const ConvexQueryOpt
     EXPECT_EQ(c.normal, V3(-f.normal)) << name;
     EXPECT_EQ(c.point, f.point) << name;
   }
-  EXPECT_GT(hits, 2) << name << ": too few intersecting poses to test anything";
+  EXPECT_GE(hits, 8) << name << ": too few intersecting poses to test anything";
 }
 
 TEST(ConvexQuery, SwappedArgumentsGiveTheMirrorImage) {
