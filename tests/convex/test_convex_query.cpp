@@ -823,4 +823,49 @@ TEST(ConvexQuery, MprAndGjkBooleansAgree) {
   EXPECT_GT(hits, 10);
 }
 
+// Swapping the arguments gives the mirror image of the answer, bit for bit: the same boolean,
+// distance and depth, the witness points exchanged, the normal reversed, the same contact point.
+// The general solvers see each unordered pair of types in one order (general_rank in
+// convex/query.hpp); run in both orders, EPA and GJK round differently and this fails. Pairs that
+// reach the general path either way: cone-hull, hull-cylinder with a hull past the candidates'
+// face bound, cone-box and cylinder-cone through libccd (options.libccd_penetration).
+template <class A, class B>
+void check_mirror(const char* name, const A& a, const B& b, const ConvexQueryOptions<double>& o, std::uint64_t seed) {
+  int hits = 0;
+  for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 12 : 40, 0.8 * (shape_size(a) + shape_size(b)), seed)) {
+    EXPECT_EQ(convex_intersect(a, pa, b, pb, o), convex_intersect(b, pb, a, pa, o)) << name;
+    const auto d = convex_distance(a, pa, b, pb, o), e = convex_distance(b, pb, a, pa, o);
+    EXPECT_EQ(d.intersecting, e.intersecting) << name;
+    EXPECT_EQ(d.distance, e.distance) << name;
+    EXPECT_EQ(d.point_a, e.point_b) << name;
+    EXPECT_EQ(d.point_b, e.point_a) << name;
+    const auto c = convex_penetration(a, pa, b, pb, o), f = convex_penetration(b, pb, a, pa, o);
+    ASSERT_EQ(c.intersecting, f.intersecting) << name;
+    hits += c.intersecting;
+    if (!c.intersecting) continue;
+    EXPECT_EQ(c.depth, f.depth) << name;
+    EXPECT_EQ(c.depth_gap, f.depth_gap) << name;
+    EXPECT_EQ(c.normal, V3(-f.normal)) << name;
+    EXPECT_EQ(c.point, f.point) << name;
+  }
+  EXPECT_GT(hits, 2) << name << ": too few intersecting poses to test anything";
+}
+
+TEST(ConvexQuery, SwappedArgumentsGiveTheMirrorImage) {
+  const auto& z = zoo();
+  const ConvexQueryOptions<double> own;
+  ConvexQueryOptions<double> ccd;
+  ccd.libccd_penetration = true;
+  check_mirror("cone-hull", z.cone, z.hull, own, 81);
+  check_mirror("cone-box libccd", z.cone, z.box, ccd, 82);
+  check_mirror("cylinder-cone libccd", z.cylinder, z.cone, ccd, 83);
+  // a hull of 300 faces (past the cylinder-hull candidates' bound): the general path
+  Vertices<double> sphere_points(200, 3);
+  test::Rng rng(84);
+  for (int i = 0; i < 200; ++i) sphere_points.row(i) = (0.5 * rng.vec(-1, 1).normalized()).transpose();
+  const ConvexHull<double> round_hull = convex_hull(sphere_points);
+  ASSERT_FALSE(detail::use_cylinder_hull_candidates(round_hull));
+  check_mirror("hull-cylinder", round_hull, z.cylinder, own, 85);
+}
+
 }  // namespace

@@ -153,6 +153,9 @@ template <class S> void check_flat_trees() {
   const MeshBvh<Aabb<S>> bvh0(torus);
   const CompactBvh fast0(bvh0.tree());
   const WideBvh<S> wide0(torus), wide_of_tree0(bvh0);
+  EXPECT_TRUE(wide.has_repeats());
+  EXPECT_FALSE(wide.packed_without_repeats());  // (the 8-wide cast's one-block leaf path skips no repeats)
+  EXPECT_EQ(wide0.packed_without_repeats(), wide0.packed());
   const Triangle<S> t = m.triangle(100);
   test::Rng rng(8);
   for (int i = 0; i < 40; ++i) {

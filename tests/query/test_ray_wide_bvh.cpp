@@ -98,6 +98,8 @@ TEST(WideBvh, FloatCoordinatesArePackedExactly) {
   const WideBvh<double> a(exact), b(rounded);
   EXPECT_FALSE(a.packed());
   EXPECT_TRUE(b.packed());
+  EXPECT_FALSE(a.packed_without_repeats());
+  EXPECT_TRUE(b.packed_without_repeats());  // (the 8-wide cast's one-block leaf path)
   EXPECT_TRUE(WideBvh<float>(make_torus<float>(1.0f, 0.4f, 8, 4)).packed());
   EXPECT_LT(b.memory_bytes(), a.memory_bytes());
   check_structure(rounded, b, 4);

@@ -170,6 +170,8 @@ template <class S, int W = 4> class WideBvh {
   bool repeats_previous(std::int32_t k) const { return !repeats_.empty() && repeats_[static_cast<std::size_t>(k)]; }
   /// True when some triangle repeats_previous().
   bool has_repeats() const { return !repeats_.empty(); }
+  /// packed() && !has_repeats(), kept as one flag (a cast's leaf path reads it at each leaf).
+  bool packed_without_repeats() const { return packed_without_repeats_; }
   std::int32_t num_triangles() const { return static_cast<std::int32_t>(ids_.size()); }
   /// Levels of inner nodes on the longest path from the root (0 for an empty tree): a
   /// nearest-first walk keeps at most (W - 1) depth() children pending.
@@ -300,6 +302,7 @@ template <class S, int W = 4> class WideBvh {
     };
     if (floats) fill(packed_);
     else fill(full_);
+    packed_without_repeats_ = floats && repeats_.empty();
   }
 
   std::vector<Node> nodes_;
@@ -310,6 +313,7 @@ template <class S, int W = 4> class WideBvh {
   std::vector<bool> repeats_;  // repeats_previous() by leaf-order position; empty when none repeats
   S coordinate_bound_ = S(0);
   int depth_ = 0;
+  bool packed_without_repeats_ = false;
 };
 
 }  // namespace impact

@@ -35,7 +35,7 @@
 ///              cylinders and cones first try the shortcut of convex/deepest_point.hpp (one point
 ///              of the triangle decides, certified by the ball about it: most contacts, no EPA)
 /// Needles: a capsule or cylinder much longer than a triangle meets it through the part of its
-/// axis that decides (needle_window: as capsule_window of convex/query.hpp), so the solvers see
+/// axis that decides (needle_window: as capsule_window of convex/round_shape_pair.hpp), so the solvers see
 /// coordinates of the triangle's size, not the needle's length (the capsule's contact normal,
 /// the cylinder's boolean, distance and contact; tests/convex/test_needle_mesh.cpp).
 /// GJK and EPA run in the shape's frame (the triangle moved there: three rotations per triangle

@@ -62,6 +62,12 @@
 /// options.max_iterations; a result stopped by the bound says limit_reached, and so does a
 /// penetration whose bracket rounding or a degenerate polytope left open (penetration_unchecked).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
+///
+/// Where the parts live: the options and the validation in convex/query_options.hpp; the general
+/// path (GJK, EPA, libccd, settling a contact along its normal) in convex/general_pair.hpp; a
+/// sphere or capsule against the other shapes in convex/round_shape_pair.hpp; each certified pair
+/// in its own file (named in the table above). This file holds the choice of method per pair, the
+/// certified pair paths that combine those parts, and the three public queries.
 #pragma once
 
 #include "impact/convex/closed_form.hpp"
@@ -73,85 +79,24 @@
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/cylinder_intersect.hpp"
 #include "impact/convex/cylinder_pair.hpp"
-#include "impact/convex/epa.hpp"
-#include "impact/convex/polytope_sat.hpp"
+#include "impact/convex/general_pair.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/libccd_solver.hpp"
 #include "impact/convex/local_certificate.hpp"
 #include "impact/convex/parallel_axes.hpp"
-#include "impact/convex/segment_cylinder.hpp"
+#include "impact/convex/polytope_sat.hpp"
+#include "impact/convex/query_options.hpp"
+#include "impact/convex/round_shape_pair.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/convex/triangle_shape.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace impact {
-
-template <class S>
-struct ConvexQueryOptions {
-  /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000.
-  int max_iterations = 512;
-  /// Tolerance of the iterative solvers relative to the larger shape's size (shape_size()); in
-  /// (0, 0.1]. The default is 1e-10 for double, 1e-5 for float.
-  S relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-10);
-  /// Tolerance of libccd's EPA expansion relative to the larger shape's size (libccd's
-  /// epa_tolerance is its square times the size squared), used with libccd_penetration; in (0, 0.1].
-  /// The own EPA stops at relative_tolerance.
-  S epa_relative_tolerance = std::is_same_v<S, float> ? S(1e-5) : S(1e-8);
-  CcdAlgorithm boolean_algorithm = CcdAlgorithm::Mpr;     ///< libccd algorithm of general boolean tests (cylinder–cylinder has its own)
-  CcdAlgorithm penetration_algorithm = CcdAlgorithm::Gjk; ///< libccd algorithm of general penetrations (GJK+EPA)
-  /// General penetrations through libccd (penetration_algorithm) instead of the library's own EPA
-  /// with Newton refinement (convex/epa.hpp), which is the default; libccd also answers when the
-  /// own solver meets a degenerate (flat) Minkowski difference.
-  bool libccd_penetration = false;
-  /// Curved pairs: stop the own EPA at a gap of 1e-3 of the size and refine the normal by Newton's
-  /// method (convex/epa.hpp), going on with EPA when the refinement does not verify. Off by
-  /// default: on the zoo's cylinders and cones the support's edges (rulings, rims) stop it on most
-  /// poses (verified on 10 of 130 cylinder–cylinder penetrations), so it cost more support calls
-  /// than it saved (38.9 against 31.5 per query there), while EPA alone closes its gap to 1e-10.
-  bool newton_refinement = false;
-  /// Cylinder against cylinder or cone, and cone against box: stop EPA early with the local certificate of
-  /// convex/local_certificate.hpp (Newton on the closed-form overlap, a certified quadratic lower
-  /// bound on a cap of directions about its minimiser, EPA's polytope for the rest); off: EPA to
-  /// relative_tolerance alone (the answers agree within relative_tolerance; tested).
-  bool local_certificate = true;
-};
-
 namespace detail {
-
-/// The core of a round shape: a sphere's centre, a capsule's segment (a radius is added to it).
-template <class S>
-struct PointCore {
-  Vec3<S> c;
-};
-template <class S>
-struct SegmentCore {
-  S h;
-};
-template <class S>
-inline Vec3<S> support(const PointCore<S>& p, const Vec3<S>&) {
-  return p.c;
-}
-template <class S>
-inline Vec3<S> support(const SegmentCore<S>& s, const Vec3<S>& d) {
-  return {S(0), S(0), d.z() >= S(0) ? s.h : -s.h};
-}
-template <class S>
-inline PointCore<S> core_of(const Sphere<S>& s) {
-  return {s.center};
-}
-template <class S>
-inline SegmentCore<S> core_of(const Capsule<S>& c) {
-  return {c.half_length};
-}
-template <class S>
-inline Vec3<S> core_interior(const PointCore<S>& p) {
-  return p.c;
-}
-template <class S>
-inline Vec3<S> core_interior(const SegmentCore<S>&) {
-  return Vec3<S>::Zero();
-}
 
 template <class T, class S>
 inline constexpr bool is_round_v = std::is_same_v<T, Sphere<S>> || std::is_same_v<T, Capsule<S>>;
@@ -190,256 +135,29 @@ constexpr PairMethod pair_method() {
   return PairMethod::General;
 }
 
-template <class S>
-void validate_query_options(const ConvexQueryOptions<S>& o, const char* where) {
-  if (IMPACT_LIKELY(o.max_iterations >= 1 && o.max_iterations <= 100000 && o.relative_tolerance > S(0) && o.relative_tolerance <= S(0.1) &&
-                    o.epa_relative_tolerance > S(0) && o.epa_relative_tolerance <= S(0.1)))
-    return;
-  validate_in_range(o.max_iterations, 1, 100000, where, "options.max_iterations");
-  if (!(o.relative_tolerance > S(0) && o.relative_tolerance <= S(0.1)))
-    throw InvalidInput(describe_rejected(where, "options.relative_tolerance", "be in (0, 0.1]", o.relative_tolerance));
-  if (!(o.epa_relative_tolerance > S(0) && o.epa_relative_tolerance <= S(0.1)))
-    throw InvalidInput(describe_rejected(where, "options.epa_relative_tolerance", "be in (0, 0.1]", o.epa_relative_tolerance));
-}
-
-template <class S, class A, class B>
-void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o,
-                    const char* where) {
-  static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
-  validate_shape(a, where);
-  validate_shape(b, where);
-  validate_pose(pa, where, "pose_a");
-  validate_pose(pb, where, "pose_b");
-  validate_query_options(o, where);
-}
-
-template <class S, class A, class B>
-S query_scale(const A& a, const B& b) {
-  return std::max(shape_size(a), shape_size(b));
-}
-
-/// b's frame seen from a's: EPA runs in a's frame, where a's support needs no rotation and b's one
-/// rotation each way (instead of two rotations per shape in the world).
-template <class S>
-struct PairFrame {
-  Mat3<S> R;  ///< pa.R^T pb.R
-  Vec3<S> t;  ///< pa.R^T (pb.t - pa.t)
-  PairFrame(const RigidTransform<S>& pa, const RigidTransform<S>& pb) : R(pa.R.transpose() * pb.R), t(pa.R.transpose() * (pb.t - pa.t)) {}
-  Vec3<S> b_to_a(const Vec3<S>& p) const { return R * p + t; }
-  template <class B>
-  Vec3<S> support_b(const B& b, const Vec3<S>& d) const {
-    return b_to_a(support(b, Vec3<S>(R.transpose() * d)));
-  }
-};
-
-/// GJK distance of shape a at pa and shape b at pb (any shapes or cores with support()), run in
-/// a's frame (PairFrame: a's support without rotation, b's with one each way); witness points in
-/// the world.
-template <class S, class A, class B>
-ConvexDistance<S> gjk(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                      const Vec3<S>& ib, S tolerance, int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
-  const PairFrame<S> f(pa, pb);
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(ia - f.b_to_a(ib)), tolerance, max_iterations, margin, stop_within_margin);
-  r.point_a = pa.apply(r.point_a);
-  r.point_b = pa.apply(r.point_b);
-  return r;
-}
-
-template <class S>
-CcdSettings ccd_settings(const ConvexQueryOptions<S>& o, S scale) {
-  CcdSettings c;
-  c.max_iterations = o.max_iterations;
-  c.length_scale = double(scale);
-  c.epa_tolerance = double(o.epa_relative_tolerance) * double(o.epa_relative_tolerance);
-  c.mpr_tolerance = double(o.relative_tolerance);
-  return c;
-}
-
-/// A libccd penetration result as a contact: whether the shapes intersect, the normal, the point
-/// and the solver's counters. The depth is left to settle_contact, which measures it.
-template <class S>
-ConvexContact<S> to_contact(const CcdPenetration<S>& r) {
-  ConvexContact<S> c;
-  c.intersecting = r.intersecting;
-  c.normal = r.normal;
-  c.point = r.point;
-  c.iterations = r.iterations;
-  c.limit_reached = r.limit_reached;
-  return c;
-}
-
-/// Makes an iterative solver's contact exact along its normal: depth := h_a(n) + h_b(-n) (the
-/// overlap of the shapes along n, computed from the support functions, so that translating b by
-/// depth * n makes them touch, and depth >= the true penetration depth), and the point moved along
-/// n onto the plane midway between the two supporting planes (keeping its tangential position).
-template <class S, class A, class B>
-void settle_contact(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
-  if (!c.intersecting) return;
-  const S top_a = c.normal.dot(support(a, pa, c.normal));
-  const S low_b = c.normal.dot(support(b, pb, Vec3<S>(-c.normal)));
-  c.depth = std::max(top_a - low_b, S(0));
-  c.point += ((top_a + low_b) / S(2) - c.normal.dot(c.point)) * c.normal;
-}
-
-/// settle_contact for a contact whose depth is already certified (EPA's, or a pair's closed-form
-/// candidates'): the point onto the mid plane, the depth the smaller of the two.
-template <class S, class A, class B>
-void settle_certified_contact(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
-  const S depth = c.depth;
-  settle_contact(a, pa, b, pb, c);
-  c.depth = std::min(c.depth, depth);
-}
-
-/// A certified contact found in a's frame (a pair's closed form or candidates, run on PairFrame):
-/// its normal and point to the world, then settle_certified_contact.
-template <class S, class A, class B>
-void settle_certified_from_frame(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S>& c) {
-  c.normal = pa.rotate(c.normal);
-  c.point = pa.apply(c.point);
-  settle_certified_contact(a, pa, b, pb, c);
-}
-
-/// libccd's penetration, settled (settle_contact) and certified: EPA's own depth is the distance
-/// to its inner polytope, a lower bound of the true depth, and the overlap along its normal an
-/// upper bound. libccd 2.1's EPA sometimes stops early (on a polytope vertex or edge, or when a
-/// support point falls within its tolerance of a face that is not on the boundary); the gap then
-/// shows it, and the query is run again in two other normalised frames (scaled by 0.77 and 1.3)
-/// and by MPR, keeping the smallest upper bound and the largest lower bound.
-template <class S, class A, class B>
-ConvexContact<S> epa(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
-  const S scale = query_scale<S>(a, b);
-  CcdSettings settings = ccd_settings(o, scale);
-  ConvexContact<S> best;
-  S lower = S(0);
-  const double frames[3] = {1.0, 0.77, 1.3};
-  for (int attempt = 0; attempt < 4; ++attempt) {
-    CcdSettings st = settings;
-    CcdAlgorithm algo = o.penetration_algorithm;
-    if (attempt < 3) {
-      st.length_scale = settings.length_scale * frames[attempt];
-    } else {
-      algo = o.penetration_algorithm == CcdAlgorithm::Gjk ? CcdAlgorithm::Mpr : CcdAlgorithm::Gjk;
-    }
-    const auto r = ccd_penetration(a, pa, b, pb, algo, st);
-    ConvexContact<S> c = to_contact(r);
-    if (attempt == 0) {
-      if (!r.intersecting) return c;
-      best = c;
-      best.depth = std::numeric_limits<S>::infinity();
-    } else {
-      best.iterations += r.iterations;
-      best.limit_reached = best.limit_reached || r.limit_reached;
-      if (!r.intersecting) continue;
-    }
-    settle_contact(a, pa, b, pb, c);
-    // EPA's depth is a certified lower bound; MPR's is not (its portal is not a supporting face).
-    if (algo == CcdAlgorithm::Gjk && !r.limit_reached) lower = std::max(lower, std::min(r.depth, c.depth));
-    if (c.depth < best.depth) {
-      const int its = best.iterations;
-      const bool lim = best.limit_reached;
-      best = c;
-      best.iterations = its;
-      best.limit_reached = lim;
-    }
-    best.depth_gap = std::max(best.depth - lower, S(0));
-    if (best.depth_gap <= o.relative_tolerance * scale * S(100)) break;
-  }
-  return best;
-}
-
+/// The order in which the general solvers (GJK, EPA, libccd) see a pair of shape types: a pair
+/// whose b ranks lower than its a runs them on (b, a) and turns the answer back (swapped). So (b, a)
+/// gets exactly the mirror image of (a, b)'s answer, and each unordered pair of types instantiates
+/// those solvers once. The ranks follow the certified paths' order (cylinder before cone before box
+/// before hull).
 template <class T, class S>
-inline constexpr bool is_polytope_v = std::is_same_v<T, Box<S>> || std::is_same_v<T, ConvexHull<S>> || std::is_same_v<T, TriangleShape<S>> ||
-                                      std::is_same_v<T, PointCore<S>> || std::is_same_v<T, SegmentCore<S>>;
-
-/// The own EPA (convex/epa.hpp) on support functions sa, sb of one frame, from interior points
-/// la of a and lb of b there, translated to their midpoint (for precision far from the frame's
-/// origin). `failed` is set when it meets a degenerate Minkowski difference. Results in that frame.
-/// With `simplex` (a tetrahedron of support points of these functions holding the origin, from
-/// gjk_enclose, which took `simplex_calls` support calls) EPA starts from it instead of running GJK.
-template <class S, class SupportA, class SupportB, class Local = NoLocalCertificate>
-ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& support_b, const Vec3<S>& la, const Vec3<S>& lb, S scale,
-                                  const ConvexQueryOptions<S>& o, bool refine, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                                  int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
-  const Vec3<S> origin = (la + lb) / S(2);
-  const auto sa = [&](const Vec3<S>& d) { return Vec3<S>(support_a(d) - origin); };
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(support_b(d) - origin); };
-  EpaSettings<S> st;
-  st.scale = scale;
-  st.tolerance = o.relative_tolerance * scale;
-  st.coarse_tolerance = S(1e-3) * scale;
-  st.max_iterations = o.max_iterations;
-  st.refine = refine;
-  if (seed) {
-    st.seeded = true;
-    st.seed = *seed;
-  }
-  EpaPenetration<S> r;
-  if (simplex) {
-    SimplexPoint<S> moved[4];  // into the frame centred at `origin` (w = a - b is unchanged)
-    for (int i = 0; i < 4; ++i) moved[i] = SimplexPoint<S>{simplex[i].w, Vec3<S>(simplex[i].a - origin), Vec3<S>(simplex[i].b - origin)};
-    r = epa_penetration_local(sa, sb, moved, simplex_calls, st, local);
+constexpr int general_rank() {
+  if constexpr (std::is_same_v<T, TriangleShape<S>>) {
+    return 0;
+  } else if constexpr (std::is_same_v<T, Cylinder<S>>) {
+    return 1;
+  } else if constexpr (std::is_same_v<T, Cone<S>>) {
+    return 2;
+  } else if constexpr (std::is_same_v<T, Box<S>>) {
+    return 3;
+  } else if constexpr (std::is_same_v<T, ConvexHull<S>>) {
+    return 4;
   } else {
-    r = epa_penetration(sa, sb, Vec3<S>(la - lb), st);
+    return 5;
   }
-  ConvexContact<S> c;
-  failed = r.failed;
-  c.iterations = r.iterations;
-  c.limit_reached = r.limit_reached;
-  if (!r.intersecting || r.failed) return c;
-  c.intersecting = true;
-  c.normal = r.normal;
-  c.depth = r.depth;
-  c.point = (r.point_a + r.point_b) / S(2) + origin;
-  c.depth_gap = std::max(r.depth - r.lower, S(0));
-  c.refined = r.refined;
-  return c;
 }
-
-/// The own EPA on a and b in a's frame (PairFrame: a's support without rotation, b's with one each
-/// way). `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
-/// `simplex` as for own_epa_in_frame, in a's frame (PairFrame's support functions).
-template <class S, class A, class B, class Local = NoLocalCertificate>
-ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
-                         const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                         int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
-  const PairFrame<S> f(pa, pb);
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
-  ConvexContact<S> c = own_epa_in_frame(sa, sb, ia, f.b_to_a(ib), scale, o, refine, failed, simplex, simplex_calls, local, seed);
-  if (!c.intersecting) return c;
-  c.normal = pa.rotate(c.normal);
-  c.point = pa.apply(c.point);
-  return c;
-}
-
-/// The general penetration: the own EPA unless options.libccd_penetration, libccd when it fails.
-/// `simplex` as for own_epa (a's frame), when the caller's GJK enclosed the origin already.
-template <class S, class A, class B, class Local = NoLocalCertificate>
-ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
-                                     const ConvexQueryOptions<S>& o, const SimplexPoint<S>* simplex = nullptr, int simplex_calls = 0,
-                                     const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
-  if (!o.libccd_penetration) {
-    bool failed = false;
-    ConvexContact<S> c =
-        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local, seed);
-    if (!failed) {
-      if (c.intersecting) settle_certified_contact(a, pa, b, pb, c);
-      return c;
-    }
-  }
-  return epa(a, pa, b, pb, o);
-}
-
-/// The answer "no contact" of a pair that one plane (one support call of each shape) separated.
-template <class S>
-ConvexContact<S> one_plane_apart() {
-  ConvexContact<S> c;
-  c.iterations = 1;
-  return c;
-}
+template <class S, class A, class B>
+inline constexpr bool general_swapped_v = general_rank<B, S>() < general_rank<A, S>();
 
 /// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
 /// penetration: when it stopped with its bracket open (a coaxial pair's least-overlap normals form
@@ -777,185 +495,6 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   return g;
 }
 
-/// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
-/// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
-/// when the segment stays clear of the cylinder (GJK otherwise).
-template <class S, class C, class B>
-ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
-                                int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
-  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
-    ConvexDistance<S> d;
-    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) return d;
-  }
-  return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin);
-}
-
-/// The part of capsule a (at pa) that decides its penetration with a shape b whose ball (centre cb
-/// in the world, radius rb, shape_size about interior_point) is small beside a's length: the
-/// capsule cut to the axis window |t - t0| <= L about b's centre's projection t0, L = 2 (rho + rb)
-/// with rho the centre's distance to the axis (and kept where the window passes an end). Returns
-/// false (a as it is) unless the window is less than half of a's segment and holds a point of it.
-/// The boolean follows (the least overlap is >= 0 for both or for neither). With `distance`, also
-/// false unless t0 lies on the segment: then p0's distance to b is at most rho (b holds its centre)
-/// and every point outside the window is farther than L - rb >= rho from b, so the closest points
-/// and the distance are the same too.
-/// Why the depth is the same: the overlap along n of the cut capsule is r + g(n) + (its end's t -
-/// t0) n_z, g(n) = n . p0 - min_b n . x (p0 = the axis point at t0) being Lipschitz with constant
-/// max_b |p0 - x| <= rho + rb =: K. On a side where the window passes the end it equals the whole
-/// capsule's; where it cuts, it is at least r + g(n) + L sin(theta) >= its value at n's projection
-/// n' onto the plane normal to the axis (|n - n'| <= pi/2 sin(theta) and L >= pi/2 K), where the
-/// two agree. So the least overlap, the depth, is the same, and the cut capsule, a subset, touches
-/// b exactly when the whole does. What changes: tolerances relative to the cut length, and no
-/// rounding of the axis' length along a normal that rounding tilted (a capsule 1e9 times longer
-/// than wide across a cone had depths off by 1e-6 of its length that way: GJK's witness points at
-/// 1e9 from each other, 1.5 apart, gave a normal tilted by 3e-7).
-template <class S>
-struct CapsuleCut {
-  Capsule<S> capsule{S(1), S(0)};
-  RigidTransform<S> pose;
-  bool low = false, high = false;  ///< whether the window cuts the segment below, above
-};
-template <class S, class B>
-bool capsule_window(const Capsule<S>& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, CapsuleCut<S>& cut,
-                    bool distance = false) {
-  const S h = a.half_length;
-  const Vec3<S> cb = pa.R.transpose() * (pb.apply(interior_point(b)) - pa.t);  // in a's frame
-  const S rho = std::sqrt(cb.x() * cb.x() + cb.y() * cb.y());
-  const S len = S(2) * (rho + shape_size(b));
-  if (!(S(2) * len < h)) return false;  // also for NaN
-  if (distance && !(std::abs(cb.z()) <= h)) return false;
-  const S t1 = std::max(cb.z() - len, -h), t2 = std::min(cb.z() + len, h);
-  if (!(t1 <= t2)) return false;  // b's ball is more than 2 rho + 2 rb beyond an end
-  cut.capsule.radius = a.radius;
-  cut.capsule.half_length = (t2 - t1) / S(2);
-  cut.pose.R = pa.R;
-  cut.pose.t = pa.t + pa.R.col(2) * ((t1 + t2) / S(2));
-  cut.low = t1 > -h;
-  cut.high = t2 < h;
-  return true;
-}
-
-/// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
-/// core touches b. `flip` swaps the roles back for the caller (b was the round one). A capsule
-/// much longer than b goes on as the part of it that decides (capsule_window).
-template <class S, class R, class B>
-ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
-                               const ConvexQueryOptions<S>& o, bool flip) {
-  if constexpr (std::is_same_v<R, Capsule<S>>) {
-    CapsuleCut<S> cut;
-    if (capsule_window(a, pa, b, pb, cut)) {
-      ConvexContact<S> c = round_contact(cut.capsule, cut.pose, b, pb, o, false);
-      // The whole capsule overlaps more than the cut one along a normal with a component towards
-      // a cut side, by the length cut off times that component (4e-11 of a tilt, within the cut
-      // query's tolerance, times 4e9). Dropping the component does not raise the cut capsule's
-      // overlap (capsule_window's bound), and there the two agree.
-      const Vec3<S> u = pa.R.col(2);
-      const S nz = c.normal.dot(u);
-      if (c.intersecting && ((nz > S(0) && cut.high) || (nz < S(0) && cut.low))) {
-        const Vec3<S> m = c.normal - nz * u;
-        const S len = m.norm();
-        if (len > S(0)) {
-          const S lower = c.depth - c.depth_gap;
-          c.normal = m / len;
-          settle_contact(a, pa, b, pb, c);
-          c.depth_gap = std::max(c.depth - lower, S(0));
-        }
-      }
-      if (flip) c.normal = -c.normal;
-      return c;
-    }
-  }
-  const auto core = core_of(a);
-  const S scale = query_scale<S>(a, b);
-  const S tol = o.relative_tolerance * scale;
-  const S r = round_radius(a);
-  // the radius as margin, stopping only when the core is farther than it (no contact: the common
-  // case, decided as cheaply as the boolean); else converged as without a margin
-  const ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations, r, false);
-  if (!d.intersecting && d.distance > tol) {
-    ConvexContact<S> c;
-    c.iterations = d.iterations;
-    c.limit_reached = d.limit_reached;
-    if (d.distance > r) return c;
-    c.intersecting = true;
-    // the witnesses' difference, normalised: GJK's distance and the witnesses' distance differ by
-    // rounding (fuzzing: by 1.4e-3 of the distance in float, and the overlap along the unnormalised
-    // normal was that much too deep)
-    const Vec3<S> gap = d.point_b - d.point_a;
-    const S len = gap.norm();
-    c.normal = len > S(0) ? Vec3<S>(gap / len) : Vec3<S>(Vec3<S>::UnitZ());
-    c.depth = r - d.distance;
-    c.point = (d.point_a + r * c.normal + d.point_b) / S(2);
-    settle_contact(a, pa, b, pb, c);
-    if (flip) c.normal = -c.normal;
-    return c;
-  }
-  if (!o.libccd_penetration) {  // the core meets b: EPA on the core, plus the radius
-    bool failed = false;
-    ConvexContact<S> c = own_epa(core, pa, core_interior(core), b, pb, interior_point(b), scale, o, failed);
-    if (!failed) {
-      c.iterations += d.iterations;
-      c.limit_reached = c.limit_reached || d.limit_reached;
-      if (!c.intersecting) {
-        // The core comes within GJK's tolerance of b, and EPA's GJK found a plane between them: the
-        // depth is at most r (the core is apart) and at least r minus GJK's distance, an upper
-        // bound of the core's (the tolerance where GJK called them touching). Along GJK's line.
-        // Settled, the depth stays at most r: the overlap along a normal that is off by rounding
-        // grows with the shape's length (fuzzing: a needle capsule 2^42 times longer than wide,
-        // 0.003 beside a box, was given a depth of 1.7e5 from the overlap along such a normal).
-        const Vec3<S> gap = d.point_b - d.point_a;
-        const S len = d.intersecting ? S(0) : gap.norm();
-        const S apart = d.intersecting ? tol : d.distance;
-        c.intersecting = true;
-        c.normal = len > S(0) ? Vec3<S>(gap / len) : Vec3<S>(Vec3<S>::UnitZ());
-        c.depth = r;
-        c.point = (d.point_a + d.point_b) / S(2);
-        settle_certified_contact(a, pa, b, pb, c);
-        c.depth_gap = std::max(c.depth - std::max(r - apart, S(0)), S(0));
-      } else {  // EPA's depth plus the radius is the overlap along its normal too: settled, the smaller
-        c.depth += r;
-        settle_certified_contact(a, pa, b, pb, c);
-      }
-      if (flip) c.normal = -c.normal;
-      return c;
-    }
-  }
-  return flip ? epa(b, pb, a, pa, o) : epa(a, pa, b, pb, o);
-}
-
-template <class S, class R, class B>
-ConvexDistance<S> round_distance(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
-                                 const ConvexQueryOptions<S>& o) {
-  if constexpr (std::is_same_v<R, Capsule<S>>) {  // a needle: the part of it that decides
-    CapsuleCut<S> cut;
-    if (capsule_window(a, pa, b, pb, cut, true)) return round_distance(cut.capsule, cut.pose, b, pb, o);
-  }
-  const auto core = core_of(a);
-  const S tol = o.relative_tolerance * query_scale<S>(a, b);
-  ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations);
-  const S r = round_radius(a);
-  if (d.intersecting || d.distance <= r) {
-    d.intersecting = true;
-    d.distance = S(0);
-    return d;
-  }
-  const Vec3<S> n = (d.point_b - d.point_a) / d.distance;
-  d.point_a += r * n;
-  d.distance -= r;
-  return d;
-}
-
-template <class S>
-ConvexDistance<S> swapped(ConvexDistance<S> d) {
-  std::swap(d.point_a, d.point_b);
-  return d;
-}
-template <class S>
-ConvexContact<S> swapped(ConvexContact<S> c) {
-  c.normal = -c.normal;
-  return c;
-}
-
 }  // namespace detail
 
 namespace detail {
@@ -1012,7 +551,11 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, ConvexHull<S>>) {
       if (!options.libccd_penetration && centre_line_separates(a, pose_a, b, pose_b)) return ConvexContact<S>{};
     }
-    return general_penetration(a, pose_a, b, pose_b, options);
+    if constexpr (general_swapped_v<S, A, B>) {
+      return swapped(general_penetration(b, pose_b, a, pose_a, options));
+    } else {
+      return general_penetration(a, pose_a, b, pose_b, options);
+    }
   }
 }
 
@@ -1100,7 +643,12 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
     if (limit_reached) *limit_reached = limit;
     return hit;
   } else {
-    return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, ccd_settings(options, query_scale<S>(a, b)), limit_reached);
+    const CcdSettings settings = ccd_settings(options, query_scale<S>(a, b));
+    if constexpr (general_swapped_v<S, A, B>) {
+      return ccd_intersect(b, pose_b, a, pose_a, options.boolean_algorithm, settings, limit_reached);
+    } else {
+      return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, settings, limit_reached);
+    }
   }
 }
 }  // namespace detail
@@ -1142,7 +690,11 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
     return swapped(round_distance(b, pose_b, a, pose_a, options));
   } else {  // BoxBox and General: GJK
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
-    return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
+    if constexpr (general_swapped_v<S, A, B>) {
+      return swapped(gjk(b, pose_b, interior_point(b), a, pose_a, interior_point(a), tol, options.max_iterations));
+    } else {
+      return gjk(a, pose_a, interior_point(a), b, pose_b, interior_point(b), tol, options.max_iterations);
+    }
   }
 }
 

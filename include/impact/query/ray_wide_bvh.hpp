@@ -268,13 +268,18 @@ template <class S, int W = 4> struct WideCast {
     }
   }
   /// One block of leaf_avx (a function of its own: the ray's values are read from the test at
-  /// each block, not hoisted out of a loop and spilled). hits_avx decides against the best B as
-  /// the block begins; after a hit of this block lowered it to B' < B, test_lane would keep a
-  /// later lane exactly when its depth check passes against B', its box is entered before B'
-  /// and max(min(q, B'), entry) < B' (q = tt / det): that needs q < B' and entry < B', and then
-  /// the value is hits_avx's max(min(q, B), entry) and the box test against B' agrees with the
-  /// one against B. So the depth re-check and th < B' give test_lane's answer.
+  /// each block, not hoisted out of a loop and spilled): block_avx.
   template <class T> IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
+    block_avx(blk, block, lanes);
+  }
+  /// The lanes of one block hit (the first `lanes`), taken in lane order. hits_avx decides
+  /// against the best B as the block begins; after a hit of this block lowered it to B' < B,
+  /// test_lane would keep a later lane exactly when its depth check passes against B', its box
+  /// is entered before B' and max(min(q, B'), entry) < B' (q = tt / det): that needs q < B' and
+  /// entry < B', and then the value is hits_avx's max(min(q, B), entry) and the box test against
+  /// B' agrees with the one against B. So the depth re-check and th < B' give test_lane's answer.
+  /// Inlined into its two callers (GCC and Clang only, as IMPACT_WIDE_AVX).
+  template <class T> __attribute__((always_inline)) IMPACT_WIDE_AVX_TARGET void block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
     typename BlockTest<S>::LaneHits h;  // of the block, when it hits a lane
     int m = lane_test->hits_avx(blk, lanes, best, h);
     bool lowered = false;  // by a lane of this block: later lanes are re-decided against it
@@ -293,6 +298,18 @@ template <class S, int W = 4> struct WideCast {
     }
   }
   std::optional<BlockTest<S>> lane_test;  // leaf_avx's test, made at its first leaf
+  /// Makes lane_test (at a cast's first leaf; kept out of the node loop's code).
+  IMPACT_NOINLINE void make_lane_test() { lane_test.emplace(o, d, inv); }
+  /// leaf_avx() of a leaf of one block (at most four triangles) in a tree of float blocks
+  /// without repeated triangles (WideBvh::packed_without_repeats; run_avx checks both, the most
+  /// common leaf): one call from the node loop, where leaf_avx made two and its checks and loop
+  /// (bunny, long rays: 869 -> 842 instructions a ray). Inlining it into the node loop too saves
+  /// no more (846) and costs short casts, which rarely reach a leaf, 4 a ray.
+  IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_one_block_avx(std::int32_t block, std::int32_t count) {
+    if (IMPACT_UNLIKELY(!lane_test)) make_lane_test();
+    triangle_tests += static_cast<std::size_t>(count);
+    block_avx(wide.packed_blocks()[static_cast<std::size_t>(block)], block, static_cast<int>(count));
+  }
 #endif
   /// After a hit, at a node whose float keys of entered children are within rounding of it: the
   /// keys in S decide (exact ties with the hit are pruned, as WideSlab prunes them: a ray through
@@ -555,7 +572,11 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
     }
     if (!done) {
       if constexpr (std::is_same_v<S, double>) {
-        leaf_avx(first, count);
+        if (IMPACT_LIKELY(count <= 4 && wide.packed_without_repeats())) {
+          leaf_one_block_avx(first, count);
+        } else {
+          leaf_avx(first, count);
+        }
       } else {
         leaf(first, count);
       }
