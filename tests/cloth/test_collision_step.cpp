@@ -234,6 +234,49 @@ TYPED_TEST(ClothStep, IntersectingStartThrowsNamingTheTriangles) {
   expect_intersecting_start(Fd, xc, none, "triangle 0 (0,1,2) and triangle 1 (1,2,0)");
 }
 
+// With a workspace, a start that is bit for bit the last step's clean end skips the exact
+// intersection test (known free); any other start, the start after a step that threw, and the
+// start after a step whose own start intersected (StartViolation::Report) are tested again.
+TYPED_TEST(ClothStep, StartAfterACleanStepIsKnownFreeOfIntersections) {
+  using S = TypeParam;
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  const ClothObstacles<S> none;
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  // triangle 1 upright through triangle 0's interior (every vertex-face and edge-edge pair far)
+  const Vertices<S> pierced = rows<S>({{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, {0, -0.2, 0.5}, {0, -0.2, -0.5}, {0.1, -0.2, 0.6}});
+  Vertices<S> apart = pierced;
+  apart.bottomRows(3).col(2).array() += S(2);  // lifted clear of triangle 0
+  const Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionWorkspace<S> ws;
+  auto step = [&](const Vertices<S>& x0, Vertices<S>& x1, StartViolation on) {
+    auto o = opt;
+    o.on_start_violation = on;
+    return cloth_collision_step(F, w, x0, x1, none, o, &ws);
+  };
+  Vertices<S> x1 = apart;
+  x1.col(2).array() -= S(0.01);
+  const auto first = step(apart, x1, StartViolation::Throw);
+  EXPECT_FALSE(first.start_intersections_known_free);
+  ASSERT_TRUE(first.collision_free);
+  Vertices<S> x0 = x1;
+  x1.col(2).array() -= S(0.01);
+  EXPECT_TRUE(step(x0, x1, StartViolation::Throw).start_intersections_known_free);
+  // not the last end: tested, and it throws
+  Vertices<S> x1p = pierced;
+  EXPECT_THROW(step(pierced, x1p, StartViolation::Throw), InvalidInput);
+  // the step that threw left no clean end behind
+  x0 = x1;
+  EXPECT_FALSE(step(x0, x1, StartViolation::Throw).start_intersections_known_free);
+  // a reported intersection stays: the next start is tested again and reports it again
+  x1p = pierced;
+  EXPECT_EQ(step(pierced, x1p, StartViolation::Report).start_intersections.size(), 1u);
+  const Vertices<S> x0p = x1p;
+  const auto again = step(x0p, x1p, StartViolation::Report);
+  EXPECT_FALSE(again.start_intersections_known_free);
+  EXPECT_EQ(again.start_intersections.size(), 1u);
+}
+
 // Starts that touch within the thickness band but do not intersect: a flat sheet (adjacent
 // triangles coplanar), a second sheet 1.5 h above it, an upright triangle standing 1.5 h above
 // the top sheet's interior, and one whose edge crosses the sheet's plane 1.5 h beyond its

@@ -99,7 +99,10 @@ class ClothCollisionWorkspace {
 /// With StartViolation::Report both are listed (start_intersections, start_violations) and the
 /// step proceeds; it cannot undo an intersection. A start free of intersections stays free: two
 /// triangles can only begin to intersect through a vertex-face or edge-edge contact, which the
-/// step keeps at least h apart.
+/// step keeps at least h apart. So with a workspace, an x0 that is bit for bit the end state of
+/// the last step (obstacles included), when that step started free of intersections and ended
+/// collision_free with no start pair excluded, skips the intersection test
+/// (ClothStepStats::start_intersections_known_free; cloth/detail/step_gathering.hpp, check_pierce).
 /// Returns the statistics; see the file comment for the guarantee.
 template <class S>
 ClothStepStats cloth_collision_step(const Faces& F, const Eigen::Matrix<S, Eigen::Dynamic, 1>& inverse_mass, const Vertices<S>& x0,
@@ -120,6 +123,7 @@ ClothStepStats cloth_collision_step(const Faces& F, const Eigen::Matrix<S, Eigen
   if (opt.impulses && opt.impulse_passes > 0) step.impulse_stage();
   if (opt.zones && opt.max_zone_iterations > 0) step.zone_stage();
   step.failsafe_stage();
+  step.note_end();
   step.write_back(x1);
   stats.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
   return stats;

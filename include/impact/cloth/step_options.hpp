@@ -177,6 +177,11 @@ struct ClothStepStats {
   /// other and no vertex-face or edge-edge pair within h / 2 (an intersection with a closer pair
   /// shows in start_violations). The step cannot undo them: they stay.
   std::vector<std::pair<std::int32_t, std::int32_t>> start_intersections;
+  /// The start's exact intersection test was not needed: x0 (with the obstacles at their start
+  /// poses) is, bit for bit, the end state of the last step in the same workspace, which started
+  /// free of intersections and ended collision_free (collision_step.hpp says why that state is
+  /// free of intersections). The distances at x0 are checked as always.
+  bool start_intersections_known_free = false;
 };
 
 }  // namespace impact

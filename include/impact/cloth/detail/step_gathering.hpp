@@ -115,7 +115,12 @@ template <class S>
 void Stepper<S>::gather() {
   const auto t0 = Clock::now();
   ++stats_.broad.passes;
-  if (sys_.vtri_off.size() != sys_.w.size() + 1 || sys_.own_faces.rows() != sys_.F.rows() || sys_.own_faces != sys_.F) build_ownership();
+  const bool same_faces = sys_.own_faces.rows() == sys_.F.rows() && sys_.own_faces == sys_.F;  // as the last gathering's
+  if (sys_.vtri_off.size() != sys_.w.size() + 1 || !same_faces) build_ownership();
+  // The start's intersection test is needed unless x0 is the last step's clean end (note_end).
+  const bool known_free = sys_.clean_end_valid && same_faces && sys_.clean_end.rows() == sys_.X0.rows() && sys_.X0 == sys_.clean_end;
+  stats_.start_intersections_known_free = known_free;
+  sys_.clean_end_valid = false;  // until this step ends clean (note_end)
   const Faces& F = sys_.F;
   const std::size_t nv = sys_.w.size(), nf = static_cast<std::size_t>(F.rows());
   ebox_.resize(nv);
@@ -130,10 +135,10 @@ void Stepper<S>::gather() {
   old_tbox_ = tbox_;
   refit_tree();
   cand_.clear();
-  start_planes();
+  if (!known_free) start_planes();
   self_pairs([&](std::int32_t fa, std::int32_t fb) {
     pairs_of(fa, fb, cand_);
-    check_pierce(fa, fb);
+    if (!known_free) check_pierce(fa, fb);
   });
   // Per candidate: a lower bound on its distance at x0 (NaN: not known yet), the pass stamp;
   // the vertex -> candidate index is built when first needed.
@@ -502,6 +507,31 @@ void Stepper<S>::check_pierce(std::int32_t fa, std::int32_t fb) {
   const Vec3<S> A[3] = {sys_.X0.row(ia[0]).transpose(), sys_.X0.row(ia[1]).transpose(), sys_.X0.row(ia[2]).transpose()};
   const Vec3<S> B[3] = {sys_.X0.row(ib[0]).transpose(), sys_.X0.row(ib[1]).transpose(), sys_.X0.row(ib[2]).transpose()};
   if (triangle_pair_intersects(A, B, ia, ib)) pierced_.push_back({std::min(fa, fb), std::max(fa, fb)});
+}
+
+/// At the end of the step: keeps its end state (the combined end positions) for the next step's
+/// start check when it is known free of intersections, i.e. this step's x0 was (check_pierce
+/// found nothing, or x0 was the last clean end) and the step ended collision_free with no start
+/// pair excluded. Then every non-adjacent vertex-face and edge-edge pair stayed farther apart than
+/// h > 0 over the whole motion, and two triangles (not sharing an edge, which the test skips)
+/// begin to intersect only at a time where such a pair touches:
+///  - triangles sharing no vertex: at the first time they meet, a vertex of one touches the other
+///    or an edge of each touch (a transversal crossing of an interior needs the segment's ends on
+///    both sides, which it reaches only through one of these);
+///  - sharing one vertex v: the intersections adjacent_pair_intersects reports are the edge
+///    opposite v of one meeting the other (as above, it first touches through an endpoint or an
+///    edge of the other, none of which shares a vertex with that edge: a non-adjacent pair), or
+///    an edge (v, e) in the other's plane inside its corner at v, which holds e inside the other
+///    (a vertex-face pair at distance 0) or crosses the edge opposite v (an edge-edge pair, no
+///    common vertex);
+///  - the same triangle twice is a property of the faces, reported at the first step.
+/// Obstacle positions are part of the combined state: an x0 that equals it bit for bit, for the
+/// same faces, is free of intersections, and gather() skips the test (known_free). Invalid until
+/// a step ends clean: gather() clears it, so a step that throws leaves none behind.
+template <class S>
+void Stepper<S>::note_end() {
+  sys_.clean_end_valid = stats_.collision_free && pierced_.empty() && excluded_.empty();
+  if (sys_.clean_end_valid) sys_.clean_end = sys_.X1;
 }
 
 /// Whether some vertex moved since the last CCD pass left its envelope.

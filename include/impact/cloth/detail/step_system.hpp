@@ -88,6 +88,11 @@ struct System {
   std::vector<std::uint32_t> vtri_off;
   std::vector<std::int32_t> vtri;
   Faces own_faces;
+  // The last step's combined end positions, when that step's x0 was checked free of
+  // intersections and it ended collision_free with nothing excluded (Stepper::note_end): then a
+  // next x0 equal to them, for the same faces, is free of intersections too (check_pierce).
+  Vertices<S> clean_end;
+  bool clean_end_valid = false;
   StepBuffers<S> buf;
 };
 

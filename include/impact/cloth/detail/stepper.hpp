@@ -61,6 +61,9 @@ class Stepper {
   void zone_stage();
 
   void write_back(Vertices<S>& x1) const { x1 = sys_.X1.topRows(sys_.n_cloth); }
+  // step_gathering.hpp: keeps the end state for the next step's start check when it is known
+  // free of intersections
+  void note_end();
 
  private:
   struct Contact {
