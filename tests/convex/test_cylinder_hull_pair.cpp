@@ -123,12 +123,24 @@ ConvexHull<double> scaled(const ConvexHull<double>& h, double s) {
   return convex_hull(p);
 }
 
+// The number of the hull's placed vertices within 1e-9 of the size of its support plane along -n:
+// 1 for a vertex, 2 for an edge.
+int support_count(const std::vector<V3L>& v, const Eigen::Vector3d& n, double size) {
+  LD top = -std::numeric_limits<LD>::infinity();
+  for (const V3L& x : v) top = std::max(top, -n.cast<LD>().dot(x));
+  int count = 0;
+  for (const V3L& x : v) count += -n.cast<LD>().dot(x) >= top - LD(1e-9 * size);
+  return count;
+}
+
 // Each certified candidate: its lower bound below the oracle's depth (an upper bound of the true
 // one), its depth within 1e-9 of the size of it and the overlap along its normal; every kind
-// certified (a hull face, a cap, the side against an edge). Checked to fail: the face ball's
-// radius taken as the distance to the contact face alone (not the least over the faces).
+// certified (a hull face, a cap, the side against an edge, the side against a vertex). Checked to
+// fail: the face ball's radius taken as the distance to the contact face alone (not the least over
+// the faces); the side vertex taken where the climb starts (no climb); its ball's radius taken as
+// its distance to the side alone (not the caps').
 TEST(CylinderHullPair, CertifiedDepthsAgainstTheOracle) {
-  int face = 0, cap = 0, side = 0;
+  int face = 0, cap = 0, side = 0, side_vertices = 0;
   for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 30 : 150, 641)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
     const double size = std::max(shape_size(c.cyl), shape_size(h)), tol = 1e-10 * size;
@@ -146,6 +158,7 @@ TEST(CylinderHullPair, CertifiedDepthsAgainstTheOracle) {
       ++cap;
     } else if (std::abs(k.normal.z()) < 1e-12) {
       ++side;
+      side_vertices += support_count(placed(h, f.R, f.t), k.normal, size) == 1;
     } else {
       ++face;
     }
@@ -153,6 +166,35 @@ TEST(CylinderHullPair, CertifiedDepthsAgainstTheOracle) {
   EXPECT_GT(face, IMPACT_TEST_SANITIZED ? 0 : 2);
   EXPECT_GT(cap, IMPACT_TEST_SANITIZED ? 0 : 2);
   EXPECT_GT(side, IMPACT_TEST_SANITIZED ? 0 : 2);
+  EXPECT_GT(side_vertices, IMPACT_TEST_SANITIZED ? 0 : 2);
+}
+
+// side_vertex from every start vertex, axes passing 0.4 to 0.9 from the hull's centre (an axis
+// through the hull has no vertex against its side): what it returns is the hull's support (a scan
+// of all vertices, long double) along minus its offset from the axis, and the climb moves (from a
+// start that is not) for some starts. Checked to fail: the start returned without the climb.
+TEST(CylinderHullPair, SideVertexIsTheSupportAlongItsOffset) {
+  test::Rng rng(649);
+  int found = 0, moved = 0;
+  for (const ConvexHull<double>& h : hulls()) {
+    for (int j = 0; j < 10; ++j) {
+      const Eigen::Vector3d ax = rng.vec(-1, 1).normalized(), away = ax.cross(rng.vec(-1, 1)).normalized();
+      const Eigen::Vector3d c = h.centroid + rng.uniform(0.4, 0.9) * away + rng.uniform(-1, 1) * ax;
+      for (int start = 0; start < static_cast<int>(h.vertices.rows()); ++start) {
+        const int v = detail::side_vertex(h, ax, c, start);
+        if (v < 0) continue;
+        ++found;
+        moved += v != start;
+        const V3L y = (h.vertices.row(v).transpose() - c).cast<LD>(), a = ax.cast<LD>();
+        const V3L q = y - y.dot(a) * a;
+        const LD top = -q.dot(h.vertices.row(v).transpose().cast<LD>());
+        for (Eigen::Index i = 0; i < h.vertices.rows(); ++i)
+          EXPECT_LE(-q.dot(h.vertices.row(i).transpose().cast<LD>()), top + LD(1e-12)) << "vertex " << v << " from " << start;
+      }
+    }
+  }
+  EXPECT_GT(found, 40);  // 91 and 85 when written
+  EXPECT_GT(moved, 20);
 }
 
 // The local certificate's terms: at most the overlap everywhere, equal to it along the direction

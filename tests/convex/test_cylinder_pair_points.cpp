@@ -14,6 +14,7 @@
 #include "impact/convex/query.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/random.hpp"
+#include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace {
@@ -75,6 +77,7 @@ LD min_sphere(const std::function<LD(LD, LD, LD)>& F, int n = 3000, int starts =
     LD x, y, z;
     dir(v[s].second, x, y, z);
     LD f = v[s].first;
+    int moves = 0;  // at most 64 moves per step length (a flat valley would let rounding walk it for long)
     for (LD step = 0.02L; step > 1e-14L;) {
       bool moved = false;
       for (int k = 0; k < 16; ++k) {  // 16 tangent directions
@@ -98,7 +101,10 @@ LD min_sphere(const std::function<LD(LD, LD, LD)>& F, int n = 3000, int starts =
           moved = true;
         }
       }
-      if (!moved) step /= 2;
+      if (!moved || ++moves == 64) {
+        step /= 2;
+        moves = 0;
+      }
     }
     best = std::min(best, f);
   }
@@ -226,4 +232,160 @@ TEST(CylinderPairPoints, CylinderConeCandidatesCertifiedThroughThePointsAgreeWit
   EXPECT_GE(through_points, 12);
 }
 
+// (its own namespace: the convex tests build as one unity source, beside test_cone_cone_pair.cpp)
+namespace cone_points_test {
+
+// Cone c's support function along n (its frame), long double.
+LD cone_h(const Cone<double>& c, LD x, LD y, LD z) {
+  return std::max(c.half_length * z, c.radius * std::sqrt(x * x + y * y) - c.half_length * z);
+}
+
+// The shadow bound of cone_shadow_distance against min over the great circle normal to v of
+// h_C(n) - n . p (long double), for p's shadow inside the cone's (the bound is -infinity outside):
+// never above it, and above half of it on most points. Checked to fail: the apex's shadow at
+// h s instead of 2h s from the ellipse's centre, and the tangent line's normal with apex - xt
+// negated.
+TEST(CylinderPairPoints, ConeShadowDistanceIsALowerBound) {
+  test::Rng rng(9);
+  int inside = 0, half = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Cone<double> c{rng.uniform(0.2, 1.0), rng.uniform(0.2, 1.0)};
+    V3 v = rng.vec(-1, 1).normalized();
+    if (i % 10 == 0) v = V3(v.x(), v.y(), 1e-3 * v.z()).normalized();  // nearly normal to the axis: a thin ellipse
+    const V3 p = rng.vec(-1, 1).cwiseProduct(V3(c.radius, c.radius, c.half_length));
+    const double lb = detail::cone_shadow_distance(c, p, v);
+    const V3 e1 = (std::abs(v.x()) < 0.6 ? V3::UnitX() : V3::UnitY()).cross(v).normalized(), e2 = v.cross(e1);
+    const LD truth = min_1d(
+        [&](LD t) {
+          const LD x = std::cos(t) * e1.x() + std::sin(t) * e2.x(), y = std::cos(t) * e1.y() + std::sin(t) * e2.y(),
+                   z = std::cos(t) * e1.z() + std::sin(t) * e2.z();
+          return cone_h(c, x, y, z) - (x * p.x() + y * p.y() + z * p.z());
+        },
+        0, 2 * M_PI);
+    EXPECT_LE(lb, truth + 1e-12) << i;
+    if (lb > -1e300) ++inside;
+    half += truth > 0 && lb > 0.5 * truth;
+  }
+  std::printf("cone shadow: shown inside %d of 200, above half the distance on %d\n", inside, half);
+  EXPECT_GE(half, 60);
+}
+
+// cone_points_lower (the cone as the container) for 1-3 points inside or outside the cone: never
+// above a fine minimisation over directions of max_p (h_C(n) - n . p) (the depth of the cone
+// against the points' hull), and within 1e-9 of it on a good share of the sets with a positive
+// depth. The bound from the faces alone (base, side at each point's azimuth; no great circles)
+// is above it on some sets, so the oracle sees a bound that leaves the pairs out. Checked to fail:
+// the side value of a point with the wrong sign of its radial term, the pairs' great circles left
+// out, and the in-cell test of the base with +z.
+TEST(CylinderPairPoints, ConePointsBoundNeverAboveTheDepthOfTheirHull) {
+  test::Rng rng(8);
+  int reached = 0, positive = 0, faces_only_above = 0;
+  for (int i = 0; i < 120; ++i) {
+    const Cone<double> c{rng.uniform(0.2, 1.0), rng.uniform(0.2, 1.0)};
+    const int np = 1 + i % 3;
+    V3 P[3];
+    for (int k = 0; k < np; ++k) P[k] = rng.vec(-1.3, 1.3).cwiseProduct(V3(c.radius, c.radius, c.half_length));
+    if (i % 3 != 2) P[0] = V3(rng.uniform(-0.3, 0.3) * c.radius, rng.uniform(-0.3, 0.3) * c.radius, rng.uniform(-0.9, 0) * c.half_length);  // inside
+    const double L = detail::cone_points_lower(c, P, np);
+    const auto F = [&](LD x, LD y, LD z) {
+      LD m = -1e30L;
+      for (int k = 0; k < np; ++k) m = std::max(m, cone_h(c, x, y, z) - (x * P[k].x() + y * P[k].y() + z * P[k].z()));
+      return m;
+    };
+    const LD truth = min_sphere(F);
+    EXPECT_LE(L, truth + 1e-12) << i;
+    if (truth > 0) {
+      ++positive;
+      reached += L >= truth - 1e-9;
+    }
+    double faces = std::numeric_limits<double>::infinity();
+    const double len = std::sqrt(4 * c.half_length * c.half_length + c.radius * c.radius);
+    for (int k = 0; k < np; ++k) {
+      const V3& p = P[k];
+      const double rxy = std::hypot(p.x(), p.y());
+      const V3 dirs[2] = {-V3::UnitZ(), V3(2 * c.half_length * p.x() / (rxy * len), 2 * c.half_length * p.y() / (rxy * len), c.radius / len)};
+      const double vals[2] = {c.half_length + p.z(), (c.radius * (c.half_length - p.z()) - 2 * c.half_length * rxy) / len};
+      for (int d = 0; d < 2; ++d) {
+        bool cell = true;
+        for (int j = 0; j < np; ++j) cell = cell && !(dirs[d].dot(p) > dirs[d].dot(P[j]) + 1e-12);
+        if (cell) faces = std::min(faces, vals[d]);
+      }
+    }
+    faces_only_above += faces > truth + 1e-6;
+  }
+  std::printf("cone: sets with a positive depth %d, bound within 1e-9 on %d; faces alone above it on %d\n", positive, reached, faces_only_above);
+  EXPECT_GE(positive, 30);
+  EXPECT_GE(reached, positive / 3);
+  EXPECT_GE(faces_only_above, 10);
+}
+
+// The overlap along unit n (a's frame) of cylinder a and cone b placed by R, t there, long double.
+LD cylinder_cone_overlap(const Cylinder<double>& a, const Cone<double>& b, const Eigen::Matrix3d& R, const V3& t, const test::OracleDirection& n) {
+  const test::OracleDirection m = -(R.cast<LD>().transpose() * n);
+  return a.radius * std::sqrt(n.x() * n.x() + n.y() * n.y()) + a.half_length * std::abs(n.z()) - t.cast<LD>().dot(n) + cone_h(b, m.x(), m.y(), m.z());
+}
+
+// The depth by test::least_overlap: kink circles at a's equator and b's side normals, the axes
+// and `extra` (the normal under test) as starts.
+LD cylinder_cone_depth(const Cylinder<double>& a, const Cone<double>& b, const Eigen::Matrix3d& R, const V3& t, const V3& extra) {
+  const auto f = [&](const test::OracleDirection& n) { return cylinder_cone_overlap(a, b, R, t, n); };
+  const double side = b.radius / std::sqrt(4 * b.half_length * b.half_length + b.radius * b.radius);
+  return test::least_overlap(f, {V3::UnitZ(), -V3::UnitZ(), R.col(2), -R.col(2), extra}, {{V3::UnitZ(), 0}, {R.col(2), -side}}).depth;
+}
+
+// Every certified cylinder–cone candidate (caps, rulings, rims, the side minimum, the points of
+// either shape against the other, a cone's whole ruling against the cylinder) against the oracle:
+// its lower bound below the oracle's depth and its depth within 1e-9 of the size of it, at the
+// unit size, 1e-3 and 1e3 of it and 1e3 from the origin; float poses and shapes within float's
+// tolerance of the double oracle of the same inputs. Deep poses (b's centre within 0.35 of the
+// sizes of a's) so that the points and the rulings decide many. Checked to fail: the cone's side
+// value in cone_points_lower with its radial term's sign flipped; the cone ruling's rim end at
+// the opposite azimuth; the side minimum's slope with its sign flipped (certified depths above
+// the oracle's).
+TEST(CylinderPairPoints, CylinderConeCertifiedAgainstTheOracle) {
+  const double scales[4] = {1, 1e-3, 1e3, 1}, offsets[4] = {0, 0, 0, 1e3};
+  int certified = 0, certified_float = 0;
+  for (int s = 0; s < 4; ++s) {
+    test::Rng rng(40 + static_cast<std::uint64_t>(s));
+    for (int i = 0; i < (IMPACT_TEST_SANITIZED ? 10 : 40); ++i) {
+      const double k = scales[s];
+      const Cylinder<double> a{k * rng.uniform(0.2, 1.0), k * rng.uniform(0.2, 1.0)};
+      const Cone<double> b{k * rng.uniform(0.2, 1.0), k * rng.uniform(0.2, 1.0)};
+      const double reach = 0.35 * (shape_size(a) + shape_size(b));
+      const RigidTransform<double> pa{rng.rotation(), Eigen::Vector3d(rng.vec(-k, k) + V3::Constant(offsets[s]))};
+      const RigidTransform<double> pb{rng.rotation(), Eigen::Vector3d(pa.t + rng.vec(-reach, reach))};
+      const double scale = detail::query_scale<double>(a, b), tol = 1e-10 * scale;
+      const double slack = (1e-12 + 1e-15 * offsets[s]) * scale;
+      const detail::PairFrame<double> f(pa, pb);
+      ConvexContact<double> c;
+      if (detail::cylinder_cone_contact(a, b, f.R, f.t, tol, c)) {
+        ++certified;
+        const double oracle = double(cylinder_cone_depth(a, b, f.R, f.t, c.normal));
+        EXPECT_LE(c.depth - c.depth_gap, oracle + slack) << s << " " << i << ": lower bound above the depth";
+        EXPECT_NEAR(c.depth, oracle, 1e-9 * scale + slack) << s << " " << i;
+      }
+      if (s != 0) continue;
+      // float: shapes and poses rounded to float, the oracle on the rounded inputs
+      const Cylinder<float> af(float(a.radius), float(a.half_length));
+      const Cone<float> bf(float(b.radius), float(b.half_length));
+      const RigidTransform<float> paf{pa.R.cast<float>(), pa.t.cast<float>()}, pbf{pb.R.cast<float>(), pb.t.cast<float>()};
+      const detail::PairFrame<float> ff(paf, pbf);
+      ConvexContact<float> cf;
+      if (!detail::cylinder_cone_contact(af, bf, ff.R, ff.t, 1e-5f * float(scale), cf)) continue;
+      ++certified_float;
+      const Cylinder<double> ad(af.radius, af.half_length);
+      const Cone<double> bd(bf.radius, bf.half_length);
+      const detail::PairFrame<double> fd(RigidTransform<double>{paf.R.cast<double>(), paf.t.cast<double>()},
+                                         RigidTransform<double>{pbf.R.cast<double>(), pbf.t.cast<double>()});
+      const double oracle = double(cylinder_cone_depth(ad, bd, fd.R, fd.t, cf.normal.cast<double>()));
+      EXPECT_LE(double(cf.depth - cf.depth_gap), oracle + 1e-5 * scale) << i << ": float lower bound above the depth";
+      EXPECT_NEAR(double(cf.depth), oracle, 1e-4 * scale) << i;
+    }
+  }
+  std::printf("cylinder-cone certified: %d double, %d float\n", certified, certified_float);
+  EXPECT_GE(certified, IMPACT_TEST_SANITIZED ? 10 : 60);
+  EXPECT_GE(certified_float, IMPACT_TEST_SANITIZED ? 2 : 10);
+}
+
+}  // namespace cone_points_test
 }  // namespace

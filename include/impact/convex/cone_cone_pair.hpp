@@ -16,6 +16,12 @@
 ///   ruling against ruling: n a side normal of a whose opposite is a side normal of b (up to two
 ///       directions), the closest points of the two rulings, each with the largest ball inside its
 ///       cone tangent there.
+/// When undecided: either cone's side against the other, the least overlap along its side normals
+/// (cone_side_minimum of convex/cylinder_pair.hpp); when the best direction is a side normal of
+/// a cone, that cone's whole ruling (apex and rim point) as points inside the other
+/// (cone_points_lower of convex/cylinder_pair_points.hpp); and the best candidate's point of each
+/// cone inside the other with the first's points deepest across the other's nearer faces
+/// (cone_points_bound).
 /// At the true contact of these kinds the bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
@@ -136,6 +142,40 @@ bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, con
   if (!decided()) opposite_rulings(a, b, R, t, in_b, offer);  // ruling against ruling
   if (!decided()) rim_of_b();
   if (!decided()) rim_of_a();
+  const auto sa_in_b = [&](const Vec3<S>& d) { return in_b(support(a, Vec3<S>(R * d))); };
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // either cone's side against the other: the least overlap along its side normals
+    Vec3<S> m, x;
+    if (cone_side_minimum(b, sa_in_b, m, x)) offer(Vec3<S>(-(R * m)), Vec3<S>(R * x + t), std::max(inside_ball(b, x).rho, S(0)));
+    if (!decided() && cone_side_minimum(a, sb, m, x)) offer(m, x, std::max(inside_ball(a, x).rho, S(0)));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best direction a side normal of either cone: that cone's whole ruling there against the
+    // other (its two ends as the points of cone_points_lower; a lower bound at any azimuth)
+    const S ca = ra / std::sqrt(S(4) * ha * ha + ra * ra), cb = rb / std::sqrt(S(4) * hb * hb + rb * rb);
+    const Vec3<S> mb = -(R.transpose() * k.normal), ma = k.normal;
+    const S mbxy = std::sqrt(mb.x() * mb.x() + mb.y() * mb.y()), maxy = std::sqrt(ma.x() * ma.x() + ma.y() * ma.y());
+    if (std::abs(mb.z() - cb) <= S(1e-6) && mbxy > S(0)) {
+      const Vec3<S> P[2] = {Vec3<S>(t + hb * bz), Vec3<S>(R * Vec3<S>(rb * mb.x() / mbxy, rb * mb.y() / mbxy, -hb) + t)};
+      k.raise(cone_points_lower(a, P, 2, k.upper - tolerance));
+    }
+    if (!decided() && std::abs(ma.z() - ca) <= S(1e-6) && maxy > S(0)) {
+      const Vec3<S> P[2] = {in_b(Vec3<S>(S(0), S(0), ha)), in_b(Vec3<S>(ra * ma.x() / maxy, ra * ma.y() / maxy, -ha))};
+      k.raise(cone_points_lower(b, P, 2, k.upper - tolerance));
+    }
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best candidate's point of each cone, when inside the other: with the first's points
+    // deepest across the other's faces nearer to it than the depth (convex/cylinder_pair_points.hpp)
+    const Vec3<S> xb = sb(Vec3<S>(-k.normal));
+    ++k.calls;
+    if (inside_ball(a, xb).rho >= S(0)) k.raise(cone_points_bound(a, xb, k.upper, tolerance, sb, k.calls));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    const Vec3<S> xa = sa_in_b(Vec3<S>(R.transpose() * k.normal));
+    ++k.calls;
+    if (inside_ball(b, xa).rho >= S(0)) k.raise(cone_points_bound(b, xa, k.upper, tolerance, sa_in_b, k.calls));
+  }
   return k.finish(tolerance, out);
 }
 

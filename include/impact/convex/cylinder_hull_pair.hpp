@@ -14,12 +14,18 @@
 ///       the edge's arc on the Gauss map (from one face's normal to the other's) crosses the
 ///       great circle normal to the axis: the crossing u = |d1| m0 + |d0| m1 (d_i = m_i . z of
 ///       opposite signs) is a normal of the hull at the edge, so h_B(u) = u . (edge vertex) with
-///       no support call.
+///       no support call;
+///   a vertex of the hull against the side: n = x's radial direction (normal to the axis), f =
+///       r - |x_xy| for a vertex x that is the hull's support along -n (side_vertex's climb, from
+///       the end of the best crossing edge past which the overlap along the circle normal to the
+///       axis still falls).
 /// A candidate is certified by a lower bound rho from a point x of one shape inside the other (the
 /// ball of radius rho about x, x's distance to that shape's boundary, lies inside it, so every
 /// separating translation is at least rho long): the face's rim point inside the hull (rho the
-/// least distance to the hull's face planes), the cap's vertex or the edge's point at n's azimuth
-/// inside the cylinder (convex/deepest_point.hpp's inside_ball). When the best upper and lower
+/// least distance to the hull's face planes), the cap's vertex, the side's vertex or the edge's
+/// point at n's azimuth inside the cylinder (convex/deepest_point.hpp's inside_ball; exact, rho =
+/// f, for a vertex or an edge point nearer the side or cap it meets than the other boundary).
+/// The face loop runs on whole arrays (Eigen's packets). When the best upper and lower
 /// bounds are within the tolerance the answer is certified as EPA's is (depth = the upper bound,
 /// depth_gap = upper - lower); otherwise (an edge or a vertex against the rim, a contact whose
 /// ball is cut) the caller runs EPA, stopped early by the local certificate of
@@ -39,6 +45,8 @@
 #include "impact/convex/deepest_point.hpp"
 #include "impact/convex/local_certificate.hpp"
 #include "impact/convex/shapes.hpp"
+
+#include <Eigen/Core>
 
 #include <algorithm>
 #include <cmath>
@@ -64,6 +72,44 @@ S cylinder_hull_overlap(const Cylinder<S>& a, const ConvexHull<S>& b, const Mat3
   return a.half_length * std::abs(n.z()) + a.radius * std::sqrt(std::max(n.x() * n.x() + n.y() * n.y(), S(0))) - n.dot(R * v + t);
 }
 
+/// The vertex of hull b deepest into the side of a cylinder (axis ax through c, b's frame) near
+/// vertex v: a vertex x that is b's support along -q(x), q(x) = P (x - c) its offset from the axis
+/// (P = I - ax ax^T), so that the overlap along n = q / |q| (normal to the axis, towards b) is
+/// r - |q|. Climbs from v to the neighbour farthest along -q(v) (q taken afresh at each vertex; all
+/// vertices for hulls without an edge graph) for at most kSideVertexSteps steps; -1 when it does
+/// not settle or a vertex lies on the axis. The support test holds up to rounding.
+inline constexpr int kSideVertexSteps = 8;
+template <class S>
+int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int v) {
+  const S* p = b.vertices.data();
+  const int nv = static_cast<int>(b.vertices.rows());
+  for (int step = 0; step < kSideVertexSteps; ++step) {
+    const S* x = p + 3 * v;
+    const Vec3<S> y(x[0] - c.x(), x[1] - c.y(), x[2] - c.z());
+    const Vec3<S> q = y - y.dot(ax) * ax;
+    if (!(q.squaredNorm() > S(0))) return -1;
+    const auto inward = [&](int i) { return -(p[3 * i] * q.x() + p[3 * i + 1] * q.y() + p[3 * i + 2] * q.z()); };
+    S best = inward(v);
+    int next = v;
+    const auto consider = [&](int i) {
+      const S w = inward(i);
+      if (w > best) {
+        best = w;
+        next = i;
+      }
+    };
+    if (b.neighbors.empty()) {
+      for (int i = 0; i < nv; ++i) consider(i);
+    } else {
+      for (int k = b.neighbor_start[static_cast<std::size_t>(v)]; k < b.neighbor_start[static_cast<std::size_t>(v) + 1]; ++k)
+        consider(b.neighbors[static_cast<std::size_t>(k)]);
+    }
+    if (next == v) return v;
+    v = next;
+  }
+  return -1;
+}
+
 /// What cylinder_hull_candidates found: apart (a face plane of the hull separates them by more
 /// than the margin), else certified or not, with `best` the best candidate's normal and depth.
 enum class CylinderHullVerdict { Apart, Certified, Open };
@@ -84,16 +130,21 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
   const S* ny = nx + nf;
   const S* nz = ny + nf;
   const S* off = nz + nf;
+  // the faces: f_k = offset_k - n_k . c + h |n_k . ax| + r sqrt(1 - (n_k . ax)^2), as whole
+  // arrays (Eigen's packets: two or four faces an instruction), then the least
+  using Faces = Eigen::Array<S, Eigen::Dynamic, 1>;
+  const Eigen::Index count = static_cast<Eigen::Index>(nf);
+  const Eigen::Map<const Faces> NX(nx, count), NY(ny, count), NZ(nz, count), OFF(off, count);
   S along_axis[kCylinderHullMaxFaces];  // m_k . z of each face
-  // the faces: f_k = offset_k - n_k . c + h |n_k . ax| + r sqrt(1 - (n_k . ax)^2)
+  S overlap[kCylinderHullMaxFaces];
+  Eigen::Map<Faces> D(along_axis, count), F(overlap, count);
+  D = NX * ax.x() + NY * ax.y() + NZ * ax.z();
+  F = OFF - (NX * c.x() + NY * c.y() + NZ * c.z()) + h * D.abs() + r * (S(1) - D.square()).max(S(0)).sqrt();
   S best_face = std::numeric_limits<S>::infinity();
   std::size_t face = 0;
   for (std::size_t k = 0; k < nf; ++k) {
-    const S d = nx[k] * ax.x() + ny[k] * ax.y() + nz[k] * ax.z();
-    along_axis[k] = d;
-    const S f = off[k] - (nx[k] * c.x() + ny[k] * c.y() + nz[k] * c.z()) + h * std::abs(d) + r * std::sqrt(std::max(S(1) - d * d, S(0)));
-    if (f < best_face) {
-      best_face = f;
+    if (overlap[k] < best_face) {
+      best_face = overlap[k];
       face = k;
     }
   }
@@ -122,6 +173,7 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
       edge = static_cast<int>(e);
     }
   }
+  int side_start = -1;  // the end of the best crossing edge beyond which its xy foot lies
   if (edge >= 0) {
     const HullEdge& g = b.edges[static_cast<std::size_t>(edge)];
     const Vec3<S> n = -(R * edge_u);  // normal to z up to rounding
@@ -134,11 +186,31 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
         const Vec3<S> x = p0 + s * (p1 - p0);
         const InsideBall<S> ball = inside_ball(a, x);
         if (ball.rho > S(0)) k.offer(n, best_edge, x, ball.rho);
+      } else {
+        side_start = s < S(0) ? g.v0 : g.v1;
       }
     }
   }
-  // the caps: the hull's deepest vertex along -+z (f = h - s x_z)
+  // a vertex against the side: when the best crossing edge's foot (the point of its xy line
+  // nearest the axis) lies beyond an end, the overlap along the circle normal to the axis falls
+  // past that end, towards a vertex x deepest into the side (n = x's radial direction,
+  // f = r - |x_xy|), certified by x's own ball (exactly, f = rho, unless a cap is nearer)
+  if (side_start >= 0 && !decided()) {
+    const int v = side_vertex(b, ax, c, side_start);
+    if (v >= 0) {
+      const Vec3<S> x = R * Vec3<S>(b.vertices.row(v).transpose()) + t;
+      const S rxy = std::sqrt(x.x() * x.x() + x.y() * x.y());
+      if (rxy > S(0)) {
+        const InsideBall<S> ball = inside_ball(a, x);
+        k.offer(Vec3<S>(x.x() / rxy, x.y() / rxy, S(0)), r - rxy, x, std::max(ball.rho, S(0)));
+      }
+    }
+  }
+  // the caps: the hull's deepest vertex along -+z (f = h - s x_z), skipped when it cannot beat the
+  // best so far: the hull holds its centroid, so f >= h - s z_c
+  const S z_c = R.row(2).dot(b.centroid) + t.z();
   for (const S s : {S(1), S(-1)}) {
+    if (h - s * z_c >= std::min(k.upper, best_face)) continue;
     const Vec3<S> x = R * support(b, Vec3<S>(-s * ax)) + t;
     const InsideBall<S> ball = inside_ball(a, x);
     if (ball.rho > S(0)) k.offer(Vec3<S>(S(0), S(0), s), h - s * x.z(), x, ball.rho);
@@ -148,8 +220,7 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
     const Vec3<S> m = R * Vec3<S>(nx[face], ny[face], nz[face]);
     const Vec3<S> x = support(a, Vec3<S>(-m));
     const Vec3<S> y = R.transpose() * (x - t);
-    S rho = std::numeric_limits<S>::infinity();
-    for (std::size_t j = 0; j < nf; ++j) rho = std::min(rho, off[j] - (nx[j] * y.x() + ny[j] * y.y() + nz[j] * y.z()));
+    const S rho = (OFF - (NX * y.x() + NY * y.y() + NZ * y.z())).minCoeff();
     if (rho > S(0)) {
       k.offer(Vec3<S>(-m), best_face, x, rho);
     } else {

@@ -20,9 +20,16 @@
 ///       a line: 8 samples of the angle, then Newton) or the cone's apex, n the radial direction
 ///       through it; the cone's side against the cylinder's rim point deepest below it (the same
 ///       minimisation of 2h rho + R z over the rim).
-/// When the best candidate's point of the cone lies inside the cylinder but a ball about it is cut
-/// by another face of the cylinder, the cone's points deepest across those faces join it in the
-/// lower bound of convex/cylinder_pair_points.hpp (the depth of the cylinder against their hull).
+/// When undecided, the cone's side against the cylinder: the least overlap along the cone's side
+/// normals (cone_side_minimum: an upper bound at the contact of the cylinder's rim or ruling with
+/// a cone ruling, where the rim point deepest below the side is not the contact's), and, when
+/// the best direction is a side normal of the cone, that whole ruling (apex and rim point) as the
+/// points of convex/cylinder_pair_points.hpp against the cylinder. When the best candidate's
+/// point of the cone lies inside the cylinder but a ball about it is cut by another face of the
+/// cylinder, the cone's points deepest across those faces join it in the lower bound of
+/// convex/cylinder_pair_points.hpp (the depth of the cylinder against their hull); the same with
+/// the roles swapped (the cylinder's point inside the cone, its ball cut by the cone's base or
+/// side: cone_points_bound).
 /// At the true contact of these kinds the two bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance, the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
@@ -256,6 +263,73 @@ void opposite_rulings(const A& a, const B& b, const Mat3<S>& R, const Vec3<S>& t
   }
 }
 
+/// The least overlap of cone c (its frame) and another convex shape along the directions where
+/// c's support is a whole side ruling: n = -m(u), m(u) = (k u, c) c's outward side normal at the
+/// radial unit u (k = 2h / L, c = R / L), where the overlap is F(u) = h_O(-m) + h R / L (O the
+/// other shape, `support_other(d)` its support along d in c's frame). Its slope along the circle
+/// is F' = -s_O(-m) . (k u', 0), u' = u turned by a right angle (the support's own motion does not
+/// count): the best of 8 samples of u, then regula falsi (Illinois) on F' between that sample's
+/// neighbours when F' changes sign there, on the chord between the bracket's ends (u from the
+/// normalised chord point: no trigonometric calls). True with m the direction found and x the
+/// other shape's support along -m (any direction gives an upper bound: the caller offers it with
+/// x's ball); false when F' does not change sign about the best sample or 24 steps do not close
+/// the bracket to 1e-9 (128 ulps in float).
+template <class S, class SupportOther>
+bool cone_side_minimum(const Cone<S>& c, const SupportOther& support_other, Vec3<S>& m, Vec3<S>& x) {
+  const S len = std::sqrt(S(4) * c.half_length * c.half_length + c.radius * c.radius), k = S(2) * c.half_length / len, cz = c.radius / len;
+  const auto normal = [&](S ux, S uy) { return Vec3<S>(k * ux, k * uy, cz); };
+  const auto slope = [&](S ux, S uy, Vec3<S>& sx) {  // F' at u, with the support
+    sx = support_other(Vec3<S>(-normal(ux, uy)));
+    return k * (sx.x() * uy - sx.y() * ux);
+  };
+  static constexpr S r = S(0.7071067811865476);
+  static constexpr S cs[8][2] = {{S(1), S(0)}, {r, r}, {S(0), S(1)}, {-r, r}, {S(-1), S(0)}, {-r, -r}, {S(0), S(-1)}, {r, -r}};
+  int best = 0;
+  S fbest = std::numeric_limits<S>::infinity();
+  for (int i = 0; i < 8; ++i) {
+    const Vec3<S> n = normal(cs[i][0], cs[i][1]);
+    const S f = -n.dot(support_other(Vec3<S>(-n)));
+    if (f < fbest) {
+      fbest = f;
+      best = i;
+    }
+  }
+  S lx = cs[(best + 7) % 8][0], ly = cs[(best + 7) % 8][1], hx = cs[(best + 1) % 8][0], hy = cs[(best + 1) % 8][1];
+  Vec3<S> sl, sh;
+  S gl = slope(lx, ly, sl), gh = slope(hx, hy, sh);
+  if (!(gl < S(0) && gh > S(0))) return false;
+  const S close = std::max(S(1e-9), S(128) * std::numeric_limits<S>::epsilon());
+  int side = 0;
+  for (int it = 0; it < 24; ++it) {
+    const S lam = gl / (gl - gh);  // the chord point where F' interpolates to 0
+    S ux = lx + lam * (hx - lx), uy = ly + lam * (hy - ly);
+    const S norm = std::sqrt(ux * ux + uy * uy);
+    ux /= norm;
+    uy /= norm;
+    Vec3<S> sx;
+    const S g = slope(ux, uy, sx);
+    if (g < S(0)) {
+      lx = ux;
+      ly = uy;
+      gl = g;
+      if (side == -1) gh /= S(2);
+      side = -1;
+    } else {
+      hx = ux;
+      hy = uy;
+      gh = g;
+      if (side == 1) gl /= S(2);
+      side = 1;
+    }
+    if (g == S(0) || std::abs(hx - lx) + std::abs(hy - ly) <= close) {
+      m = normal(ux, uy);
+      x = sx;
+      return true;
+    }
+  }
+  return false;
+}
+
 /// The certified contact of cylinders a and b when one of the candidates of the file comment
 /// decides it within `tolerance`, in a's frame (b placed by R, t there): true and `out` set
 /// (normal from a towards b, depth, depth_gap, a point of the contact (the caller moves it onto the
@@ -341,8 +415,11 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
 /// normals (2h u + R axis) / L, L = sqrt(4h^2 + R^2), u radial): a's caps against b's deepest point,
 /// b's base against a's, b's apex and base rim against a's rulings, a ruling of each (n normal to
 /// a's axis and a side normal of b: up to two directions), and b's side against the point of a's
-/// rims deepest below it; then, when undecided and the best candidate's point of b lies in a, the
-/// bound from b's points (cylinder_points_bound; 1 to 4 more support calls of b).
+/// rims deepest below it; then, when undecided, the least overlap along b's side normals
+/// (cone_side_minimum), b's whole ruling against a when the best direction is a side normal of b
+/// (cylinder_points_lower on its two ends), the bound from b's points when the best candidate's
+/// point of b lies in a (cylinder_points_bound; 1 to 4 more support calls of b) and from a's
+/// points when a's lies in b (cone_points_bound).
 template <class S>
 bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
                            ConvexContact<S>& out) {
@@ -399,12 +476,36 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
   if (!decided()) opposite_rulings(a, b, R, t, in_b, offer);  // a ruling of each
   if (!decided()) base_rim();
   if (!decided()) rims_of_a();
+  const auto sa_in_b = [&](const Vec3<S>& d) { return in_b(support(a, Vec3<S>(R * d))); };  // a's support in b's frame
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // b's side against a: the least overlap along b's side normals
+    Vec3<S> m, x;
+    if (cone_side_minimum(b, sa_in_b, m, x)) offer(Vec3<S>(-(R * m)), Vec3<S>(R * x + t), std::max(inside_ball(b, x).rho, S(0)));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best direction a side normal of b: b's whole ruling there against a (its two ends as
+    // the points of convex/cylinder_pair_points.hpp; a lower bound at any azimuth, tight at a
+    // contact of that ruling)
+    const Vec3<S> m = -(R.transpose() * k.normal);
+    const S mxy = std::sqrt(m.x() * m.x() + m.y() * m.y());
+    if (std::abs(m.z() - rc / len) <= S(1e-6) && mxy > S(0)) {
+      const Vec3<S> P[2] = {Vec3<S>(t + hc * bz), Vec3<S>(R * Vec3<S>(rc * m.x() / mxy, rc * m.y() / mxy, -hc) + t)};
+      k.raise(cylinder_points_lower(a, P, 2, k.upper - tolerance));
+    }
+  }
   if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
     // the best candidate's point of b, when inside a: with b's points deepest across a's faces
     // that are nearer to it than the depth (convex/cylinder_pair_points.hpp)
     const Vec3<S> x = sb(Vec3<S>(-k.normal));
     ++k.calls;
     if (inside_ball(a, x).rho >= S(0)) k.raise(cylinder_points_bound(a, x, k.upper, tolerance, sb, k.calls));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best candidate's point of a, when inside b: with a's points deepest across b's faces
+    // that are nearer to it than the depth (the cone as the container)
+    const Vec3<S> x = sa_in_b(Vec3<S>(R.transpose() * k.normal));
+    ++k.calls;
+    if (inside_ball(b, x).rho >= S(0)) k.raise(cone_points_bound(b, x, k.upper, tolerance, sa_in_b, k.calls));
   }
   return k.finish(tolerance, out);
 }

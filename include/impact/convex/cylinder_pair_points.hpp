@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// A lower bound of the penetration depth of a cylinder A and a convex set B from a few points of
-/// B inside A, for the candidates of convex/cylinder_pair.hpp whose ball is cut: a point x of B
+/// A lower bound of the penetration depth of a cylinder (or a cone) A and a convex set B from a few
+/// points of B inside A, for the candidates of convex/cylinder_pair.hpp whose ball is cut: a point x of B
 /// deep across one face of A (its cap or its side) but near another face, so that no ball about x
 /// inside A reaches the depth.
 ///
@@ -24,6 +24,8 @@
 ///                over pairs p, q: that shadow distance of p or of q, the larger ).
 /// The points are x and, for each face of A whose value at x is below the depth sought, B's point
 /// deepest across that face (its support along minus the face's normal: there g_y equals f).
+///
+/// The same bound with a cone as the container (cone_points_lower, cone_points_bound) is below.
 ///
 /// Numerical contract: CONSERVATIVE up to rounding: the bound is lowered by an allowance of 1024
 /// ulps of the pair's size. Thread safety: pure functions.
@@ -193,6 +195,113 @@ S cylinder_points_bound(const Cylinder<S>& a, const Vec3<S>& x, S depth, S toler
   calls += np - 1;
   if (np == 1) return -std::numeric_limits<S>::infinity();  // the ball about x was enough (or x outside)
   return cylinder_points_lower(a, pts, np, want);
+}
+
+/// The same bound with a cone c as the container (base disc of radius R at z = -h, apex (0, 0, h);
+/// its outward side normal at azimuth u is m(u) = (2h u + R z^) / sqrt(4h^2 + R^2)): for p inside,
+/// the local minima of g_p(n) = h_C(n) - n . p are the base normal -z (value h + p_z) and the side
+/// normal at p's own azimuth (p's distance to that tangent plane; along the circle of side normals
+/// g_p is least there, in the apex's and the rim's regions g_p has no interior minimum of a
+/// non-negative value); for p outside also -dist(p, C) along the direction from C's nearest point.
+/// On the great circle normal to v the value is the distance of p's shadow to the boundary of C's
+/// shadow along v: the hull of the base disc's ellipse (semi-axes R |v_z| along the axis' shadow
+/// and R across it) and the apex's point, bounded below through the two tangents from the apex to
+/// the ellipse and the ellipse's arc (the whole ellipse curve when inside it, else the chord
+/// between the tangent points, beyond which the arc does not reach).
+
+/// The least over unit n normal to v (not zero) of h_C(n) - n . p for cone c and p, bounded from
+/// below as the comment above says; -infinity when p's shadow is not shown inside c's.
+template <class S>
+S cone_shadow_distance(const Cone<S>& c, const Vec3<S>& p, const Vec3<S>& v) {
+  const Vec3<S> vn = v.normalized();
+  const S vz = vn.z(), s = std::sqrt(std::max(S(1) - vz * vz, S(0)));
+  const S R = c.radius, h = c.half_length, a = R * std::abs(vz);
+  const S none = -std::numeric_limits<S>::infinity();
+  if (!(s > S(1e-6))) {  // nearly along the axis: the disc of radius R |v_z| about the base centre's shadow
+    const Vec3<S> q = p + Vec3<S>(S(0), S(0), h);
+    return a - (q - q.dot(vn) * vn).norm();
+  }
+  const Vec3<S> e1 = (Vec3<S>::UnitZ() - vz * vn) / s, e2 = vn.cross(e1);
+  // from the ellipse's centre (the base centre's shadow): along the axis' shadow u, across it w
+  const S u = p.dot(e1) + h * s, w = std::abs(p.dot(e2)), apex = S(2) * h * s;
+  const bool in_ellipse = a > S(0) && (u / a) * (u / a) + (w / R) * (w / R) <= S(1);
+  if (apex <= a) return in_ellipse ? ellipse_inner_distance(std::abs(u), w, a, R) : none;  // the shadow is the ellipse
+  // the tangents from (apex, 0) touch the ellipse at (a^2 / apex, +-R sqrt(1 - a^2 / apex^2))
+  const S xt = a * a / apex, yt = R * std::sqrt(std::max(S(1) - (a / apex) * (a / apex), S(0)));
+  const S len = std::sqrt(yt * yt + (apex - xt) * (apex - xt));
+  const S line = (yt * (xt - u) + (apex - xt) * (yt - w)) / len;  // below the upper tangent (outward normal (yt, apex - xt))
+  if (!(line >= S(0))) return none;
+  S arc = u > xt ? u - xt : none;
+  if (in_ellipse) arc = std::max(arc, ellipse_inner_distance(std::abs(u), w, a, R));
+  return std::min(line, arc);
+}
+
+/// L(P) of the file comment for the np points P (cone c's frame, np <= 4, inside c or not;
+/// -infinity for a non-finite point, or as soon as the bound is seen to fall below `want`).
+template <class S>
+S cone_points_lower(const Cone<S>& c, const Vec3<S>* pts, int np, S want = -std::numeric_limits<S>::infinity()) {
+  const S R = c.radius, h = c.half_length, size = R + h, len = std::sqrt(S(4) * h * h + R * R);
+  Vec3<S> P[4];
+  int m = 0;
+  for (int i = 0; i < np && i < 4; ++i) {
+    bool dup = false;
+    for (int j = 0; j < m; ++j) dup = dup || (pts[i] - P[j]).norm() <= S(1e-9) * size;
+    if (!dup) P[m++] = pts[i];
+  }
+  S L = std::numeric_limits<S>::infinity();
+  const auto in_cell = [&](int i, const Vec3<S>& n) {  // generous: a face kept on a tie only lowers L
+    for (int j = 0; j < m; ++j)
+      if (j != i && n.dot(P[i]) > n.dot(P[j]) + S(1e-9) * size) return false;
+    return true;
+  };
+  for (int i = 0; i < m; ++i) {
+    const Vec3<S>& p = P[i];
+    const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    const S base = h + p.z(), side = (R * (h - p.z()) - S(2) * h * rxy) / len;
+    if (!(std::isfinite(side) && std::isfinite(base))) return -std::numeric_limits<S>::infinity();
+    if (in_cell(i, Vec3<S>(-Vec3<S>::UnitZ()))) L = std::min(L, base);
+    const bool on_axis = !(rxy > S(1e-9) * size);
+    const S ux = on_axis ? S(1) : p.x() / rxy, uy = on_axis ? S(0) : p.y() / rxy;
+    if (on_axis || in_cell(i, Vec3<S>(S(2) * h * ux / len, S(2) * h * uy / len, R / len))) L = std::min(L, side);
+    if (side < S(0) || base < S(0)) {  // outside: -dist(p, C) along the direction from C's nearest point
+      // in p's meridian half-plane (rho, z): the nearer of the base segment and the side segment
+      const S qb = std::clamp(rxy, S(0), R);
+      const S ts = std::clamp(((rxy - R) * -R + (p.z() + h) * (S(2) * h)) / (len * len), S(0), S(1));
+      const S qs_rho = R - ts * R, qs_z = -h + S(2) * h * ts;
+      const S db = std::hypot(rxy - qb, p.z() + h), ds = std::hypot(rxy - qs_rho, p.z() - qs_z);
+      const S q_rho = db <= ds ? qb : qs_rho, q_z = db <= ds ? -h : qs_z, d = std::min(db, ds);
+      const Vec3<S> n = Vec3<S>(p.x() - q_rho * ux, p.y() - q_rho * uy, p.z() - q_z) / d;
+      if (!(d > S(0)) || in_cell(i, n)) L = std::min(L, -d);
+    }
+  }
+  const S allowance = S(1024) * std::numeric_limits<S>::epsilon() * (size + (m > 0 ? P[0].norm() : S(0)));
+  if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
+  for (int i = 0; i < m; ++i)
+    for (int j = i + 1; j < m; ++j) {  // on the great circle normal to v every point of the line through them ties
+      L = std::min(L, cone_shadow_distance(c, Vec3<S>((P[i] + P[j]) / S(2)), Vec3<S>(P[j] - P[i])));
+      if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
+    }
+  return m > 0 ? L - allowance : -std::numeric_limits<S>::infinity();
+}
+
+/// The bound for a candidate of depth `depth` whose point x of the other shape (c's frame) lies
+/// inside cone c: x and the other shape's points deepest across each face of c whose value at x
+/// is below depth - tolerance (`support_other(d)`: its support along d in c's frame; calls counts
+/// them): across the base (its support along +z) and the side at x's azimuth (along minus that
+/// side normal).
+template <class S, class SupportOther>
+S cone_points_bound(const Cone<S>& c, const Vec3<S>& x, S depth, S tolerance, const SupportOther& support_other, int& calls) {
+  const S R = c.radius, h = c.half_length, len = std::sqrt(S(4) * h * h + R * R);
+  const S rxy = std::sqrt(x.x() * x.x() + x.y() * x.y());
+  Vec3<S> pts[3] = {x, x, x};
+  int np = 1;
+  const S want = depth - tolerance;
+  if (h + x.z() < want) pts[np++] = support_other(Vec3<S>(Vec3<S>::UnitZ()));
+  if ((R * (h - x.z()) - S(2) * h * rxy) / len < want && rxy > S(0))
+    pts[np++] = support_other(Vec3<S>(-S(2) * h * x.x() / (rxy * len), -S(2) * h * x.y() / (rxy * len), -R / len));
+  calls += np - 1;
+  if (np == 1) return -std::numeric_limits<S>::infinity();  // the ball about x was enough (or x outside)
+  return cone_points_lower(c, pts, np, want);
 }
 
 }  // namespace impact::detail
