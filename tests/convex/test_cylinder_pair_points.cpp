@@ -242,9 +242,9 @@ LD cone_h(const Cone<double>& c, LD x, LD y, LD z) {
 
 // The shadow bound of cone_shadow_distance against min over the great circle normal to v of
 // h_C(n) - n . p (long double), for p's shadow inside the cone's (the bound is -infinity outside):
-// never above it, and above half of it on most points. Checked to fail: the apex's shadow at
-// h s instead of 2h s from the ellipse's centre, and the tangent line's normal with apex - xt
-// negated.
+// never above it, and above half of it on most points. Checked to fail: the tangent line's value
+// with its (apex - xt) term negated. Not caught: the apex's shadow at h s instead of 2h s from the
+// ellipse's centre (a smaller shadow, so a lower bound that is still valid).
 TEST(CylinderPairPoints, ConeShadowDistanceIsALowerBound) {
   test::Rng rng(9);
   int inside = 0, half = 0;
@@ -275,8 +275,8 @@ TEST(CylinderPairPoints, ConeShadowDistanceIsALowerBound) {
 // against the points' hull), and within 1e-9 of it on a good share of the sets with a positive
 // depth. The bound from the faces alone (base, side at each point's azimuth; no great circles)
 // is above it on some sets, so the oracle sees a bound that leaves the pairs out. Checked to fail:
-// the side value of a point with the wrong sign of its radial term, the pairs' great circles left
-// out, and the in-cell test of the base with +z.
+// the side value of a point with the wrong sign of its radial term, and the pairs' great circles
+// left out. Not caught: the in-cell test of the base with +z.
 TEST(CylinderPairPoints, ConePointsBoundNeverAboveTheDepthOfTheirHull) {
   test::Rng rng(8);
   int reached = 0, positive = 0, faces_only_above = 0;
@@ -338,10 +338,8 @@ LD cylinder_cone_depth(const Cylinder<double>& a, const Cone<double>& b, const E
 // its lower bound below the oracle's depth and its depth within 1e-9 of the size of it, at the
 // unit size, 1e-3 and 1e3 of it and 1e3 from the origin; float poses and shapes within float's
 // tolerance of the double oracle of the same inputs. Deep poses (b's centre within 0.35 of the
-// sizes of a's) so that the points and the rulings decide many. Checked to fail: the cone's side
-// value in cone_points_lower with its radial term's sign flipped; the cone ruling's rim end at
-// the opposite azimuth; the side minimum's slope with its sign flipped (certified depths above
-// the oracle's).
+// sizes of a's) so that the points and the rulings decide many. Checked to fail: the pairs' great
+// circles left out of cone_points_lower (certified depths above the oracle's).
 TEST(CylinderPairPoints, CylinderConeCertifiedAgainstTheOracle) {
   const double scales[4] = {1, 1e-3, 1e3, 1}, offsets[4] = {0, 0, 0, 1e3};
   int certified = 0, certified_float = 0;
