@@ -131,6 +131,29 @@ S cylinder_shadow_distance(const Cylinder<S>& a, const Vec3<S>& p, const Vec3<S>
   return swept_ellipse_inner_distance(p.dot(e1), p.dot(e2), ac, r, a.half_length * s);
 }
 
+/// The points of a several-points bound (at most four), with each point within 1e-9 of `size` of
+/// an earlier one dropped (the bound of fewer points is lower, so still valid), and in_cell(i, n):
+/// whether point i is the deepest of them along the face normal n, so that n's face value at it
+/// counts (generous: a face kept on a tie only lowers the bound).
+template <class S>
+struct DistinctPoints {
+  Vec3<S> P[4];
+  int m = 0;
+  S size;
+  DistinctPoints(const Vec3<S>* pts, int np, S size_) : size(size_) {
+    for (int i = 0; i < np && i < 4; ++i) {
+      bool dup = false;
+      for (int j = 0; j < m; ++j) dup = dup || (pts[i] - P[j]).norm() <= S(1e-9) * size;
+      if (!dup) P[m++] = pts[i];
+    }
+  }
+  bool in_cell(int i, const Vec3<S>& n) const {
+    for (int j = 0; j < m; ++j)
+      if (j != i && n.dot(P[i]) > n.dot(P[j]) + S(1e-9) * size) return false;
+    return true;
+  }
+};
+
 /// L(P) of the file comment for the np points P of b (cylinder a's frame, np <= 4, inside a or
 /// not; -infinity for a non-finite point, or as soon as the bound is seen to fall below `want`).
 /// Points within 1e-9 of the size of an earlier one are dropped (the bound
@@ -138,19 +161,11 @@ S cylinder_shadow_distance(const Cylinder<S>& a, const Vec3<S>& p, const Vec3<S>
 template <class S>
 S cylinder_points_lower(const Cylinder<S>& a, const Vec3<S>* pts, int np, S want = -std::numeric_limits<S>::infinity()) {
   const S size = a.radius + a.half_length;
-  Vec3<S> P[4];
-  int m = 0;
-  for (int i = 0; i < np && i < 4; ++i) {
-    bool dup = false;
-    for (int j = 0; j < m; ++j) dup = dup || (pts[i] - P[j]).norm() <= S(1e-9) * size;
-    if (!dup) P[m++] = pts[i];
-  }
+  const DistinctPoints<S> q(pts, np, size);
+  const Vec3<S>* const P = q.P;
+  const int m = q.m;
   S L = std::numeric_limits<S>::infinity();
-  const auto in_cell = [&](int i, const Vec3<S>& n) {  // generous: a face kept on a tie only lowers L
-    for (int j = 0; j < m; ++j)
-      if (j != i && n.dot(P[i]) > n.dot(P[j]) + S(1e-9) * size) return false;
-    return true;
-  };
+  const auto in_cell = [&q](int i, const Vec3<S>& n) { return q.in_cell(i, n); };
   for (int i = 0; i < m; ++i) {
     const Vec3<S>& p = P[i];
     const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
@@ -241,19 +256,11 @@ S cone_shadow_distance(const Cone<S>& c, const Vec3<S>& p, const Vec3<S>& v) {
 template <class S>
 S cone_points_lower(const Cone<S>& c, const Vec3<S>* pts, int np, S want = -std::numeric_limits<S>::infinity()) {
   const S R = c.radius, h = c.half_length, size = R + h, len = std::sqrt(S(4) * h * h + R * R);
-  Vec3<S> P[4];
-  int m = 0;
-  for (int i = 0; i < np && i < 4; ++i) {
-    bool dup = false;
-    for (int j = 0; j < m; ++j) dup = dup || (pts[i] - P[j]).norm() <= S(1e-9) * size;
-    if (!dup) P[m++] = pts[i];
-  }
+  const DistinctPoints<S> q(pts, np, size);
+  const Vec3<S>* const P = q.P;
+  const int m = q.m;
   S L = std::numeric_limits<S>::infinity();
-  const auto in_cell = [&](int i, const Vec3<S>& n) {  // generous: a face kept on a tie only lowers L
-    for (int j = 0; j < m; ++j)
-      if (j != i && n.dot(P[i]) > n.dot(P[j]) + S(1e-9) * size) return false;
-    return true;
-  };
+  const auto in_cell = [&q](int i, const Vec3<S>& n) { return q.in_cell(i, n); };
   for (int i = 0; i < m; ++i) {
     const Vec3<S>& p = P[i];
     const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
