@@ -246,5 +246,126 @@ TEST(ConeConePair, FloatPenetrationAgainstTheOracle) {
   EXPECT_GT(certified, IMPACT_TEST_SANITIZED ? -1 : 2);
 }
 
+// cone_side_minimum (convex/cylinder_pair.hpp) of a cone against a cylinder placed by R, t in the
+// cone's frame: F(phi) = h_cyl(-m(phi)), m(phi) = (k cos phi, k sin phi, c) the cone's side normal
+// at azimuth phi. The oracle: the cylinder's support function in closed form in long double
+// (t . d + r |P d| + h |a . d|), scanned at 4096 azimuths and refined by golden sections.
+LD cylinder_h(const Cylinder<double>& cyl, const V3L& axis, const V3L& t, const V3L& d) {
+  const LD ad = axis.dot(d);
+  return t.dot(d) + LD(cyl.radius) * std::sqrt(std::max(d.squaredNorm() - ad * ad, LD(0))) + LD(cyl.half_length) * std::abs(ad);
+}
+struct SideOracle {
+  LD k = 0, c = 0;
+  V3L axis, t;
+  Cylinder<double> cyl{0.3, 0.4};
+  SideOracle(const Cone<double>& cone, const Cylinder<double>& cy, const Eigen::Matrix3d& R, const Eigen::Vector3d& tr)
+      : axis(R.col(2).cast<LD>()), t(tr.cast<LD>()), cyl(cy) {
+    const LD len = std::sqrt(LD(4) * cone.half_length * cone.half_length + LD(cone.radius) * cone.radius);
+    k = 2 * cone.half_length / len;
+    c = cone.radius / len;
+  }
+  LD F(LD phi) const { return cylinder_h(cyl, axis, t, V3L(-k * std::cos(phi), -k * std::sin(phi), -c)); }
+  LD F(const V3L& m) const { return cylinder_h(cyl, axis, t, V3L(-m)); }
+  // the least F and its azimuth
+  std::pair<LD, LD> least() const {
+    const LD pi = std::acos(LD(-1));
+    int best = 0;
+    for (int i = 1; i < 4096; ++i)
+      if (F(2 * pi * i / 4096) < F(2 * pi * best / 4096)) best = i;
+    LD lo = 2 * pi * (best - 1) / 4096, hi = 2 * pi * (best + 1) / 4096;
+    const LD g = (std::sqrt(LD(5)) - 1) / 2;
+    for (int it = 0; it < 120; ++it) {
+      const LD x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+      if (F(x1) < F(x2)) hi = x2; else lo = x1;
+    }
+    return {F((lo + hi) / 2), (lo + hi) / 2};
+  }
+};
+
+// The cylinder's support in the cone's frame (R, t), counting the calls.
+template <class S>
+auto counted_cylinder_support(const Cylinder<S>& cyl, const Mat3<S>& R, const Vec3<S>& t, int& calls) {
+  return [&cyl, R, t, &calls](const Vec3<S>& d) {
+    ++calls;
+    return Vec3<S>(R * support(cyl, Vec3<S>(R.transpose() * d)) + t);
+  };
+}
+
+// A smooth minimum (the cylinder's support on one rim near it): found (false only when the 8
+// samples give no bracket of F's slope about the best: 10 support calls), F there the oracle's
+// least value, x the support along -m; float and double.
+TEST(ConeSideMinimum, SmoothMinimumAgainstTheOracle) {
+  test::Rng rng(941);
+  int smooth = 0, found = 0, found_f = 0;
+  for (int n = 0; n < (IMPACT_TEST_SANITIZED ? 8 : 40); ++n) {
+    const Cone<double> cone(rng.uniform(0.2, 1.0), rng.uniform(0.2, 1.0));
+    const Cylinder<double> cyl(rng.uniform(0.1, 0.6), rng.uniform(0.1, 0.6));
+    const Eigen::Matrix3d R = rng.rotation();
+    const Eigen::Vector3d t = rng.vec(-0.5, 0.5);
+    const SideOracle o(cone, cyl, R, t);
+    const auto [fmin, phi] = o.least();
+    // smooth there: the cylinder's support on one rim, away from its caps' switch and its axis
+    const V3L d(-o.k * std::cos(phi), -o.k * std::sin(phi), -o.c);
+    const LD ad = o.axis.dot(d);
+    if (std::abs(ad) < 0.05 || d.squaredNorm() - ad * ad < 0.05) continue;
+    ++smooth;
+    int calls = 0;
+    Vec3<double> m, x;
+    if (detail::cone_side_minimum(cone, counted_cylinder_support(cyl, R, t, calls), m, x)) {
+      ++found;
+      EXPECT_NEAR(m.norm(), 1.0, 1e-15);
+      EXPECT_NEAR(double(o.F(m.cast<LD>())), double(fmin), 1e-13) << "not the least overlap along the side";
+      EXPECT_NEAR(-m.dot(x), double(o.F(m.cast<LD>())), 1e-14) << "x not the support along -m";
+    } else {
+      EXPECT_EQ(calls, 10) << "false after the samples bracketed a smooth minimum";  // 8 samples, 2 ends
+    }
+    const Cone<float> cf(float(cone.radius), float(cone.half_length));
+    const Cylinder<float> yf(float(cyl.radius), float(cyl.half_length));
+    const Mat3<float> Rf = R.cast<float>();
+    const Vec3<float> tf = t.cast<float>();
+    Vec3<float> mf, xf;
+    calls = 0;
+    if (detail::cone_side_minimum(cf, counted_cylinder_support(yf, Rf, tf, calls), mf, xf)) {
+      ++found_f;
+      EXPECT_NEAR(double(o.F(mf.cast<LD>())), double(fmin), 1e-5);
+    } else {
+      EXPECT_EQ(calls, 10);
+    }
+  }
+  EXPECT_GT(smooth, IMPACT_TEST_SANITIZED ? 2 : 15);
+  EXPECT_GE(found, smooth * 9 / 10);
+  EXPECT_GE(found_f, smooth * 9 / 10);
+}
+
+// A kink minimum: the cylinder's axis normal to the cone's side normal at azimuth phi0 and tilted
+// by 45 degrees about it from the cone's ruling, its centre in the plane of that ruling and the
+// axis, so F's slope jumps from - k h sin 45 to + k h sin 45 at phi0 (the support switches caps;
+// the contact is ruling against ruling, offered by opposite_rulings). cone_side_minimum says so
+// early: false within 24 support calls (8 samples, 2 ends, then 9 to 11 steps of the bracket).
+// Checked to fail (run): without the kink test, 34 calls (all 24 steps; the bracket never closes).
+TEST(ConeSideMinimum, KinkEndsEarly) {
+  for (const double phi0 : {0.3, 2.0, -2.6}) {
+    const Cone<double> cone(0.5, 0.6);
+    const Cylinder<double> cyl(0.2, 0.5);
+    const double len = std::sqrt(4 * 0.6 * 0.6 + 0.5 * 0.5), k = 1.2 / len, c = 0.5 / len;
+    const Eigen::Vector3d ruling(c * std::cos(phi0), c * std::sin(phi0), -k), tangent(-std::sin(phi0), std::cos(phi0), 0);
+    const Eigen::Vector3d axis = (ruling + tangent).normalized();
+    Eigen::Matrix3d R;
+    R.col(0) = tangent.cross(axis).cross(axis).normalized();
+    R.col(1) = axis.cross(R.col(0));
+    R.col(2) = axis;
+    const Eigen::Vector3d t = 0.3 * Eigen::Vector3d(std::cos(phi0), std::sin(phi0), 0) + Eigen::Vector3d(0, 0, 0.1);
+    const SideOracle o(cone, cyl, R, t);
+    // the construction: F's least value at phi0, a kink
+    const auto [fmin, phi] = o.least();
+    EXPECT_NEAR(double(std::remainder(phi - phi0, 2 * std::acos(LD(-1)))), 0.0, 1e-6);
+    EXPECT_LT(double(o.F(LD(phi0))), double(std::min(o.F(LD(phi0 - 1e-4)), o.F(LD(phi0 + 1e-4))) - 1e-6));
+    int calls = 0;
+    Vec3<double> m, x;
+    EXPECT_FALSE(detail::cone_side_minimum(cone, counted_cylinder_support(cyl, R, t, calls), m, x));
+    EXPECT_LE(calls, 24);
+  }
+}
+
 }  // namespace cone_cone_pair_test
 }  // namespace

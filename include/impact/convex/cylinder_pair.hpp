@@ -85,7 +85,7 @@ inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v
     S q1 = g1, q2 = g2;  // beta = 0: Newton on g (the same minimiser as rho)
     if (beta != S(0)) {
       if (!(g > S(0))) break;
-      const S rho = std::sqrt(g), r1 = g1 / rho, r2 = (g2 - r1 * r1) / rho;  // rho', rho''
+      const S inv_rho = S(1) / std::sqrt(g), r1 = g1 * inv_rho, r2 = (g2 - r1 * r1) * inv_rho;  // rho', rho''
       q1 = alpha * r1 + beta * d.z();
       q2 = alpha * r2 - beta * p.z();
     }
@@ -96,7 +96,9 @@ inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v
     const S q = step * step / S(4), den = S(1) / (S(1) + q);
     const S cs_step = (S(1) - q) * den, sn_step = step * den;
     const S c2 = co * cs_step - si * sn_step, s2n = si * cs_step + co * sn_step;
-    const S norm = S(1) / std::sqrt(c2 * c2 + s2n * s2n);
+    // the rotation keeps the length up to rounding: one Newton step of 1 / sqrt from 1 puts it
+    // back within rounding (no square root or division in the loop's dependent chain)
+    const S norm = (S(3) - (c2 * c2 + s2n * s2n)) / S(2);
     co = c2 * norm;
     si = s2n * norm;
     if (std::abs(step) <= S(1e-7)) break;  // Newton's next step would be below 1e-14
@@ -299,29 +301,36 @@ bool cone_side_minimum(const Cone<S>& c, const SupportOther& support_other, Vec3
   S gl = slope(lx, ly, sl), gh = slope(hx, hy, sh);
   if (!(gl < S(0) && gh > S(0))) return false;
   const S close = std::max(S(1e-9), S(128) * std::numeric_limits<S>::epsilon());
+  // a kink: F' jumps where the other shape's support jumps (a cylinder's from cap to cap, a cone's
+  // from apex to rim); there the bracket's true end slopes stay apart from 0 as it closes, while
+  // about a smooth minimum they shrink with it (|F'| <= F'' width, F'' <= k |s| + k^2 r / |P d|)
+  const S kink = S(1e2) * k * (sl.norm() + sh.norm());
+  S tl = gl, th = gh;  // the true slopes at the ends (Illinois halves gl, gh)
   int side = 0;
   for (int it = 0; it < 24; ++it) {
     const S lam = gl / (gl - gh);  // the chord point where F' interpolates to 0
     S ux = lx + lam * (hx - lx), uy = ly + lam * (hy - ly);
-    const S norm = std::sqrt(ux * ux + uy * uy);
-    ux /= norm;
-    uy /= norm;
+    const S inv_norm = S(1) / std::sqrt(ux * ux + uy * uy);
+    ux *= inv_norm;
+    uy *= inv_norm;
     Vec3<S> sx;
     const S g = slope(ux, uy, sx);
     if (g < S(0)) {
       lx = ux;
       ly = uy;
-      gl = g;
+      gl = tl = g;
       if (side == -1) gh /= S(2);
       side = -1;
     } else {
       hx = ux;
       hy = uy;
-      gh = g;
+      gh = th = g;
       if (side == 1) gl /= S(2);
       side = 1;
     }
-    if (g == S(0) || std::abs(hx - lx) + std::abs(hy - ly) <= close) {
+    const S width = std::abs(hx - lx) + std::abs(hy - ly);
+    if (th - tl > kink * width) return false;  // a kink: no smooth minimum to find
+    if (g == S(0) || width <= close) {
       m = normal(ux, uy);
       x = sx;
       return true;

@@ -407,17 +407,19 @@ bool cylinder_cone_side_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3
 /// Cylinder a (its frame) against cone b placed by R, t there, along b's side: the directions
 /// w(phi) = -R m(phi), m(phi) b's outward side normal at azimuth phi, where the overlap is
 /// h_A(w) - t . w + h r / L (b's support is its whole ruling there). Newton on phi from the azimuth
-/// of -n (the derivatives from a's support: (s_A - t) . w' and w'^T H_A w' + (s_A - t) . w'');
-/// true with n the minimiser when it converges (|step| <= 1e-10 within 16 steps) where a's support
-/// is smooth; false otherwise.
+/// of -n (the derivatives from a's support: (s_A - t) . w' and w'^T H_A w' + (s_A - t) . w''),
+/// the azimuth held as its cosine and sine and turned by each step through the Cayley transform (a
+/// rotation by 2 atan(step / 2), without trigonometric calls, as circle_minimise in
+/// convex/cylinder_pair.hpp); true with n the minimiser when it converges (|step| <= 1e-10 within
+/// 16 steps) where a's support is smooth; false otherwise.
 template <class S>
 bool cone_side_newton(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, Vec3<S>& n) {
   const Vec3<S> v = -(R.transpose() * n);
-  if (!(std::sqrt(v.x() * v.x() + v.y() * v.y()) > S(1e-9))) return false;
-  S phi = std::atan2(v.y(), v.x());
+  const S vxy = std::sqrt(v.x() * v.x() + v.y() * v.y());
+  if (!(vxy > S(1e-9))) return false;
+  S c = v.x() / vxy, s = v.y() / vxy;
   const S rc = b.radius, hc = b.half_length, L = std::sqrt(S(4) * hc * hc + rc * rc), k = S(2) * hc / L;
   for (int it = 0; it < 16; ++it) {
-    const S c = std::cos(phi), s = std::sin(phi);
     const Vec3<S> w = -(R * Vec3<S>(k * c, k * s, rc / L)), w1 = -(R * Vec3<S>(-k * s, k * c, S(0))), w2 = -(R * Vec3<S>(-k * c, -k * s, S(0)));
     const S pw = std::sqrt(w.x() * w.x() + w.y() * w.y());
     if (!(pw > S(1e-6) && std::abs(w.z()) > S(1e-6))) return false;  // a's cap or ruling: a kink
@@ -426,9 +428,14 @@ bool cone_side_newton(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, 
     const S g1 = arm.dot(w1), g2 = a.radius / pw * perp * perp + arm.dot(w2);
     if (!(g2 > S(0))) return false;
     const S step = std::clamp(-g1 / g2, S(-0.3), S(0.3));
-    phi += step;
+    const S q = step * step / S(4), den = S(1) / (S(1) + q);
+    const S cs = (S(1) - q) * den, sn = step * den;
+    const S c2 = c * cs - s * sn, s2 = s * cs + c * sn;
+    const S norm = (S(3) - (c2 * c2 + s2 * s2)) / S(2);  // back to unit length within rounding
+    c = c2 * norm;
+    s = s2 * norm;
     if (std::abs(step) <= S(1e-10)) {
-      n = -(R * Vec3<S>(k * std::cos(phi), k * std::sin(phi), rc / L));
+      n = -(R * Vec3<S>(k * c, k * s, rc / L));
       return true;
     }
   }
