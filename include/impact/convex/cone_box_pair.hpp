@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// A certified shortcut for the penetration of an intersecting cone and box (convex/query.hpp runs
-/// it before GJK and EPA), built as convex/cylinder_pair.hpp is: with f(n) = h_A(n) + h_B(-n), the
+/// A certified shortcut for the penetration of an intersecting cone and box (convex/certified_pair.hpp
+/// runs it once GJK has enclosed the origin, before EPA), built as convex/cylinder_pair.hpp is: with f(n) = h_A(n) + h_B(-n), the
 /// overlap along a unit direction n (the depth is min_n f(n)), each candidate gives an upper bound
 /// f(n) at its direction and a lower bound rho from a point x of one shape inside the other, rho
 /// its distance to that shape's boundary (the ball of radius rho about x lies inside it, so every

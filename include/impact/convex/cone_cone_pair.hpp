@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// A certified shortcut for the penetration of two intersecting cones (convex/query.hpp runs it
+/// A certified shortcut for the penetration of two intersecting cones (convex/certified_pair.hpp runs it
 /// after GJK has enclosed the origin, before EPA), built as convex/cylinder_pair.hpp and
 /// convex/cone_box_pair.hpp are: with f(n) = h_A(n) + h_B(-n), the overlap along a unit direction
 /// n (the depth is min_n f(n)), each candidate gives an upper bound f(n) at its direction and a

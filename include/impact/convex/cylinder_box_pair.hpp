@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// Cylinder against box (convex/query.hpp's cylinder–box paths), in the cylinder's frame (its axis
-/// z, its centre the origin; the box placed by R, t there, half extents e):
+/// Cylinder against box (the boolean of convex/query.hpp, the penetration of
+/// convex/certified_pair.hpp), in the cylinder's frame (its axis z, its centre the origin; the box
+/// placed by R, t there, half extents e):
 ///
 /// Separating tests. The cylinder's extent along a unit u is h |u_z| + r |P_z u| about 0, the box's
 /// sum_i e_i |R_i . u| about u . t; a plane normal to u separates them when the two intervals are

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// Cylinder against convex hull (convex/query.hpp's cylinder–hull penetration), in the cylinder's
+/// Cylinder against convex hull (convex/certified_pair.hpp's cylinder–hull penetration), in the cylinder's
 /// frame (its axis z, its centre the origin; the hull placed by R, t there). With
 /// f(n) = h_A(n) + h_B(-n), the overlap along a unit n from the cylinder towards the hull (the
 /// depth is min_n f), the features of the Minkowski difference that have a finite set of normals

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// A certified shortcut for the penetration of an intersecting cylinder and cylinder or cone
-/// (convex/query.hpp runs it before EPA). With f(n) = h_A(n) + h_B(-n), the overlap along a unit
+/// (convex/certified_pair.hpp runs it before EPA). With f(n) = h_A(n) + h_B(-n), the overlap along a unit
 /// direction n (translating b by f(n) n separates them; the depth is min_n f(n), as for EPA in
 /// convex/epa.hpp), each candidate below gives an upper bound f(n) at its direction and a lower
 /// bound from balls inside the shapes: for balls A' (centre c_a, radius rho_a) inside A and B'

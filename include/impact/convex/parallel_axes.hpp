@@ -28,7 +28,7 @@
 /// parallel axes up to rounding (the same orientation, and any tilt below about 1e-11 rad at the
 /// default tolerance); otherwise the caller goes on to its other methods, and when those stop with
 /// their bracket open it calls this again with their bracket's width as the tolerance and keeps the
-/// narrower bracket (convex/query.hpp, narrow_by_parallel_axes: coaxial pairs tilted by 1e-9 rad).
+/// narrower bracket (convex/certified_pair.hpp, narrow_by_parallel_axes: coaxial pairs tilted by 1e-9 rad).
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.

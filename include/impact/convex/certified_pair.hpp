@@ -1,0 +1,352 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The certified pair paths of convex_penetration: the pairs of curved and flat shapes that have
+/// candidates of their own (cylinder against cylinder or cone, cone against cone, cone against box,
+/// cylinder against box, cylinder against hull). Each path runs the same stages:
+///   1. planes that separate the shapes (one support call each: no contact);
+///   2. the pair's candidates (its own file: cylinder_pair.hpp, cone_cone_pair.hpp, ...), whose
+///      certificate, a positive lower bound of the depth within the tolerance of the upper bound,
+///      proves the intersection and the depth without GJK (settled);
+///   3. GJK until its simplex encloses the origin or a plane separates the shapes (enclose_origin;
+///      cones run it before their candidates, which cost more than GJK on separated poses);
+///   4. EPA from GJK's tetrahedron, seeded with the best candidate's normal and stopped early by a
+///      local certificate on the pair's overlap terms (epa_from_simplex; convex/epa.hpp and
+///      convex/local_certificate.hpp).
+/// convex/query.hpp chooses the path per pair of types; the general pieces (GJK, EPA, settling)
+/// are in convex/general_pair.hpp.
+#pragma once
+
+#include "impact/convex/closed_form.hpp"
+#include "impact/convex/cone_box_pair.hpp"
+#include "impact/convex/cone_box_terms.hpp"
+#include "impact/convex/cone_cone_pair.hpp"
+#include "impact/convex/convex_hull.hpp"
+#include "impact/convex/cylinder_box_pair.hpp"
+#include "impact/convex/cylinder_hull_pair.hpp"
+#include "impact/convex/cylinder_pair.hpp"
+#include "impact/convex/epa.hpp"
+#include "impact/convex/general_pair.hpp"
+#include "impact/convex/local_certificate.hpp"
+#include "impact/convex/parallel_axes.hpp"
+#include "impact/convex/query_options.hpp"
+#include "impact/convex/shapes.hpp"
+#include "impact/geometry/transform.hpp"
+
+#include <limits>
+#include <type_traits>
+
+namespace impact {
+namespace detail {
+
+/// "No contact", after `calls` support calls.
+template <class S>
+ConvexContact<S> no_contact(int calls) {
+  ConvexContact<S> c;
+  c.iterations = calls;
+  return c;
+}
+
+/// A certified candidate's answer: `calls` support calls of the stages before it added to its
+/// count, and its contact settled along its normal (settle_certified_from_frame).
+template <class S, class A, class B>
+ConvexContact<S> settled(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S> c, int calls) {
+  c.iterations += calls;
+  settle_certified_from_frame(a, pa, b, pb, c);
+  return c;
+}
+
+/// How GJK ended (enclose_origin): its simplex holds the origin; a plane separates the shapes; or
+/// it hit options.max_iterations or met a degenerate simplex, and the caller runs the general
+/// path from scratch.
+enum class Enclosure { Enclosed, Apart, Unsure };
+
+/// GJK on support functions of a's frame from the direction `start` (gjk_enclose of
+/// convex/epa.hpp): `simplex` receives the tetrahedron, `calls` counts the support calls.
+template <class S, class SupportA, class SupportB>
+Enclosure enclose_origin(const SupportA& sa, const SupportB& sb, const Vec3<S>& start, S scale, const ConvexQueryOptions<S>& o,
+                         SimplexPoint<S> (&simplex)[4], int& calls) {
+  bool limit = false, failed = false;
+  if (gjk_enclose(sa, sb, start, scale, o.max_iterations, simplex, calls, limit, failed)) return Enclosure::Enclosed;
+  return limit || failed ? Enclosure::Unsure : Enclosure::Apart;
+}
+
+/// Whether a local certificate whose bound came through one branch of a shape (a cone's side or
+/// base, a hull's vertex or edge) holds: that bound is exact only where the branch touches the
+/// contact, so the true overlap at the certificate's normal (one support call of each shape) must
+/// be within `tol` of its lower bound.
+template <class S, class SupportA, class SupportB>
+bool certificate_holds(const LocalCertificate<S>& lc, const SupportA& sa, const SupportB& sb, S tol) {
+  const Vec3<S>& k = lc.normal;
+  return lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol;
+}
+
+/// EPA from GJK's tetrahedron (`calls` support calls so far), seeded with the best candidate's
+/// normal when one has a finite depth (an upper bound near the answer, and the local
+/// certificate's first start), and stopped early by `local` unless options.local_certificate is
+/// off; the candidates' support calls are added to the count.
+template <class S, class A, class B, class Local>
+ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                                  const ConvexQueryOptions<S>& o, const SimplexPoint<S> (&simplex)[4], int calls, const Local& local,
+                                  const ConvexContact<S>& cand) {
+  const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, local, seed)
+                                           : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed);
+  g.iterations += cand.iterations;
+  return g;
+}
+
+/// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
+/// penetration: when it stopped with its bracket open (a coaxial pair's least-overlap normals form
+/// a circle EPA cannot close: about 515 support calls and a bracket of 7.5e-5 of the size at a tilt
+/// of 1e-9 rad), the parallel-axes closed form certifies a bracket of about twice the tilt times
+/// b's reach (convex/parallel_axes.hpp). The narrower of the two is kept; limit_reached stays set
+/// unless it is within the tolerance.
+template <class S, class A, class B>
+void narrow_by_parallel_axes(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                             const ConvexQueryOptions<S>& o, ConvexContact<S>& g) {
+  if (!g.intersecting || !g.limit_reached) return;
+  const PairFrame<S> f(pa, pb);
+  ConvexContact<S> p;
+  if (!parallel_axes_contact(a, b, f.R, f.t, g.depth_gap, p) || !(p.depth_gap < g.depth_gap)) return;
+  settle_certified_from_frame(a, pa, b, pb, p);
+  p.iterations += g.iterations;
+  p.limit_reached = !(p.depth_gap <= o.relative_tolerance * query_scale<S>(a, b));
+  g = p;
+}
+
+/// A cylinder and a cylinder or cone: the overlap along the line between their centres (a negative
+/// one separates them: no contact; 85-90 % of the bench's separated poses end here), then
+/// the certified candidates of convex/cylinder_pair.hpp (caps, rulings, a ruling or a side against
+/// a rim point; their certificate, a positive lower bound of the depth, proves the intersection,
+/// so no GJK runs), else GJK until it encloses the origin or separates them (no contact), and EPA
+/// from GJK's tetrahedron.
+template <class S, class B>
+ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                                           const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_b = f.b_to_a(interior_point(b));  // a's centre is its frame's origin
+  // a plane normal to the line between the centres separates them (by more than rounding: a pair
+  // touching within rounding goes on to GJK, which decides it)
+  if (separated_along(sa, sb, centre_b, scale)) return one_plane_apart<S>();
+  ConvexContact<S> c;
+  if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) return settled(a, pa, b, pb, c, 1);  // parallel axes
+  bool certified;
+  if constexpr (std::is_same_v<B, Cone<S>>) {
+    certified = cylinder_cone_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
+  } else {
+    certified = cylinder_pair_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
+  }
+  if (certified) return settled(a, pa, b, pb, c, 1);
+  c.iterations += 1;  // the plane along the centre line
+  SimplexPoint<S> simplex[4];
+  int its = 0;
+  switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
+    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Apart: return no_contact<S>(its + c.iterations);
+    case Enclosure::Enclosed: break;
+  }
+  // EPA from GJK's tetrahedron (its support calls counted once, in g.iterations), stopped early by
+  // the local certificate of convex/local_certificate.hpp where it holds
+  const auto local = [&](const Vec3<S>& n) {
+    if constexpr (std::is_same_v<B, Cone<S>>) {
+      // a bound through the cone's branch or a body inside it is exact only where that branch or
+      // body touches the contact: accepted when the true overlap at the certified normal is within
+      // the tolerance of the bound
+      const S tol = o.relative_tolerance * scale;
+      OverlapTerms<S> terms;
+      if (cylinder_cone_terms(a, b, f.R, f.t, n, terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, n);
+        if (certificate_holds(lc, sa, sb, tol)) return lc;
+      }
+      // the cone's side: the minimiser along b's side normals (Newton on the azimuth), then the
+      // body inside b along that ruling (its overlap is exact there)
+      Vec3<S> m = n;
+      if (cone_side_newton(a, b, f.R, f.t, m) && cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, m);
+        if (certificate_holds(lc, sa, sb, tol)) return lc;
+      }
+      // else (a's rim or ruling against b's side) no certificate: moving the body round by round
+      // to the ruling of the minimiser found (up to 8 rounds) certified 9 of the 88 queries that got
+      // this far on the bench's 2000 poses at 226 certificate evaluations, more than it saved
+      return LocalCertificate<S>();
+    } else {
+      return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
+    }
+  };
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c);
+  narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  return g;
+}
+
+/// Two cones: the closed form of convex/parallel_axes.hpp when their axes are parallel; else a
+/// plane normal to the line between the centres (separating: no contact; most separated poses),
+/// GJK until it encloses the origin or separates them (no contact), then the certified candidates
+/// of convex/cone_cone_pair.hpp (bases, apexes, rims against sides, rulings), else EPA from GJK's
+/// tetrahedron, seeded with the best candidate's direction and stopped early by the local
+/// certificate of convex/local_certificate.hpp on the terms of each cone's branch active at EPA's
+/// normal (none where a branch ties: a side ruling); accepted when the true overlap at its normal
+/// is within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb,
+                                       const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
+  // a plane normal to the line between the centres separates them (most separated poses)
+  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  ConvexContact<S> cand;
+  if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
+    case Enclosure::Unsure: {
+      ConvexContact<S> g = general_penetration(a, pa, b, pb, o);
+      narrow_by_parallel_axes(a, pa, b, pb, o, g);
+      return g;
+    }
+    case Enclosure::Apart: return no_contact<S>(its);
+    case Enclosure::Enclosed: break;
+  }
+  cand = ConvexContact<S>();
+  if (cone_cone_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
+  const auto local = [&](const Vec3<S>& n) {
+    OverlapTerms<S> terms;
+    if (cone_cone_terms(a, b, f.R, f.t, n, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, n);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
+    return LocalCertificate<S>();
+  };
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+  narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  return g;
+}
+
+/// A cone (a) and a box (b): planes normal to the line between the centres and to the box's axes
+/// (separating: no contact), GJK until it encloses the origin or separates them (no contact), then
+/// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
+/// deepest point, a corner or an edge of the box through the cone's side or base), else
+/// EPA from GJK's tetrahedron, stopped early by the local certificate of
+/// convex/local_certificate.hpp on the terms of convex/cone_box_terms.hpp (the cone's branch active
+/// at EPA's normal; none on a side ruling). A bound through one branch is exact only where that
+/// branch touches the contact, so a certificate is accepted when the true overlap at its normal is
+/// within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
+                                      const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_line = f.t - interior_point(a);
+  // a plane normal to the line between the centres separates them (most separated poses)
+  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
+  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale))
+    return one_plane_apart<S>();
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
+    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Apart: return no_contact<S>(its);
+    case Enclosure::Enclosed: break;
+  }
+  // intersecting: the certified candidates of convex/cone_box_pair.hpp (after GJK, which decides
+  // the separated poses more cheaply than they would), else EPA from GJK's tetrahedron
+  ConvexContact<S> cand;
+  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
+  const auto local = [&](const Vec3<S>& n) {
+    OverlapTerms<S> terms;
+    if (cone_box_terms(a, b, f.R, f.t, n, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, n);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
+    return LocalCertificate<S>();
+  };
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+}
+
+/// A cylinder (a) and a box (b): the planes of convex/cylinder_box_pair.hpp (the line between the
+/// centres, the box's axes, the cylinder's axis, normal to the axis and a box edge; separating: no
+/// contact), the certified candidates of convex/cylinder_box_pair.hpp (a certified lower bound is
+/// positive, so it proves the intersection: no GJK; before GJK saves 4 % of the instructions on
+/// the bench's poses), else GJK until it encloses the origin or separates them, and EPA from its
+/// tetrahedron seeded with the best candidate's direction and stopped early by the local
+/// certificate on cylinder_box_terms (the overlap's exact terms, so no check of a branch).
+template <class S>
+ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
+                                          const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * scale;
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = f.t.norm();
+    if (len > S(0) && cylinder_box_overlap(a, b, f.R, f.t, Vec3<S>(f.t / len)) < -margin) return one_plane_apart<S>();
+  }
+  if (cylinder_box_apart(a, b, f.R, f.t, margin)) return one_plane_apart<S>();
+  ConvexContact<S> cand;
+  if (cylinder_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  switch (enclose_origin(sa, sb, Vec3<S>(-f.t), scale, o, simplex, its)) {
+    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
+    case Enclosure::Enclosed: break;
+  }
+  const OverlapTerms<S> terms = cylinder_box_terms(a, b, f.R, f.t);
+  const auto local = [&](const Vec3<S>& n) { return local_certificate(terms, n); };
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+}
+
+/// A cylinder (a) and a convex hull (b): a plane normal to the line between the centres, then the
+/// candidates of convex/cylinder_hull_pair.hpp (the hull's face planes, which also separate most
+/// of the separated poses left; faces, caps and edges across the side, certified by a ball inside
+/// one shape; a certified lower bound is positive, so it proves the intersection: no GJK), else
+/// GJK until it encloses the origin or separates them, and EPA from its tetrahedron seeded with
+/// the best candidate's direction and stopped early by the local certificate on
+/// cylinder_hull_terms (the hull's vertex or edge at EPA's normal), accepted when the true overlap
+/// at its normal is within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b,
+                                           const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_b = f.b_to_a(interior_point(b));
+  {  // a plane normal to the line between the centres separates them (most separated poses)
+    const S len = centre_b.norm();
+    if (len > S(0)) {
+      const Vec3<S> m = centre_b / len;
+      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -margin) return one_plane_apart<S>();
+    }
+  }
+  ConvexContact<S> cand;
+  const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
+  if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
+  if (verdict == CylinderHullVerdict::Certified) return settled(a, pa, b, pb, cand, 1);
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
+    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
+    case Enclosure::Enclosed: break;
+  }
+  const auto local = [&](const Vec3<S>& n) {
+    const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
+    if (certificate_holds(lc, sa, sb, tol)) return lc;
+    return LocalCertificate<S>();
+  };
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+}
+
+}  // namespace detail
+}  // namespace impact
