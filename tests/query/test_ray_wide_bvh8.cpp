@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -129,6 +130,86 @@ TEST(WideBvh8, DeepTreeCastsLikeBruteForce) {
     ASSERT_TRUE(ref.has_value() && fast.has_value()) << i;
     EXPECT_EQ(*ref, fast->t) << i;
   }
+}
+
+// The collapse minimises the surface-area cost (WideBvhConfig::node_cost, block_cost): on the
+// binary SAH tree of a random soup of 1,500 triangles, the cost of the 8-wide tree, counted here
+// from its nodes' float boxes, is at least 1 % below that of the rule it replaced, computed here
+// on the binary tree (each node opens its largest-area inner child until it has eight; every
+// subtree of at most four triangles is a leaf), for block costs 0.5, 1 and 3 (ratios 0.97, 0.94,
+// 0.74). Run and failed: the previous collapse (ratio 1.0000003, its float boxes), and a collapse
+// taking a leaf where a node costs less (the comparison reversed: ratios 22 to 72). Bad costs
+// are InvalidInput.
+TEST(WideBvh8, CollapseLowersTheSurfaceAreaCost) {
+  const TriangleMesh<double> m = test::random_soup<double>(1500, 5, 1.0, 0.05);
+  MeshBvhConfig bcfg;
+  bcfg.build.split = SplitRule::Sah;
+  bcfg.build.leaf_size = 1;
+  const MeshBvh<Aabb<double>> binary(m, bcfg);
+  const auto& nodes = binary.tree().nodes;
+  auto area = [](const Vec3<double>& lo, const Vec3<double>& hi) {
+    const Vec3<double> e = hi - lo;
+    return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
+  };
+  std::vector<int> size(nodes.size());
+  for (std::size_t j = nodes.size(); j-- > 0;)
+    size[j] = nodes[j].is_leaf() ? nodes[j].count : size[static_cast<std::size_t>(nodes[j].left())] + size[static_cast<std::size_t>(nodes[j].right())];
+  for (const double block_cost : {0.5, 1.0, 3.0}) {
+    WideBvhConfig cfg;
+    cfg.block_cost = block_cost;
+    const WideBvh<double, 8> w(binary, cfg);
+    test::wide::check_structure(m, w, 4);
+    // the wide tree's cost
+    double wide_cost = 0;
+    Vec3<double> rlo = Vec3<double>::Constant(DBL_MAX), rhi = -rlo;
+    for (const auto& n : w.nodes())
+      for (int c = 0; c < 8; ++c) {
+        if (n.count[c] < 0) continue;
+        const Vec3<double> lo(n.bounds[0][c], n.bounds[2][c], n.bounds[4][c]), hi(n.bounds[1][c], n.bounds[3][c], n.bounds[5][c]);
+        wide_cost += area(lo, hi) * (n.count[c] == 0 ? 1.0 : block_cost * ((n.count[c] + 3) / 4));
+        if (&n == &w.nodes()[0]) rlo = rlo.cwiseMin(lo), rhi = rhi.cwiseMax(hi);
+      }
+    wide_cost += area(rlo, rhi);
+    // the greedy collapse's cost
+    auto leaf = [&](std::int32_t j) { return nodes[static_cast<std::size_t>(j)].is_leaf() || size[static_cast<std::size_t>(j)] <= 4; };
+    auto node_area = [&](std::int32_t j) { return area(nodes[static_cast<std::size_t>(j)].bv.min, nodes[static_cast<std::size_t>(j)].bv.max); };
+    ASSERT_FALSE(leaf(0));
+    double greedy = node_area(0);
+    std::vector<std::int32_t> work{0};
+    while (!work.empty()) {
+      const std::int32_t j = work.back();
+      work.pop_back();
+      std::vector<std::int32_t> kids{nodes[static_cast<std::size_t>(j)].left(), nodes[static_cast<std::size_t>(j)].right()};
+      while (kids.size() < 8) {
+        int open = -1;
+        for (int c = 0; c < static_cast<int>(kids.size()); ++c)
+          if (!leaf(kids[static_cast<std::size_t>(c)]) && (open < 0 || node_area(kids[static_cast<std::size_t>(c)]) > node_area(kids[static_cast<std::size_t>(open)]))) open = c;
+        if (open < 0) break;
+        const std::int32_t x = kids[static_cast<std::size_t>(open)];
+        kids[static_cast<std::size_t>(open)] = nodes[static_cast<std::size_t>(x)].left();
+        kids.push_back(nodes[static_cast<std::size_t>(x)].right());
+      }
+      for (const std::int32_t x : kids) {
+        if (leaf(x)) {
+          greedy += node_area(x) * block_cost * ((size[static_cast<std::size_t>(x)] + 3) / 4);
+        } else {
+          greedy += node_area(x);
+          work.push_back(x);
+        }
+      }
+    }
+    EXPECT_LT(wide_cost, 0.99 * greedy) << block_cost;
+  }
+  WideBvhConfig bad;
+  bad.node_cost = 0;
+  EXPECT_THROW(WideBvh<double>(m, bad), InvalidInput);
+  bad.node_cost = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((WideBvh<double, 8>(binary, bad)), InvalidInput);
+  bad.node_cost = 1;
+  bad.block_cost = -1;
+  EXPECT_THROW(WideBvh<double>(m, bad), InvalidInput);
+  bad.block_cost = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((WideBvh<double, 8>(binary, bad)), InvalidInput);
 }
 
 // Under a rigid pose: the plain tree's hit.

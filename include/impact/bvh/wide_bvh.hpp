@@ -2,12 +2,13 @@
 /// \file
 /// WideBvh: a read-only 4-wide (or 8-wide: WideBvh<S, 8>) bounding-volume hierarchy over a
 /// triangle mesh, made for first-hit ray and segment casts (query/ray_wide_bvh.hpp). It is built by
-/// collapsing a binary tree (by default the surface-area-heuristic tree of the mesh): each wide
-/// node takes the two children of a binary node and keeps opening its largest-area inner child
-/// until it holds four (eight), and every subtree of at most `leaf_size` triangles becomes one
-/// leaf. A 4-wide node is two cache lines: its four children's float boxes (rounded outward)
-/// stored plane by plane, so one pass of SIMD arithmetic tests all four (SSE2 or a scalar loop
-/// giving the same answers), and their references; an 8-wide node is four (its test: AVX when the
+/// collapsing a binary tree (by default the surface-area-heuristic tree of the mesh) into the
+/// wide tree of least surface-area cost (WideBvhConfig::node_cost, block_cost): which binary nodes
+/// become wide nodes, which are opened into their parent, and which subtrees of at most
+/// `leaf_size` triangles become leaves, chosen by dynamic programming over the binary tree (Ylitie,
+/// Karras and Laine 2017), not by a fixed rule. A 4-wide node is two cache lines: its four
+/// children's float boxes (rounded outward) stored plane by plane, so one pass of SIMD arithmetic
+/// tests all four (SSE2 or a scalar loop giving the same answers), and their references; an 8-wide node is four (its test: AVX when the
 /// CPU has it, checked at run time, else SSE2 on two halves; no compiler flag needed). The
 /// triangles are copied in leaf order into blocks of four, coordinate by coordinate (a block holds
 /// a[x][4], a[y][4], ..., c[z][4]: one aligned load per coordinate of four triangles, no
@@ -67,6 +68,10 @@ inline bool is_float_exact(float) { return true; }
 struct WideBvhConfig {
   int leaf_size = 4;  ///< maximum triangles per leaf (>= 1; larger only when the source tree's leaves are)
   int sah_bins = 16;  ///< bins per axis of the binary SAH build (WideBvh(mesh) only), in [2, 256]
+  /// The collapse's surface-area costs (> 0, finite; only their ratio matters): of testing one
+  /// node's children, and of testing one block of up to four triangles of a leaf.
+  double node_cost = 1.0;
+  double block_cost = 1.0;
 };
 
 /// A node of a WideBvh of width W (4 or 8): W children, their float boxes plane by plane.
@@ -112,23 +117,27 @@ template <class S, int W = 4> class WideBvh {
   WideBvh() = default;
 
   /// Validates the mesh (InvalidInput on bad input, see validate_mesh), builds its binary SAH tree
-  /// (leaves of one triangle) and collapses it. Throws InvalidInput for leaf_size < 1 or sah_bins
-  /// outside [2, 256]. O(n log n).
+  /// (leaves of one triangle) and collapses it. Throws InvalidInput for leaf_size < 1, sah_bins
+  /// outside [2, 256], or costs that are not finite and positive. O(n log n).
   explicit WideBvh(const TriangleMesh<S>& mesh, const WideBvhConfig& cfg = {}) {
     validate_in_range(cfg.sah_bins, 2, 256, "WideBvh", "config.sah_bins");
     validate_in_range(cfg.leaf_size, 1, std::numeric_limits<int>::max(), "WideBvh", "config.leaf_size");
+    validate_positive(cfg.node_cost, "WideBvh", "config.node_cost");
+    validate_positive(cfg.block_cost, "WideBvh", "config.block_cost");
     MeshBvhConfig binary;
     binary.build.split = SplitRule::Sah;
     binary.build.sah_bins = cfg.sah_bins;
     binary.build.leaf_size = 1;
-    collapse(MeshBvh<Aabb<S>>(mesh, binary), cfg.leaf_size);
+    collapse(MeshBvh<Aabb<S>>(mesh, binary), cfg);
   }
 
   /// Collapses the tree of an existing MeshBvh (any build; its quality carries over). Throws
-  /// InvalidInput for leaf_size < 1. O(nodes).
+  /// InvalidInput for leaf_size < 1 or costs that are not finite and positive. O(W^2 nodes).
   explicit WideBvh(const MeshBvh<Aabb<S>>& mesh, const WideBvhConfig& cfg = {}) {
     validate_in_range(cfg.leaf_size, 1, std::numeric_limits<int>::max(), "WideBvh", "config.leaf_size");
-    collapse(mesh, cfg.leaf_size);
+    validate_positive(cfg.node_cost, "WideBvh", "config.node_cost");
+    validate_positive(cfg.block_cost, "WideBvh", "config.block_cost");
+    collapse(mesh, cfg);
   }
 
   bool empty() const { return ids_.empty(); }
@@ -186,7 +195,9 @@ template <class S, int W = 4> class WideBvh {
   }
 
  private:
-  void collapse(const MeshBvh<Aabb<S>>& mesh, int leaf_size) {
+  void collapse(const MeshBvh<Aabb<S>>& mesh, const WideBvhConfig& cfg) {
+    const int leaf_size = cfg.leaf_size;
+    const double node_cost = cfg.node_cost, block_cost = cfg.block_cost;
     const Bvh<Aabb<S>>& tree = mesh.tree();
     const std::int32_t n = mesh.num_triangles();
     ids_.resize(static_cast<std::size_t>(n));
@@ -220,11 +231,75 @@ template <class S, int W = 4> class WideBvh {
         begin[j] = begin[static_cast<std::size_t>(nd.left())];
       }
     }
-    auto is_leaf = [&](std::int32_t j) { return tree.nodes[static_cast<std::size_t>(j)].is_leaf() || size[static_cast<std::size_t>(j)] <= leaf_size; };
-    auto area = [&](std::int32_t j) {
+    // The collapse minimising the wide tree's SAH cost (Ylitie, Karras and Laine 2017, "Efficient
+    // incoherent ray traversal on GPUs through compressed wide BVHs", section 3, without their
+    // triangle splitting): cost[W j + i - 1] is the least cost of covering binary subtree j by a
+    // forest of at most i subtrees (i in 1..W), each of them a wide leaf (area * block_cost per
+    // block of four triangles; only subtrees of at most leaf_size triangles, or a leaf of the
+    // source tree) or a wide node (area * node_cost plus the cost of its children, a forest of at
+    // most W from its two binary children). Areas are half surface areas; the probability that a
+    // ray through the root's box enters a box is proportional to it, so the cost is the expected
+    // work of a ray that is not stopped by a hit. O(W^2 nodes) time, O(W nodes) memory.
+    const auto area = [&](std::int32_t j) {
       const Aabb<S>& b = tree.nodes[static_cast<std::size_t>(j)].bv;
       const Vec3<S> e = b.max - b.min;
-      return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
+      return double(e.x()) * double(e.y()) + double(e.y()) * double(e.z()) + double(e.z()) * double(e.x());
+    };
+    const double inf = std::numeric_limits<double>::infinity();
+    std::vector<double> cost(static_cast<std::size_t>(W) * m, inf);
+    // choice[W j + i - 1]: for i = 1, 0 a leaf, 1 a node; for i > 1, the number k of trees the
+    // best forest of exactly i (split at j) takes from the left child (i - k from the right);
+    // fewer[W j + i - 1]: a forest of at most i - 1 is as cheap (always at a leaf of the source)
+    std::vector<std::int8_t> choice(static_cast<std::size_t>(W) * m, 0), fewer(static_cast<std::size_t>(W) * m, 1);
+    auto at = [&](std::int32_t j, int i) { return static_cast<std::size_t>(W) * static_cast<std::size_t>(j) + static_cast<std::size_t>(i - 1); };
+    std::vector<double> split(W + 1, inf);  // split[i]: the best forest of exactly i split at j
+    for (std::size_t jj = m; jj-- > 0;) {
+      const std::int32_t j = static_cast<std::int32_t>(jj);
+      const auto& nd = tree.nodes[jj];
+      const double a = area(j);
+      const double leaf = nd.is_leaf() || size[jj] <= leaf_size ? a * block_cost * double((size[jj] + 3) / 4) : inf;
+      if (nd.is_leaf()) {
+        for (int i = 1; i <= W; ++i) cost[at(j, i)] = leaf;  // choice 0: a leaf; fewer
+        continue;
+      }
+      for (int i = 2; i <= W; ++i) {
+        split[i] = inf;
+        for (int k = 1; k < i; ++k) {
+          const double c = cost[at(nd.left(), k)] + cost[at(nd.right(), i - k)];
+          if (c < split[i]) split[i] = c, choice[at(j, i)] = static_cast<std::int8_t>(k);
+        }
+      }
+      const double inner = a * node_cost + split[W];
+      cost[at(j, 1)] = leaf <= inner ? leaf : inner;
+      choice[at(j, 1)] = leaf <= inner ? 0 : 1;
+      for (int i = 2; i <= W; ++i) {
+        const bool f = cost[at(j, i - 1)] <= split[i];
+        cost[at(j, i)] = f ? cost[at(j, i - 1)] : split[i];
+        fewer[at(j, i)] = f ? 1 : 0;
+      }
+    }
+    auto is_leaf = [&](std::int32_t j) { return choice[at(j, 1)] == 0; };
+    // the forest of at most W trees that covers the children of inner binary node j
+    std::vector<std::pair<std::int32_t, int>> pending;
+    auto forest = [&](std::int32_t j, std::int32_t (&kids)[W]) {
+      int k = 0;
+      const auto& nd = tree.nodes[static_cast<std::size_t>(j)];
+      const int kl = choice[at(j, W)];
+      pending.assign({{nd.right(), W - kl}, {nd.left(), kl}});
+      while (!pending.empty()) {
+        auto [x, i] = pending.back();
+        pending.pop_back();
+        while (i > 1 && fewer[at(x, i)]) --i;  // a forest of fewer trees is as cheap
+        if (i == 1) {
+          kids[k++] = x;
+          continue;
+        }
+        const auto& nx = tree.nodes[static_cast<std::size_t>(x)];
+        const int kx = choice[at(x, i)];
+        pending.push_back({nx.right(), i - kx});
+        pending.push_back({nx.left(), kx});
+      }
+      return k;
     };
     nodes_.reserve(m / (W - 1) + 1);
     nodes_.emplace_back();
@@ -237,19 +312,9 @@ template <class S, int W = 4> class WideBvh {
       std::int32_t kids[W];
       int k = 0;
       if (is_leaf(src)) {
-        kids[k++] = src;  // a root that is a leaf
+        kids[k++] = src;  // a root that is one leaf (at most leaf_size triangles, cheaper so)
       } else {
-        kids[k++] = tree.nodes[static_cast<std::size_t>(src)].left();
-        kids[k++] = tree.nodes[static_cast<std::size_t>(src)].right();
-        while (k < W) {  // open the largest inner child
-          int open = -1;
-          for (int c = 0; c < k; ++c)
-            if (!is_leaf(kids[c]) && (open < 0 || area(kids[c]) > area(kids[open]))) open = c;
-          if (open < 0) break;
-          const auto& nd = tree.nodes[static_cast<std::size_t>(kids[open])];
-          kids[open] = nd.left();
-          kids[k++] = nd.right();
-        }
+        k = forest(src, kids);
       }
       Node node;
       for (int c = 0; c < k; ++c) {

@@ -166,15 +166,20 @@ bool cylinder_box_contact(const Cylinder<S>& a, const Box<S>& b, const Mat3<S>& 
   const auto overlap = [&](const Vec3<S>& n) { return cylinder_box_overlap(a, b, R, t, n); };
   CandidateBounds<S> k;
   const auto decided = [&] { return k.upper - k.lower <= tolerance; };
-  // the box's faces: the cylinder's deepest point across each, in the box's frame y (the overlap
-  // along the face's inward normal s R_i is e_i + s y_i)
+  // the box's faces: the cylinder's deepest point x across each (support(a, s R_i), its rim
+  // point's xy part shared by both signs: one square root per axis), in the box's frame y (the
+  // overlap along the face's inward normal s R_i is e_i + s y_i; x's ball the least of the gaps)
+  const S r = a.radius, h = a.half_length;
   for (int i = 0; i < 3; ++i) {
+    const Vec3<S> c = R.col(i);
+    const S cxy = std::sqrt(c.x() * c.x() + c.y() * c.y());
+    const bool off_axis = cxy > S(0);
+    const S q = off_axis ? r / cxy : S(0);
     for (const S s : {S(1), S(-1)}) {
-      const Vec3<S> n = s * R.col(i);
-      const Vec3<S> x = support(a, n);
+      const Vec3<S> x(off_axis ? s * c.x() * q : r, off_axis ? s * c.y() * q : S(0), s * c.z() >= S(0) ? h : -h);
       const Vec3<S> y = R.transpose() * (x - t);
-      const InsideBall<S> ball = inside_ball(b, y);
-      if (ball.rho > S(0)) k.offer(n, b.half[i] + s * y[i], x, ball.rho);
+      const S rho = std::min(std::min(b.half.x() - std::abs(y.x()), b.half.y() - std::abs(y.y())), b.half.z() - std::abs(y.z()));
+      if (rho > S(0)) k.offer(Vec3<S>(s * c), b.half[i] + s * y[i], x, rho);
     }
   }
   if (decided()) return k.finish(tolerance, out);
@@ -212,7 +217,10 @@ bool cylinder_box_contact(const Cylinder<S>& a, const Box<S>& b, const Mat3<S>& 
       Vec3<S> x;
       if (!box_edge_at_azimuth(R, t, hc, i, n, n.x(), n.y(), x)) continue;
       const InsideBall<S> ball = inside_ball(a, x);
-      if (ball.rho > S(0)) k.offer(n, overlap(n), x, ball.rho);
+      if (ball.rho > S(0)) {  // the overlap along n normal to the axis: r - n . t + the box's abs terms
+        const Vec3<S> m = R.transpose() * n;
+        k.offer(n, r - n.dot(t) + b.half.x() * std::abs(m.x()) + b.half.y() * std::abs(m.y()) + b.half.z() * std::abs(m.z()), x, ball.rho);
+      }
     }
   }
   return k.finish(tolerance, out);
