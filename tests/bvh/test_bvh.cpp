@@ -7,6 +7,7 @@
 // oriented box, float and double, every split rule (middle, median, SAH) and construction (top-down,
 // bottom-up, incremental). The traversal stack keeps its order past its fixed slots.
 #include "impact/bvh/mesh_bvh.hpp"
+#include "impact/bvh/node_layout.hpp"
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/traverse.hpp"
 #include "impact/query/mesh_collide.hpp"
@@ -15,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <type_traits>
 
 using namespace impact;
@@ -419,4 +421,84 @@ TEST(MeshBvhMemory, SphereAndAabbTreesWithin120BytesPerTriangle) {
   const auto mf = random_soup<float>(3000, 92);
   expect_tree_bytes_within<Sphere<float>>(mf, 120);
   expect_tree_bytes_within<Aabb<float>>(mf, 120);
+}
+
+// The node layout (bvh/node_layout.hpp): a mesh's tree is stored in treelets. From every node at a
+// depth that is a multiple of L (the root, and the nodes L, 2L, ... levels below it), the nodes 1
+// to L levels below it fill one contiguous block of the node array, level by level. The builders'
+// depth-first order does not: there a right child's descendants follow the whole left subtree.
+template <class BV> void expect_treelets(const MeshBvh<BV>& m) {
+  const auto& nodes = m.tree().nodes;
+  const int levels = treelet_levels(sizeof(BvhNode<BV>));
+  std::vector<int> depth(nodes.size(), 0);
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+    if (!nodes[k].is_leaf()) depth[static_cast<std::size_t>(nodes[k].left())] = depth[static_cast<std::size_t>(nodes[k].right())] = depth[k] + 1;
+  int treelets = 0;
+  for (std::size_t r = 0; r < nodes.size(); ++r) {
+    if (nodes[r].is_leaf() || depth[r] % levels != 0) continue;
+    ++treelets;
+    std::vector<std::int32_t> level{static_cast<std::int32_t>(r)}, below;
+    for (int d = 0; d < levels; ++d) {
+      std::vector<std::int32_t> next;
+      for (std::int32_t k : level)
+        if (!nodes[static_cast<std::size_t>(k)].is_leaf()) next.insert(next.end(), {nodes[static_cast<std::size_t>(k)].left(), nodes[static_cast<std::size_t>(k)].right()});
+      below.insert(below.end(), next.begin(), next.end());
+      level = next;
+    }
+    // the block: exactly the indices first child .. first child + count - 1, in level order
+    for (std::size_t k = 0; k < below.size(); ++k)
+      ASSERT_EQ(below[k], nodes[r].left() + static_cast<std::int32_t>(k)) << "treelet at node " << r << ", depth " << depth[r];
+  }
+  EXPECT_GT(treelets, 10);
+}
+
+TEST(BvhNodeLayout, MeshTreesAreStoredInPageSizedTreelets) {
+  static_assert(treelet_levels(136) == 4 && treelet_levels(56) == 5 && treelet_levels(40) == 5 && treelet_levels(4096) == 1);
+  const auto md = random_soup<double>(1500, 93);
+  const auto mf = random_soup<float>(1500, 94);
+  expect_treelets(MeshBvh<Obb<double>>(md));
+  expect_treelets(MeshBvh<Aabb<double>>(md));
+  expect_treelets(MeshBvh<Sphere<float>>(mf));
+  MeshBvhConfig cfg;
+  cfg.build.method = BuildMethod::BottomUp;
+  expect_treelets(MeshBvh<Obb<float>>(mf, cfg));
+}
+
+// Renumbering keeps the tree: from the root down, the same BVs bit for bit, the same children (left
+// and right), the same leaf ranges, whatever the treelet height.
+template <class BV> void expect_same_tree(const Bvh<BV>& x, std::int32_t i, const Bvh<BV>& y, std::int32_t j, int& nodes) {
+  const auto& a = x.nodes[static_cast<std::size_t>(i)];
+  const auto& b = y.nodes[static_cast<std::size_t>(j)];
+  ++nodes;
+  ASSERT_EQ(std::memcmp(&a.bv, &b.bv, sizeof(BV)), 0) << "node " << i << " / " << j;
+  ASSERT_EQ(a.count, b.count);
+  if (a.is_leaf()) {
+    ASSERT_EQ(a.first, b.first);
+    return;
+  }
+  ASSERT_GT(b.left(), j);  // children after their parent
+  expect_same_tree(x, a.left(), y, b.left(), nodes);
+  expect_same_tree(x, a.right(), y, b.right(), nodes);
+}
+
+TEST(BvhNodeLayout, RenumberingKeepsTheTree) {
+  const auto md = random_soup<double>(1000, 95);
+  for (int leaf : {1, 3}) {
+    MeshBvhConfig cfg;
+    cfg.build.leaf_size = leaf;
+    const MeshBvh<Obb<double>> m(md, cfg);
+    const MeshBvh<Aabb<double>> ma(md, cfg);
+    for (int levels : {1, 2, 3, 7}) {
+      Bvh<Obb<double>> t = m.tree();
+      lay_out_in_treelets(t, levels);
+      int n = 0;
+      expect_same_tree(m.tree(), 0, t, 0, n);
+      EXPECT_EQ(static_cast<std::size_t>(n), t.nodes.size());
+      Bvh<Aabb<double>> ta = ma.tree();
+      lay_out_in_treelets(ta, levels);
+      n = 0;
+      expect_same_tree(ma.tree(), 0, ta, 0, n);
+      EXPECT_EQ(static_cast<std::size_t>(n), ta.nodes.size());
+    }
+  }
 }

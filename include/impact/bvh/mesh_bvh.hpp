@@ -8,6 +8,7 @@
 /// its triangles' vertices, and keeps only the leaf order of the triangles (their rows of F): a
 /// triangle's vertices are read from the copied mesh. In the tree, primitive ids are leaf positions; triangle_id() maps them back to rows of
 /// F. For deforming meshes, set_vertices() moves the vertices and refits; the topology is kept.
+/// The nodes are stored in page-sized treelets (lay_out_in_treelets, bvh/node_layout.hpp).
 ///
 /// Coincident copies of a triangle: the top-down build gathers the copies of one triangle (the
 /// same three points) in one leaf (TriangleCopyOrder), sorted by vertex order, and the tree marks
@@ -26,6 +27,7 @@
 #include "impact/bvh/build_bottom_up.hpp"
 #include "impact/bvh/build_incremental.hpp"
 #include "impact/bvh/build_top_down.hpp"
+#include "impact/bvh/node_layout.hpp"
 #include "impact/bvh/refit.hpp"
 #include "impact/detail/revision.hpp"
 #include "impact/geometry/obb_slabs.hpp"
@@ -160,6 +162,7 @@ template <class BV> class MeshBvh {
     }
     ids_ = tree_.primitives;
     for (std::size_t k = 0; k < m; ++k) tree_.primitives[k] = static_cast<std::int32_t>(k);
+    lay_out_in_treelets(tree_);  // a page-sized block per few levels (node_layout.hpp); the same tree
     tree_.nodes.shrink_to_fit();
     update_coordinate_bound();
     update_root_slabs();
