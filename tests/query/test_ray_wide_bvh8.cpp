@@ -8,6 +8,7 @@
 // scalar keys and masks bit for bit, and conservative against the double slab test.
 #include "impact/geometry/mesh_generators.hpp"
 #include "impact/query/ray_wide_bvh.hpp"
+#include "impact/query/wide_fused_slab.hpp"
 #include "support/random.hpp"
 #include "wide_bvh_checks.hpp"
 
@@ -77,8 +78,13 @@ TYPED_TEST(WideBvh8Test, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
       const auto ref = test::wide::brute_first_t(m, ray);
       const auto fast = ray_mesh_first_hit(w, ray);
       const auto sse = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, nullptr, true, false);
+      // the scalar loop with the public cast's node test (the AVX loop's, when it runs): the same
+      // visiting order, so the same triangle among those at the same t (the SSE loop's node test
+      // rounds otherwise and may take another one first)
+      const auto same = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, nullptr, false, false, detail::wide_fma_available());
       ASSERT_EQ(ref.has_value(), fast.has_value()) << i;
       ASSERT_EQ(fast.has_value(), sse.has_value()) << i;
+      ASSERT_EQ(fast.has_value(), same.has_value()) << i;
       if (sphere && i % 4 < 2) {
         ASSERT_TRUE(fast.has_value()) << i;  // from inside the sphere, out through p
       }
@@ -86,7 +92,8 @@ TYPED_TEST(WideBvh8Test, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {
       ++hits;
       test::wide::expect_first_t(*ref, fast->t, i);
       EXPECT_EQ(fast->t, sse->t) << i;
-      EXPECT_EQ(fast->triangle, sse->triangle) << i;
+      EXPECT_EQ(fast->t, same->t) << i;
+      EXPECT_EQ(fast->triangle, same->triangle) << i;
     }
     EXPECT_GT(hits, n / 2);
   }
@@ -255,23 +262,29 @@ TEST(WideBvh8, AvxLoopVisitsTheNodesOfTheOtherLoops) {
     for (int i = 0; i < rays; ++i) {
       const double len = i % 2 ? 4.0 : 0.3;  // long rays cross several boxes; short legs a few
       const Ray<double> ray(rng.vec(-1.6, 1.6), rng.vec(-1, 1).normalized() * len, 1.0);
-      RayMeshStats avx, sse, scalar;
+      RayMeshStats avx, sse, scalar, fused;
       const auto a = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &avx, true, true);
       const auto b = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &sse, true, false);
       const auto c = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &scalar, false, false);
+      // the scalar loop with the AVX loop's node test (when the AVX loop runs: else the SSE one's)
+      const auto f = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &fused, false, false, detail::wide_fma_available());
       ASSERT_EQ(a.has_value(), b.has_value()) << i;
       ASSERT_EQ(a.has_value(), c.has_value()) << i;
+      ASSERT_EQ(a.has_value(), f.has_value()) << i;
       if (a) {
         ++hits;
         EXPECT_EQ(a->t, b->t) << i;
-        EXPECT_EQ(a->triangle, b->triangle) << i;
         EXPECT_EQ(a->t, c->t) << i;
-        EXPECT_EQ(a->triangle, c->triangle) << i;
+        EXPECT_EQ(a->t, f->t) << i;
+        EXPECT_EQ(a->triangle, f->triangle) << i;
+        EXPECT_EQ(b->triangle, c->triangle) << i;
       }
-      ASSERT_EQ(avx.node_tests, sse.node_tests) << i;
-      ASSERT_EQ(avx.node_tests, scalar.node_tests) << i;
-      EXPECT_EQ(avx.triangle_tests, sse.triangle_tests) << i;
-      EXPECT_EQ(avx.triangle_tests, scalar.triangle_tests) << i;
+      // the AVX loop and the scalar loop with its node test visit the same nodes and triangles, as
+      // do the SSE loop and the scalar loop with its node test
+      ASSERT_EQ(avx.node_tests, fused.node_tests) << i;
+      EXPECT_EQ(avx.triangle_tests, fused.triangle_tests) << i;
+      ASSERT_EQ(sse.node_tests, scalar.node_tests) << i;
+      EXPECT_EQ(sse.triangle_tests, scalar.triangle_tests) << i;
       avx_nodes += avx.node_tests;
     }
     EXPECT_GT(hits, 150 / kWide8Samples / (rounded ? 2 : 1));
@@ -280,13 +293,13 @@ TEST(WideBvh8, AvxLoopVisitsTheNodesOfTheOtherLoops) {
   }
 }
 
-// The 8-wide float node test: AVX (when the CPU has it), SSE and scalar give the same keys and
+// The 8-wide float node test of the SSE and scalar loops: SSE and scalar give the same keys and
 // mask bit for bit; a child the double slab test (WideSlab, on the same float boxes) enters before
 // the bound is entered, its key never above the double entry; empty slots are never entered.
 TYPED_TEST(WideBvh8Test, FloatSlabIsConservative) {
   using S = TypeParam;
   test::Rng rng(67);
-  int entered = 0, missed = 0, avx_checked = 0;
+  int entered = 0, missed = 0;
   for (int i = 0; i < 8000 / kWide8Samples; ++i) {
     const double scale = std::ldexp(1.0, int(rng.integer(40)));
     const Vec3<S> o = (rng.vec(-1, 1) * scale).template cast<S>();
@@ -307,18 +320,6 @@ TYPED_TEST(WideBvh8Test, FloatSlabIsConservative) {
     float simd[8], scalar[8];
     const int ms = fs.entered(n, exit, bound, simd, true), mc = fs.entered(n, exit, bound, scalar, false);
     ASSERT_EQ(ms, mc) << i;
-#if defined(IMPACT_WIDE_AVX)
-    if (detail::wide_avx_available()) {
-      float avx[8];
-      const int ma = fs.entered_avx(n, exit, bound, avx);
-      ASSERT_EQ(ma, mc) << i;
-      for (int c = 0; c < 8; ++c)
-        if ((mc >> c) & 1) {
-          EXPECT_EQ(avx[c], scalar[c]) << i << " " << c;
-        }
-      ++avx_checked;
-    }
-#endif
     S exact[8];
     detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
     for (int c = 0; c < 8; ++c) {
@@ -340,29 +341,161 @@ TYPED_TEST(WideBvh8Test, FloatSlabIsConservative) {
   }
   EXPECT_GT(entered, 500 / kWide8Samples);
   EXPECT_GT(missed, 500 / kWide8Samples);
-  if (detail::wide_avx_available()) {
+}
+
+// The fused node test of the AVX loop (WideFusedRay, WideFusedAvx), for rays in float and double
+// against the double slab test (WideSlab) on random nodes: a child WideSlab enters before the bound
+// is entered, its key lo never above WideSlab's entry and at most 2 (|entry| 2^-19 + e) below it
+// (the slack the cast's tie bound allows: a key below the hit's t by more is entered before it);
+// empty slots are never entered; the AVX test gives the scalar test's keys and mask bit for bit.
+TYPED_TEST(WideBvh8Test, FusedSlabIsConservative) {
+  using S = TypeParam;
+  test::Rng rng(83);
+  int entered = 0, missed = 0, avx_checked = 0;
+  for (int i = 0; i < 8000 / kWide8Samples; ++i) {
+    const double scale = std::ldexp(1.0, int(rng.integer(40)));
+    // origins near the boxes, or far off (a translated mesh: e grows with |o / d|)
+    const double shift = i % 4 == 0 ? std::ldexp(1.0, int(rng.index(20))) * scale : 0.0;
+    const Vec3<S> o = (rng.vec(-1, 1) * scale + Eigen::Vector3d::Constant(shift)).template cast<S>();
+    const Vec3<S> d = (rng.vec(-1, 1) * 3.0 * scale).template cast<S>();
+    const Vec3<S> inv = detail::safe_inverse(d);
+    const detail::WideFusedRay fr(o, inv, S(4 * (scale + shift)));
+    if (!fr.usable()) continue;
+    WideBvhNode8 n;
+    const int used = 1 + int(rng.index(8));
+    for (int c = 0; c < used; ++c) {
+      const Eigen::Vector3d m = rng.vec(-1.5, 1.5) * scale + Eigen::Vector3d::Constant(shift);
+      const Eigen::Vector3d h = rng.vec(0.0, i % 5 == 0 ? 1e-6 : 0.8) * scale;
+      for (int k = 0; k < 3; ++k) n.bounds[2 * k][c] = float(m[k] - h[k]), n.bounds[2 * k + 1][c] = float(m[k] + h[k]);
+      n.count[c] = 1;
+    }
+    const S t_max = i % 3 == 0 ? std::numeric_limits<S>::infinity() : S(rng.uniform() * 2);
+    const float bound = i % 2 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 1.5);
+    const float exit = detail::float_round_up(double(t_max));
+    float keys[8];
+    const int m = fr.entered_scalar(n, exit, bound, keys);
+#if defined(IMPACT_WIDE_AVX)
+    if (detail::wide_fma_available()) {
+      detail::WideFusedAvx a;
+      a.set(fr);
+      float avx[8];
+      ASSERT_EQ(a.entered(n, exit, bound, avx), m) << i;
+      for (int c = 0; c < 8; ++c)
+        if ((m >> c) & 1) {
+          EXPECT_EQ(avx[c], keys[c]) << i << " " << c;
+        }
+      ++avx_checked;
+    }
+#endif
+    S exact[8];
+    detail::WideSlab<S>(o, inv).keys(n, t_max, exact, false);
+    for (int c = 0; c < 8; ++c) {
+      if (c >= used) {
+        EXPECT_FALSE((m >> c) & 1) << "empty slot entered " << i;
+        continue;
+      }
+      if (exact[c] <= S(bound)) {
+        ++entered;
+        ASSERT_TRUE((m >> c) & 1) << i << " " << c;
+        EXPECT_LE(S(keys[c]), exact[c]) << i << " " << c;
+        EXPECT_LE(double(exact[c]) - double(keys[c]), 2 * (std::abs(double(exact[c])) * 0x1p-19 + double(fr.e))) << i << " " << c;
+      } else {
+        missed += (m >> c) & 1 ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_GT(entered, 500 / kWide8Samples);
+  EXPECT_GT(missed, 500 / kWide8Samples);
+  if (detail::wide_fma_available()) {
     EXPECT_GT(avx_checked, 1000 / kWide8Samples);
   }
 }
 
-// The 8-wide AVX cast's one-pass set-up in double (WideFloatSlab::avx_state) against the slab
-// object: the same usability (rays beyond its range, zero and tiny direction components,
-// origins off the float grid far from the origin), the same absolute error and, node by node,
-// the same mask and keys bit for bit (a wrong axis, sign or rounding in the set-up changes them).
-TEST(WideBvh8, AvxSetUpMatchesTheSlab) {
+// Rays that touch a box exactly, by construction: the ray passes at t = 1/2 (or starts, at t = 0)
+// through a point q on a face, an edge or a corner of the box (q's coordinates are floats and
+// o = q - d / 2 is exact in double), at scales from 2^-40 to 2^36, near the coordinate origin and
+// translated by up to 2^20 times the box size, t_max at or beyond the touch: the fused test enters
+// the box with a key at most the touch's t.
+TEST(WideBvh8, FusedSlabEntersBoxesTheRayGrazes) {
+  test::Rng rng(89);
+  int checked = 0, corners = 0;
+  for (int i = 0; i < 20000 / kWide8Samples; ++i) {
+    const int k = int(rng.integer(38)) - 2;
+    const double s = std::ldexp(1.0, k);
+    const double shift = i % 3 == 0 ? 0.0 : std::ldexp(1.0, int(rng.index(21))) * s * (i % 2 ? 1 : -1);
+    Vec3<double> q, d;
+    for (int a = 0; a < 3; ++a) {
+      q[a] = double(float(rng.uniform(-1, 1) * s + shift));
+      d[a] = double(float(rng.uniform(0.25, 4.0) * s)) * (rng.index(2) ? 1 : -1);  // no tiny component: o exact
+    }
+    const bool at_start = i % 7 == 0;
+    const Vec3<double> o = at_start ? q : Vec3<double>(q - 0.5 * d);
+    const double t_touch = at_start ? 0.0 : 0.5;
+    if (!at_start && (o + 0.5 * d != q || (q - o) * 2.0 != d)) continue;  // (never: checked)
+    // the box: q on its boundary on 1 (face), 2 (edge) or 3 (corner) axes, inside on the others
+    const int boundary = 1 + int(rng.index(3));
+    corners += boundary == 3 ? 1 : 0;
+    WideBvhNode8 n;
+    const int slot = int(rng.index(8)), used = slot + 1 + int(rng.index(std::uint64_t(8 - slot)));
+    for (int c = 0; c < used; ++c) {
+      for (int a = 0; a < 3; ++a) {
+        const float lo = float(q[a] - rng.uniform(0.01, 1.0) * s), hi = float(q[a] + rng.uniform(0.01, 1.0) * s);
+        float box_lo = lo < float(q[a]) ? lo : std::nextafter(float(q[a]), -FLT_MAX);
+        float box_hi = hi > float(q[a]) ? hi : std::nextafter(float(q[a]), FLT_MAX);
+        if (c == slot && a < boundary) {  // q on the lower or the upper face of this axis
+          if (rng.index(2)) box_lo = float(q[a]);
+          else box_hi = float(q[a]);
+        } else if (c != slot) {  // other children: anywhere around
+          const float off = float(rng.uniform(-2, 2) * s);
+          box_lo += off, box_hi += off;
+        }
+        n.bounds[2 * a][c] = box_lo, n.bounds[2 * a + 1][c] = box_hi;
+      }
+      n.count[c] = 1;
+    }
+    const double t_max = i % 5 == 0 ? t_touch : (i % 5 == 1 ? std::numeric_limits<double>::infinity() : 1.0);
+    const Vec3<double> inv = detail::safe_inverse(d);
+    const detail::WideFusedRay fr(o, inv, 4 * (s + std::abs(shift)));
+    ASSERT_TRUE(fr.usable()) << i;
+    const float exit = detail::float_round_up(t_max);
+    float keys[8];
+    const int m = fr.entered_scalar(n, exit, std::numeric_limits<float>::infinity(), keys);
+    ASSERT_TRUE((m >> slot) & 1) << i << " scale 2^" << k << " shift " << shift << " axes " << boundary;
+    EXPECT_LE(double(keys[slot]), t_touch) << i;
+    // a key below the touch's t keeps the box entered against a bound at that t
+    EXPECT_TRUE((fr.entered_scalar(n, exit, float(t_touch), keys) >> slot) & 1) << i;
 #if defined(IMPACT_WIDE_AVX)
-  if (!detail::wide_avx_available()) GTEST_SKIP() << "no AVX";
+    if (detail::wide_fma_available()) {
+      detail::WideFusedAvx a;
+      float e = -1.0f, avx[8];
+      ASSERT_TRUE(a.set(o, inv, 4 * (s + std::abs(shift)), e)) << i;
+      EXPECT_EQ(a.entered(n, exit, std::numeric_limits<float>::infinity(), avx), m) << i;
+    }
+#endif
+    ++checked;
+  }
+  EXPECT_GT(checked, 19000 / kWide8Samples);
+  EXPECT_GT(corners, 5000 / kWide8Samples);
+}
+
+// The AVX cast's one-pass set-up in double (WideFusedAvx::set) against WideFusedRay: the same
+// usability (rays beyond its range, zero and tiny direction components, origins far off, |o / d|
+// beyond 2^63), the same e and plane offsets and, node by node, the same mask and keys bit for bit
+// (a wrong axis, sign or rounding in the set-up changes them).
+TEST(WideBvh8, AvxSetUpMatchesTheScalarTest) {
+#if defined(IMPACT_WIDE_AVX)
+  if (!detail::wide_fma_available()) GTEST_SKIP() << "no AVX and FMA";
   test::Rng rng(71);
   int usable = 0, unusable = 0, keys_checked = 0;
   for (int i = 0; i < 6000 / kWide8Samples; ++i) {
     const double scale = std::ldexp(1.0, int(rng.integer(70)));
     Vec3<double> o = rng.vec(-1, 1) * scale, d = rng.vec(-1, 1) * std::ldexp(1.0, int(rng.integer(70)));
     if (i % 7 == 0) d[int(rng.index(3))] = 0.0;                      // an infinite 1 / d
-    if (i % 11 == 0) o[int(rng.index(3))] = std::ldexp(1.0, 61);     // beyond the float test's range
-    if (i % 13 == 0) o[int(rng.index(3))] += std::ldexp(1.0, 45);    // far off the float grid
+    if (i % 11 == 0) o[int(rng.index(3))] = std::ldexp(1.0, 61);     // beyond the node test's range
+    if (i % 13 == 0) o[int(rng.index(3))] += std::ldexp(1.0, 45);    // far off
     const Vec3<double> inv = detail::safe_inverse(d);
     const double bound_c = i % 17 == 0 ? std::ldexp(1.0, 61) : 4 * scale;
-    const detail::WideFloatSlab<double, 8> fs(o, inv, bound_c);
+    const detail::WideFusedRay fr(o, inv, bound_c);
     WideBvhNode8 n;
     const int used = 1 + int(rng.index(8));
     for (int c = 0; c < used; ++c) {
@@ -372,21 +505,23 @@ TEST(WideBvh8, AvxSetUpMatchesTheSlab) {
     }
     const float exit = i % 3 == 0 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 2);
     const float bound = i % 2 ? std::numeric_limits<float>::infinity() : float(rng.uniform() * 1.5);
-    float direct[8], object[8], e = -1.0f;
-    const int md = detail::WideFloatSlab<double, 8>::entered_avx_from_ray(o, inv, bound_c, n, exit, bound, direct, e);
-    ASSERT_EQ(md >= 0, fs.usable()) << i;
-    if (md < 0) {
+    detail::WideFusedAvx a;
+    float e = -1.0f;
+    ASSERT_EQ(a.set(o, inv, bound_c, e), fr.usable()) << i;
+    if (!fr.usable()) {
       EXPECT_EQ(e, 0.0f) << i;
       ++unusable;
       continue;
     }
     ++usable;
-    EXPECT_EQ(e, fs.absolute_error()) << i;
-    const int mo = fs.entered_avx(n, exit, bound, object);
-    ASSERT_EQ(md, mo) << i;
+    EXPECT_EQ(e, fr.e) << i;
+    for (int j = 0; j < 6; ++j) EXPECT_EQ(a.planes[j], fr.planes[j]) << i << " " << j;
+    float direct[8], scalar[8];
+    const int md = a.entered(n, exit, bound, direct), ms = fr.entered_scalar(n, exit, bound, scalar);
+    ASSERT_EQ(md, ms) << i;
     for (int c = 0; c < 8; ++c)
-      if ((mo >> c) & 1) {
-        EXPECT_EQ(direct[c], object[c]) << i << " " << c;
+      if ((ms >> c) & 1) {
+        EXPECT_EQ(direct[c], scalar[c]) << i << " " << c;
         ++keys_checked;
       }
   }

@@ -3,13 +3,15 @@
 /// First-hit ray (or segment) casts through a WideBvh (bvh/wide_bvh.hpp): nearest-first, the
 /// four children of a node tested at once (SSE when compiled with it, else a scalar loop of the
 /// same IEEE operations in the same order: the same answers bit for bit; the eight of an 8-wide
-/// node with AVX when the CPU has it, the node loop compiled for AVX by a target attribute and
-/// picked at run time, else SSE on two halves: the same keys, so the same answers), the nearest entered
-/// child descended at once and the others kept on a stack with their entry parameter. The node
-/// test (query/wide_slab.hpp) runs in float (WideFloatSlab: the boxes are floats; its entry is lowered and its exit
-/// raised by a bound on its rounding, so it enters every box the double slab test WideSlab enters,
-/// never later), or in S through WideSlab for rays it cannot take (magnitudes beyond 2^60, a zero
-/// direction component). The triangles of a leaf, stored in blocks of four coordinate by
+/// node with AVX and FMA when the CPU has them, the node loop compiled for them by a target
+/// attribute and picked at run time, else SSE on two halves), the nearest entered child descended
+/// at once and the others kept on a stack with their entry parameter. The node test runs in
+/// float (the boxes are floats; its entry is lowered and its exit raised by a bound on its
+/// rounding, so it enters every box the double slab test WideSlab enters, never later: WideFloatSlab,
+/// query/wide_slab.hpp, for SSE and the scalar loop; WideFusedAvx, query/wide_fused_slab.hpp, one
+/// multiply-add a plane, for the AVX loop: their keys differ in the last bits, so the loops may
+/// order two nearly equal children differently, never the t they return), or in S through WideSlab
+/// for rays it cannot take (magnitudes beyond 2^60, a zero direction component). The triangles of a leaf, stored in blocks of four coordinate by
 /// coordinate (WideTriangleBlock), go four at a time through the watertight test's own operations
 /// in SIMD (BlockTest, query/wide_leaf_filter.hpp: SSE2, or AVX when the CPU has it), which passes
 /// exactly the triangles the scalar test hits (in float, also those with an edge function equal to
@@ -32,6 +34,7 @@
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/wide_bvh.hpp"
 #include "impact/query/ray_mesh.hpp"
+#include "impact/query/wide_fused_slab.hpp"
 #include "impact/query/wide_leaf_filter.hpp"
 #include "impact/query/wide_slab.hpp"
 
@@ -120,8 +123,11 @@ template <class S, int W = 4> struct WideCast {
   const Vec3<S> inv;
   const S t_max;
   const bool use_simd;
-  const bool use_avx;  // the 8-wide AVX node test and the AVX leaf test when the CPU has AVX
-  float slab_error = 0.0f;  // the float node test's absolute error (WideFloatSlab::absolute_error; 0 when it is not used)
+  const bool use_avx;  // the 8-wide AVX node loop (AVX and FMA) and the AVX leaf test when the CPU has them
+  // without SIMD: the scalar loop with the AVX loop's fused node test (WideFusedRay::entered_scalar,
+  // 8-wide), for the tests that compare the two loops node by node
+  bool fused_scalar = false;
+  float slab_error = 0.0f;  // the float node test's absolute error (its e; 0 when it is not used)
   S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
   std::int32_t best_k = -1;     // leaf-order position of the best hit
   std::int32_t best_block = -1;  // its block and lane
@@ -357,13 +363,13 @@ template <class S, int W = 4> struct WideCast {
   void run() {
 #if defined(IMPACT_WIDE_AVX)
     if constexpr (W == 8) {
-      if (use_simd && use_avx && wide_avx_available() && run_avx_loop()) return;
+      if (use_simd && use_avx && wide_fma_available() && run_avx_loop()) return;
     }
 #endif
     run_without_avx();
   }
 #if defined(IMPACT_WIDE_AVX)
-  /// The AVX loop (8-wide; call only when wide_avx_available()), its stack a local of its own
+  /// The AVX loop (8-wide; call only when wide_fma_available()), its stack a local of its own
   /// frame (the top in a register). False, having done nothing, when its float test cannot take
   /// the ray: then run_without_avx().
   bool run_avx_loop() {
@@ -373,8 +379,22 @@ template <class S, int W = 4> struct WideCast {
 #endif
   /// The traversal with the SSE or scalar node test.
   void run_without_avx() {
+    if constexpr (W == 8) {
+      if (fused_scalar && !use_simd) {
+        const WideFusedRay fused(o, inv, wide.coordinate_bound());
+        if (fused.usable()) {
+          slab_error = fused.e;
+          run_on_stack(fused);
+          return;
+        }
+      }
+    }
     const WideFloatSlab<S, W> float_slab(o, inv, wide.coordinate_bound());
     slab_error = float_slab.absolute_error();
+    run_on_stack(float_slab);
+  }
+  /// run() with the node test `slab` on the stack the tree's depth calls for.
+  template <class Slab> void run_on_stack(const Slab& float_slab) {
     if (wide.depth() <= kFixedDepth) {
       TraversalStack<WideEntry, (W - 1) * kFixedDepth, StackOverflow::None> stack;  // W - 1 entries a level at most
       run(stack, float_slab);
@@ -398,11 +418,11 @@ template <class S, int W = 4> struct WideCast {
     return false;
   }
 #if defined(IMPACT_WIDE_AVX)
-  /// The traversal of an 8-wide tree with the AVX node test (compiled for AVX; called when the CPU
-  /// has it): the loop of run() with eight children tested at once, on a Stack of its own, the
-  /// float test's state made in the same frame (in double by WideFloatSlab::avx_state, in one
-  /// pass). False, having done nothing, when the float test cannot take the ray.
-  template <class Stack> IMPACT_WIDE_AVX_TARGET bool run_avx();
+  /// The traversal of an 8-wide tree with the fused AVX node test (WideFusedAvx; compiled for AVX
+  /// and FMA, called when the CPU has both): the loop of run() with eight children tested at once,
+  /// on a Stack of its own, the node test's state made in the same frame (in double in one pass).
+  /// False, having done nothing, when the node test cannot take the ray.
+  template <class Stack> IMPACT_WIDE_FMA_TARGET bool run_avx();
   /// descend() for the keys in an AVX register: the same order (by key, ties by the lower slot),
   /// three or more children ranked without a sort (a child's rank: the entered children with a
   /// smaller key, or an equal key in a lower slot).
@@ -443,53 +463,55 @@ template <class S, int W = 4> struct WideCast {
   }
 #endif
 
-  template <class Stack> void run(Stack& stack, const WideFloatSlab<S, W>& float_slab) {
+  template <class Stack, class Slab> void run(Stack& stack, const Slab& float_slab) {
     const Node* nodes = wide.nodes().data();
     std::int32_t first = 0, count = 0;  // the root: an inner node
     std::size_t tests = 0;
     const bool in_float = float_slab.usable();  // (false for an infinite 1 / d)
 #if defined(__SSE2__)
-    if (in_float && use_simd) {
-      const typename WideFloatSlab<S, W>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
-      for (;;) {
-        // the bounds as of the last leaf, in registers for the node loop
-        const __m128 exit_v = _mm_set1_ps(exit_f), bound_v = _mm_set1_ps(bound_f), tie_v = _mm_set1_ps(tie_f);
-        const float bound = bound_f;
-        while (count == 0) {
-          const Node& n = nodes[first];
-          prefetch_references(n);
-          ++tests;
-          __m128 lo[W / 4];
-          int mask = fs.entered(n, exit_v, bound_v, lo);
-          if (mask) {
-            float fk[W];
-            int ties = 0;
-            for (int g = 0; g < W / 4; ++g) {
-              _mm_storeu_ps(fk + 4 * g, lo[g]);
-              ties |= _mm_movemask_ps(_mm_cmpge_ps(lo[g], tie_v)) << (4 * g);
-            }
-            if (IMPACT_UNLIKELY(ties & mask)) {
-              mask = redecide(n, fk);
-              if (!mask) {
-                if (!pop_below(stack, bound, first, count)) {
-                  node_tests += tests;
-                  return;
-                }
-                continue;
+    if constexpr (std::is_same_v<Slab, WideFloatSlab<S, W>>) {
+      if (in_float && use_simd) {
+        const typename WideFloatSlab<S, W>::Sse fs = float_slab.sse();  // a copy the node loop keeps in registers
+        for (;;) {
+          // the bounds as of the last leaf, in registers for the node loop
+          const __m128 exit_v = _mm_set1_ps(exit_f), bound_v = _mm_set1_ps(bound_f), tie_v = _mm_set1_ps(tie_f);
+          const float bound = bound_f;
+          while (count == 0) {
+            const Node& n = nodes[first];
+            prefetch_references(n);
+            ++tests;
+            __m128 lo[W / 4];
+            int mask = fs.entered(n, exit_v, bound_v, lo);
+            if (mask) {
+              float fk[W];
+              int ties = 0;
+              for (int g = 0; g < W / 4; ++g) {
+                _mm_storeu_ps(fk + 4 * g, lo[g]);
+                ties |= _mm_movemask_ps(_mm_cmpge_ps(lo[g], tie_v)) << (4 * g);
               }
+              if (IMPACT_UNLIKELY(ties & mask)) {
+                mask = redecide(n, fk);
+                if (!mask) {
+                  if (!pop_below(stack, bound, first, count)) {
+                    node_tests += tests;
+                    return;
+                  }
+                  continue;
+                }
+              }
+              descend(n, mask, fk, stack, first, count);
+              continue;
             }
-            descend(n, mask, fk, stack, first, count);
-            continue;
+            if (!pop_below(stack, bound, first, count)) {
+              node_tests += tests;
+              return;
+            }
           }
-          if (!pop_below(stack, bound, first, count)) {
+          leaf(first, count);
+          if (!pop_below(stack, bound_f, first, count)) {
             node_tests += tests;
             return;
           }
-        }
-        leaf(first, count);
-        if (!pop_below(stack, bound_f, first, count)) {
-          node_tests += tests;
-          return;
         }
       }
     }
@@ -524,16 +546,16 @@ template <class S, int W = 4> struct WideCast {
 #if defined(IMPACT_WIDE_AVX)
 template <class S, int W>
 template <class Stack>
-IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
+IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
   static_assert(W == 8, "the AVX node loop: 8-wide nodes");
-  typename WideFloatSlab<S, W>::Avx fs;  // in registers for the node loop
+  WideFusedAvx fs;  // in registers for the node loop
   if constexpr (std::is_same_v<S, double>) {
-    if (!WideFloatSlab<S, W>::avx_state(o, inv, double(wide.coordinate_bound()), fs, slab_error)) return false;
+    if (!fs.set(o, inv, double(wide.coordinate_bound()), slab_error)) return false;
   } else {
-    const WideFloatSlab<S, W> float_slab(o, inv, wide.coordinate_bound());
-    if (!float_slab.usable()) return false;
-    slab_error = float_slab.absolute_error();
-    fs = float_slab.avx();
+    const WideFusedRay fused(o, inv, wide.coordinate_bound());
+    if (!fused.usable()) return false;
+    slab_error = fused.e;
+    fs.set(fused);
   }
   Stack stack;
   const Node* nodes = wide.nodes().data();
@@ -547,7 +569,7 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
       prefetch_references(n);
       ++node_tests;  // (in memory: the loop has more live integers than registers)
       __m256 lo;
-      int mask = WideFloatSlab<S, W>::entered_avx(fs, n, exit_v, bound_v, lo);
+      int mask = fs.entered(n, exit_v, bound_v, lo);
       if (mask) {
         if (IMPACT_UNLIKELY(_mm256_movemask_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ)) & mask)) {
           float fk[W];
@@ -590,12 +612,13 @@ IMPACT_WIDE_AVX_TARGET bool WideCast<S, W>::run_avx() {
 /// The cast of ray_wide_first_hit_unchecked once its ray, in the mesh's frame (o, d), is known
 /// to have a non-zero direction and t_max >= 0 (ray_in_range implies both: the public overload
 /// without a pose comes here directly, but for the 8-wide tree in double with AVX).
-/// With kCheckRay (the public 8-wide cast in double without a pose, when the CPU has AVX; `ray`
-/// not yet checked but for t_max >= 0): the AVX loop first, and ray_in_range (validate_ray) only
-/// for a ray its float test does not take (WideFloatSlab::avx_state's limits imply the rest).
+/// With kCheckRay (the public 8-wide cast in double without a pose, when the CPU has AVX and FMA;
+/// `ray` not yet checked but for t_max >= 0): the AVX loop first, and ray_in_range (validate_ray)
+/// only for a ray its node test does not take (WideFusedAvx::set's limits imply the rest).
 template <bool kCheckRay = false, class S, int W>
 std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<S>& ray, const Vec3<S>& o, const Vec3<S>& d,
-                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+                                           const RigidTransform<S>* pose, RayMeshStats* stats, bool use_simd = true, bool use_avx = true,
+                                           bool fused_scalar = false) {
   if (wide.empty()) {
     if constexpr (kCheckRay) {
       if (!ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
@@ -603,6 +626,7 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
     return std::nullopt;
   }
   WideCast<S, W> cast(wide, o, d, ray.t_max, use_simd, use_avx);
+  cast.fused_scalar = fused_scalar;
 #if defined(IMPACT_WIDE_AVX)
   if constexpr (kCheckRay && W == 8) {
     if (!cast.run_avx_loop()) {
@@ -636,13 +660,15 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
 
 /// ray_mesh_first_hit through a WideBvh without the argument checks; `pose` null for the mesh's
 /// own frame. `use_simd` false forces the scalar node test and leaf loop (for the tests that
-/// compare the two: the same answers, triangle included).
+/// compare the two: the same answers, triangle included), with `fused_scalar` (8-wide) the AVX
+/// loop's node test in it (the same nodes visited as the AVX loop).
 /// The direction's largest component must be at least CoordinateRange::min_scale (else squared
 /// norms underflow and hits are missed): callers with unvalidated rays (a particle's leg) scale
 /// it first (detail::cast_short_ray, geometry/ray.hpp).
 template <class S, int W>
 std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& wide, const Ray<S>& ray, const RigidTransform<S>* pose,
-                                                          RayMeshStats* stats, bool use_simd = true, bool use_avx = true) {
+                                                          RayMeshStats* stats, bool use_simd = true, bool use_avx = true,
+                                                          bool fused_scalar = false) {
   Vec3<S> posed_o, posed_d;  // the ray in the mesh's frame when posed (else the caller's, not copied)
   if (pose) {
     posed_o = pose->R.transpose() * (ray.origin - pose->t);
@@ -651,7 +677,7 @@ std::optional<RayMeshHit<S>> ray_wide_first_hit_unchecked(const WideBvh<S, W>& w
   const Vec3<S>& o = pose ? posed_o : ray.origin;
   const Vec3<S>& d = pose ? posed_d : ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return std::nullopt;
-  return ray_wide_cast(wide, ray, o, d, pose, stats, use_simd, use_avx);
+  return ray_wide_cast(wide, ray, o, d, pose, stats, use_simd, use_avx, fused_scalar);
 }
 
 }  // namespace detail
@@ -673,12 +699,12 @@ std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const
 template <class S, int W> std::optional<RayMeshHit<S>> ray_mesh_first_hit(const WideBvh<S, W>& wide, const Ray<S>& ray) {
 #if defined(IMPACT_WIDE_AVX)
   if constexpr (W == 8 && std::is_same_v<S, double>) {
-    // The argument check folded into the AVX cast's set-up: its float test takes a ray only when
+    // The argument check folded into the AVX cast's set-up: its node test takes a ray only when
     // every origin component is within 2^60 and every 1 / d component within [2^-60, 2^60]
-    // (WideFloatSlab::avx_state), which implies ray_in_range but for t_max (all three direction
+    // (WideFusedAvx::set), which implies ray_in_range but for t_max (all three direction
     // components finite, at least 2^-60 > min_scale and at most about 2^60 < max; NaN fails).
     // Only a ray it does not take is checked, then cast with the other node tests.
-    if (ray.t_max >= S(0) && detail::wide_avx_available())
+    if (ray.t_max >= S(0) && detail::wide_fma_available())
       return detail::ray_wide_cast<true>(wide, ray, ray.origin, ray.direction, static_cast<const RigidTransform<S>*>(nullptr), nullptr);
   }
 #endif

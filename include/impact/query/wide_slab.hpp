@@ -7,10 +7,8 @@
 /// WideSlab enters, never later), and the order in which the entered children are visited
 /// (order_children, shared by both so that a cast visits the same nodes whichever test ran).
 /// Each runs with SSE when compiled with it, else as a scalar loop of the same IEEE operations in
-/// the same order: the same keys and masks bit for bit; the float test of an 8-wide node also in
-/// 256-bit AVX (compiled for AVX by a target attribute on GCC and Clang for x86, used when the CPU
-/// has it: wide_avx_available), again the same operations lane by lane. Used by
-/// query/ray_wide_bvh.hpp.
+/// the same order: the same keys and masks bit for bit. (The 8-wide AVX cast has a node test of its
+/// own, one multiply-add a plane: query/wide_fused_slab.hpp.) Used by query/ray_wide_bvh.hpp.
 #pragma once
 
 #include "impact/bvh/wide_bvh.hpp"
@@ -29,8 +27,8 @@
 #if defined(__AVX__)
 #include <immintrin.h>
 #endif
-// the 8-wide AVX node test: compiled for AVX whatever the target (a target attribute), called when
-// the CPU has it (wide_avx_available), else the SSE test of two halves
+// the 8-wide AVX code (the cast's node loop, query/wide_fused_slab.hpp, and its leaf test): compiled
+// for AVX whatever the target (a target attribute), called when the CPU has it (wide_avx_available)
 #if defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #include <immintrin.h>
 #define IMPACT_WIDE_AVX 1
@@ -40,7 +38,7 @@
 namespace impact {
 namespace detail {
 
-/// True when the 8-wide node test may use AVX: compiled in (GCC or Clang on x86) and the CPU has
+/// True when the 8-wide cast's AVX code may run: compiled in (GCC or Clang on x86) and the CPU has
 /// it (checked once).
 inline bool wide_avx_available() {
 #if defined(IMPACT_WIDE_AVX)
@@ -226,8 +224,7 @@ template <class S> inline S next_below(S x) {
 /// Empty slots (lower plane FLT_MAX, upper -FLT_MAX) give lo >= 2^67 (1 - 2^-19) - 2^41 > 0 > hi
 /// on every axis and are never entered (no count check). SSE when compiled with it, else a
 /// scalar loop of the same IEEE operations in the same order (the same keys and mask bit for bit);
-/// for W = 8 SSE tests the two halves of four, and AVX (compiled for it by a target attribute,
-/// called when the CPU has it: entered_avx) all eight at once, in the same operations.
+/// for W = 8 SSE tests the two halves of four.
 template <class S, int W = 4> class WideFloatSlab {
  public:
   WideFloatSlab(const Vec3<S>& o, const Vec3<S>& inv, S coordinate_bound) {
@@ -336,100 +333,6 @@ template <class S, int W = 4> class WideFloatSlab {
   const Sse& sse() const { return sse_; }
   /// entered() with the bounds broadcast and the keys left in a register.
   int entered(const WideBvhNodeN<W>& n, __m128 t_max_up, __m128 bound, __m128& keys) const { return sse_.entered(n, t_max_up, bound, keys); }
-#endif
-#if defined(IMPACT_WIDE_AVX)
-  /// The per-ray state of the AVX test of eight children, broadcast to eight lanes (made by
-  /// avx() inside a function compiled for AVX).
-  struct Avx {
-    __m256 o[3], neg_inv[3], e;  // neg_inv: -(1 / d) rounded to float (the test takes (o - b) (-1 / d), the plane b from memory)
-    int planes[6];
-  };
-  IMPACT_WIDE_AVX_TARGET Avx avx() const {
-    Avx a;
-    // the SSE state's registers hold each value four times already: two of them side by side
-    // (no lambda: it would not be compiled for AVX)
-    for (int i = 0; i < 3; ++i) {
-      a.o[i] = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.o[i]), sse_.o[i], 1);
-      a.neg_inv[i] = _mm256_xor_ps(_mm256_insertf128_ps(_mm256_castps128_ps256(sse_.inv[i]), sse_.inv[i], 1), _mm256_set1_ps(-0.0f));
-      a.planes[i] = planes()[i];
-      a.planes[3 + i] = planes()[3 + i];
-    }
-    a.e = _mm256_insertf128_ps(_mm256_castps128_ps256(sse_.e), sse_.e, 1);
-    return a;
-  }
-  /// The Avx state of a ray in double made directly, in one pass of 256-bit AVX over the three
-  /// axes (no SSE state, no object): the constructor's checks, the same float roundings of the
-  /// origin and of `inv`, the same e and plane offsets, so the same keys bit for bit (tested
-  /// against WideFloatSlab(o, inv, coordinate_bound).avx()). False when the slab would not be
-  /// usable(); else `e` gets absolute_error(). Compiled for AVX (call only when
-  /// wide_avx_available()). Its limits (2^60) are within CoordinateRange<double>: the public 8-wide
-  /// cast relies on them as its argument check (ray_mesh_first_hit, query/ray_wide_bvh.hpp).
-  IMPACT_WIDE_AVX_TARGET static bool avx_state(const Vec3<double>& o, const Vec3<double>& inv, double coordinate_bound, Avx& a, float& e) {
-    static_assert(std::is_same_v<S, double>, "avx_state: a ray in double");
-    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
-    // (x, y, z, 0) and (1/dx, 1/dy, 1/dz, 1): the fourth lane passes every check and adds 0 to e
-    const __m256d vo = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(o.data())), _mm_load_sd(o.data() + 2), 1);
-    const __m256d vi = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(inv.data())), _mm_set_pd(1.0, inv[2]), 1);
-    const __m256d ao = _mm256_and_pd(vo, abs_mask), ai = _mm256_and_pd(vi, abs_mask);
-    const __m256d big = _mm256_set1_pd(0x1p60);
-    const __m256d in = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(ao, big, _CMP_LE_OQ), _mm256_cmp_pd(ai, big, _CMP_LE_OQ)),
-                                     _mm256_cmp_pd(ai, _mm256_set1_pd(0x1p-60), _CMP_GE_OQ));
-    const __m128 of = _mm256_cvtpd_ps(vo), invf = _mm256_cvtpd_ps(vi);
-    const __m256d err = _mm256_mul_pd(_mm256_and_pd(_mm256_sub_pd(vo, _mm256_cvtps_pd(of)), abs_mask), ai);
-    const __m128d e2 = _mm_max_pd(_mm256_castpd256_pd128(err), _mm256_extractf128_pd(err, 1));
-    const double ed = _mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2)));  // (NaN only when a check fails)
-    if (!((_mm256_movemask_pd(in) == 15) & (coordinate_bound <= 0x1p60) & (ed <= 0x1p40))) {
-      e = 0.0f;
-      return false;
-    }
-    e = float_round_up(ed * (1.0 + 0x1p-16) + 0x1p-100);
-    const __m256 o2 = _mm256_insertf128_ps(_mm256_castps128_ps256(of), of, 1);
-    const __m256 i2 = _mm256_xor_ps(_mm256_insertf128_ps(_mm256_castps128_ps256(invf), invf, 1), _mm256_set1_ps(-0.0f));  // -(1 / d)
-    a.o[0] = _mm256_permute_ps(o2, 0x00), a.o[1] = _mm256_permute_ps(o2, 0x55), a.o[2] = _mm256_permute_ps(o2, 0xAA);
-    a.neg_inv[0] = _mm256_permute_ps(i2, 0x00), a.neg_inv[1] = _mm256_permute_ps(i2, 0x55), a.neg_inv[2] = _mm256_permute_ps(i2, 0xAA);
-    a.e = _mm256_set1_ps(e);
-    std::memcpy(a.planes, kPlaneOffsets.at[_mm256_movemask_pd(vi) & 7], sizeof a.planes);
-    return true;
-  }
-  /// entered() of the eight children of a WideBvhNode8 in 256-bit AVX: the same keys and mask as
-  /// the SSE and scalar tests bit for bit, lane by lane (no FMA). A plane's parameter is taken as
-  /// (o - b) (-1 / d), which is (b - o) (1 / d) exactly (rounding to nearest is symmetric) but
-  /// for the sign of a zero, which the keys never show: t0 starts at +0 and keeps it on a tie,
-  /// and a zero t1 gives hi = e > 0 whatever its sign. So the plane is an operand from memory.
-  IMPACT_WIDE_AVX_TARGET static int entered_avx(const Avx& a, const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) {
-    const char* p = reinterpret_cast<const char*>(n.bounds);
-    __m256 t0 = _mm256_setzero_ps(), t1 = t_max_up;
-    for (int i = 0; i < 3; ++i) {
-      const __m256 lo = _mm256_mul_ps(_mm256_sub_ps(a.o[i], _mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[i]))), a.neg_inv[i]);
-      const __m256 hi = _mm256_mul_ps(_mm256_sub_ps(a.o[i], _mm256_load_ps(reinterpret_cast<const float*>(p + a.planes[3 + i]))), a.neg_inv[i]);
-      t0 = _mm256_max_ps(lo, t0);
-      t1 = _mm256_min_ps(hi, t1);
-    }
-    const __m256 lo = _mm256_sub_ps(_mm256_mul_ps(t0, _mm256_set1_ps(kLow)), a.e);
-    const __m256 hi = _mm256_add_ps(_mm256_mul_ps(t1, _mm256_set1_ps(kHigh)), a.e);
-    keys = lo;
-    // lo <= hi and lo <= bound as one comparison with min(hi, bound): neither is NaN (a usable
-    // ray's products are finite or infinite, and no sum adds opposite infinities)
-    return _mm256_movemask_ps(_mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ));
-  }
-  /// entered_avx() on the state made by avx_state (for the tests that compare it with the
-  /// object's): the mask, or -1 when avx_state says the slab is not usable; `e` as avx_state.
-  IMPACT_WIDE_AVX_TARGET static int entered_avx_from_ray(const Vec3<double>& o, const Vec3<double>& inv, double coordinate_bound,
-                                                         const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8], float& e) {
-    Avx a;
-    if (!avx_state(o, inv, coordinate_bound, a, e)) return -1;
-    __m256 lo;
-    const int m = entered_avx(a, n, _mm256_set1_ps(t_max_up), _mm256_set1_ps(bound), lo);
-    _mm256_storeu_ps(keys, lo);
-    return m;
-  }
-  /// entered() through entered_avx (call only when wide_avx_available()).
-  IMPACT_WIDE_AVX_TARGET int entered_avx(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
-    __m256 lo;
-    const int m = entered_avx(avx(), n, _mm256_set1_ps(t_max_up), _mm256_set1_ps(bound), lo);
-    _mm256_storeu_ps(keys, lo);
-    return m;
-  }
 #endif
 
   /// entered() by a scalar loop of the same IEEE operations in the same order.
