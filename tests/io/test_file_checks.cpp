@@ -232,7 +232,26 @@ TEST(FileChecks, HeaderLinesBetweenPropertiesKeepTheLayout) {
       EXPECT_EQ(Eigen::MatrixXd(m.V), expected) << path;
     }
   }
-  // a stray word there is still refused: the layout it meant cannot be known
+  // free text before the first element line is read as a comment: Blender 2.4x wrote such a line
+  // ("Created by Blender3D 247 - www.blender.org, source file: ") without the comment keyword,
+  // and assimp loads those files
+  const std::string blender = "Created by Blender3D 247 - www.blender.org, source file: \n";
+  std::string ascii_text = kPlyAscii;
+  ascii_text.insert(ascii_text.find("format"), blender);
+  std::string binary_text = binary_ply("", 3, true);
+  binary_text.insert(binary_text.find("element vertex"), blender);
+  for (const std::string& bytes : {ascii_text, binary_text}) {
+    const std::string path = f.write("text" + std::to_string(n++) + ".ply", bytes);
+    expect_loaded(path, 1);
+    const TriangleMesh<double> m = load_mesh<double>(path);  // safe now: it loaded in the child
+    Eigen::MatrixXd expected(3, 3);
+    expected << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+    EXPECT_EQ(Eigen::MatrixXd(m.V), expected) << path;
+  }
+  // a stray word after it is still refused: the layout it meant cannot be known
+  std::string late = kPlyAscii;
+  late.insert(late.find("element face"), blender);
+  expect_rejected(f.write("late_text.ply", late), "unknown PLY header line 'Created by Blender3D");
   std::string stray = kPlyAscii;
   stray.insert(stray.find("property float y"), "pry\n");
   expect_rejected(f.write("stray.ply", stray), "unknown PLY header line 'pry'");

@@ -16,12 +16,13 @@
 ///   ruling against ruling: n a side normal of a whose opposite is a side normal of b (up to two
 ///       directions), the closest points of the two rulings, each with the largest ball inside its
 ///       cone tangent there.
-/// When undecided: either cone's side against the other, the least overlap along its side normals
-/// (cone_side_minimum of convex/cylinder_pair.hpp); when the best direction is a side normal of
-/// a cone, that cone's whole ruling (apex and rim point) as points inside the other
+/// When undecided: when the best direction is a side normal of a cone, that cone's whole ruling
+/// (apex and rim point) as points inside the other
 /// (cone_points_lower of convex/cylinder_pair_points.hpp); and the best candidate's point of each
 /// cone inside the other with the first's points deepest across the other's nearer faces
-/// (cone_points_bound).
+/// (cone_points_bound). (Not here: the least overlap along either cone's side normals,
+/// cone_side_minimum of convex/cylinder_pair.hpp, which cylinder–cone runs last: on cone pairs it cost
+/// more time on the poses it left to EPA than it saved; docs/convex.md.)
 /// At the true contact of these kinds the bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
@@ -143,12 +144,6 @@ bool cone_cone_contact(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, con
   if (!decided()) rim_of_b();
   if (!decided()) rim_of_a();
   const auto sa_in_b = [&](const Vec3<S>& d) { return in_b(support(a, Vec3<S>(R * d))); };
-  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
-    // either cone's side against the other: the least overlap along its side normals
-    Vec3<S> m, x;
-    if (cone_side_minimum(b, sa_in_b, m, x)) offer(Vec3<S>(-(R * m)), Vec3<S>(R * x + t), std::max(inside_ball(b, x).rho, S(0)));
-    if (!decided() && cone_side_minimum(a, sb, m, x)) offer(m, x, std::max(inside_ball(a, x).rho, S(0)));
-  }
   if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
     // the best direction a side normal of either cone: that cone's whole ruling there against the
     // other (its two ends as the points of cone_points_lower; a lower bound at any azimuth)

@@ -20,16 +20,17 @@
 ///       a line: 8 samples of the angle, then Newton) or the cone's apex, n the radial direction
 ///       through it; the cone's side against the cylinder's rim point deepest below it (the same
 ///       minimisation of 2h rho + R z over the rim).
-/// When undecided, the cone's side against the cylinder: the least overlap along the cone's side
-/// normals (cone_side_minimum: an upper bound at the contact of the cylinder's rim or ruling with
-/// a cone ruling, where the rim point deepest below the side is not the contact's), and, when
-/// the best direction is a side normal of the cone, that whole ruling (apex and rim point) as the
-/// points of convex/cylinder_pair_points.hpp against the cylinder. When the best candidate's
-/// point of the cone lies inside the cylinder but a ball about it is cut by another face of the
-/// cylinder, the cone's points deepest across those faces join it in the lower bound of
-/// convex/cylinder_pair_points.hpp (the depth of the cylinder against their hull); the same with
-/// the roles swapped (the cylinder's point inside the cone, its ball cut by the cone's base or
-/// side: cone_points_bound).
+/// When undecided: when the best candidate's point of the cone lies inside the cylinder but a
+/// ball about it is cut by another face of the cylinder, the cone's points deepest across those
+/// faces join it in the lower bound of convex/cylinder_pair_points.hpp (the depth of the cylinder
+/// against their hull); the same with the roles swapped (the cylinder's point inside the cone,
+/// its ball cut by the cone's base or side: cone_points_bound). Last, the cone's side against the
+/// cylinder: the least overlap along the cone's side normals (cone_side_minimum: an upper bound at
+/// the contact of the cylinder's rim or ruling with a cone ruling, where the rim point deepest
+/// below the side is not the contact's), and, when the best direction is a side normal of the
+/// cone, that whole ruling (apex and rim point) as the points of convex/cylinder_pair_points.hpp
+/// against the cylinder. (The side minimum is the dearest stage by the clock, a chain of dependent
+/// square roots: last, it runs only on the poses the points bounds leave.)
 /// At the true contact of these kinds the two bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance, the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep
@@ -424,11 +425,11 @@ bool cylinder_pair_contact(const Cylinder<S>& a, const Cylinder<S>& b, const Mat
 /// normals (2h u + R axis) / L, L = sqrt(4h^2 + R^2), u radial): a's caps against b's deepest point,
 /// b's base against a's, b's apex and base rim against a's rulings, a ruling of each (n normal to
 /// a's axis and a side normal of b: up to two directions), and b's side against the point of a's
-/// rims deepest below it; then, when undecided, the least overlap along b's side normals
-/// (cone_side_minimum), b's whole ruling against a when the best direction is a side normal of b
-/// (cylinder_points_lower on its two ends), the bound from b's points when the best candidate's
-/// point of b lies in a (cylinder_points_bound; 1 to 4 more support calls of b) and from a's
-/// points when a's lies in b (cone_points_bound).
+/// rims deepest below it; then, when undecided, the bound from b's points when the best
+/// candidate's point of b lies in a (cylinder_points_bound; 1 to 4 more support calls of b) and
+/// from a's points when a's lies in b (cone_points_bound), the least overlap along b's side normals
+/// (cone_side_minimum), and b's whole ruling against a when the best direction is a side normal of
+/// b (cylinder_points_lower on its two ends).
 template <class S>
 bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, S tolerance,
                            ConvexContact<S>& out) {
@@ -487,6 +488,20 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
   if (!decided()) rims_of_a();
   const auto sa_in_b = [&](const Vec3<S>& d) { return in_b(support(a, Vec3<S>(R * d))); };  // a's support in b's frame
   if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best candidate's point of b, when inside a: with b's points deepest across a's faces
+    // that are nearer to it than the depth (convex/cylinder_pair_points.hpp)
+    const Vec3<S> x = sb(Vec3<S>(-k.normal));
+    ++k.calls;
+    if (inside_ball(a, x).rho >= S(0)) k.raise(cylinder_points_bound(a, x, k.upper, tolerance, sb, k.calls));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
+    // the best candidate's point of a, when inside b: with a's points deepest across b's faces
+    // that are nearer to it than the depth (the cone as the container)
+    const Vec3<S> x = sa_in_b(Vec3<S>(R.transpose() * k.normal));
+    ++k.calls;
+    if (inside_ball(b, x).rho >= S(0)) k.raise(cone_points_bound(b, x, k.upper, tolerance, sa_in_b, k.calls));
+  }
+  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
     // b's side against a: the least overlap along b's side normals
     Vec3<S> m, x;
     if (cone_side_minimum(b, sa_in_b, m, x)) offer(Vec3<S>(-(R * m)), Vec3<S>(R * x + t), std::max(inside_ball(b, x).rho, S(0)));
@@ -501,20 +516,6 @@ bool cylinder_cone_contact(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>
       const Vec3<S> P[2] = {Vec3<S>(t + hc * bz), Vec3<S>(R * Vec3<S>(rc * m.x() / mxy, rc * m.y() / mxy, -hc) + t)};
       k.raise(cylinder_points_lower(a, P, 2, k.upper - tolerance));
     }
-  }
-  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
-    // the best candidate's point of b, when inside a: with b's points deepest across a's faces
-    // that are nearer to it than the depth (convex/cylinder_pair_points.hpp)
-    const Vec3<S> x = sb(Vec3<S>(-k.normal));
-    ++k.calls;
-    if (inside_ball(a, x).rho >= S(0)) k.raise(cylinder_points_bound(a, x, k.upper, tolerance, sb, k.calls));
-  }
-  if (!decided() && k.upper < std::numeric_limits<S>::infinity()) {
-    // the best candidate's point of a, when inside b: with a's points deepest across b's faces
-    // that are nearer to it than the depth (the cone as the container)
-    const Vec3<S> x = sa_in_b(Vec3<S>(R.transpose() * k.normal));
-    ++k.calls;
-    if (inside_ball(b, x).rho >= S(0)) k.raise(cone_points_bound(b, x, k.upper, tolerance, sa_in_b, k.calls));
   }
   return k.finish(tolerance, out);
 }

@@ -162,37 +162,34 @@ template <class S>
 S cylinder_points_lower(const Cylinder<S>& a, const Vec3<S>* pts, int np, S want = -std::numeric_limits<S>::infinity()) {
   const S size = a.radius + a.half_length;
   const DistinctPoints<S> q(pts, np, size);
-  const Vec3<S>* const P = q.P;
-  const int m = q.m;
   S L = std::numeric_limits<S>::infinity();
-  const auto in_cell = [&q](int i, const Vec3<S>& n) { return q.in_cell(i, n); };
-  for (int i = 0; i < m; ++i) {
-    const Vec3<S>& p = P[i];
+  for (int i = 0; i < q.m; ++i) {
+    const Vec3<S>& p = q.P[i];
     const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
     const S side = a.radius - rxy, top = a.half_length - p.z(), bottom = a.half_length + p.z();
     if (!(std::isfinite(side) && std::isfinite(p.z()))) return -std::numeric_limits<S>::infinity();
-    if (in_cell(i, Vec3<S>::UnitZ())) L = std::min(L, top);
-    if (in_cell(i, Vec3<S>(-Vec3<S>::UnitZ()))) L = std::min(L, bottom);
+    if (q.in_cell(i, Vec3<S>::UnitZ())) L = std::min(L, top);
+    if (q.in_cell(i, Vec3<S>(-Vec3<S>::UnitZ()))) L = std::min(L, bottom);
     const Vec3<S> u = rxy > S(1e-9) * size ? Vec3<S>(p.x() / rxy, p.y() / rxy, S(0)) : Vec3<S>(Vec3<S>::UnitX());
-    if (!(rxy > S(1e-9) * size) || in_cell(i, u)) L = std::min(L, side);
+    if (!(rxy > S(1e-9) * size) || q.in_cell(i, u)) L = std::min(L, side);
     const S cap = std::min(top, bottom);
     if (side < S(0) && cap < S(0)) {  // beyond a rim: the direction from the rim to p, -dist(p, a)
       const Vec3<S> n = (-side * u + Vec3<S>(S(0), S(0), p.z() >= S(0) ? -cap : cap)).normalized();
-      if (in_cell(i, n)) L = std::min(L, -std::sqrt(side * side + cap * cap));
+      if (q.in_cell(i, n)) L = std::min(L, -std::sqrt(side * side + cap * cap));
     }
   }
-  const S allowance = S(1024) * std::numeric_limits<S>::epsilon() * (size + (m > 0 ? P[0].norm() : S(0)));
+  const S allowance = S(1024) * std::numeric_limits<S>::epsilon() * (size + (q.m > 0 ? q.P[0].norm() : S(0)));
   if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
-  for (int i = 0; i < m; ++i)
-    for (int j = i + 1; j < m; ++j) {  // on the great circle normal to v every point of the line through them ties
-      const Vec3<S> v = P[j] - P[i], mid = (P[i] + P[j]) / S(2);
-      S on_circle = cylinder_shadow_distance(a, P[i], v);  // the best of three, each only while it may lower L
+  for (int i = 0; i < q.m; ++i)
+    for (int j = i + 1; j < q.m; ++j) {  // on the great circle normal to v every point of the line through them ties
+      const Vec3<S> v = q.P[j] - q.P[i], mid = (q.P[i] + q.P[j]) / S(2);
+      S on_circle = cylinder_shadow_distance(a, q.P[i], v);  // the best of three, each only while it may lower L
       if (on_circle < L) on_circle = std::max(on_circle, cylinder_shadow_distance(a, mid, v));
-      if (on_circle < L) on_circle = std::max(on_circle, cylinder_shadow_distance(a, P[j], v));
+      if (on_circle < L) on_circle = std::max(on_circle, cylinder_shadow_distance(a, q.P[j], v));
       L = std::min(L, on_circle);
       if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
     }
-  return m > 0 ? L - allowance : -std::numeric_limits<S>::infinity();
+  return q.m > 0 ? L - allowance : -std::numeric_limits<S>::infinity();
 }
 
 /// The bound of the file comment for a candidate of depth `depth` whose point x of B (a's frame)
@@ -257,19 +254,16 @@ template <class S>
 S cone_points_lower(const Cone<S>& c, const Vec3<S>* pts, int np, S want = -std::numeric_limits<S>::infinity()) {
   const S R = c.radius, h = c.half_length, size = R + h, len = std::sqrt(S(4) * h * h + R * R);
   const DistinctPoints<S> q(pts, np, size);
-  const Vec3<S>* const P = q.P;
-  const int m = q.m;
   S L = std::numeric_limits<S>::infinity();
-  const auto in_cell = [&q](int i, const Vec3<S>& n) { return q.in_cell(i, n); };
-  for (int i = 0; i < m; ++i) {
-    const Vec3<S>& p = P[i];
+  for (int i = 0; i < q.m; ++i) {
+    const Vec3<S>& p = q.P[i];
     const S rxy = std::sqrt(p.x() * p.x() + p.y() * p.y());
     const S base = h + p.z(), side = (R * (h - p.z()) - S(2) * h * rxy) / len;
     if (!(std::isfinite(side) && std::isfinite(base))) return -std::numeric_limits<S>::infinity();
-    if (in_cell(i, Vec3<S>(-Vec3<S>::UnitZ()))) L = std::min(L, base);
+    if (q.in_cell(i, Vec3<S>(-Vec3<S>::UnitZ()))) L = std::min(L, base);
     const bool on_axis = !(rxy > S(1e-9) * size);
     const S ux = on_axis ? S(1) : p.x() / rxy, uy = on_axis ? S(0) : p.y() / rxy;
-    if (on_axis || in_cell(i, Vec3<S>(S(2) * h * ux / len, S(2) * h * uy / len, R / len))) L = std::min(L, side);
+    if (on_axis || q.in_cell(i, Vec3<S>(S(2) * h * ux / len, S(2) * h * uy / len, R / len))) L = std::min(L, side);
     if (side < S(0) || base < S(0)) {  // outside: -dist(p, C) along the direction from C's nearest point
       // in p's meridian half-plane (rho, z): the nearer of the base segment and the side segment
       const S qb = std::clamp(rxy, S(0), R);
@@ -278,17 +272,17 @@ S cone_points_lower(const Cone<S>& c, const Vec3<S>* pts, int np, S want = -std:
       const S db = std::hypot(rxy - qb, p.z() + h), ds = std::hypot(rxy - qs_rho, p.z() - qs_z);
       const S q_rho = db <= ds ? qb : qs_rho, q_z = db <= ds ? -h : qs_z, d = std::min(db, ds);
       const Vec3<S> n = Vec3<S>(p.x() - q_rho * ux, p.y() - q_rho * uy, p.z() - q_z) / d;
-      if (!(d > S(0)) || in_cell(i, n)) L = std::min(L, -d);
+      if (!(d > S(0)) || q.in_cell(i, n)) L = std::min(L, -d);
     }
   }
-  const S allowance = S(1024) * std::numeric_limits<S>::epsilon() * (size + (m > 0 ? P[0].norm() : S(0)));
+  const S allowance = S(1024) * std::numeric_limits<S>::epsilon() * (size + (q.m > 0 ? q.P[0].norm() : S(0)));
   if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
-  for (int i = 0; i < m; ++i)
-    for (int j = i + 1; j < m; ++j) {  // on the great circle normal to v every point of the line through them ties
-      L = std::min(L, cone_shadow_distance(c, Vec3<S>((P[i] + P[j]) / S(2)), Vec3<S>(P[j] - P[i])));
+  for (int i = 0; i < q.m; ++i)
+    for (int j = i + 1; j < q.m; ++j) {  // on the great circle normal to v every point of the line through them ties
+      L = std::min(L, cone_shadow_distance(c, Vec3<S>((q.P[i] + q.P[j]) / S(2)), Vec3<S>(q.P[j] - q.P[i])));
       if (!(L - allowance >= want)) return -std::numeric_limits<S>::infinity();
     }
-  return m > 0 ? L - allowance : -std::numeric_limits<S>::infinity();
+  return q.m > 0 ? L - allowance : -std::numeric_limits<S>::infinity();
 }
 
 /// The bound for a candidate of depth `depth` whose point x of the other shape (c's frame) lies

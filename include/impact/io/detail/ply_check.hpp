@@ -88,7 +88,8 @@ struct PlyHeaderText {
 };
 
 /// Checks a PLY file (data holds its bytes): a first line of exactly "ply", a complete header of
-/// known keywords only (format, element, property, comment, obj_info, end_header), known types,
+/// known keywords only (format, element, property, comment, obj_info, end_header; other lines
+/// only before the first element line, read as comments there), known types,
 /// counts that the file's size can hold, one item per line in ASCII bodies with exactly the
 /// declared values, every value a number of its type, no empty face index list, face indices in
 /// [0, vertices) (-1 also allowed in triangle strips), and no item cut off. Returns the header
@@ -156,6 +157,11 @@ inline PlyHeaderText check_ply(const std::string& path, const std::string& data)
       if (ply_is_index_list(elements.back(), p) && (!p.is_list || p.value_type.is_float))
         fail(path, "cannot be parsed: PLY face indices must be a list of an integer type");
       elements.back().properties.push_back(p);
+    } else if (elements.empty()) {
+      // free text before the first element line describes no layout, so it is read as a comment
+      // (and left out of the header handed to assimp): Blender 2.4x wrote its "Created by
+      // Blender3D ..." line there without the comment keyword
+      continue;
     } else {
       // assimp ends an element's property list at any other line, so the body would be read
       // with another layout than the one checked here (one fuzz input: a stray line between two
