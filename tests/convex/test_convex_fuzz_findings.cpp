@@ -24,6 +24,9 @@
 // 8. EPA's polytope too small for deep capsules in large cylinders (random inputs).
 // 9. A sphere centred on the axis of a needle cone (9,000 times longer than wide) was called
 //    touching, with the sphere's radius as its depth along an arbitrary normal (fuzz_convex).
+// 10. The boolean test of a float cylinder and a needle cylinder (82 times longer than wide) that
+//    overlap by 2.0e-5 (30 solver tolerances) said apart: GJK stalled at |v| = 1.9e-6 with no
+//    separating plane, and a stall within 4 tolerances was taken for converged (fuzz_convex).
 #include "impact/convex/query.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/random.hpp"
@@ -430,6 +433,36 @@ TEST(ConvexFuzzFindings, BallOnTheAxisOfANeedleCone) {
   const double r = 0.00012159347534179688;
   expect_needle_cone_depth(impact::Sphere<double>{impact::Vec3<double>::Zero(), r}, r);
   expect_needle_cone_depth(Capsule<double>(r, 0), r);
+}
+
+// Finding 10: a squat cylinder and a needle cylinder overlapping by 2.048e-5 (the poses as the
+// fuzzer wrote them, float-rounded; the same numbers in double).
+template <class S>
+void expect_needle_cylinder_overlap() {
+  const Cylinder<S> a(S(0.00311279296875), S(0.00311279296875));
+  const Cylinder<S> b(S(0.0008392333984375), S(0.06884765625));
+  const auto pa = pose_of<S>({-0.60000002384185791, -0.80000001192092896, 0, -0.63999998569488525, 0.47999998927116394, 0.60000002384185791,
+                              -0.47999998927116394, 0.36000001430511475, -0.80000001192092896},
+                             {-0.009033203125, 0.00244140625, -0.0040283203125});
+  const auto pb = pose_of<S>({-0.85507243871688843, -0.23188406229019165, -0.4637681245803833, -0.4637681245803833, -0.057971015572547913,
+                              0.88405799865722656, -0.23188406229019165, 0.97101449966430664, -0.057971015572547913},
+                             {-0.00634765625, -0.0023193359375, -0.0089111328125});
+  const impact::ConvexQueryOptions<S> options;
+  for (const bool swap : {false, true}) {
+    bool limit = true;
+    const bool hit = swap ? impact::convex_intersect(b, pb, a, pa, options, &limit) : impact::convex_intersect(a, pa, b, pb, options, &limit);
+    EXPECT_TRUE(hit) << "swap " << swap;  // was false in float
+    EXPECT_FALSE(limit) << "swap " << swap;
+  }
+  const auto c = impact::convex_penetration(a, pa, b, pb, options);
+  ASSERT_TRUE(c.intersecting);
+  EXPECT_NEAR(double(c.depth), 2.04808e-5, 1e-9);
+  EXPECT_EQ(impact::convex_distance(a, pa, b, pb, options).distance, S(0));
+}
+
+TEST(ConvexFuzzFindings, StalledBooleanIsNotApart) {
+  expect_needle_cylinder_overlap<float>();
+  expect_needle_cylinder_overlap<double>();
 }
 
 }  // namespace

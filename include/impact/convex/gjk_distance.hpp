@@ -16,7 +16,10 @@
 /// wider than 4 tolerances, it runs again from there on the same support points in a wider type
 /// (float in double, double in long double) and returns that run's answer if it converges. When
 /// the iteration bound is hit, or the wider run stalls too, limit_reached is set and the best upper
-/// bound found so far is returned.
+/// bound found so far is returned. A boolean query (a margin, stop_within_margin) answers "apart"
+/// only on a separating plane beyond the margin: a stall runs again in the wider type whatever its
+/// gap, and when that run cannot decide either but the gap was within 4 tolerances, the sets count
+/// as touching.
 #pragma once
 
 #include "impact/convex/signed_volumes.hpp"
@@ -161,6 +164,8 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   int level_steps = 0;  // steps kept without coming nearer (gjk_step's Level)
   GjkSavedSimplex<S> level_saved;  // the nearest simplex a Level step left
   bool stalled = false;            // rounding stopped the solver with its gap still wide
+  bool near_stall = false;         // ... or with its gap within 4 tolerances
+  const bool boolean = margin >= S(0) && stop_within_margin;  // only "distance <= margin?" is asked
   while (out.iterations < max_iterations) {
     const S vv = v.squaredNorm();
     if (vv <= tol2 || (stop_within_margin && margin >= S(0) && vv <= margin * margin)) {  // within the tolerance (or the margin)
@@ -203,8 +208,14 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
     // distance may be anywhere in [lower, |v|], and the result says limit_reached (fuzzing: a
     // float box and cone that overlap stalled at |v| = 1.5e-4, 5e-4 of the size, with no
     // separating plane found).
+    // In the boolean mode (a margin, stopping within it) a stall decides nothing, however narrow
+    // its gap: a separating plane beyond the margin would have stopped the loop above, and |v| is
+    // only an upper bound of the distance, so the sets may overlap deeply (fuzzing: a float
+    // cylinder and a needle cylinder overlapping by 30 tolerances stalled at |v| = 2.8
+    // tolerances with no plane found, and the stall was taken for "apart"). The wider run decides.
     out.intersecting = step == GjkStep::Inside;
-    converged = out.intersecting || len - lower <= S(4) * tolerance;
+    near_stall = len - lower <= S(4) * tolerance;
+    converged = out.intersecting || (near_stall && !boolean);
     stalled = !converged;
     break;
   }
@@ -230,6 +241,12 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
         return out;
       }
     }
+  }
+  if (boolean && near_stall && !converged) {
+    // no wider type decided either: the distance is at most |v| <= lower + 4 tolerances <= the
+    // margin + 4 tolerances, so the sets touch within the rounding of the solver
+    out.intersecting = true;
+    out.limit_reached = false;
   }
   if (level_saved.vv < v.squaredNorm()) {  // Level steps came no nearer in the end: back to the nearest
     n = level_saved.n;
