@@ -293,6 +293,42 @@ TEST(WideBvh8, AvxLoopVisitsTheNodesOfTheOtherLoops) {
   }
 }
 
+// Rays through the vertices and edge midpoints of a closed mesh in floats (the rounded torus):
+// children whose float keys are within rounding of the hit are decided again in double, by the AVX
+// loop as by the scalar loop with its node test (else the leaves around the vertex would all be
+// opened): the same node and triangle tests on every ray, and the same hit.
+TEST(WideBvh8, AvxLoopRedecidesChildrenAtTheHit) {
+  if (!detail::wide_fma_available()) GTEST_SKIP() << "no AVX and FMA: the AVX loop does not run";
+  TriangleMesh<double> m = make_torus<double>(1.0, 0.4, 48, 24);
+  for (int v = 0; v < m.num_vertices(); ++v)
+    for (int c = 0; c < 3; ++c) m.V(v, c) = double(float(m.V(v, c)));
+  const WideBvh<double, 8> w(m);
+  test::Rng rng(41);
+  const RigidTransform<double>* no_pose = nullptr;
+  const int n = 1500 / kWide8Samples;
+  int hits = 0;
+  for (int i = 0; i < n; ++i) {
+    const int t = static_cast<int>(rng.index(static_cast<std::uint64_t>(m.num_triangles())));
+    const Vec3<double> a = m.vertex(m.F(t, i % 3)), b = m.vertex(m.F(t, (i + 1) % 3));
+    const Vec3<double> p = i % 2 == 0 ? a : Vec3<double>((a + b) / 2.0);
+    const Vec3<double> o = p + rng.vec(-1, 1) * 3.0;
+    if ((p - o).squaredNorm() == 0.0) continue;
+    const Ray<double> ray(o, p - o, 2.0);
+    RayMeshStats avx, fused;
+    const auto x = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &avx, true, true);
+    const auto y = detail::ray_wide_first_hit_unchecked(w, ray, no_pose, &fused, false, false, true);
+    ASSERT_EQ(x.has_value(), y.has_value()) << i;
+    if (x) {
+      ++hits;
+      EXPECT_EQ(x->t, y->t) << i;
+      EXPECT_EQ(x->triangle, y->triangle) << i;
+    }
+    ASSERT_EQ(avx.node_tests, fused.node_tests) << i;
+    ASSERT_EQ(avx.triangle_tests, fused.triangle_tests) << i;
+  }
+  EXPECT_GT(hits, n / 4);
+}
+
 // The 8-wide float node test of the SSE and scalar loops: SSE and scalar give the same keys and
 // mask bit for bit; a child the double slab test (WideSlab, on the same float boxes) enters before
 // the bound is entered, its key never above the double entry; empty slots are never entered.

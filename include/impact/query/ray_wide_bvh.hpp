@@ -92,9 +92,10 @@ struct WideEntry {
 };
 
 /// The pending children of the AVX node loop when the tree's depth bounds them (N entries at
-/// most: IMPACT_ASSERT): TraversalStack's interface with the top kept as a pointer, so a push is
-/// three stores and a pop one decrement, and the loop holds one register for it, not an index
-/// and its scaled copy.
+/// most: IMPACT_ASSERT): TraversalStack's push and pop with the top kept as a pointer, so a push
+/// is three stores and a pop one decrement, and the loop holds one register for it, not an index
+/// and its scaled copy. The loop keeps an entry at its bottom (WideCast::kStackBottom) and never
+/// asks whether it is empty.
 template <int N> class WideFixedStack {
  public:
   WideFixedStack() : top_(slots_) {}  // the slots stay uninitialised
@@ -104,7 +105,6 @@ template <int N> class WideFixedStack {
     IMPACT_ASSERT(top_ < slots_ + N);
     *top_++ = e;
   }
-  bool empty() const { return top_ == slots_; }
   WideEntry pop() { return *--top_; }
 
  private:
@@ -373,7 +373,7 @@ template <class S, int W = 4> struct WideCast {
   /// frame (the top in a register). False, having done nothing, when its float test cannot take
   /// the ray: then run_without_avx().
   bool run_avx_loop() {
-    return wide.depth() <= kFixedDepth ? run_avx<WideFixedStack<(W - 1) * kFixedDepth>>()
+    return wide.depth() <= kFixedDepth ? run_avx<WideFixedStack<(W - 1) * kFixedDepth + 1>>()
                                        : run_avx<TraversalStack<WideEntry, 128>>();
   }
 #endif
@@ -418,10 +418,23 @@ template <class S, int W = 4> struct WideCast {
     return false;
   }
 #if defined(IMPACT_WIDE_AVX)
+  /// The bottom entry of the AVX loop's stack: a key below every bound (so pop_to stops there),
+  /// count -1 (no child's: empty slots are never entered), which ends the walk.
+  static constexpr WideEntry kStackBottom = {-std::numeric_limits<float>::infinity(), 0, -1};
+  /// pop_below for a stack with kStackBottom at its bottom: pops up to the nearest entry at or
+  /// below `bound` (the bottom if none), which becomes (first, count).
+  template <class Stack> static void pop_to(Stack& stack, float bound, std::int32_t& first, std::int32_t& count) {
+    WideEntry e = stack.pop();
+    while (e.key > bound) e = stack.pop();
+    first = e.first;
+    count = e.count;
+  }
   /// The traversal of an 8-wide tree with the fused AVX node test (WideFusedAvx; compiled for AVX
   /// and FMA, called when the CPU has both): the loop of run() with eight children tested at once,
-  /// on a Stack of its own, the node test's state made in the same frame (in double in one pass).
-  /// False, having done nothing, when the node test cannot take the ray.
+  /// on a Stack of its own with kStackBottom at its bottom (a pop is one comparison a popped entry,
+  /// and the walk ends where the leaves' path meets a count of -1), the node test's state made in
+  /// the same frame (in double in one pass). False, having done nothing, when the node test cannot
+  /// take the ray.
   template <class Stack> IMPACT_WIDE_FMA_TARGET bool run_avx();
   /// descend() for the keys in an AVX register: the same order (by key, ties by the lower slot),
   /// three or more children ranked without a sort (a child's rank: the entered children with a
@@ -558,28 +571,26 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
     fs.set(fused);
   }
   Stack stack;
+  stack.push(kStackBottom);  // (pop_to stops there: no emptiness check, count -1 ends the walk)
   const Node* nodes = wide.nodes().data();
   std::int32_t first = 0, count = 0;  // the root: an inner node
   for (;;) {
     const __m256 exit_v = _mm256_set1_ps(exit_f), bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
     const float bound = bound_f;
-    bool done = false;
     while (count == 0) {
       const Node& n = nodes[first];
       prefetch_references(n);
       ++node_tests;  // (in memory: the loop has more live integers than registers)
-      __m256 lo;
-      int mask = fs.entered(n, exit_v, bound_v, lo);
+      __m256 lo, entered;
+      int mask = fs.entered(n, exit_v, bound_v, lo, entered);
       if (mask) {
-        if (IMPACT_UNLIKELY(_mm256_movemask_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ)) & mask)) {
+        // an entered child's key at or above tie_f (the sign bits of both comparisons: vtestps)
+        if (IMPACT_UNLIKELY(!_mm256_testz_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ), entered))) {
           float fk[W];
           _mm256_storeu_ps(fk, lo);
           mask = redecide(n, fk);
           if (!mask) {
-            if (!pop_below(stack, bound, first, count)) {
-              done = true;
-              break;
-            }
+            pop_to(stack, bound, first, count);
             continue;
           }
           lo = _mm256_loadu_ps(fk);
@@ -587,12 +598,10 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
         descend_avx(n, mask, lo, stack, first, count);
         continue;
       }
-      if (!pop_below(stack, bound, first, count)) {
-        done = true;
-        break;
-      }
+      pop_to(stack, bound, first, count);
     }
-    if (!done) {
+    do {
+      if (count < 0) return true;  // (the stack's bottom)
       if constexpr (std::is_same_v<S, double>) {
         if (IMPACT_LIKELY(count <= 4 && wide.packed_without_repeats())) {
           leaf_one_block_avx(first, count);
@@ -602,9 +611,8 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
       } else {
         leaf(first, count);
       }
-      done = !pop_below(stack, bound_f, first, count);
-    }
-    if (done) return true;
+      pop_to(stack, bound_f, first, count);
+    } while (count != 0);
   }
 }
 #endif

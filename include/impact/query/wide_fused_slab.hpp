@@ -163,6 +163,11 @@ struct WideFusedAvx {
 
   /// WideFusedRay::entered_scalar of the eight children at once, the keys left in a register.
   IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) const {
+    __m256 in;
+    return entered(n, t_max_up, bound, keys, in);
+  }
+  /// entered() with the comparison's lanes too (all ones where entered).
+  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys, __m256& in) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
     __m256 t0 = _mm256_setzero_ps(), t1 = t_max_up;
     for (int i = 0; i < 3; ++i) {
@@ -176,7 +181,8 @@ struct WideFusedAvx {
     keys = lo;
     // neither operand is NaN (a usable ray's products are finite or infinite, no sum adds
     // opposite infinities): lo <= hi and lo <= bound as one comparison
-    return _mm256_movemask_ps(_mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ));
+    in = _mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ);
+    return _mm256_movemask_ps(in);
   }
   /// entered() with the keys stored (for the tests).
   IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
