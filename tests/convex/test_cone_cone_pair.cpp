@@ -6,7 +6,9 @@
 // rim), minimised by test::least_overlap (support/convex_oracle.hpp). The oracle's minimum is an
 // upper bound of the true depth and every certified lower bound lies below the true depth, so a
 // certificate that certifies a wrong (too large) depth shows as depth - depth_gap above the oracle.
+#include "impact/convex/certified_pair.hpp"
 #include "impact/convex/cone_cone_pair.hpp"
+#include "impact/convex/local_certificate.hpp"
 #include "impact/convex/query.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/random.hpp"
@@ -14,7 +16,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 // (its own namespace: the convex tests build as one unity source, beside test_cone_box_pair.cpp)
@@ -47,6 +51,16 @@ LD depth_oracle(const Cone<double>& a, const Cone<double>& b, const Eigen::Matri
   const auto side = [](const Cone<double>& c) { return c.radius / std::sqrt(4 * c.half_length * c.half_length + c.radius * c.radius); };
   const std::vector<test::KinkCircle> circles = {{Eigen::Vector3d::UnitZ(), side(a)}, {R.col(2), -side(b)}};
   return test::least_overlap(f, starts, circles).depth;
+}
+
+// The value of overlap terms (convex/local_certificate.hpp) along w.
+double terms_value(const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
+  double v = terms.linear.dot(w);
+  for (int i = 0; i < terms.n; ++i) {
+    const double d = terms.axis[i].dot(w);
+    v += terms.coef[i] * (terms.disc[i] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
+  }
+  return v;
 }
 
 struct Case {
@@ -170,14 +184,7 @@ TEST(ConeConePair, TermsBoundTheOverlap) {
       detail::OverlapTerms<double> terms;
       if (!detail::cone_cone_terms(c.a, c.b, f.R, f.t, n, terms)) continue;
       ++built;
-      const auto value = [&](const Eigen::Vector3d& w) {
-        double v = terms.linear.dot(w);
-        for (int i = 0; i < terms.n; ++i) {
-          const double d = terms.axis[i].dot(w);
-          v += terms.coef[i] * (terms.disc[i] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
-        }
-        return v;
-      };
+      const auto value = [&](const Eigen::Vector3d& w) { return terms_value(terms, w); };
       EXPECT_NEAR(value(n), double(overlap_ld(c.a, c.b, f.R, f.t, n.cast<LD>())), 1e-12);
       for (int j = 0; j < 10; ++j) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
@@ -216,6 +223,59 @@ TEST(ConeConePair, PenetrationAgainstTheOracle) {
     }
   }
   EXPECT_GT(hits, IMPACT_TEST_SANITIZED ? 2 : 20);
+}
+
+// The cone's-side certificate of the cone–cone query (convex/certified_pair.hpp, where a cone's side
+// ruling touches the other's apex or rim, so cone_cone_terms has no exact branch): Newton along b's
+// side normals (cone_side_newton with a cone's support), then the local certificate on a's active
+// branch and the body inside b along that ruling (cone_cone_side_terms); both ways round, from EPA
+// alone's normal on deep poses. The terms are never above the overlap; every certificate that
+// holds (the overlap at its normal within the tolerance of its bound, as the query accepts it)
+// bounds the overlap from below on its cap (random directions in it and on its rim), and where its
+// minimum is EPA's (the global one) its lower bound is below the oracle's depth. Checked to fail:
+// the body moved out by half its radius (terms above the overlap); the rim's curvature left out
+// of Newton's second derivative (fewer certificates than the bound below).
+TEST(ConeConePair, SideCertificateAgainstTheOracle) {
+  test::Rng rng(919);
+  int built = 0, held = 0, global = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 30 : 120, 921, 1, 0, 0.4)) {
+    for (const bool x_first : {true, false}) {
+      const Cone<double>& a = x_first ? c.a : c.b;
+      const Cone<double>& b = x_first ? c.b : c.a;
+      const RigidTransform<double>& pa = x_first ? c.pa : c.pb;
+      const RigidTransform<double>& pb = x_first ? c.pb : c.pa;
+      const double scale = std::max(shape_size(a), shape_size(b)), tol = 1e-10 * scale;
+      const detail::PairFrame<double> f(pa, pb);
+      const ConvexContact<double> g = detail::general_penetration(a, pa, b, pb, ConvexQueryOptions<double>());
+      if (!g.intersecting) continue;
+      Eigen::Vector3d m = pa.R.transpose() * g.normal;
+      detail::OverlapTerms<double> terms;
+      if (!detail::cone_side_newton(a, b, f.R, f.t, m) || !detail::cone_cone_side_terms(a, b, f.R, f.t, m, terms)) continue;
+      ++built;
+      for (int j = 0; j < 10; ++j) {
+        const Eigen::Vector3d w = rng.vec(-1, 1).normalized();
+        EXPECT_LE(terms_value(terms, w), double(overlap_ld(a, b, f.R, f.t, w.cast<LD>())) + 1e-12 * scale);
+      }
+      const detail::LocalCertificate<double> lc = detail::local_certificate(terms, m);
+      const auto sa = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(support(a, d)); };
+      const auto sb = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(f.support_b(b, d)); };
+      if (!detail::certificate_holds(lc, sa, sb, tol)) continue;
+      ++held;
+      const Eigen::Vector3d e1 = detail::any_orthogonal(lc.normal), e2 = lc.normal.cross(e1);
+      for (int j = 0; j < 40; ++j) {  // directions in the cap (the last ten on its rim)
+        const double phi = rng.uniform(0, 2 * M_PI), ang = j < 30 ? lc.cap * rng.uniform() : lc.cap;
+        const Eigen::Vector3d w = std::cos(ang) * lc.normal + std::sin(ang) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+        EXPECT_GE(double(overlap_ld(a, b, f.R, f.t, w.cast<LD>())), lc.lower - 1e-12 * scale) << "below the bound in its cap";
+      }
+      if (!(std::abs(lc.upper - g.depth) <= 2 * tol)) continue;  // a local minimum, not the global one
+      ++global;
+      const double oracle = double(depth_oracle(a, b, f.R, f.t, lc.normal));
+      EXPECT_LE(lc.lower, oracle + 1e-12 * scale) << "lower bound above the depth";
+      EXPECT_NEAR(lc.upper, oracle, 1e-9 * scale);
+    }
+  }
+  std::printf("side certificates: %d built, %d held, %d at the global minimum\n", built, held, global);
+  EXPECT_GT(global, IMPACT_TEST_SANITIZED ? 2 : 10);
 }
 
 // Float: the same query on float shapes and poses against the double oracle of the float inputs,

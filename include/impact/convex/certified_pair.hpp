@@ -187,8 +187,10 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
 /// of convex/cone_cone_pair.hpp (bases, apexes, rims against sides, rulings), else EPA from GJK's
 /// tetrahedron, seeded with the best candidate's direction and stopped early by the local
 /// certificate of convex/local_certificate.hpp on the terms of each cone's branch active at EPA's
-/// normal (none where a branch ties: a side ruling); accepted when the true overlap at its normal
-/// is within the tolerance of its lower bound.
+/// normal; where a branch ties (a side ruling touches the contact) on the other cone's active
+/// branch and a body inside the first along the ruling where the overlap along its side normals
+/// is least (cone_side_newton, cone_cone_side_terms), either cone's side; accepted when the true
+/// overlap at its normal is within the tolerance of its lower bound.
 template <class S>
 ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb,
                                        const ConvexQueryOptions<S>& o) {
@@ -214,10 +216,25 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   }
   cand = ConvexContact<S>();
   if (cone_cone_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
+  const Mat3<S> Rs = f.R.transpose();
+  const Vec3<S> ts = -(Rs * f.t);
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
     if (cone_cone_terms(a, b, f.R, f.t, n, terms)) {
       const LocalCertificate<S> lc = local_certificate(terms, n);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
+    // b's side against a: Newton along b's side normals, then the body inside b along that ruling
+    Vec3<S> m = n;
+    if (cone_side_newton(a, b, f.R, f.t, m) && cone_cone_side_terms(a, b, f.R, f.t, m, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, m);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
+    // a's side against b: the same in b's frame (the overlap there is f(-R w)), mapped back
+    m = -(Rs * n);
+    if (cone_side_newton(b, a, Rs, ts, m) && cone_cone_side_terms(b, a, Rs, ts, m, terms)) {
+      LocalCertificate<S> lc = local_certificate(terms, m);
+      lc.normal = -(f.R * lc.normal);
       if (certificate_holds(lc, sa, sb, tol)) return lc;
     }
     return LocalCertificate<S>();

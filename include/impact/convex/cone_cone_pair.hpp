@@ -76,6 +76,16 @@ bool cone_cone_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const
   return add_cone_terms(a, Mat3<S>(Mat3<S>::Identity()), Vec3<S>(Vec3<S>::Zero()), n, false, f) && add_cone_terms(b, R, t, n, true, f);
 }
 
+/// The overlap of cone a (its frame, its branch active along n) and the body inside cone b along
+/// the ruling whose side normal is nearest -n (add_cone_side_body): <= the true overlap
+/// everywhere, equal along that ruling's side normals while a's branch is the active one; false
+/// at a tie of a's branches or with -n along b's axis.
+template <class S>
+bool cone_cone_side_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+  f = OverlapTerms<S>();
+  return add_cone_terms(a, Mat3<S>(Mat3<S>::Identity()), Vec3<S>(Vec3<S>::Zero()), n, false, f) && add_cone_side_body(b, R, t, n, f);
+}
+
 /// The outward side normal of cone c (its frame) at the azimuth of x (any azimuth on the axis).
 template <class S>
 Vec3<S> cone_side_normal_at(const Cone<S>& c, const Vec3<S>& x) {

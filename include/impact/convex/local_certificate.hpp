@@ -375,6 +375,27 @@ bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& 
   return true;
 }
 
+/// The body inside cone b (placed by R, t in the terms' frame) along the ruling whose side normal
+/// is nearest -n, as cylinder_cone_side_terms builds it, added to f: a disc term, an abs term and
+/// a linear one (its support along -w); false when -n is along b's axis.
+template <class S>
+bool add_cone_side_body(const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+  const Vec3<S> v = -(R.transpose() * n);
+  const S m = std::sqrt(v.x() * v.x() + v.y() * v.y());
+  if (!(m > S(1e-9))) return false;
+  const S rc = b.radius, hc = b.half_length, rho = rc / S(2), s_max = S(1) - rho / rc;
+  const Vec3<S> e(v.x() / m, v.y() / m, S(0)), apex(S(0), S(0), hc);
+  const Vec3<S> p = rc * e - Vec3<S>(S(0), S(0), hc), d = apex - p;
+  const Vec3<S> c0 = (rc - rho) * e - Vec3<S>(S(0), S(0), hc);
+  const Vec3<S> centre = c0 + (s_max / S(2)) * d, half = (s_max / S(2)) * d;
+  const S len = half.norm();
+  f.add(R.col(2), rho, true);
+  f.add(Vec3<S>(R * half / len), len, false);
+  f.linear -= R * centre + t;
+  f.magnitude += rc + hc;
+  return true;
+}
+
 /// The overlap of cylinder a (its frame) and, for cone b placed by R, t there, a body inside b
 /// touching b's side along the ruling whose side normal is nearest -n (the azimuth of -n in b's
 /// frame): the disc of radius R/2 tangent to b's base rim there, swept along that ruling for half
@@ -385,23 +406,10 @@ bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& 
 template <class S>
 bool cylinder_cone_side_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n,
                               OverlapTerms<S>& f) {
-  const Vec3<S> v = -(R.transpose() * n);
-  const S m = std::sqrt(v.x() * v.x() + v.y() * v.y());
-  if (!(m > S(1e-9))) return false;
-  const S rc = b.radius, hc = b.half_length, rho = rc / S(2), s_max = S(1) - rho / rc;
-  const Vec3<S> e(v.x() / m, v.y() / m, S(0)), apex(S(0), S(0), hc);
-  const Vec3<S> p = rc * e - Vec3<S>(S(0), S(0), hc), d = apex - p;
-  const Vec3<S> c0 = (rc - rho) * e - Vec3<S>(S(0), S(0), hc);
-  const Vec3<S> centre = c0 + (s_max / S(2)) * d, half = (s_max / S(2)) * d;
-  const S len = half.norm();
   f = OverlapTerms<S>();
   f.add(Vec3<S>::UnitZ(), a.radius, true);
   f.add(Vec3<S>::UnitZ(), a.half_length, false);
-  f.add(R.col(2), rho, true);
-  f.add(Vec3<S>(R * half / len), len, false);
-  f.linear = -(R * centre + t);
-  f.magnitude += rc + hc;
-  return true;
+  return add_cone_side_body(b, R, t, n, f);
 }
 
 /// Cylinder a (its frame) against cone b placed by R, t there, along b's side: the directions
@@ -432,6 +440,43 @@ bool cone_side_newton(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, 
     const S cs = (S(1) - q) * den, sn = step * den;
     const S c2 = c * cs - s * sn, s2 = s * cs + c * sn;
     const S norm = (S(3) - (c2 * c2 + s2 * s2)) / S(2);  // back to unit length within rounding
+    c = c2 * norm;
+    s = s2 * norm;
+    if (std::abs(step) <= S(1e-10)) {
+      n = -(R * Vec3<S>(k * c, k * s, rc / L));
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Cone a (its frame) against cone b placed by R, t there, along b's side: cone_side_newton's
+/// Newton on b's azimuth with a cone's support (its apex: no curvature term; its base rim: the
+/// disc term's, as a cylinder's side); false where a's support is not smooth (its apex and rim
+/// tie, or its base faces w) or Newton does not converge within 16 steps.
+template <class S>
+bool cone_side_newton(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, Vec3<S>& n) {
+  const Vec3<S> v = -(R.transpose() * n);
+  const S vxy = std::sqrt(v.x() * v.x() + v.y() * v.y());
+  if (!(vxy > S(1e-9))) return false;
+  S c = v.x() / vxy, s = v.y() / vxy;
+  const S rc = b.radius, hc = b.half_length, L = std::sqrt(S(4) * hc * hc + rc * rc), k = S(2) * hc / L;
+  const S tie = S(1e-6) * (a.radius + a.half_length);
+  for (int it = 0; it < 16; ++it) {
+    const Vec3<S> w = -(R * Vec3<S>(k * c, k * s, rc / L)), w1 = -(R * Vec3<S>(-k * s, k * c, S(0))), w2 = -(R * Vec3<S>(-k * c, -k * s, S(0)));
+    const S pw = std::sqrt(w.x() * w.x() + w.y() * w.y());
+    if (!(pw > S(1e-6))) return false;  // a's base faces w
+    const S apex = a.half_length * w.z(), rim = a.radius * pw - a.half_length * w.z();
+    if (!(std::abs(apex - rim) > tie)) return false;  // a's side ruling: a kink
+    const Vec3<S> arm = support(a, w) - t;
+    const S perp = (w.x() * w1.y() - w.y() * w1.x()) / pw;
+    const S g1 = arm.dot(w1), g2 = (rim > apex ? a.radius / pw * perp * perp : S(0)) + arm.dot(w2);
+    if (!(g2 > S(0))) return false;
+    const S step = std::clamp(-g1 / g2, S(-0.3), S(0.3));
+    const S q = step * step / S(4), den = S(1) / (S(1) + q);
+    const S cs = (S(1) - q) * den, sn = step * den;
+    const S c2 = c * cs - s * sn, s2 = s * cs + c * sn;
+    const S norm = (S(3) - (c2 * c2 + s2 * s2)) / S(2);
     c = c2 * norm;
     s = s2 * norm;
     if (std::abs(step) <= S(1e-10)) {
