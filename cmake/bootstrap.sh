@@ -33,11 +33,11 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # Two build folders, so that neither mode recompiles the other's: the bench mode's build/release
-# compiles the benches at -O3; the test mode's build/test compiles the benches and examples at -O1
+# compiles the benches at -O3; the test mode's build/test compiles the benches and examples at -Og
 # (IMPACT_BENCH_OPTIMIZATION, as the tests), since there they only run as smoke tests.
 if [ "$mode" = test ]; then
   build="${IMPACT_BUILD_DIR:-$root/build/test}"
-  bench_optimization=-O1
+  bench_optimization=-Og
 else
   build="${IMPACT_BUILD_DIR:-$root/build/release}"
   bench_optimization=
