@@ -3,12 +3,14 @@
 // (epa_penetration_local, convex/epa.hpp), on cylinder–cylinder and cylinder–cone poses, deep and
 // shallow:
 //   - the overlap terms are the overlap of the supports (the cone's active branch a lower bound);
-//     the body inside the cone along a ruling (cylinder_cone_side_terms) is a lower bound too;
+//     the body inside the cone along a ruling (cylinder_cone_side_terms, over random spans of the
+//     ruling) is a lower bound too;
 //   - where a certificate holds (from EPA's normal and from random directions), the overlap of the
 //     supports is >= its lower bound on random directions of its cap (up to rounding), its bracket
 //     agrees with plain EPA's at the global minimum, and the cap of a local minimum that is not
 //     the global one leaves the global one out; every kind of contact is met (smooth, a cap, one
-//     ruling, two rulings, the cone's side through its inner body);
+//     ruling, two rulings, the cone's side through its inner body), and the cone's side
+//     certificate (cylinder_cone_side_certificate) holds at the global minimum of most side contacts;
 //   - the queries with and without it agree within the tolerance, with fewer support calls;
 //   - a certificate of a local minimum that is not the global one (the cap of two parallel
 //     cylinders) does not stop EPA: the depth stays the global one; a flat circle of minima
@@ -74,7 +76,9 @@ TEST(LocalCertificate, TermsAreTheOverlap) {
     const auto tc = terms_at(z.cylinder, z.cylinder, f, n, ok);
     EXPECT_NEAR(terms_value(tc, n), frame_overlap(z.cylinder, z.cylinder, f, n), 1e-14);
     detail::OverlapTerms<double> side;
-    if (detail::cylinder_cone_side_terms(z.cylinder, z.cone, f.R, f.t, n, side)) {
+    // the body from the base rim to a random fraction of the ruling (the default: half of it)
+    const double s1 = i % 2 ? 0.5 : rng.uniform(0.05, 0.95);
+    if (detail::cylinder_cone_side_terms(z.cylinder, z.cone, f.R, f.t, n, side, 0.0, s1)) {
       for (int k = 0; k < 20; ++k) {  // inside the cone: a lower bound everywhere
         V3 m = rng.vec(-1, 1);
         if (m.norm() < 0.1) continue;
@@ -107,7 +111,7 @@ Kind kind_of(const V3& n, const V3& bz) {
 }
 
 template <class B>
-void check_caps(const char* name, const B& b, double reach, std::uint64_t seed, int& certified, int kinds[5]) {
+void check_caps(const char* name, const B& b, double reach, std::uint64_t seed, int& certified, int kinds[5], int& side_at_minimum) {
   const auto& z = zoo();
   const Cylinder<double>& a = z.cylinder;
   const double scale = std::max(shape_size(a), shape_size(b)), tol = 1e-10 * scale;
@@ -134,10 +138,13 @@ void check_caps(const char* name, const B& b, double reach, std::uint64_t seed, 
       auto terms = terms_at(a, b, f, n0, ok);
       auto cert = ok ? detail::local_certificate(terms, n0) : detail::LocalCertificate<double>();
       if constexpr (std::is_same_v<B, Cone<double>>) {
-        V3 m = n0;  // the cone's side: the body inside it along the ruling of the side minimiser
-        if (!cert.ok && detail::cone_side_newton(a, b, f.R, f.t, m) && detail::cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) {
-          cert = detail::local_certificate(terms, m);
+        // the cone's side: the body inside it along the ruling of the side minimiser, past the
+        // contact's point of that ruling
+        if (!cert.ok) {
+          cert = detail::cylinder_cone_side_certificate(a, b, f.R, f.t, n0);
           if (cert.ok) ++kinds[kConeSide];
+          // from EPA's normal, where that bound is the depth
+          if (cert.ok && start == 0 && std::abs(frame_overlap(a, b, f, cert.normal) - cert.lower) <= tol) ++side_at_minimum;
         }
       }
       if (!cert.ok) continue;
@@ -178,18 +185,23 @@ void check_caps(const char* name, const B& b, double reach, std::uint64_t seed, 
 
 TEST(LocalCertificate, BoundHoldsOnItsCap) {
   const auto& z = zoo();
-  int certified = 0, kinds[5] = {0, 0, 0, 0, 0};
+  int certified = 0, kinds[5] = {0, 0, 0, 0, 0}, side_at_minimum = 0;
   const double cyl = 2 * shape_size(z.cylinder), cone = shape_size(z.cylinder) + shape_size(z.cone);
-  check_caps("cylinder-cylinder deep", z.cylinder, 0.3 * cyl, 31, certified, kinds);
-  check_caps("cylinder-cylinder shallow", z.cylinder, 0.9 * cyl, 32, certified, kinds);
-  check_caps("cylinder-cone deep", z.cone, 0.3 * cone, 33, certified, kinds);
-  check_caps("cylinder-cone shallow", z.cone, 0.9 * cone, 34, certified, kinds);
+  check_caps("cylinder-cylinder deep", z.cylinder, 0.3 * cyl, 31, certified, kinds, side_at_minimum);
+  check_caps("cylinder-cylinder shallow", z.cylinder, 0.9 * cyl, 32, certified, kinds, side_at_minimum);
+  check_caps("cylinder-cone deep", z.cone, 0.3 * cone, 33, certified, kinds, side_at_minimum);
+  check_caps("cylinder-cone shallow", z.cone, 0.9 * cone, 34, certified, kinds, side_at_minimum);
+  std::printf("cone side certificates at the global minimum: %d\n", side_at_minimum);
   EXPECT_GE(certified, IMPACT_TEST_SANITIZED ? 10 : 150);
   EXPECT_GT(kinds[kSmooth], 0);
   EXPECT_GT(kinds[kCap], 0);
   EXPECT_GT(kinds[kOneRuling], 0);
   EXPECT_GT(kinds[kTwoRulings], 0);
   EXPECT_GT(kinds[kConeSide], 0);
+  // the body past the contact's point of the ruling, and from EPA's normal at a ruling of the
+  // cylinder: 293 (155 with the body over the lower half of the ruling, 95 without the start at
+  // a ruling)
+  EXPECT_GE(side_at_minimum, IMPACT_TEST_SANITIZED ? 20 : 250);
 }
 
 template <class B>

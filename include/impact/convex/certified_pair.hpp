@@ -161,16 +161,13 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
         const LocalCertificate<S> lc = local_certificate(terms, n);
         if (certificate_holds(lc, sa, sb, tol)) return lc;
       }
-      // the cone's side: the minimiser along b's side normals (Newton on the azimuth), then the
-      // body inside b along that ruling (its overlap is exact there)
-      Vec3<S> m = n;
-      if (cone_side_newton(a, b, f.R, f.t, m) && cylinder_cone_side_terms(a, b, f.R, f.t, m, terms)) {
-        const LocalCertificate<S> lc = local_certificate(terms, m);
-        if (certificate_holds(lc, sa, sb, tol)) return lc;
-      }
-      // else (a's rim or ruling against b's side) no certificate: moving the body round by round
-      // to the ruling of the minimiser found (up to 8 rounds) certified 9 of the 88 queries that got
-      // this far on the bench's 2000 poses at 226 certificate evaluations, more than it saved
+      // the cone's side (a's rim or ruling against it): the body inside b along the ruling of the
+      // minimiser along b's side normals, past the contact's point of it (its overlap is exact
+      // there); else no certificate (moving the body round by round to the ruling of the
+      // minimiser found, up to 8 rounds, certified 9 of the 88 queries that got this far on the
+      // bench's 2000 poses at 226 certificate evaluations, more than it saved)
+      const LocalCertificate<S> side = cylinder_cone_side_certificate(a, b, f.R, f.t, n);
+      if (certificate_holds(side, sa, sb, tol)) return side;
       return LocalCertificate<S>();
     } else {
       return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
@@ -225,14 +222,17 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
       if (certificate_holds(lc, sa, sb, tol)) return lc;
     }
     // b's side against a: Newton along b's side normals, then the body inside b along that ruling
+    // from its base rim point to past the contact's point of it
     Vec3<S> m = n;
-    if (cone_side_newton(a, b, f.R, f.t, m) && cone_cone_side_terms(a, b, f.R, f.t, m, terms)) {
+    if (cone_side_newton(a, b, f.R, f.t, m) &&
+        cone_cone_side_terms(a, b, f.R, f.t, m, terms, S(0), side_body_end(cone_side_contact(a, b, f.R, f.t, m)))) {
       const LocalCertificate<S> lc = local_certificate(terms, m);
       if (certificate_holds(lc, sa, sb, tol)) return lc;
     }
     // a's side against b: the same in b's frame (the overlap there is f(-R w)), mapped back
     m = -(Rs * n);
-    if (cone_side_newton(b, a, Rs, ts, m) && cone_cone_side_terms(b, a, Rs, ts, m, terms)) {
+    if (cone_side_newton(b, a, Rs, ts, m) &&
+        cone_cone_side_terms(b, a, Rs, ts, m, terms, S(0), side_body_end(cone_side_contact(b, a, Rs, ts, m)))) {
       LocalCertificate<S> lc = local_certificate(terms, m);
       lc.normal = -(f.R * lc.normal);
       if (certificate_holds(lc, sa, sb, tol)) return lc;

@@ -77,13 +77,14 @@ bool cone_cone_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const
 }
 
 /// The overlap of cone a (its frame, its branch active along n) and the body inside cone b along
-/// the ruling whose side normal is nearest -n (add_cone_side_body): <= the true overlap
-/// everywhere, equal along that ruling's side normals while a's branch is the active one; false
-/// at a tie of a's branches or with -n along b's axis.
+/// the ruling whose side normal is nearest -n (add_cone_side_body, over the fractions [s0, s1] of
+/// that ruling): <= the true overlap everywhere, equal along that ruling's side normals while a's
+/// branch is the active one; false at a tie of a's branches or with -n along b's axis.
 template <class S>
-bool cone_cone_side_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+bool cone_cone_side_terms(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f,
+                          S s0 = S(0), S s1 = S(0.5)) {
   f = OverlapTerms<S>();
-  return add_cone_terms(a, Mat3<S>(Mat3<S>::Identity()), Vec3<S>(Vec3<S>::Zero()), n, false, f) && add_cone_side_body(b, R, t, n, f);
+  return add_cone_terms(a, Mat3<S>(Mat3<S>::Identity()), Vec3<S>(Vec3<S>::Zero()), n, false, f) && add_cone_side_body(b, R, t, n, f, s0, s1);
 }
 
 /// The outward side normal of cone c (its frame) at the azimuth of x (any azimuth on the axis).

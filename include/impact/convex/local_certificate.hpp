@@ -46,6 +46,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace impact::detail {
 
@@ -377,17 +378,20 @@ bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& 
 
 /// The body inside cone b (placed by R, t in the terms' frame) along the ruling whose side normal
 /// is nearest -n, as cylinder_cone_side_terms builds it, added to f: a disc term, an abs term and
-/// a linear one (its support along -w); false when -n is along b's axis.
+/// a linear one (its support along -w); false when -n is along b's axis. The body spans the
+/// fractions s0 < s1 of that ruling (0 at the base rim, 1 at the apex; 0 <= s0, s1 < 1): the disc
+/// of radius R (1 - s1), tangent to b's side on the ruling, swept from s0 to s1.
 template <class S>
-bool add_cone_side_body(const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+bool add_cone_side_body(const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f, S s0 = S(0),
+                        S s1 = S(0.5)) {
   const Vec3<S> v = -(R.transpose() * n);
   const S m = std::sqrt(v.x() * v.x() + v.y() * v.y());
   if (!(m > S(1e-9))) return false;
-  const S rc = b.radius, hc = b.half_length, rho = rc / S(2), s_max = S(1) - rho / rc;
+  const S rc = b.radius, hc = b.half_length, rho = rc * (S(1) - s1);
   const Vec3<S> e(v.x() / m, v.y() / m, S(0)), apex(S(0), S(0), hc);
   const Vec3<S> p = rc * e - Vec3<S>(S(0), S(0), hc), d = apex - p;
-  const Vec3<S> c0 = (rc - rho) * e - Vec3<S>(S(0), S(0), hc);
-  const Vec3<S> centre = c0 + (s_max / S(2)) * d, half = (s_max / S(2)) * d;
+  const Vec3<S> c0 = (rc - rho) * e - Vec3<S>(S(0), S(0), hc);  // the disc's centre at s = 0
+  const Vec3<S> centre = c0 + ((s0 + s1) / S(2)) * d, half = ((s1 - s0) / S(2)) * d;
   const S len = half.norm();
   f.add(R.col(2), rho, true);
   f.add(Vec3<S>(R * half / len), len, false);
@@ -398,18 +402,56 @@ bool add_cone_side_body(const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, co
 
 /// The overlap of cylinder a (its frame) and, for cone b placed by R, t there, a body inside b
 /// touching b's side along the ruling whose side normal is nearest -n (the azimuth of -n in b's
-/// frame): the disc of radius R/2 tangent to b's base rim there, swept along that ruling for half
-/// its length (a slanted cylinder: at each height its disc touches b's cross-section from inside),
-/// whose support is a disc term, an abs term (the ruling) and a linear one. Its overlap is <= the
-/// true one everywhere and equal along the side normals of that ruling; false when -n is along
-/// b's axis.
+/// frame): a disc tangent to b's side on that ruling, swept along it over the fractions [s0, s1]
+/// of its length from the base rim (by default the disc of radius R/2 tangent to the base rim,
+/// swept for half the ruling; a slanted cylinder: at each height its disc touches b's
+/// cross-section from inside), whose support is a disc term, an abs term (the ruling) and a linear
+/// one. Its overlap is <= the true one everywhere and equal along the side normals of that ruling;
+/// the certificate needs the contact's point of the ruling strictly inside the span (the abs
+/// term's kink then holds the minimum on the side normals); false when -n is along b's axis.
 template <class S>
 bool cylinder_cone_side_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n,
-                              OverlapTerms<S>& f) {
+                              OverlapTerms<S>& f, S s0 = S(0), S s1 = S(0.5)) {
   f = OverlapTerms<S>();
   f.add(Vec3<S>::UnitZ(), a.radius, true);
   f.add(Vec3<S>::UnitZ(), a.half_length, false);
-  return add_cone_side_body(b, R, t, n, f);
+  return add_cone_side_body(b, R, t, n, f, s0, s1);
+}
+
+/// Where a cylinder or cone a (its frame) touches the side of cone b (placed by R, t there) along
+/// n, as a fraction of b's ruling whose side normal is nearest -n (0 at its base rim point, 1 at
+/// the apex; not clamped): the projection onto that ruling of a's support along n (a rim point or
+/// a cone's apex), or, for a cylinder with n within `flat` of normal to its axis (its support a
+/// whole ruling), of the point of its ruling nearest the line of b's. NaN when -n is along b's
+/// axis.
+template <class S, class A>
+S cone_side_contact(const A& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, S flat = S(0.1)) {
+  const Vec3<S> v = -(R.transpose() * n);
+  const S m = std::sqrt(v.x() * v.x() + v.y() * v.y());
+  if (!(m > S(1e-9))) return std::numeric_limits<S>::quiet_NaN();
+  const S rc = b.radius, hc = b.half_length;
+  const Vec3<S> p = Vec3<S>(rc * v.x() / m, rc * v.y() / m, -hc), d = Vec3<S>(S(0), S(0), hc) - p;  // b's ruling from s = 0 to 1
+  const S dd = d.dot(d);
+  const Vec3<S> xa = support(a, n);
+  if (std::is_same_v<A, Cylinder<S>> && std::abs(n.z()) < flat) {
+    // a's ruling q0 + sigma u, sigma in [-h_a, h_a] (u a's axis in b's frame): its point nearest
+    // the line of b's ruling
+    const Vec3<S> q0 = R.transpose() * (Vec3<S>(xa.x(), xa.y(), S(0)) - t), u = R.row(2).transpose(), w = q0 - p;
+    const S du = d.dot(u), dw = d.dot(w), uw = u.dot(w), den = dd - du * du;  // |u| = 1
+    S sigma = den > S(1e-12) * dd ? ((dw - uw * du) / den) * du - uw : S(0);
+    sigma = std::clamp(sigma, -a.half_length, a.half_length);
+    return (dw + sigma * du) / dd;
+  }
+  return (R.transpose() * (xa - t) - p).dot(d) / dd;
+}
+
+/// The upper end of the body inside a cone along a ruling (add_cone_side_body, from the base rim
+/// point) for a contact at the fraction s of that ruling (cone_side_contact): 0.1 of the ruling
+/// past it, so the contact lies strictly inside the body's span, and its disc, tangent at that
+/// end, as large as that allows; at most 0.95.
+template <class S>
+S side_body_end(S s) {
+  return std::min(std::clamp(s, S(0), S(1)) + S(0.1), S(0.95));
 }
 
 /// Cylinder a (its frame) against cone b placed by R, t there, along b's side: the directions
@@ -485,6 +527,25 @@ bool cone_side_newton(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, cons
     }
   }
   return false;
+}
+
+/// The local certificate of cylinder a (its frame) against the side of cone b placed by R, t
+/// there, from a direction n near the contact (EPA's best normal): the minimiser along b's side
+/// normals (cone_side_newton; where a's support is a ruling, n within 0.1 of normal to a's axis,
+/// a kink Newton stops at: n itself), then local_certificate on the body inside b along that
+/// ruling (cylinder_cone_side_terms) from its base rim point to side_body_end of the contact's
+/// point of it (cone_side_contact). A lower
+/// bound exact only where the body touches the contact: the caller checks the true overlap at its
+/// normal (no certificate when none applies).
+template <class S>
+LocalCertificate<S> cylinder_cone_side_certificate(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t,
+                                                   const Vec3<S>& n) {
+  Vec3<S> m = n;
+  if (!cone_side_newton(a, b, R, t, m) && !(std::abs(n.z()) < S(0.1))) return LocalCertificate<S>();
+  const S s = cone_side_contact(a, b, R, t, m);
+  OverlapTerms<S> terms;
+  if (!(s == s) || !cylinder_cone_side_terms(a, b, R, t, m, terms, S(0), side_body_end(s))) return LocalCertificate<S>();
+  return local_certificate(terms, m);
 }
 
 }  // namespace impact::detail
