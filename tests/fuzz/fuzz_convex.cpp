@@ -14,6 +14,9 @@
 //   of the translations): a distance clearly above zero with an intersecting boolean or
 //   penetration; a penetration whose certified lower bound is clearly above zero with a
 //   non-intersecting boolean; closest points farther apart than the distance;
+// - a certified lower bound of the depth (depth - depth_gap) above the overlap along the answer's
+//   normal or along the normals found by libccd's penetration or the own EPA without the local
+//   certificate (the overlap along any direction bounds the depth from above);
 // - a depth that is not an upper bound: b translated by the depth (and the tolerance) along the
 //   normal must not still overlap a by more than the tolerance.
 // Results that say limit_reached are exempt from the comparisons (the contract lets them be open).
@@ -203,6 +206,35 @@ void check_pair(const A& a, const impact::RigidTransform<S>& pa, const B& b, con
     finding<S>("penetration certified deeper than " + std::to_string(double(pen.depth - pen.depth_gap)) + " but intersect=" +
                    std::to_string(inter) + " distance=" + std::to_string(double(dist.distance)),
                d);
+  if (pen.intersecting) {
+    // the certified lower bound is below the overlap f(n) = h_A(n) + h_B(-n) along every unit n
+    // (f(n) bounds the depth from above): along the answer's own normal, and along the normals of
+    // two other solvers (libccd's, and the own EPA without the local certificate), which find the
+    // least overlap by other routes
+    const S lower = pen.depth - pen.depth_gap;
+    const auto overlap = [&](const impact::Vec3<S>& n) {
+      return n.dot(impact::support(a, pa, n)) - n.dot(impact::support(b, pb, impact::Vec3<S>(-n)));
+    };
+    impact::ConvexQueryOptions<S> other = o;
+    other.libccd_penetration = true;
+    const auto by_libccd = impact::convex_penetration(a, pa, b, pb, other);
+    other.libccd_penetration = false;
+    other.local_certificate = false;
+    const auto by_epa = impact::convex_penetration(a, pa, b, pb, other);
+    const impact::Vec3<S> normals[3] = {pen.normal, by_libccd.normal, by_epa.normal};
+    const char* names[3] = {"its own normal", "libccd's normal", "EPA's normal"};
+    for (int k = 0; k < 3; ++k) {
+      if (k == 1 && !by_libccd.intersecting) continue;
+      if (k == 2 && !by_epa.intersecting) continue;
+      const S len = normals[k].norm();
+      if (!(len > S(0.5)) || !normals[k].allFinite()) continue;
+      const S f = overlap(impact::Vec3<S>(normals[k] / len));
+      if (f < lower - tol)
+        finding<S>("certified depth " + std::to_string(double(lower)) + " above the overlap " + std::to_string(double(f)) + " along " +
+                       names[k],
+                   d);
+    }
+  }
   if (pen.intersecting && pen.depth > tol) {
     // the depth is an upper bound: b moved out by it along the normal overlaps a by at most tol
     impact::RigidTransform<S> out = pb;

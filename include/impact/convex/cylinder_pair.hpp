@@ -41,6 +41,7 @@
 /// Thread safety: pure functions.
 #pragma once
 
+#include "impact/convex/azimuth_turn.hpp"
 #include "impact/convex/closed_form.hpp"
 #include "impact/convex/cylinder_pair_points.hpp"
 #include "impact/convex/deepest_point.hpp"
@@ -57,7 +58,8 @@ namespace impact::detail {
 /// to the z axis: alpha = 1, beta = 0 gives the point nearest the axis; alpha = 2h, beta = R the
 /// point deepest below the side of a cone of base radius R and half length h about the axis. The
 /// best of 8 samples with z in [-zmax, zmax] (of all 8 if none is), then Newton on q(phi) (the
-/// certificate that uses the point checks it anyway).
+/// certificate that uses the point checks it anyway), the angle turned by each step as in
+/// convex/azimuth_turn.hpp.
 template <class S>
 inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v, S alpha, S beta, S zmax, S& cos_phi,
                             S& sin_phi) {
@@ -92,16 +94,7 @@ inline void circle_minimise(const Vec3<S>& c, const Vec3<S>& u, const Vec3<S>& v
     }
     S step = q2 > S(0) ? -q1 / q2 : (q1 > S(0) ? S(-0.2) : S(0.2));
     step = std::clamp(step, S(-0.4), S(0.4));
-    // rotate (co, si) by 2 atan(step / 2) = step - step^3 / 12 + ... (the Cayley transform: a
-    // rotation without sin and cos; Newton's next error is then O(step^3), as fast as Newton's own)
-    const S q = step * step / S(4), den = S(1) / (S(1) + q);
-    const S cs_step = (S(1) - q) * den, sn_step = step * den;
-    const S c2 = co * cs_step - si * sn_step, s2n = si * cs_step + co * sn_step;
-    // the rotation keeps the length up to rounding: one Newton step of 1 / sqrt from 1 puts it
-    // back within rounding (no square root or division in the loop's dependent chain)
-    const S norm = (S(3) - (c2 * c2 + s2n * s2n)) / S(2);
-    co = c2 * norm;
-    si = s2n * norm;
+    azimuth_turn(step, co, si);
     if (std::abs(step) <= S(1e-7)) break;  // Newton's next step would be below 1e-14
   }
   cos_phi = co;

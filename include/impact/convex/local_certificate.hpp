@@ -39,6 +39,7 @@
 /// Thread safety: pure functions.
 #pragma once
 
+#include "impact/convex/azimuth_turn.hpp"
 #include "impact/convex/gjk_distance.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/core/types.hpp"
@@ -412,73 +413,52 @@ bool cylinder_cone_side_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3
   return add_cone_side_body(b, R, t, n, f);
 }
 
-/// Cylinder a (its frame) against cone b placed by R, t there, along b's side: the directions
-/// w(phi) = -R m(phi), m(phi) b's outward side normal at azimuth phi, where the overlap is
-/// h_A(w) - t . w + h r / L (b's support is its whole ruling there). Newton on phi from the azimuth
-/// of -n (the derivatives from a's support: (s_A - t) . w' and w'^T H_A w' + (s_A - t) . w''),
-/// the azimuth held as its cosine and sine and turned by each step through the Cayley transform (a
-/// rotation by 2 atan(step / 2), without trigonometric calls, as circle_minimise in
-/// convex/cylinder_pair.hpp); true with n the minimiser when it converges (|step| <= 1e-10 within
-/// 16 steps) where a's support is smooth; false otherwise.
+/// Whether a cylinder's support along w (pw = |P w|, P the projection on its xy plane) is smooth
+/// across the directions cone_side_newton turns through (not its cap or a ruling: a kink), and
+/// then the radius of its active disc term (its own radius).
 template <class S>
-bool cone_side_newton(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, Vec3<S>& n) {
-  const Vec3<S> v = -(R.transpose() * n);
-  const S vxy = std::sqrt(v.x() * v.x() + v.y() * v.y());
-  if (!(vxy > S(1e-9))) return false;
-  S c = v.x() / vxy, s = v.y() / vxy;
-  const S rc = b.radius, hc = b.half_length, L = std::sqrt(S(4) * hc * hc + rc * rc), k = S(2) * hc / L;
-  for (int it = 0; it < 16; ++it) {
-    const Vec3<S> w = -(R * Vec3<S>(k * c, k * s, rc / L)), w1 = -(R * Vec3<S>(-k * s, k * c, S(0))), w2 = -(R * Vec3<S>(-k * c, -k * s, S(0)));
-    const S pw = std::sqrt(w.x() * w.x() + w.y() * w.y());
-    if (!(pw > S(1e-6) && std::abs(w.z()) > S(1e-6))) return false;  // a's cap or ruling: a kink
-    const Vec3<S> arm = support(a, w) - t;
-    const S perp = (w.x() * w1.y() - w.y() * w1.x()) / pw;  // w1's part normal to P w in a's xy plane
-    const S g1 = arm.dot(w1), g2 = a.radius / pw * perp * perp + arm.dot(w2);
-    if (!(g2 > S(0))) return false;
-    const S step = std::clamp(-g1 / g2, S(-0.3), S(0.3));
-    const S q = step * step / S(4), den = S(1) / (S(1) + q);
-    const S cs = (S(1) - q) * den, sn = step * den;
-    const S c2 = c * cs - s * sn, s2 = s * cs + c * sn;
-    const S norm = (S(3) - (c2 * c2 + s2 * s2)) / S(2);  // back to unit length within rounding
-    c = c2 * norm;
-    s = s2 * norm;
-    if (std::abs(step) <= S(1e-10)) {
-      n = -(R * Vec3<S>(k * c, k * s, rc / L));
-      return true;
-    }
-  }
-  return false;
+bool side_support_disc(const Cylinder<S>& a, const Vec3<S>& w, S pw, S& disc) {
+  if (!(pw > S(1e-6) && std::abs(w.z()) > S(1e-6))) return false;
+  disc = a.radius;
+  return true;
 }
 
-/// Cone a (its frame) against cone b placed by R, t there, along b's side: cone_side_newton's
-/// Newton on b's azimuth with a cone's support (its apex: no curvature term; its base rim: the
-/// disc term's, as a cylinder's side); false where a's support is not smooth (its apex and rim
-/// tie, or its base faces w) or Newton does not converge within 16 steps.
+/// The same for a cone: not smooth where its base faces w or its apex and base rim tie (a side
+/// ruling); the disc term is its base radius where the rim supports w, none (0) at its apex.
 template <class S>
-bool cone_side_newton(const Cone<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, Vec3<S>& n) {
+bool side_support_disc(const Cone<S>& a, const Vec3<S>& w, S pw, S& disc) {
+  if (!(pw > S(1e-6))) return false;
+  const S apex = a.half_length * w.z(), rim = a.radius * pw - a.half_length * w.z();
+  if (!(std::abs(apex - rim) > S(1e-6) * (a.radius + a.half_length))) return false;
+  disc = rim > apex ? a.radius : S(0);
+  return true;
+}
+
+/// Cylinder or cone a (its frame) against cone b placed by R, t there, along b's side: the
+/// directions w(phi) = -R m(phi), m(phi) b's outward side normal at azimuth phi, where the overlap
+/// is h_A(w) - t . w + h r / L (b's support is its whole ruling there). Newton on phi from the
+/// azimuth of -n (the derivatives from a's support: (s_A - t) . w' and w'^T H_A w' + (s_A - t) . w'',
+/// H_A from a's active disc term, side_support_disc), the azimuth held as its cosine and sine and
+/// turned by each step (convex/azimuth_turn.hpp); true with n the minimiser when it converges
+/// (|step| <= 1e-10 within 16 steps) where a's support is smooth; false otherwise.
+template <class A, class S>
+bool cone_side_newton(const A& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, Vec3<S>& n) {
   const Vec3<S> v = -(R.transpose() * n);
   const S vxy = std::sqrt(v.x() * v.x() + v.y() * v.y());
   if (!(vxy > S(1e-9))) return false;
   S c = v.x() / vxy, s = v.y() / vxy;
   const S rc = b.radius, hc = b.half_length, L = std::sqrt(S(4) * hc * hc + rc * rc), k = S(2) * hc / L;
-  const S tie = S(1e-6) * (a.radius + a.half_length);
   for (int it = 0; it < 16; ++it) {
     const Vec3<S> w = -(R * Vec3<S>(k * c, k * s, rc / L)), w1 = -(R * Vec3<S>(-k * s, k * c, S(0))), w2 = -(R * Vec3<S>(-k * c, -k * s, S(0)));
     const S pw = std::sqrt(w.x() * w.x() + w.y() * w.y());
-    if (!(pw > S(1e-6))) return false;  // a's base faces w
-    const S apex = a.half_length * w.z(), rim = a.radius * pw - a.half_length * w.z();
-    if (!(std::abs(apex - rim) > tie)) return false;  // a's side ruling: a kink
+    S disc;
+    if (!side_support_disc(a, w, pw, disc)) return false;
     const Vec3<S> arm = support(a, w) - t;
-    const S perp = (w.x() * w1.y() - w.y() * w1.x()) / pw;
-    const S g1 = arm.dot(w1), g2 = (rim > apex ? a.radius / pw * perp * perp : S(0)) + arm.dot(w2);
+    const S perp = (w.x() * w1.y() - w.y() * w1.x()) / pw;  // w1's part normal to P w in a's xy plane
+    const S g1 = arm.dot(w1), g2 = disc / pw * perp * perp + arm.dot(w2);
     if (!(g2 > S(0))) return false;
     const S step = std::clamp(-g1 / g2, S(-0.3), S(0.3));
-    const S q = step * step / S(4), den = S(1) / (S(1) + q);
-    const S cs = (S(1) - q) * den, sn = step * den;
-    const S c2 = c * cs - s * sn, s2 = s * cs + c * sn;
-    const S norm = (S(3) - (c2 * c2 + s2 * s2)) / S(2);
-    c = c2 * norm;
-    s = s2 * norm;
+    azimuth_turn(step, c, s);
     if (std::abs(step) <= S(1e-10)) {
       n = -(R * Vec3<S>(k * c, k * s, rc / L));
       return true;
