@@ -413,6 +413,32 @@ TYPED_TEST(WideBvhTest, BlockTestDecidesAsTheScalarTest) {
   }
   EXPECT_GT(skipped, lanes / 4);  // the clear misses are rejected
 }
+
+// The block test's frame as the AVX cast sets it up (BlockTest::set_ray, without jumps) is
+// PreparedRay's where the direction's largest magnitude is shared by two or three components (the
+// first such axis) and the frame's x and y swap (a negative component along it): rays with such
+// directions, in each of the eight sign combinations, through four triangles around a point;
+// check_block compares the lanes' values with the scalar test's bit for bit.
+TEST(WideBvh, BlockTestFrameAtTiedDirections) {
+  test::Rng rng(53);
+  const Eigen::Vector3d p(0.25, -0.5, 0.75);
+  WideTriangleBlock<double> block{};
+  for (int c = 0; c < 4; ++c) {  // the triangle (p + u, p + v, p - u - v): its centroid is p
+    const Eigen::Vector3d u = rng.vec(-1, 1), v = rng.vec(-1, 1);
+    const Eigen::Vector3d vertex[3] = {p + u, p + v, p - u - v};
+    for (int k = 0; k < 9; ++k) block.v[k][c] = vertex[k / 3][k % 3];
+  }
+  const double magnitudes[][3] = {{1, 1, 1}, {1, 1, 0.5}, {1, 0.5, 1}, {0.5, 1, 1}, {2, 2, 1}, {1, 2, 2}, {2, 1, 2}};
+  int rejected = 0;
+  for (const auto& m : magnitudes) {
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Vector3d d;
+      for (int k = 0; k < 3; ++k) d[k] = (signs >> k) & 1 ? -m[k] : m[k];
+      rejected += check_block(block, Ray<double>(p - 1.5 * d, d, 2.0), 4);
+    }
+  }
+  EXPECT_LT(rejected, 7 * 8);  // most lanes are hit (so their values are compared)
+}
 #endif
 
 // The float slab at large magnitudes: origins up to 2^59, off the float grid by up to 2^35,

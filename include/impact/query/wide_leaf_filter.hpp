@@ -58,7 +58,11 @@ template <class S> class BlockTest {
   static constexpr bool kHasValues = false;
 #endif
 
-  BlockTest() = default;
+  BlockTest() : off_{0, 1, 2}, o_{S(0), S(0), S(0)}, sx_(S(0)), sy_(S(0)), sz_(S(1)), valid_(false) {
+#if defined(IMPACT_BLOCK_TEST_AVX)
+    for (int i = 0; i < 3; ++i) box_o_[i] = box_inv_[i] = S(0);
+#endif
+  }
   /// `allow_avx` false keeps to SSE2 (for the tests that compare the two).
   void set(const PreparedRay<S>& pr, bool allow_avx = true) {
 #if defined(IMPACT_BLOCK_TEST_AVX)
@@ -78,24 +82,31 @@ template <class S> class BlockTest {
   struct alignas(32) LaneHits {
     S t[4], inv_det[4], eu[4], ev[4], ew[4], det[4], tt[4];  // NOLINT(cppcoreguidelines-pro-type-member-init)
   };
-  /// A test made by set_ray(o, d, inv) (in place, without the zeroing of a value-initialised
-  /// BlockTest()).
-  BlockTest(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) { set_ray(o, d, inv); }
+  /// A test made by set_ray(o, d, inv) (in place, each member written once: no zeroing first, as
+  /// BlockTest() does).
+  BlockTest(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) { set_ray(o, d, inv); }  // NOLINT(cppcoreguidelines-pro-type-member-init)
   /// set(PreparedRay<S>(Ray<S>(o, d))) without the PreparedRay (the same frame, shear and
   /// roundings), for S = double, with `inv` = safe_inverse(d), finite on every axis (a ray the
   /// 8-wide AVX cast takes), for the box entries of hits_avx.
   void set_ray(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) {
     static_assert(std::is_same_v<S, double>, "set_ray: a ray in double");
     const S ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
-    const int kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);  // PreparedRay's frame
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
+    // PreparedRay's frame (kz the axis of the largest |d_i|, the first of equal ones; kx, ky the
+    // next ones, swapped when d_kz < 0), without jumps: for random rays each is a coin toss
+    const int xy = ax >= ay ? 1 : 0, xz = ax >= az ? 1 : 0, yz = ay >= az ? 1 : 0;
+    const int kz = 2 - 2 * (xy & xz) - ((xy ^ 1) & yz);
+    const int kx0 = (0x09 >> (2 * kz)) & 3, ky0 = (0x12 >> (2 * kz)) & 3;  // (kz + 1) % 3, (kz + 2) % 3
     const S dz = d[kz];
     valid_ = dz != S(0);
-    if (dz < S(0)) std::swap(kx, ky);
+    const int flip = -static_cast<int>(dz < S(0));
+    const int kx = kx0 ^ ((kx0 ^ ky0) & flip), ky = kx0 ^ ky0 ^ kx;
     off_[0] = kx, off_[1] = ky, off_[2] = kz;
     for (int i = 0; i < 3; ++i) o_[i] = o[off_[i]], box_o_[i] = o[i], box_inv_[i] = inv[i];
-    if (valid_) sx_ = d[kx] / dz, sy_ = d[ky] / dz, sz_ = S(1) / dz;
+    if (valid_) {
+      sx_ = d[kx] / dz, sy_ = d[ky] / dz, sz_ = S(1) / dz;
+    } else {
+      sx_ = sy_ = S(0), sz_ = S(1);
+    }
     avx_ = true;
   }
   /// The lanes of `b` (the first `count`, <= 4) hit with t_max = `t_max` by the narrow-phase rule
@@ -227,7 +238,7 @@ template <class S> class BlockTest {
     return ~_mm256_movemask_pd(miss) & lanes;
   }
   bool avx_ = false;
-  S box_o_[3] = {S(0), S(0), S(0)}, box_inv_[3] = {S(0), S(0), S(0)};  // set_ray's origin and 1 / d (the box entries)
+  S box_o_[3], box_inv_[3];  // set_ray's origin and 1 / d (the box entries; only hits_avx reads them)
 #endif
 #if defined(__SSE2__)
   /// SSE2 in double: two lanes a register (a float block's coordinates converted exactly).
@@ -317,9 +328,10 @@ template <class S> class BlockTest {
     return m;
   }
 #endif
-  int off_[3] = {0, 1, 2};  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
-  S o_[3] = {S(0), S(0), S(0)}, sx_ = S(0), sy_ = S(0), sz_ = S(1);
-  bool valid_ = false;
+  // (initialised by the constructors: the one of the AVX cast writes each member once)
+  int off_[3];  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
+  S o_[3], sx_, sy_, sz_;
+  bool valid_;
 };
 
 }  // namespace detail

@@ -167,9 +167,42 @@ typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, const Measur
   };
   double prev = dist(0.0);
   if (prev < inside) return Sampled::unknown;  // closer than h at the start: the search decides
+  // The samples computed so far (NaN: not yet). First the first sample closer than h is looked
+  // for by skipping the samples the last computed one proves farther: from sample j at distance
+  // d_j the distance at t_i is at least d_j - (t_i - t_j) m, so every sample i with
+  // (i - j) m / n <= d_j - far is at least `far` = inside + 2 bound_margin_ away and computes
+  // to at least inside (the margin covers the rounding of the samples' positions and distances,
+  // as for every bound here; the factor 1 - 1e-9 the rounding of the index). The first computed
+  // sample closer than `inside` is then the first of all, the one the loop below returns at:
+  // the same hit, with the samples of a pair approaching head-on instead of every h / 4. When
+  // there is none, the loop below runs as it would without this, on the samples computed here.
+  double ds[129];  // n <= 128 (m <= 32 h)
+  if (n > 128) return Sampled::unknown;  // (not reached)
+  std::fill(ds, ds + n + 1, std::numeric_limits<double>::quiet_NaN());
+  ds[0] = prev;
+  auto sample = [&](int k) {
+    if (std::isnan(ds[k])) ds[k] = dist(double(k) / n);
+    return ds[k];
+  };
+  const double far = inside + 2 * bound_margin_;
+  int first_in = -1;
+  for (int j = 0; j < n;) {
+    const double dj = ds[j];
+    int skip = 0;
+    if (dj > far && m > 0) skip = static_cast<int>(std::min(double(n), std::floor((dj - far) / m * n * (1 - 1e-9))));
+    const int k = j + std::max(skip, 0) + 1;
+    if (k > n) break;
+    if (sample(k) < inside) {
+      first_in = k;
+      break;
+    }
+    j = k;
+  }
   bool proved = true;
   for (int k = 1; k <= n; ++k) {
-    const double t = double(k) / n, d = dist(t);
+    if (first_in >= 0 && k < first_in) continue;  // each farther than inside (above)
+    if (first_in >= 0) prev = sample(k - 1);
+    const double t = double(k) / n, d = sample(k);
     if (d < inside) {
       double lo = double(k - 1) / n, hi = t;
       if (prev > aim)

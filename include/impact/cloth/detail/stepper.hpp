@@ -144,7 +144,8 @@ class Stepper {
   double key_of(const Prim& p, double bound) const { return proof_key(path_sum(p), bound - (h_ + bound_margin_)); }
   /// Whether candidate c's last proof still holds (kept_proofs.hpp; the path lengths' rounding
   /// bound assumes at most moves_cap_ noted moves, beyond which no proof is kept).
-  bool kept(std::size_t c) const { return moves_noted_ <= moves_cap_ && proof_holds(path_sum(cand_[c]), key_[c]); }
+  /// (A candidate without a proof, key < 0, is not kept whatever its path lengths: tested first.)
+  bool kept(std::size_t c) const { return key_[c] >= 0 && moves_noted_ <= moves_cap_ && proof_holds(path_sum(cand_[c]), key_[c]); }
 
   // step_passes.hpp: the CCD passes
   CcdResult<S> ccd(const Prim& p, bool static_start);
