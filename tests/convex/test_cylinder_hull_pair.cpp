@@ -208,12 +208,13 @@ LD overlap_ld(const Cone<double>& a, const std::vector<V3L>& v, const V3L& n) {
 }
 
 // The local certificate's terms, of cylinder_hull_terms and of convex/cone_hull_terms.hpp (a cone
-// of the cylinder's radius and half length): at most the overlap everywhere, equal to it along the
-// direction they were built at. Checked to fail: the edge's abs term with twice its coefficient;
-// the cone's rim branch with its linear term's sign turned.
+// of the cylinder's radius and half length; its branch, and the body along a side ruling): at most
+// the overlap everywhere, equal to it along the direction they were built at. Checked to fail: the
+// edge's abs term with twice its coefficient; the cone's rim branch with its linear term's sign
+// turned; the inactive branch; the side body's support not mirrored.
 TEST(CylinderHullPair, TermsBoundTheOverlap) {
   test::Rng rng(642);
-  int cone_terms = 0;
+  int cone_terms = 0, side_terms = 0;
   for (const Case& c : cases(30, 643)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
     const Cone<double> cone(c.cyl.radius, c.cyl.half_length);
@@ -237,16 +238,33 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
       if (has_cone) {
         EXPECT_NEAR(value_of(ct, n), double(overlap_ld(cone, v, n.cast<LD>())), 1e-12);
       }
+      // the body inside the cone along the ruling the hull's feature along -n touches, at that
+      // ruling's side normal s, over a random span
+      Eigen::Vector3d e, s = Eigen::Vector3d::Zero();
+      detail::OverlapTerms<double> st;
+      bool has_side = false;
+      if (detail::cone_hull_side_azimuth(cone, h, f.R, f.t, n, e)) {
+        s = Eigen::Vector3d(2 * cone.half_length * e.x(), 2 * cone.half_length * e.y(), cone.radius).normalized();
+        has_side = detail::cone_side_hull_terms(cone, h, f.R, f.t, s, e, rng.uniform(0.1, 0.95), st);
+      }
+      side_terms += has_side;
+      if (has_side) {
+        EXPECT_NEAR(value_of(st, s), double(overlap_ld(cone, v, s.cast<LD>())), 1e-12);
+      }
       for (int i = 0; i < 10; ++i) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
         EXPECT_LE(value_of(terms, m), double(overlap_ld(c.cyl, v, m.cast<LD>())) + 1e-12);
         if (has_cone) {
           EXPECT_LE(value_of(ct, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
         }
+        if (has_side) {
+          EXPECT_LE(value_of(st, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
+        }
       }
     }
   }
   EXPECT_GT(cone_terms, 150);  // of 180 directions
+  EXPECT_GT(side_terms, 100);
 }
 
 // The whole penetration, both argument orders, in S: the same boolean as the oracle away from

@@ -370,8 +370,10 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
 /// the centres (separating: no contact), GJK until it encloses the origin or separates them (no
 /// contact), then EPA from GJK's tetrahedron stopped early by the local certificate on
-/// cone_hull_terms (the cone's branch active at EPA's normal and the hull's vertex or edge there),
-/// accepted when the true overlap at its normal is within the tolerance of its lower bound.
+/// cone_hull_terms (the cone's branch active at EPA's normal and the hull's vertex or edge there)
+/// or, near a side ruling of the cone, on cone_side_hull_terms (a body inside the cone along the
+/// ruling the hull's feature touches), accepted when the true overlap at its normal is within the
+/// tolerance of its lower bound.
 template <class S>
 ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
                                        const ConvexQueryOptions<S>& o) {
@@ -390,8 +392,24 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   }
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
-    if (cone_hull_terms(a, b, f.R, f.t, n, terms)) {
-      const LocalCertificate<S> lc = local_certificate(terms, n);
+    const S nz = n.z(), apex = a.half_length * nz, rim = a.radius * std::sqrt(std::max(S(1) - nz * nz, S(0))) - a.half_length * nz;
+    if (std::abs(apex - rim) > S(0.02) * (a.half_length + a.radius)) {
+      // away from the cone's side: its active branch (a side contact's branch terms never hold)
+      if (cone_hull_terms(a, b, f.R, f.t, n, terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, n);
+        if (certificate_holds(lc, sa, sb, tol)) return lc;
+      }
+      return LocalCertificate<S>();
+    }
+    // near the side: the body inside a along the ruling the hull's feature touches, at its side
+    // normal m, from the base rim point to past the hull's contact point on that ruling
+    Vec3<S> e;
+    if (!cone_hull_side_azimuth(a, b, f.R, f.t, n, e)) return LocalCertificate<S>();
+    const Vec3<S> m = Vec3<S>(S(2) * a.half_length * e.x(), S(2) * a.half_length * e.y(), a.radius).normalized();
+    const Vec3<S> x = sb(Vec3<S>(-m));
+    const Vec3<S> p(a.radius * e.x(), a.radius * e.y(), -a.half_length), d = Vec3<S>(S(0), S(0), a.half_length) - p;
+    if (cone_side_hull_terms(a, b, f.R, f.t, m, e, side_body_end((x - p).dot(d) / d.dot(d)), terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, m);
       if (certificate_holds(lc, sa, sb, tol)) return lc;
     }
     return LocalCertificate<S>();
