@@ -150,14 +150,28 @@ Row make_row(const std::string& pair, const char* query, const char* lib, double
 
 volatile double g_sink = 0;
 
-// Each library's penetration query behind a function that is never inlined, so that callgrind can
-// count its instructions alone (docs/convex.md: valgrind --tool=callgrind
-// --toggle-collect='*bench_impact_penetration*', and '*bench_fcl_penetration*' for FCL's).
+// Each library's query behind a function that is never inlined, so that callgrind can count its
+// instructions alone (docs/convex.md: valgrind --tool=callgrind
+// --toggle-collect='*bench_impact_penetration*', and likewise bench_fcl_penetration,
+// bench_impact_boolean, bench_fcl_boolean, bench_impact_distance, bench_fcl_distance). The error
+// pass and the timed loop both call them.
+template <class A, class B>
+[[gnu::noinline]] bool bench_impact_boolean(const A& a, const Pose& pa, const B& b, const Pose& pb) {
+  return convex_intersect(a, pa, b, pb);
+}
+template <class A, class B>
+[[gnu::noinline]] ConvexDistance<double> bench_impact_distance(const A& a, const Pose& pa, const B& b, const Pose& pb) {
+  return convex_distance(a, pa, b, pb);
+}
 template <class A, class B>
 [[gnu::noinline]] ConvexContact<double> bench_impact_penetration(const A& a, const Pose& pa, const B& b, const Pose& pb) {
   return convex_penetration(a, pa, b, pb);
 }
 #ifdef IMPACT_HAVE_FCL
+[[gnu::noinline]] bool bench_fcl_boolean(const test::FclShapePair& fcl, const Pose& pa, const Pose& pb) { return fcl.collide(pa, pb); }
+[[gnu::noinline]] double bench_fcl_distance(const test::FclShapePair& fcl, const Pose& pa, const Pose& pb, V3* wa, V3* wb) {
+  return fcl.distance(pa, pb, wa, wb);
+}
 [[gnu::noinline]] bool bench_fcl_penetration(const test::FclShapePair& fcl, const Pose& pa, const Pose& pb, double& depth,
                                              V3& normal, V3& point) {
   return fcl.penetration(pa, pb, depth, normal, point);
@@ -181,8 +195,8 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     Errors eb, ed, ep;
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [pa, pb] = poses[i];
-      const bool hit = convex_intersect(a, pa, b, pb);
-      const auto d = convex_distance(a, pa, b, pb);
+      const bool hit = bench_impact_boolean(a, pa, b, pb);
+      const auto d = bench_impact_distance(a, pa, b, pb);
       const auto c = bench_impact_penetration(a, pa, b, pb);
       if (ref[i].separated || ref[i].intersecting) {
         ++eb.n;
@@ -193,8 +207,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
       if (ref[i].separated && !d.intersecting) ed.add(std::abs(d.distance - ref[i].signed_distance));
       if (ref[i].intersecting && c.intersecting) ep.add(depth_error(c.depth, ref[i]));
     }
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + convex_intersect(a, poses[i].first, b, poses[i].second); });
-    const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + convex_distance(a, poses[i].first, b, poses[i].second).distance; });
+    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_impact_boolean(a, poses[i].first, b, poses[i].second); });
+    const double qd =
+        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_impact_distance(a, poses[i].first, b, poses[i].second).distance; });
     const double qp = rate(n, min_time, [&](std::size_t i) {
       g_sink = g_sink + bench_impact_penetration(a, poses[i].first, b, poses[i].second).depth;
     });
@@ -208,9 +223,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     Errors eb, ed, ep;
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [pa, pb] = poses[i];
-      const bool hit = fcl.collide(pa, pb);
+      const bool hit = bench_fcl_boolean(fcl, pa, pb);
       V3 wa, wb;
-      const double d = fcl.distance(pa, pb, &wa, &wb);
+      const double d = bench_fcl_distance(fcl, pa, pb, &wa, &wb);
       double depth = 0;
       V3 normal, point;
       const bool pen = bench_fcl_penetration(fcl, pa, pb, depth, normal, point);
@@ -226,8 +241,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     V3 wa, wb;
     double depth;
     V3 normal, point;
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + fcl.collide(poses[i].first, poses[i].second); });
-    const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + fcl.distance(poses[i].first, poses[i].second, &wa, &wb); });
+    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_fcl_boolean(fcl, poses[i].first, poses[i].second); });
+    const double qd =
+        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_fcl_distance(fcl, poses[i].first, poses[i].second, &wa, &wb); });
     const double qp = rate(n, min_time, [&](std::size_t i) {
       g_sink = g_sink + bench_fcl_penetration(fcl, poses[i].first, poses[i].second, depth, normal, point);
     });

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Cylinder against convex hull (convex/cylinder_hull_pair.hpp and the cylinder–hull path of
-// convex/query.hpp): the certified candidates, the local certificate's terms and the whole
+// convex/query.hpp): the certified candidates, the local certificate's terms (also a cone's
+// against a hull, convex/cone_hull_terms.hpp) and the whole
 // penetration, against an oracle: the least overlap f(n) = h |n_z| + r |P_z n| + max_v (-n . v)
 // over unit directions (the hull's support by a scan of all its vertices, in long double),
 // minimised by test::least_overlap (support/convex_oracle.hpp) with the kink circle of the
@@ -9,6 +10,7 @@
 // minimum is an upper bound of the true depth and every certified lower bound lies below the
 // true depth, so a certificate of a wrong (too large) depth shows as depth - depth_gap above the
 // oracle.
+#include "impact/convex/cone_hull_terms.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/query.hpp"
 #include "support/convex_oracle.hpp"
@@ -197,18 +199,29 @@ TEST(CylinderHullPair, SideVertexIsTheSupportAlongItsOffset) {
   EXPECT_GT(moved, 20);
 }
 
-// The local certificate's terms: at most the overlap everywhere, equal to it along the direction
-// they were built at. Checked to fail: the edge's abs term with twice its coefficient.
+// The overlap along unit n of cone a (its frame) and the hull's placed vertices, long double.
+LD overlap_ld(const Cone<double>& a, const std::vector<V3L>& v, const V3L& n) {
+  LD hull = -std::numeric_limits<LD>::infinity();
+  for (const V3L& x : v) hull = std::max(hull, -n.dot(x));
+  const LD h = a.half_length, rim = LD(a.radius) * std::sqrt(n.x() * n.x() + n.y() * n.y()) - h * n.z();
+  return std::max(h * n.z(), rim) + hull;
+}
+
+// The local certificate's terms, of cylinder_hull_terms and of convex/cone_hull_terms.hpp (a cone
+// of the cylinder's radius and half length): at most the overlap everywhere, equal to it along the
+// direction they were built at. Checked to fail: the edge's abs term with twice its coefficient;
+// the cone's rim branch with its linear term's sign turned.
 TEST(CylinderHullPair, TermsBoundTheOverlap) {
   test::Rng rng(642);
+  int cone_terms = 0;
   for (const Case& c : cases(30, 643)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
+    const Cone<double> cone(c.cyl.radius, c.cyl.half_length);
     const detail::PairFrame<double> f(c.pa, c.pb);
     const std::vector<V3L> v = placed(h, f.R, f.t);
     for (int j = 0; j < 6; ++j) {
       const Eigen::Vector3d n = rng.vec(-1, 1).normalized();
-      const detail::OverlapTerms<double> terms = detail::cylinder_hull_terms(c.cyl, h, f.R, f.t, n);
-      const auto value = [&](const Eigen::Vector3d& w) {
+      const auto value_of = [](const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
         double s = terms.linear.dot(w);
         for (int k = 0; k < terms.n; ++k) {
           const double d = terms.axis[k].dot(w);
@@ -216,13 +229,24 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
         }
         return s;
       };
-      EXPECT_NEAR(value(n), double(overlap_ld(c.cyl, v, n.cast<LD>())), 1e-12);
+      const detail::OverlapTerms<double> terms = detail::cylinder_hull_terms(c.cyl, h, f.R, f.t, n);
+      detail::OverlapTerms<double> ct;
+      const bool has_cone = detail::cone_hull_terms(cone, h, f.R, f.t, n, ct);
+      cone_terms += has_cone;
+      EXPECT_NEAR(value_of(terms, n), double(overlap_ld(c.cyl, v, n.cast<LD>())), 1e-12);
+      if (has_cone) {
+        EXPECT_NEAR(value_of(ct, n), double(overlap_ld(cone, v, n.cast<LD>())), 1e-12);
+      }
       for (int i = 0; i < 10; ++i) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
-        EXPECT_LE(value(m), double(overlap_ld(c.cyl, v, m.cast<LD>())) + 1e-12);
+        EXPECT_LE(value_of(terms, m), double(overlap_ld(c.cyl, v, m.cast<LD>())) + 1e-12);
+        if (has_cone) {
+          EXPECT_LE(value_of(ct, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
+        }
       }
     }
   }
+  EXPECT_GT(cone_terms, 150);  // of 180 directions
 }
 
 // The whole penetration, both argument orders, in S: the same boolean as the oracle away from

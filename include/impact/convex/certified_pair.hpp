@@ -12,6 +12,7 @@
 ///   4. EPA from GJK's tetrahedron, seeded with the best candidate's normal and stopped early by a
 ///      local certificate on the pair's overlap terms (epa_from_simplex; convex/epa.hpp and
 ///      convex/local_certificate.hpp).
+/// Cone against hull has no candidates yet: stages 1, 3 and 4 only.
 /// convex/query.hpp chooses the path per pair of types; the general pieces (GJK, EPA, settling)
 /// are in convex/general_pair.hpp.
 #pragma once
@@ -20,6 +21,7 @@
 #include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/cone_cone_pair.hpp"
+#include "impact/convex/cone_hull_terms.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
@@ -363,6 +365,40 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
     return LocalCertificate<S>();
   };
   return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+}
+
+/// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
+/// the centres (separating: no contact), GJK until it encloses the origin or separates them (no
+/// contact), then EPA from GJK's tetrahedron stopped early by the local certificate on
+/// cone_hull_terms (the cone's branch active at EPA's normal and the hull's vertex or edge there),
+/// accepted when the true overlap at its normal is within the tolerance of its lower bound.
+template <class S>
+ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
+                                       const ConvexQueryOptions<S>& o) {
+  const PairFrame<S> f(pa, pb);
+  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
+  const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
+  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  SimplexPoint<S> simplex[4];
+  int its = 1;
+  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
+    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Apart: return no_contact<S>(its);
+    case Enclosure::Enclosed: break;
+  }
+  const auto local = [&](const Vec3<S>& n) {
+    OverlapTerms<S> terms;
+    if (cone_hull_terms(a, b, f.R, f.t, n, terms)) {
+      const LocalCertificate<S> lc = local_certificate(terms, n);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
+    return LocalCertificate<S>();
+  };
+  ConvexContact<S> none;  // no candidate: EPA unseeded
+  none.depth = std::numeric_limits<S>::infinity();
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none);
 }
 
 }  // namespace detail

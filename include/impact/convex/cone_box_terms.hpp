@@ -32,22 +32,38 @@ void add_box_terms(const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, OverlapT
   f.linear -= t;
 }
 
-/// The overlap of cone a (its frame) and box b placed by R, t there, with the cone's branch
-/// active along n (its apex or its base rim); false when they tie within 1e-6 of the cone's size
-/// (n normal to a side ruling).
+/// Which branch of cone a (its frame) supports unit n: 1 its apex, 2 its base rim, 0 when they tie
+/// within 1e-6 of the cone's size (n normal to a side ruling).
 template <class S>
-bool cone_box_terms(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+int cone_branch(const Cone<S>& a, const Vec3<S>& n) {
   const S nz = n.z(), apex = a.half_length * nz, rim = a.radius * std::sqrt(std::max(S(1) - nz * nz, S(0))) - a.half_length * nz;
-  if (std::abs(apex - rim) <= S(1e-6) * (a.half_length + a.radius)) return false;
-  f = OverlapTerms<S>();
-  add_box_terms(b, R, t, f);
-  if (apex > rim) {
+  if (std::abs(apex - rim) <= S(1e-6) * (a.half_length + a.radius)) return 0;
+  return apex > rim ? 1 : 2;
+}
+
+/// Adds the terms of cone a's branch `branch` (cone_branch: 1 the apex, a linear term; 2 the base
+/// rim, a disc term about z plus a linear one), each a lower bound of the cone's support everywhere.
+template <class S>
+void add_cone_branch_terms(const Cone<S>& a, int branch, OverlapTerms<S>& f) {
+  if (branch == 1) {
     f.linear.z() += a.half_length;
   } else {
     f.linear.z() -= a.half_length;
     f.add(Vec3<S>::UnitZ(), a.radius, true);
   }
   f.magnitude += a.half_length;
+}
+
+/// The overlap of cone a (its frame) and box b placed by R, t there, with the cone's branch
+/// active along n (its apex or its base rim); false when they tie within 1e-6 of the cone's size
+/// (n normal to a side ruling).
+template <class S>
+bool cone_box_terms(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+  const int branch = cone_branch(a, n);
+  if (branch == 0) return false;
+  f = OverlapTerms<S>();
+  add_box_terms(b, R, t, f);
+  add_cone_branch_terms(a, branch, f);
   return true;
 }
 

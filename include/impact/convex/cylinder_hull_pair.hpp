@@ -230,17 +230,13 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
   return k.finish(tolerance, out) ? CylinderHullVerdict::Certified : CylinderHullVerdict::Open;
 }
 
-/// The terms of convex/local_certificate.hpp for cylinder a (its frame) and hull b placed by R, t
-/// there, near unit n: the cylinder's disc and abs terms about z, and the hull's support feature
-/// along -n: its farthest vertex v (a linear term), or the edge from v to the neighbour u nearly
-/// as far (within 1e-3 of the size along -n: linear plus an abs term, h_B(-w) >= max(-w . v,
-/// -w . u)). A lower bound of the overlap everywhere (any points of the hull bound its support
-/// from below), equal to it near n where that feature is the hull's support.
+/// Adds to f the terms of hull b (placed by R, t in the frame of f) near unit n: its support
+/// feature along -n, its farthest vertex v (a linear term), or the edge from v to the neighbour u
+/// nearly as far (within 1e-3 of the size along -n: linear plus an abs term, h_B(-w) >= max(-w . v,
+/// -w . u)). A lower bound of the hull's part of the overlap everywhere (any points of the hull
+/// bound its support from below), equal to it near n where that feature is the hull's support.
 template <class S>
-OverlapTerms<S> cylinder_hull_terms(const Cylinder<S>& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n) {
-  OverlapTerms<S> f;
-  f.add(Vec3<S>::UnitZ(), a.radius, true);
-  f.add(Vec3<S>::UnitZ(), a.half_length, false);
+void add_hull_feature_terms(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
   const Vec3<S> d = -(R.transpose() * n);
   const S* p = b.vertices.data();
   const auto along = [&](int i) { return p[3 * i] * d.x() + p[3 * i + 1] * d.y() + p[3 * i + 2] * d.z(); };
@@ -278,11 +274,23 @@ OverlapTerms<S> cylinder_hull_terms(const Cylinder<S>& a, const ConvexHull<S>& b
     const S len = e.norm();
     if (len > S(0)) {
       f.add(Vec3<S>(e / len), len / S(2), false);
-      f.linear = -(pv + pu) / S(2);
-      return f;
+      f.linear -= (pv + pu) / S(2);
+      return;
     }
   }
-  f.linear = -pv;
+  f.linear -= pv;
+}
+
+/// The terms of convex/local_certificate.hpp for cylinder a (its frame) and hull b placed by R, t
+/// there, near unit n: the cylinder's disc and abs terms about z, and the hull's support feature
+/// along -n (add_hull_feature_terms). A lower bound of the overlap everywhere, equal to it near n
+/// where that feature is the hull's support.
+template <class S>
+OverlapTerms<S> cylinder_hull_terms(const Cylinder<S>& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n) {
+  OverlapTerms<S> f;
+  f.add(Vec3<S>::UnitZ(), a.radius, true);
+  f.add(Vec3<S>::UnitZ(), a.half_length, false);
+  add_hull_feature_terms(b, R, t, n, f);
   return f;
 }
 

@@ -434,14 +434,16 @@ S cone_side_contact(const A& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S
   const Vec3<S> p = Vec3<S>(rc * v.x() / m, rc * v.y() / m, -hc), d = Vec3<S>(S(0), S(0), hc) - p;  // b's ruling from s = 0 to 1
   const S dd = d.dot(d);
   const Vec3<S> xa = support(a, n);
-  if (std::is_same_v<A, Cylinder<S>> && std::abs(n.z()) < flat) {
-    // a's ruling q0 + sigma u, sigma in [-h_a, h_a] (u a's axis in b's frame): its point nearest
-    // the line of b's ruling
-    const Vec3<S> q0 = R.transpose() * (Vec3<S>(xa.x(), xa.y(), S(0)) - t), u = R.row(2).transpose(), w = q0 - p;
-    const S du = d.dot(u), dw = d.dot(w), uw = u.dot(w), den = dd - du * du;  // |u| = 1
-    S sigma = den > S(1e-12) * dd ? ((dw - uw * du) / den) * du - uw : S(0);
-    sigma = std::clamp(sigma, -a.half_length, a.half_length);
-    return (dw + sigma * du) / dd;
+  if constexpr (std::is_same_v<A, Cylinder<S>>) {
+    if (std::abs(n.z()) < flat) {
+      // a's ruling q0 + sigma u, sigma in [-h_a, h_a] (u a's axis in b's frame): its point nearest
+      // the line of b's ruling
+      const Vec3<S> q0 = R.transpose() * (Vec3<S>(xa.x(), xa.y(), S(0)) - t), u = R.row(2).transpose(), w = q0 - p;
+      const S du = d.dot(u), dw = d.dot(w), uw = u.dot(w), den = dd - du * du;  // |u| = 1
+      S sigma = den > S(1e-12) * dd ? ((dw - uw * du) / den) * du - uw : S(0);
+      sigma = std::clamp(sigma, -a.half_length, a.half_length);
+      return (dw + sigma * du) / dd;
+    }
   }
   return (R.transpose() * (xa - t) - p).dot(d) / dd;
 }

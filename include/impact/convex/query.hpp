@@ -47,7 +47,9 @@
 ///                                     convex/cone_box_pair.hpp, cone against cone through those
 ///                                     of convex/cone_cone_pair.hpp, then EPA with the local
 ///                                     certificate of convex/cone_box_terms.hpp or
-///                                     cone_cone_terms, else the own EPA (convex/epa.hpp;
+///                                     cone_cone_terms; cone against hull: the centre line,
+///                                     GJK, EPA with the local certificate of
+///                                     convex/cone_hull_terms.hpp; else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with
 ///                                     options.libccd_penetration, and as the fallback when the
 ///                                     Minkowski difference is flat)
@@ -198,6 +200,10 @@ ConvexContact<S> penetration_by_method(const A& a, const RigidTransform<S>& pose
       if (!options.libccd_penetration && use_cylinder_hull_candidates(b)) return cylinder_hull_penetration(a, pose_a, b, pose_b, options);
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Cylinder<S>>) {
       if (!options.libccd_penetration && use_cylinder_hull_candidates(a)) return swapped(cylinder_hull_penetration(b, pose_b, a, pose_a, options));
+    } else if constexpr (std::is_same_v<A, Cone<S>> && std::is_same_v<B, ConvexHull<S>>) {
+      if (!options.libccd_penetration && use_cylinder_hull_candidates(b)) return cone_hull_penetration(a, pose_a, b, pose_b, options);
+    } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Cone<S>>) {
+      if (!options.libccd_penetration && use_cylinder_hull_candidates(a)) return swapped(cone_hull_penetration(b, pose_b, a, pose_a, options));
     } else if constexpr (std::is_same_v<A, Box<S>> && std::is_same_v<B, ConvexHull<S>>) {  // separating axes
       if (!options.libccd_penetration && use_box_hull_sat(b)) return box_hull_sat(a, pose_a, b, pose_b);
     } else if constexpr (std::is_same_v<A, ConvexHull<S>> && std::is_same_v<B, Box<S>>) {

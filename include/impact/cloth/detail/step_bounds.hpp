@@ -124,7 +124,8 @@ double Stepper<S>::split_bound(const Prim& p, const Measured& known) const {
 /// relative motion (relative_motion: the distance changes by at most (t' - t) m between times t
 /// and t'), the distance is sampled (exact closest points, in double) at n + 1 evenly spaced
 /// times, n = ceil(4 m / h) (so it changes by at most h / 4 between samples; pairs with
-/// m > 32 h are left to the search).
+/// m > (max_samples_ / 4) h = 32 h, which would need more than max_samples_ intervals, are left
+/// to the search).
 /// Hit: at the first sample closer than h (a contact, up to the rounding margin), the time just
 /// before the distance falls to h + band_ / 2 is bisected between it and the sample before; the
 /// pair was farther than 3 h / 4 before it (the samples are h / 4 apart in distance), so it had
@@ -143,7 +144,8 @@ double Stepper<S>::split_bound(const Prim& p, const Measured& known) const {
 template <class S>
 typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, const Measured& known, CcdResult<S>& r, double& bound) const {
   const double m = known.m;
-  if (!(m <= 32 * h_)) return Sampled::unknown;
+  static_assert(max_samples_ % 4 == 0, "the motion bound below is max_samples_ / 4 intervals of h");
+  if (!(m <= (max_samples_ / 4) * h_)) return Sampled::unknown;  // so 4 m / h <= max_samples_ exactly
   const int n = std::max(2, static_cast<int>(std::ceil(4 * m / h_)));
   auto dist = [&](double t) {
     if (t == 0.0 && !std::isnan(known.d0)) return known.d0;
@@ -176,8 +178,8 @@ typename Stepper<S>::Sampled Stepper<S>::sample_pair(const Prim& p, const Measur
   // sample closer than `inside` is then the first of all, the one the loop below returns at:
   // the same hit, with the samples of a pair approaching head-on instead of every h / 4. When
   // there is none, the loop below runs as it would without this, on the samples computed here.
-  double ds[129];  // n <= 128 (m <= 32 h)
-  if (n > 128) return Sampled::unknown;  // (not reached)
+  double ds[max_samples_ + 1];
+  if (n > max_samples_) return Sampled::unknown;  // (not reached: m is bounded above)
   std::fill(ds, ds + n + 1, std::numeric_limits<double>::quiet_NaN());
   ds[0] = prev;
   auto sample = [&](int k) {

@@ -133,6 +133,9 @@ class Stepper {
   };
   double separation_bound(std::size_t i, Measured& known);
   double split_bound(const Prim& p, const Measured& known) const;
+  /// sample_pair's most intervals along the step (each h / 4 of relative motion): pairs moving
+  /// relative to each other by more than max_samples_ / 4 h go to the search.
+  static constexpr int max_samples_ = 128;
   Sampled sample_pair(const Prim& p, const Measured& known, CcdResult<S>& r, double& bound) const;
   Contact closest(const Prim& p, bool start) const;
   template <class Pos>
