@@ -487,7 +487,8 @@ TYPED_TEST(WideBvhTest, FloatSlabAtLargeMagnitudes) {
 
 // float_round_up / float_round_down / float_bounds (the float node test's bounds) against a reference by
 // nextafter: the nearest float on the right side, at zero, subnormals, the float range's ends;
-// next_below against std::nextafter.
+// next_below against std::nextafter; the bounds after a hit (float_hit_bounds: the same floats as
+// rounding best and next_below(best)) and the tie bound under best - 4 (best 2^-19 + e).
 TEST(WideBvh, FloatRoundingHelpers) {
   test::Rng rng(59);
   auto up = [](double x) {
@@ -517,6 +518,17 @@ TEST(WideBvh, FloatRoundingHelpers) {
     const float xf = static_cast<float>(x);
     const float nf = detail::next_below(xf), rnf = std::nextafter(xf, -std::numeric_limits<float>::infinity());
     EXPECT_TRUE(nf == rnf && std::signbit(nf) == std::signbit(rnf)) << x;
+    if (std::signbit(x) && x != 0.0) continue;  // (a hit's t: +0, -0 or positive)
+    float hu = 0.0f, hb = 0.0f;
+    detail::float_hit_bounds(x, hu, hb);
+    const float rb = -up(-rnd);  // the largest float below x
+    EXPECT_TRUE(hu == ru) << x;  // (+0 or -0 for x = -0)
+    EXPECT_TRUE(hb == rb && std::signbit(hb) == std::signbit(rb)) << x;
+    if (!(x <= double(FLT_MAX))) continue;
+    for (const float e : {0x1p-100f, static_cast<float>(0x1p-20 * x) + 0x1p-100f, static_cast<float>(x) + 0x1p-100f}) {
+      const long double tie = detail::float_tie_bound(hb, e);
+      EXPECT_LE(tie, static_cast<long double>(x) - 4.0L * (static_cast<long double>(x) * 0x1p-19L + e)) << x << " " << e;
+    }
   }
 }
 

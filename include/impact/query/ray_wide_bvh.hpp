@@ -128,12 +128,13 @@ template <class S, int W = 4> struct WideCast {
   // 8-wide), for the tests that compare the two loops node by node
   bool fused_scalar = false;
   float slab_error = 0.0f;  // the float node test's absolute error (its e; 0 when it is not used)
-  S best, limit;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
-  std::int32_t best_k = -1;     // leaf-order position of the best hit
-  std::int32_t best_block = -1;  // its block and lane
+  S best;  // after a hit only a strictly earlier one replaces it: nodes entered at best are pruned
+  std::int32_t best_block = -1;  // the best hit's block (-1: no hit yet) and lane (leaf-order position: hit_position)
   int best_lane = 0;
-  Vec3<S> best_bary = Vec3<S>::Zero();
-  float exit_f = 0.0f, bound_f = 0.0f;  // the float node test's exit bound (a float >= best) and entry bound (<= limit)
+  Vec3<S> best_bary;  // (set with best_block)
+  // the float node test's exit bound (a float >= best) and entry bound (before a hit a float <=
+  // t_max, after it the largest float < best)
+  float exit_f = 0.0f, bound_f = 0.0f;
   // after a hit: float keys at or above tie_f may be within rounding of the hit (redecide)
   float tie_f = std::numeric_limits<float>::infinity();
   /// What the triangle tests need of the ray: made at the first leaf (most short casts reach
@@ -149,7 +150,7 @@ template <class S, int W = 4> struct WideCast {
 
   /// `o_` and `d_` must outlive the cast.
   WideCast(const WideBvh<S, W>& w, const Vec3<S>& o_, const Vec3<S>& d_, S t_max_, bool simd, bool avx = true)
-      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), best(t_max_), limit(t_max_) {
+      : wide(w), o(o_), d(d_), inv(safe_inverse(d_)), t_max(t_max_), use_simd(simd), use_avx(avx), best(t_max_) {
     float_bounds(double(t_max_), bound_f, exit_f);
   }
 
@@ -167,10 +168,16 @@ template <class S, int W = 4> struct WideCast {
       keys[c] = t ? *t : std::numeric_limits<S>::quiet_NaN();
     }
   }
-  /// The children entered by the test in S (before limit), with their keys rounded down to float.
+  /// True once a hit is recorded.
+  bool has_hit() const { return best_block >= 0; }
+  /// The best hit's leaf-order position (after a hit).
+  std::int32_t hit_position() const { return wide.block_first(best_block) + best_lane; }
+  /// The children entered by the test in S (at or before t_max, after a hit before it), with their
+  /// keys rounded down to float.
   int double_mask(const Node& n, float (&fk)[W]) {
     S keys[W];
     double_keys(n, keys);
+    const S limit = has_hit() ? next_below(best) : best;
     int mask = 0;
     for (int c = 0; c < W; ++c) {
       const bool in = keys[c] <= limit && n.count[c] >= 0;
@@ -192,7 +199,7 @@ template <class S, int W = 4> struct WideCast {
     PreparedRay<S>& pr = leaf_setup->pr;
     pr.ray.t_max = best;
     const auto h = ray_mesh_triangle_hit(pr, inv, wide.block_triangle(b, c));
-    if (h && (best_k < 0 || h->t < best)) record(b, c, h->t, Vec3<S>(h->u, h->v, h->w));
+    if (h && (!has_hit() || h->t < best)) record(b, c, h->t, Vec3<S>(h->u, h->v, h->w));
   }
   /// test() from the block test's values of lane c (`values`: the scalar test's own
   /// intermediate values, so the same decision and hit values bit for bit): the depth checked
@@ -204,19 +211,19 @@ template <class S, int W = 4> struct WideCast {
     if (det > S(0) ? (tt < S(0) || tt > tmd) : (tt > S(0) || tt < tmd)) return;
     const S inv_det = S(1) / det;
     const std::optional<S> th = detail::mesh_hit_t(o, inv, wide.block_triangle(b, c), std::min(S(tt * inv_det), best), det > S(0), best);
-    if (th && (best_k < 0 || *th < best))
+    if (th && (!has_hit() || *th < best))
       record(b, c, *th, Vec3<S>(S(values.eu[c] * inv_det), S(values.ev[c] * inv_det), S(values.ew[c] * inv_det)));
   }
-  /// A new best hit: triangle in lane c of block b at t.
+  /// A new best hit: triangle in lane c of block b at t (>= 0). The float bounds from one rounding
+  /// of t (float_hit_bounds); the tie bound at most t - 4 (t 2^-19 + e) (float_tie_bound: the
+  /// slack of docs/rays.md, e = slab_error >= 2^-100, set by the node loop before any leaf).
   void record(std::int32_t b, int c, S t, const Vec3<S>& bary) {
     best = t;
-    best_k = wide.block_first(b) + c;
     best_block = b;
     best_lane = c;
     best_bary = bary;
-    limit = next_below(best);
-    const double slack = 4.0 * (std::abs(double(best)) * 0x1p-19 + double(slab_error));
-    float_round_three(double(best), double(limit), double(best) - slack, exit_f, bound_f, tie_f);
+    float_hit_bounds(double(t), exit_f, bound_f);
+    tie_f = float_tie_bound(bound_f, slab_error);
   }
   /// The triangles of a leaf (its blocks from `block`): four at a time through the block test
   /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
@@ -297,7 +304,7 @@ template <class S, int W = 4> struct WideCast {
         const S det = h.det[c], tt = h.tt[c], tmd = best * det;
         if (det > S(0) ? (tt < S(0) || tt > tmd) : (tt > S(0) || tt < tmd)) continue;
       }
-      if (best_k >= 0 && !(th < best)) continue;
+      if (has_hit() && !(th < best)) continue;
       const S inv_det = h.inv_det[c];
       record(block, c, th, Vec3<S>(S(h.eu[c] * inv_det), S(h.ev[c] * inv_det), S(h.ew[c] * inv_det)));
       lowered = true;
@@ -647,7 +654,7 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
       if (!ray_in_range(ray)) validate_ray(ray, "ray_mesh_first_hit");
       cast.run_without_avx();
     }
-    if (cast.best_k < 0) return std::nullopt;  // (most short casts)
+    if (!cast.has_hit()) return std::nullopt;  // (most short casts)
   } else {
     cast.run();
   }
@@ -659,11 +666,11 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
     stats->node_tests += W * cast.node_tests;
     stats->triangle_tests += cast.triangle_tests;
   }
-  if (cast.best_k < 0) return std::nullopt;
+  if (!cast.has_hit()) return std::nullopt;
   RayMeshHit<S> hit;
   hit.t = cast.best;
-  hit.leaf_index = cast.best_k;
-  hit.triangle = wide.triangle_id(cast.best_k);
+  hit.leaf_index = cast.hit_position();
+  hit.triangle = wide.triangle_id(hit.leaf_index);
   hit.barycentric = cast.best_bary;
   hit.point = ray.origin + cast.best * ray.direction;
   const Vec3<S> nrm = wide.block_triangle(cast.best_block, cast.best_lane).normal();

@@ -169,23 +169,31 @@ inline void float_bounds(double x, float& down, float& up) {
   down = d;
 }
 
-/// float_round_up(a), float_round_down(b) and float_round_down(c) (none NaN) at once: with SSE2
-/// the same roundings on four lanes (a cast's bounds after a hit).
-inline void float_round_three(double a, double b, double c, float& up_a, float& down_b, float& down_c) {
-#if defined(__SSE2__)
-  const __m128d x01 = _mm_set_pd(-b, a), x23 = _mm_set_pd(0.0, -c);  // round_down(x) = -round_up(-x)
-  const __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(x01), _mm_cvtpd_ps(x23));  // float(x), each lane
-  const __m128d below01 = _mm_cmplt_pd(_mm_cvtps_pd(f), x01), below23 = _mm_cmplt_pd(_mm_cvtps_pd(_mm_movehl_ps(f, f)), x23);
-  const __m128i below = _mm_srli_epi32(_mm_castps_si128(_mm_shuffle_ps(_mm_castpd_ps(below01), _mm_castpd_ps(below23), _MM_SHUFFLE(2, 0, 2, 0))), 31);
-  const __m128i bits = _mm_castps_si128(f);
-  const __m128i up = _mm_sub_epi32(_mm_add_epi32(bits, below), _mm_slli_epi32(_mm_and_si128(below, _mm_srli_epi32(bits, 31)), 1));  // float_round_up
-  alignas(16) float r[4];
-  _mm_store_ps(r, _mm_castsi128_ps(up));
-  up_a = r[0], down_b = -r[1], down_c = -r[2];
-#else
-  up_a = float_round_up(a), down_b = float_round_down(b), down_c = float_round_down(c);
-#endif
+/// The float bounds of a cast after a hit at t = x (x >= 0 or -0, not NaN): `up` the smallest
+/// float >= x (the node test's exit bound) and `below` the largest float < x
+/// (float_round_down(next_below(x)): the entry bound, so a child entered at or after the hit is
+/// pruned), from one rounding of x: f = float(x) is one of them and the other its neighbour (for f
+/// below x, f and the float up; else the float down, -denorm_min for f = +-0, and f).
+inline void float_hit_bounds(double x, float& up, float& below) {
+  const float f = static_cast<float>(x);
+  std::uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  // without jumps (whether f is below x is a coin toss): f >= +-0 and its bits are b
+  const std::uint32_t lower = double(f) < x ? 1u : 0u;
+  const std::uint32_t ub = b + lower;  // (below x: the next float up, +infinity above FLT_MAX)
+  const std::uint32_t db0 = b - 1u + lower;  // (else the float below f, but for f = +-0: a NaN)
+  const std::uint32_t db = (db0 << 1) == 0xfffffffeu ? 0x80000001u : db0;  // (-denorm_min)
+  std::memcpy(&up, &ub, sizeof up);
+  std::memcpy(&below, &db, sizeof below);
 }
+/// A float at most x - 4 (x 2^-19 + e) for every x > `below` (float_hit_bounds' bound of a hit at
+/// x >= 0) and e >= 2^-100: the cast's tie bound (docs/rays.md), in two float operations (or one
+/// multiply-add where the compiler contracts them). With k = 1 - 2^-16, P = below k rounded is at
+/// most x k (1 + 2^-24) <= x (1 - 2^-17) - x 2^-24 (P <= 0 for below < 0), c = 5 e rounded is at
+/// least 4.99 e, and P - c rounded is at most (P - c)(1 + 2^-24) <= P (1 + 2^-24) - c when P - c >= 0,
+/// at most P - c (1 - 2^-24) below zero: both <= x (1 - 2^-17) - 4 e; an underflow's 2^-150 is far
+/// below the 0.98 e to spare.
+inline float float_tie_bound(float below, float e) { return below * (1.0f - 0x1p-16f) - 5.0f * e; }
 
 /// The largest S below x (x not NaN): std::nextafter(x, -infinity) without libm (the bound of a
 /// cast after a hit).
