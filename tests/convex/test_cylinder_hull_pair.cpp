@@ -209,11 +209,14 @@ LD overlap_ld(const Cone<double>& a, const std::vector<V3L>& v, const V3L& n) {
 
 // The local certificate's terms, of cylinder_hull_terms and of convex/cone_hull_terms.hpp (a cone
 // of the cylinder's radius and half length; its branch, and the body along a side ruling): at most
-// the overlap everywhere, equal to it along the direction they were built at. Checked to fail: the
+// the overlap everywhere, equal to it along the direction they were built at; the side body's own
+// part equal to the cone's support where that is the ruling's base rim point. Checked to fail: the
 // edge's abs term with twice its coefficient; the cone's rim branch with its linear term's sign
-// turned; the inactive branch; the side body's support not mirrored.
+// turned; the inactive branch; the side body's support not mirrored; the side body on the opposite
+// ruling.
 TEST(CylinderHullPair, TermsBoundTheOverlap) {
   test::Rng rng(642);
+  test::Rng rim_rng(644);  // its own, so the other directions stay those drawn before
   int cone_terms = 0, side_terms = 0;
   for (const Case& c : cases(30, 643)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
@@ -232,7 +235,7 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
       };
       const detail::OverlapTerms<double> terms = detail::cylinder_hull_terms(c.cyl, h, f.R, f.t, n);
       detail::OverlapTerms<double> ct;
-      const bool has_cone = detail::cone_hull_terms(cone, h, f.R, f.t, n, ct);
+      const bool has_cone = detail::cone_hull_terms(cone, h, f.R, f.t, n, detail::cone_branch(cone, n), ct);
       cone_terms += has_cone;
       EXPECT_NEAR(value_of(terms, n), double(overlap_ld(c.cyl, v, n.cast<LD>())), 1e-12);
       if (has_cone) {
@@ -250,6 +253,16 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
       side_terms += has_side;
       if (has_side) {
         EXPECT_NEAR(value_of(st, s), double(overlap_ld(cone, v, s.cast<LD>())), 1e-12);
+        // the body holds that ruling's base rim point, so its own part (the terms less the hull's)
+        // is the cone's support along the directions whose support is that point: between s and
+        // -z in the plane of e and z (a body on another ruling is not, though it still bounds)
+        detail::OverlapTerms<double> hull_part;
+        detail::add_hull_feature_terms(h, f.R, f.t, s, hull_part);
+        for (int i = 0; i < 3; ++i) {
+          const Eigen::Vector3d w = (s - rim_rng.uniform(0.05, 2.0) * Eigen::Vector3d::UnitZ()).normalized();
+          const double rim = cone.radius * std::hypot(w.x(), w.y()) - cone.half_length * w.z();
+          EXPECT_NEAR(value_of(st, w) - value_of(hull_part, w), std::max(cone.half_length * w.z(), rim), 1e-12);
+        }
       }
       for (int i = 0; i < 10; ++i) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();

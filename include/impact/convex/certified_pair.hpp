@@ -72,6 +72,62 @@ Enclosure enclose_origin(const SupportA& sa, const SupportB& sb, const Vec3<S>& 
   return limit || failed ? Enclosure::Unsure : Enclosure::Apart;
 }
 
+/// What the paths of a (its frame) and b with their own stages share: the pair's frame, the
+/// larger shape's size and the tolerance, both support functions in a's frame, the line between
+/// the interior points (stage 1: separated_along it) and stage 3 from it (enclose). Holds
+/// references to the query's arguments: used within the query only.
+template <class S, class A, class B>
+struct PairPath {
+  struct SupportA {
+    const A& shape;
+    Vec3<S> operator()(const Vec3<S>& d) const { return support(shape, d); }
+  };
+  struct SupportB {
+    const PairFrame<S>& f;
+    const B& shape;
+    Vec3<S> operator()(const Vec3<S>& d) const { return f.support_b(shape, d); }
+  };
+
+  const A& a;
+  const RigidTransform<S>& pa;
+  const B& b;
+  const RigidTransform<S>& pb;
+  const ConvexQueryOptions<S>& o;
+  const PairFrame<S> f;
+  const S scale, tol;
+  const SupportA sa;
+  const SupportB sb;
+  const Vec3<S> centre_line;
+
+  PairPath(const A& a_, const RigidTransform<S>& pa_, const B& b_, const RigidTransform<S>& pb_, const ConvexQueryOptions<S>& o_)
+      : a(a_), pa(pa_), b(b_), pb(pb_), o(o_), f(pa_, pb_), scale(query_scale<S>(a_, b_)), tol(o_.relative_tolerance * scale),
+        sa{a_}, sb{f, b_}, centre_line(placed_interior() - interior_point(a_)) {}
+  PairPath(const PairPath&) = delete;
+  PairPath& operator=(const PairPath&) = delete;
+
+  /// b's interior point in a's frame (a box's is its centre: f.t).
+  Vec3<S> placed_interior() const {
+    if constexpr (std::is_same_v<B, Box<S>>) {
+      return f.t;
+    } else {
+      return f.b_to_a(interior_point(b));
+    }
+  }
+
+  /// GJK from the centre line (enclose_origin, `its` support calls so far): true with `simplex` its
+  /// tetrahedron about the origin; false with `answer` the query's answer when it ended there (a
+  /// separating plane: no contact after its calls and `extra` more; unsure: the general path from
+  /// scratch).
+  bool enclose(SimplexPoint<S> (&simplex)[4], int& its, int extra, ConvexContact<S>& answer) const {
+    switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
+      case Enclosure::Unsure: answer = general_penetration(a, pa, b, pb, o); return false;
+      case Enclosure::Apart: answer = no_contact<S>(its + extra); return false;
+      case Enclosure::Enclosed: break;
+    }
+    return true;
+  }
+};
+
 /// Whether a local certificate whose bound came through one branch of a shape (a cone's side or
 /// base, a hull's vertex or edge) holds: that bound is exact only where the branch touches the
 /// contact, so the true overlap at the certificate's normal (one support call of each shape) must
@@ -85,14 +141,15 @@ bool certificate_holds(const LocalCertificate<S>& lc, const SupportA& sa, const 
 /// EPA from GJK's tetrahedron (`calls` support calls so far), seeded with the best candidate's
 /// normal when one has a finite depth (an upper bound near the answer, and the local
 /// certificate's first start), and stopped early by `local` unless options.local_certificate is
-/// off; the candidates' support calls are added to the count.
+/// off; the candidates' support calls are added to the count. `f` is PairFrame(pa, pb), the frame
+/// of `simplex` (computed once a query).
 template <class S, class A, class B, class Local>
 ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                   const ConvexQueryOptions<S>& o, const SimplexPoint<S> (&simplex)[4], int calls, const Local& local,
-                                  const ConvexContact<S>& cand) {
+                                  const ConvexContact<S>& cand, const PairFrame<S>& f) {
   const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
-  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, local, seed)
-                                           : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed);
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, local, seed, &f)
+                                           : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed, &f);
   g.iterations += cand.iterations;
   return g;
 }
@@ -175,7 +232,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
       return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
     }
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c);
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c, f);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   return g;
 }
@@ -193,25 +250,20 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
 template <class S>
 ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb,
                                        const ConvexQueryOptions<S>& o) {
-  const PairFrame<S> f(pa, pb);
-  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
+  const PairPath<S, Cone<S>, Cone<S>> path(a, pa, b, pb, o);
+  const PairFrame<S>& f = path.f;
+  const S tol = path.tol;
+  const auto& sa = path.sa;
+  const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
-  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
   ConvexContact<S> cand;
   if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
   SimplexPoint<S> simplex[4];
   int its = 1;
-  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
-    case Enclosure::Unsure: {
-      ConvexContact<S> g = general_penetration(a, pa, b, pb, o);
-      narrow_by_parallel_axes(a, pa, b, pb, o, g);
-      return g;
-    }
-    case Enclosure::Apart: return no_contact<S>(its);
-    case Enclosure::Enclosed: break;
+  if (!path.enclose(simplex, its, 0, cand)) {
+    narrow_by_parallel_axes(a, pa, b, pb, o, cand);  // the general path's answer (no contact: unchanged)
+    return cand;
   }
   cand = ConvexContact<S>();
   if (cone_cone_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
@@ -241,7 +293,7 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   return g;
 }
@@ -258,26 +310,22 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
 template <class S>
 ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
                                       const ConvexQueryOptions<S>& o) {
-  const PairFrame<S> f(pa, pb);
-  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  const Vec3<S> centre_line = f.t - interior_point(a);
+  const PairPath<S, Cone<S>, Box<S>> path(a, pa, b, pb, o);
+  const PairFrame<S>& f = path.f;
+  const S tol = path.tol;
+  const auto& sa = path.sa;
+  const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
-  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
   // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
-  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * scale))
+  if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * path.scale))
     return one_plane_apart<S>();
   SimplexPoint<S> simplex[4];
   int its = 1;
-  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
-    case Enclosure::Apart: return no_contact<S>(its);
-    case Enclosure::Enclosed: break;
-  }
+  ConvexContact<S> cand;
+  if (!path.enclose(simplex, its, 0, cand)) return cand;
   // intersecting: the certified candidates of convex/cone_box_pair.hpp (after GJK, which decides
   // the separated poses more cheaply than they would), else EPA from GJK's tetrahedron
-  ConvexContact<S> cand;
   if (cone_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
@@ -287,7 +335,7 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
 }
 
 /// A cylinder (a) and a box (b): the planes of convex/cylinder_box_pair.hpp (the line between the
@@ -321,7 +369,7 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   }
   const OverlapTerms<S> terms = cylinder_box_terms(a, b, f.R, f.t);
   const auto local = [&](const Vec3<S>& n) { return local_certificate(terms, n); };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
 }
 
 /// A cylinder (a) and a convex hull (b): a plane normal to the line between the centres, then the
@@ -335,36 +383,28 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
 template <class S>
 ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b,
                                            const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
-  const PairFrame<S> f(pa, pb);
-  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
-  const S margin = std::numeric_limits<S>::epsilon() * S(16) * scale;
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  const Vec3<S> centre_b = f.b_to_a(interior_point(b));
-  {  // a plane normal to the line between the centres separates them (most separated poses)
-    const S len = centre_b.norm();
-    if (len > S(0)) {
-      const Vec3<S> m = centre_b / len;
-      if (m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -margin) return one_plane_apart<S>();
-    }
-  }
+  const PairPath<S, Cylinder<S>, ConvexHull<S>> path(a, pa, b, pb, o);
+  const PairFrame<S>& f = path.f;
+  const S tol = path.tol;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * path.scale;
+  const auto& sa = path.sa;
+  const auto& sb = path.sb;
+  // a plane normal to the line between the centres separates them (most separated poses)
+  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
   ConvexContact<S> cand;
   const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
   if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
   if (verdict == CylinderHullVerdict::Certified) return settled(a, pa, b, pb, cand, 1);
   SimplexPoint<S> simplex[4];
   int its = 1;
-  switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
-    case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
-    case Enclosure::Enclosed: break;
-  }
+  ConvexContact<S> answer;
+  if (!path.enclose(simplex, its, cand.iterations, answer)) return answer;
   const auto local = [&](const Vec3<S>& n) {
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
     if (certificate_holds(lc, sa, sb, tol)) return lc;
     return LocalCertificate<S>();
   };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand);
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
 }
 
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
@@ -377,25 +417,22 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
 template <class S>
 ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
                                        const ConvexQueryOptions<S>& o) {
-  const PairFrame<S> f(pa, pb);
-  const S scale = query_scale<S>(a, b), tol = o.relative_tolerance * scale;
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
-  const Vec3<S> centre_line = f.b_to_a(interior_point(b)) - interior_point(a);
-  if (separated_along(sa, sb, centre_line, scale)) return one_plane_apart<S>();
+  const PairPath<S, Cone<S>, ConvexHull<S>> path(a, pa, b, pb, o);
+  const PairFrame<S>& f = path.f;
+  const S tol = path.tol;
+  const auto& sa = path.sa;
+  const auto& sb = path.sb;
+  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
   SimplexPoint<S> simplex[4];
   int its = 1;
-  switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
-    case Enclosure::Apart: return no_contact<S>(its);
-    case Enclosure::Enclosed: break;
-  }
+  ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded
+  if (!path.enclose(simplex, its, 0, none)) return none;
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
-    const S nz = n.z(), apex = a.half_length * nz, rim = a.radius * std::sqrt(std::max(S(1) - nz * nz, S(0))) - a.half_length * nz;
-    if (std::abs(apex - rim) > S(0.02) * (a.half_length + a.radius)) {
+    const S gap = cone_branch_gap(a, n);
+    if (std::abs(gap) > S(0.02) * (a.half_length + a.radius)) {
       // away from the cone's side: its active branch (a side contact's branch terms never hold)
-      if (cone_hull_terms(a, b, f.R, f.t, n, terms)) {
+      if (cone_hull_terms(a, b, f.R, f.t, n, cone_branch_of_gap(a, gap), terms)) {
         const LocalCertificate<S> lc = local_certificate(terms, n);
         if (certificate_holds(lc, sa, sb, tol)) return lc;
       }
@@ -414,9 +451,8 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> none;  // no candidate: EPA unseeded
   none.depth = std::numeric_limits<S>::infinity();
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none);
+  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f);
 }
 
 }  // namespace detail

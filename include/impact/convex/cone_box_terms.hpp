@@ -32,13 +32,27 @@ void add_box_terms(const Box<S>& b, const Mat3<S>& R, const Vec3<S>& t, OverlapT
   f.linear -= t;
 }
 
+/// How far cone a's (its frame) apex supports unit n beyond its base rim: h n_z minus
+/// r |P_z n| - h n_z (positive: the apex, negative: the rim, 0 on a side ruling's normal).
+template <class S>
+S cone_branch_gap(const Cone<S>& a, const Vec3<S>& n) {
+  const S nz = n.z(), apex = a.half_length * nz, rim = a.radius * std::sqrt(std::max(S(1) - nz * nz, S(0))) - a.half_length * nz;
+  return apex - rim;
+}
+
+/// The branch of cone a whose support gap (cone_branch_gap) is `gap`: 1 its apex, 2 its base rim,
+/// 0 when they tie within 1e-6 of the cone's size (n normal to a side ruling).
+template <class S>
+int cone_branch_of_gap(const Cone<S>& a, S gap) {
+  if (std::abs(gap) <= S(1e-6) * (a.half_length + a.radius)) return 0;
+  return gap > S(0) ? 1 : 2;
+}
+
 /// Which branch of cone a (its frame) supports unit n: 1 its apex, 2 its base rim, 0 when they tie
 /// within 1e-6 of the cone's size (n normal to a side ruling).
 template <class S>
 int cone_branch(const Cone<S>& a, const Vec3<S>& n) {
-  const S nz = n.z(), apex = a.half_length * nz, rim = a.radius * std::sqrt(std::max(S(1) - nz * nz, S(0))) - a.half_length * nz;
-  if (std::abs(apex - rim) <= S(1e-6) * (a.half_length + a.radius)) return 0;
-  return apex > rim ? 1 : 2;
+  return cone_branch_of_gap(a, cone_branch_gap(a, n));
 }
 
 /// Adds the terms of cone a's branch `branch` (cone_branch: 1 the apex, a linear term; 2 the base

@@ -28,10 +28,11 @@
 namespace impact::detail {
 
 /// The overlap of cone a (its frame) and hull b placed by R, t there near unit n: the cone's
-/// branch active along n and the hull's feature along -n; false when the cone's branches tie.
+/// branch active along n (`branch`, as cone_branch gives it: the caller has it already) and the
+/// hull's feature along -n; false when the cone's branches tie (branch 0).
 template <class S>
-bool cone_hull_terms(const Cone<S>& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
-  const int branch = cone_branch(a, n);
+bool cone_hull_terms(const Cone<S>& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, int branch,
+                     OverlapTerms<S>& f) {
   if (branch == 0) return false;
   f = OverlapTerms<S>();
   add_cone_branch_terms(a, branch, f);

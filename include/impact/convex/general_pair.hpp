@@ -245,12 +245,14 @@ ConvexContact<S> own_epa_in_frame(const SupportA& support_a, const SupportB& sup
 
 /// The own EPA on a and b in a's frame (PairFrame: a's support without rotation, b's with one each
 /// way). `failed` is set when it meets a degenerate Minkowski difference. Results in the world.
-/// `simplex` as for own_epa_in_frame, in a's frame (PairFrame's support functions).
+/// `simplex` as for own_epa_in_frame, in a's frame (PairFrame's support functions); `frame`, when
+/// given, is PairFrame(pa, pb), which the caller has already.
 template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> own_epa(const A& a, const RigidTransform<S>& pa, const Vec3<S>& ia, const B& b, const RigidTransform<S>& pb,
                          const Vec3<S>& ib, S scale, const ConvexQueryOptions<S>& o, bool& failed, const SimplexPoint<S>* simplex = nullptr,
-                         int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
-  const PairFrame<S> f(pa, pb);
+                         int simplex_calls = 0, const Local& local = Local{}, const Vec3<S>* seed = nullptr,
+                         const PairFrame<S>* frame = nullptr) {
+  const PairFrame<S> f = frame ? *frame : PairFrame<S>(pa, pb);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const bool refine = o.newton_refinement && !(is_polytope_v<A, S> && is_polytope_v<B, S>);
@@ -287,17 +289,18 @@ ConvexContact<S> separated_by_normal(const ConvexContact<S>& c) {
 /// 5.5e-4 apart, 5.5e-4 of the size; GJK stalled at 6.2e-4 on a nearly flat triangle, the distance
 /// solver's witnesses gave no separating plane, and EPA's answer was a contact of depth 0 along a
 /// normal that separates them by 5.4e-4).
-/// `simplex` as for own_epa (a's frame), when the caller's GJK enclosed the origin already.
+/// `simplex` as for own_epa (a's frame), when the caller's GJK enclosed the origin already;
+/// `frame` as for own_epa.
 template <class S, class A, class B, class Local = NoLocalCertificate>
 ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                      const ConvexQueryOptions<S>& o, const SimplexPoint<S>* simplex = nullptr, int simplex_calls = 0,
-                                     const Local& local = Local{}, const Vec3<S>* seed = nullptr) {
+                                     const Local& local = Local{}, const Vec3<S>* seed = nullptr, const PairFrame<S>* frame = nullptr) {
   if (!o.libccd_penetration) {
     bool failed = false;
-    ConvexContact<S> c =
-        own_epa(a, pa, interior_point(a), b, pb, interior_point(b), query_scale<S>(a, b), o, failed, simplex, simplex_calls, local, seed);
+    const S scale = query_scale<S>(a, b);
+    ConvexContact<S> c = own_epa(a, pa, interior_point(a), b, pb, interior_point(b), scale, o, failed, simplex, simplex_calls, local, seed, frame);
     if (!failed) {
-      if (c.intersecting && normal_separates(settle_certified_contact(a, pa, b, pb, c), pa, pb, query_scale<S>(a, b), o))
+      if (c.intersecting && normal_separates(settle_certified_contact(a, pa, b, pb, c), pa, pb, scale, o))
         return separated_by_normal(c);
       return c;
     }

@@ -48,8 +48,11 @@ inline bool wide_fma_available() {
 /// p = fma(b, inv, -oi), within 2.01 u |t| + 0.51 e of the exact (b - o) / d (u = 2^-24); the
 /// entry t0 = max(0, near planes) becomes lo = fma(t0, 1 - 2^-19, -e), the exit t1 = min(t_max
 /// rounded up, far planes) becomes hi = fma(t1, 1 + 2^-19, e), and a child is entered when
-/// lo <= min(hi, bound). Usable for origins and tree coordinates within 2^60, 1 / d within
-/// [2^-60, 2^60] in magnitude and M <= 2^63 (so e < 2^41: an empty slot, lower plane FLT_MAX and
+/// lo <= min(hi, bound). The maxima and minima are taken as trees, (a0 max a1) max (a2 max 0),
+/// two deep rather than three on the node loop's dependent chain: no operand is NaN (see
+/// WideFusedAvx::entered), so any order gives the same values up to the sign of a zero, which
+/// the corrections turn into the same -e or e: the keys and masks of any order, bit for bit.
+/// Usable for origins and tree coordinates within 2^60, 1 / d within [2^-60, 2^60] in magnitude and M <= 2^63 (so e < 2^41: an empty slot, lower plane FLT_MAX and
 /// upper -FLT_MAX, gives lo > 2^66 > 0 > hi and is never entered).
 struct WideFusedRay {
   static constexpr float kLow = 1.0f - 0x1p-19f, kHigh = 1.0f + 0x1p-19f;
@@ -86,22 +89,20 @@ struct WideFusedRay {
   /// `t_max_up` a float >= t_max. The AVX test's operations one lane at a time.
   int entered_scalar(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
-    float t0[8], t1[8];
-    for (int c = 0; c < 8; ++c) t0[c] = 0.0f, t1[c] = t_max_up;
-    for (int i = 0; i < 3; ++i) {
-      const float* near = reinterpret_cast<const float*>(p + planes[i]);
-      const float* far = reinterpret_cast<const float*>(p + planes[3 + i]);
-      for (int c = 0; c < 8; ++c) {
-        const float a = std::fma(near[c], inv[i], -oi[i]), b = std::fma(far[c], inv[i], -oi[i]);
-        t0[c] = a > t0[c] ? a : t0[c];  // maxps / minps: the second operand unless the first wins
-        t1[c] = b < t1[c] ? b : t1[c];
-      }
-    }
+    // maxps / minps: the second operand unless the first wins
+    const auto maxps = [](float x, float y) { return x > y ? x : y; };
+    const auto minps = [](float x, float y) { return x < y ? x : y; };
     int mask = 0;
     for (int c = 0; c < 8; ++c) {
-      const float lo = std::fma(t0[c], kLow, -e), hi = std::fma(t1[c], kHigh, e);
+      float a[3], b[3];
+      for (int i = 0; i < 3; ++i) {
+        a[i] = std::fma(reinterpret_cast<const float*>(p + planes[i])[c], inv[i], -oi[i]);
+        b[i] = std::fma(reinterpret_cast<const float*>(p + planes[3 + i])[c], inv[i], -oi[i]);
+      }
+      const float t0 = maxps(maxps(a[0], a[1]), maxps(a[2], 0.0f)), t1 = minps(minps(b[0], b[1]), minps(b[2], t_max_up));
+      const float lo = std::fma(t0, kLow, -e), hi = std::fma(t1, kHigh, e);
       keys[c] = lo;
-      mask |= (lo <= (hi < bound ? hi : bound) ? 1 : 0) << c;
+      mask |= (lo <= minps(hi, bound) ? 1 : 0) << c;
     }
     return mask;
   }
@@ -169,18 +170,21 @@ struct WideFusedAvx {
   /// entered() with the comparison's lanes too (all ones where entered).
   IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys, __m256& in) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
-    __m256 t0 = _mm256_setzero_ps(), t1 = t_max_up;
+    __m256 a[3], b[3];
     for (int i = 0; i < 3; ++i) {
-      const __m256 a = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[i])), inv[i], oi[i]);
-      const __m256 b = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[3 + i])), inv[i], oi[i]);
-      t0 = _mm256_max_ps(a, t0);
-      t1 = _mm256_min_ps(b, t1);
+      a[i] = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[i])), inv[i], oi[i]);
+      b[i] = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[3 + i])), inv[i], oi[i]);
     }
+    // No operand is NaN (a usable ray's products are finite or infinite, no sum adds opposite
+    // infinities), so the order of the maxima and minima changes at most the sign of a zero:
+    // taken as trees, two deep on the node loop's dependent chain instead of three.
+    const __m256 t0 = _mm256_max_ps(_mm256_max_ps(a[0], a[1]), _mm256_max_ps(a[2], _mm256_setzero_ps()));
+    const __m256 t1 = _mm256_min_ps(_mm256_min_ps(b[0], b[1]), _mm256_min_ps(b[2], t_max_up));
     const __m256 lo = _mm256_fmsub_ps(t0, _mm256_set1_ps(WideFusedRay::kLow), e);
     const __m256 hi = _mm256_fmadd_ps(t1, _mm256_set1_ps(WideFusedRay::kHigh), e);
     keys = lo;
-    // neither operand is NaN (a usable ray's products are finite or infinite, no sum adds
-    // opposite infinities): lo <= hi and lo <= bound as one comparison
+    // lo <= hi and lo <= bound as one comparison (two comparisons and an `and` measured 5-7 %
+    // slower on long rays, docs/rays.md)
     in = _mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ);
     return _mm256_movemask_ps(in);
   }
