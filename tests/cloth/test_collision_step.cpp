@@ -387,6 +387,35 @@ TYPED_TEST(ClothStep, PushedOutOfItsEnvelopeIsGatheredAgain) {
   }
 }
 
+// A kinematic piston under one corner region of a large cloth triangle A rises 0.5 in one step and
+// pushes A out of its envelope, through the point of a hanging spike B (its lowest vertex) over
+// A's interior, far from A's vertices and edges and from the piston: only the pairs of B's
+// vertices (which did not move) against A's face (which grew) find it, so a re-gathering must test
+// the faces of grown triangles against vertices that did not grow.
+TYPED_TEST(ClothStep, GrownFaceMeetsAStillVertex) {
+  using S = TypeParam;
+  const Vertices<S> piston0 = rows<S>({{0.3, -0.2, 0}, {0.35, -0.2, -0.05}, {0.3, -0.15, -0.05}});
+  Vertices<S> piston1 = piston0;
+  piston1.col(2).array() += S(0.5);
+  const Faces piston_faces = (Faces(1, 3) << 0, 1, 2).finished();
+  ClothObstacles<S> obs;
+  obs.kinematic.push_back({&piston0, &piston1, &piston_faces});
+  const Faces F = (Faces(2, 3) << 0, 1, 2, 3, 4, 5).finished();
+  const Vertices<S> x0 =
+      rows<S>({{-0.3, -0.3, 0.05}, {0.6, -0.3, 0.05}, {-0.3, 0.6, 0.05}, {0, 0.1, 0.2}, {-0.05, 0.1, 0.3}, {0.05, 0.1, 0.3}});
+  Vertices<S> x1 = x0;  // both at rest
+  Eigen::Matrix<S, Eigen::Dynamic, 1> w = Eigen::Matrix<S, Eigen::Dynamic, 1>::Ones(6);
+  ClothCollisionOptions<S> opt;
+  opt.thickness = S(1e-3);
+  const auto st = cloth_collision_step(F, w, x0, x1, obs, opt);
+  EXPECT_TRUE(st.collision_free);
+  EXPECT_GE(st.broad.passes, 2);
+  EXPECT_GT(double(x1(1, 2)), 0.3);  // A was pushed past B's point
+  const auto c = combine(F, x0, x1, obs);
+  EXPECT_EQ(cloth_test::all_pairs_ccd_hits(c, 1e-3), 0);
+  EXPECT_GE(cloth_test::sampled_min_distance(c), 1e-3);
+}
+
 // A sheet translating rigidly, far from everything: its candidates (neighbours within the
 // proximity distance) are gathered once, and every one is settled by the distance bound (distance
 // at x0 minus relative motion, here 0, stays above h) without a CCD test; nothing changes.

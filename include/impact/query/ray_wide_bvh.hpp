@@ -343,13 +343,17 @@ template <class S, int W = 4> struct WideCast {
       const bool swap = fk[c0] > fk[c1];
       const int near = swap ? c1 : c0, far = swap ? c0 : c1;
       stack.push({fk[far], n.first[far], n.count[far]});
+      prefetch_child(n.first[far], n.count[far]);
       first = n.first[near];
       count = n.count[near];
       return;
     }
     int order[W];
     const int m = order_children(mask, fk, order);
-    for (int j = m - 1; j > 0; --j) stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
+    for (int j = m - 1; j > 0; --j) {
+      stack.push({fk[order[j]], n.first[order[j]], n.count[order[j]]});
+      prefetch_child(n.first[order[j]], n.count[order[j]]);
+    }
     first = n.first[order[0]];
     count = n.count[order[0]];
   }
@@ -365,8 +369,8 @@ template <class S, int W = 4> struct WideCast {
 #endif
   }
 
-  /// Starts loading the lines of a child the AVX loop has pushed or is about to test as a leaf (the
-  /// three lines of an inner node's planes, of a leaf the first three of its first block), as
+  /// Starts loading the lines of a child the loop has pushed or is about to test as a leaf (three
+  /// lines: an 8-wide node's planes, a 4-wide node and the next line, a leaf's first block), as
   /// Embree's traversal prefetches the children it keeps: a pushed child is popped after the
   /// nearer one's subtree, its lines by then in L1, and a leaf's block arrives while the loop
   /// spills its registers and calls the leaf test. No effect on the answers.
@@ -549,6 +553,7 @@ template <class S, int W = 4> struct WideCast {
               return;
             }
           }
+          if (wide.packed()) prefetch_child(first, count);
           leaf(first, count);
           if (!pop_below(stack, bound_f, first, count)) {
             node_tests += tests;

@@ -109,7 +109,8 @@ class Stepper {
   void self_pairs(Visit&& visit);
   template <class Visit>
   void grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit);
-  void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out, bool only_new = false) const;
+  template <bool OnlyNew = false>
+  void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out) const;
   void start_planes();
   void check_pierce(std::int32_t fa, std::int32_t fb);
   bool escaped() const;
@@ -192,6 +193,7 @@ class Stepper {
   std::vector<Aabb<S>>& old_gbox_ = buf_.old_gbox;  // gbox_, tbox_ before the current re-gathering
   std::vector<Aabb<S>>& old_tbox_ = buf_.old_tbox;
   std::vector<std::uint8_t> grown_tri_;       // regather's triangles with a grown vertex (all 0 between calls)
+  std::vector<std::uint8_t> grown_vert_;      // regather's grown vertices (all 0 between calls)
   std::vector<std::uint8_t> grown_node_;      // grown_pairs: tree nodes above such a triangle (all 0 between calls)
   std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // grown_pairs walk
   std::vector<double>& d0_ = buf_.d0;              // per candidate: a lower bound on its distance at x0
