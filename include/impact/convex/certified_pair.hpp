@@ -114,12 +114,12 @@ struct PairPath {
     }
   }
 
-  /// GJK from the centre line (enclose_origin, `its` support calls so far): true with `simplex` its
-  /// tetrahedron about the origin; false with `answer` the query's answer when it ended there (a
-  /// separating plane: no contact after its calls and `extra` more; unsure: the general path from
-  /// scratch).
-  bool enclose(SimplexPoint<S> (&simplex)[4], int& its, int extra, ConvexContact<S>& answer) const {
-    switch (enclose_origin(sa, sb, Vec3<S>(-centre_line), scale, o, simplex, its)) {
+  /// GJK from the centre line, or with its first support along `first` when given (enclose_origin,
+  /// `its` support calls so far): true with `simplex` its tetrahedron about the origin; false with
+  /// `answer` the query's answer when it ended there (a separating plane: no contact after its
+  /// calls and `extra` more; unsure: the general path from scratch).
+  bool enclose(SimplexPoint<S> (&simplex)[4], int& its, int extra, ConvexContact<S>& answer, const Vec3<S>* first = nullptr) const {
+    switch (enclose_origin(sa, sb, first ? Vec3<S>(-*first) : Vec3<S>(-centre_line), scale, o, simplex, its)) {
       case Enclosure::Unsure: answer = general_penetration(a, pa, b, pb, o); return false;
       case Enclosure::Apart: answer = no_contact<S>(its + extra); return false;
       case Enclosure::Enclosed: break;
@@ -362,7 +362,10 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   SimplexPoint<S> simplex[4];
   int its = 1;
-  switch (enclose_origin(sa, sb, Vec3<S>(-f.t), scale, o, simplex, its)) {
+  // GJK's first support along the best candidate's normal, when one applied (near the contact's
+  // side of D: fewer steps to enclose the origin than from the centre line)
+  const Vec3<S> start = cand.depth < std::numeric_limits<S>::infinity() ? Vec3<S>(-cand.normal) : Vec3<S>(-f.t);
+  switch (enclose_origin(sa, sb, start, scale, o, simplex, its)) {
     case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
     case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
     case Enclosure::Enclosed: break;
@@ -398,7 +401,9 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   SimplexPoint<S> simplex[4];
   int its = 1;
   ConvexContact<S> answer;
-  if (!path.enclose(simplex, its, cand.iterations, answer)) return answer;
+  // GJK's first support along the best candidate's normal, when one applied (as cylinder–box)
+  const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
+  if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
     if (certificate_holds(lc, sa, sb, tol)) return lc;

@@ -183,8 +183,8 @@ struct WideFusedAvx {
     const __m256 lo = _mm256_fmsub_ps(t0, _mm256_set1_ps(WideFusedRay::kLow), e);
     const __m256 hi = _mm256_fmadd_ps(t1, _mm256_set1_ps(WideFusedRay::kHigh), e);
     keys = lo;
-    // lo <= hi and lo <= bound as one comparison (two comparisons and an `and` measured 5-7 %
-    // slower on long rays, docs/rays.md)
+    // lo <= hi and lo <= bound as one comparison (two side by side and an `and`, one operation
+    // shorter on the chain, measured no faster: docs/rays.md)
     in = _mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ);
     return _mm256_movemask_ps(in);
   }
