@@ -4,8 +4,10 @@
 // face plane) whose vertices are input points and which holds every input point is the hull.
 // Brute force confirms the vertex set: an input point is a hull vertex iff some direction makes it
 // the unique maximiser (checked through the hull's own faces from the outside: each hull vertex is
-// strictly beyond a plane through the others). Degenerate sets throw InvalidInput.
+// strictly beyond a plane through the others). Degenerate sets throw InvalidInput. A mesh's hull
+// (convex_hull_of_mesh) is that of its vertices.
 #include "impact/convex/convex_hull.hpp"
+#include "impact/geometry/mesh_generators.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
@@ -126,6 +128,15 @@ TEST(ConvexHull, ScaledAndTranslatedAndFloat) {
   const auto hf = impact::convex_hull(pf);
   check_hull<float>(pf, hf, 1e-5f);
   EXPECT_EQ(hf.vertices.rows(), h.vertices.rows());
+}
+
+TEST(ConvexHull, OfAMeshHoldsEveryVertex) {
+  // 24 segments around the axis, 12 around the tube: the hull's vertices are those at the 7 tube
+  // angles within 90 degrees of outwards (the top and bottom circles included), 7 x 24
+  const auto m = impact::make_torus(1.0, 0.3, 24, 12);
+  const auto h = impact::convex_hull_of_mesh(m.V, m.F);
+  check_hull(m.V, h, 1e-12);
+  EXPECT_EQ(h.vertices.rows(), 168);
 }
 
 TEST(ConvexHull, DegenerateSetsThrow) {

@@ -74,7 +74,7 @@ Enclosure enclose_origin(const SupportA& sa, const SupportB& sb, const Vec3<S>& 
 
 /// What the paths of a (its frame) and b with their own stages share: the pair's frame, the
 /// larger shape's size and the tolerance, both support functions in a's frame, the line between
-/// the interior points (stage 1: separated_along it) and stage 3 from it (enclose). Holds
+/// the interior points (stage 1: separated) and stage 3 from it (enclose). Holds
 /// references to the query's arguments: used within the query only.
 template <class S, class A, class B>
 struct PairPath {
@@ -113,6 +113,10 @@ struct PairPath {
       return f.b_to_a(interior_point(b));
     }
   }
+
+  /// A plane normal to the centre line separates the shapes (separated_along): most separated
+  /// poses end here.
+  bool separated() const { return separated_along(sa, sb, centre_line, scale); }
 
   /// GJK from the centre line, or with its first support along `first` when given (enclose_origin,
   /// `its` support calls so far): true with `simplex` its tetrahedron about the origin; false with
@@ -256,7 +260,7 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   const auto& sa = path.sa;
   const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
-  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
+  if (path.separated()) return one_plane_apart<S>();
   ConvexContact<S> cand;
   if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
   SimplexPoint<S> simplex[4];
@@ -316,7 +320,7 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   const auto& sa = path.sa;
   const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
-  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
+  if (path.separated()) return one_plane_apart<S>();
   // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
   if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * path.scale))
     return one_plane_apart<S>();
@@ -393,7 +397,7 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   const auto& sa = path.sa;
   const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
-  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
+  if (path.separated()) return one_plane_apart<S>();
   ConvexContact<S> cand;
   const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
   if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
@@ -427,7 +431,7 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   const S tol = path.tol;
   const auto& sa = path.sa;
   const auto& sb = path.sb;
-  if (separated_along(sa, sb, path.centre_line, path.scale)) return one_plane_apart<S>();
+  if (path.separated()) return one_plane_apart<S>();
   SimplexPoint<S> simplex[4];
   int its = 1;
   ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded

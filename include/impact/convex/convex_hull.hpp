@@ -84,13 +84,13 @@ struct ConvexHull {
 /// ones by scanning every vertex (cheaper below it; measured on the convex bench's pairs).
 inline constexpr int kHullClimbMinVertices = 12;
 
-/// The vertex of h farthest along d. Hulls with an edge graph (convex_hull() builds one from
-/// kHullClimbMinVertices vertices) climb it: from the octant's start vertex to the neighbour
-/// farthest along d, until no neighbour is farther (on a convex polytope a vertex no neighbour
-/// beats is a farthest vertex; quickhull's triangles are convex up to its tolerance, so the value
-/// is the largest within that tolerance times |d|). Smaller hulls scan every vertex.
+/// The index of the vertex of h farthest along d. Hulls with an edge graph (convex_hull() builds
+/// one from kHullClimbMinVertices vertices) climb it: from the octant's start vertex to the
+/// neighbour farthest along d, until no neighbour is farther (on a convex polytope a vertex no
+/// neighbour beats is a farthest vertex; quickhull's triangles are convex up to its tolerance, so
+/// the value is the largest within that tolerance times |d|). Smaller hulls scan every vertex.
 template <class S>
-inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
+inline int support_vertex(const ConvexHull<S>& h, const Vec3<S>& d) {
   const S* p = h.vertices.data();
   const auto along = [&](int v) { return p[3 * v] * d.x() + p[3 * v + 1] * d.y() + p[3 * v + 2] * d.z(); };
   if (h.neighbors.empty()) {
@@ -104,7 +104,7 @@ inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
         best = i;
       }
     }
-    return h.vertices.row(best).transpose();
+    return best;
   }
   const int octant = int(d.x() > S(0)) | (int(d.y() > S(0)) << 1) | (int(d.z() > S(0)) << 2);
   int v = h.octant_vertex[static_cast<std::size_t>(octant)];
@@ -123,7 +123,13 @@ inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
     if (next == v) break;  // the value strictly grows each step: no vertex is visited twice
     v = next;
   }
-  return h.vertices.row(v).transpose();
+  return v;
+}
+
+/// The vertex of h farthest along d (support_vertex).
+template <class S>
+inline Vec3<S> support(const ConvexHull<S>& h, const Vec3<S>& d) {
+  return h.vertices.row(support_vertex(h, d)).transpose();
 }
 template <class S>
 inline Vec3<S> interior_point(const ConvexHull<S>& h) {

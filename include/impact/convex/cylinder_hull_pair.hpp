@@ -240,18 +240,12 @@ void add_hull_feature_terms(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3
   const Vec3<S> d = -(R.transpose() * n);
   const S* p = b.vertices.data();
   const auto along = [&](int i) { return p[3 * i] * d.x() + p[3 * i + 1] * d.y() + p[3 * i + 2] * d.z(); };
-  // the farthest vertex v (a scan) and, of its neighbours (of all vertices for small hulls, which
-  // have no edge graph), the farthest u
+  // the farthest vertex v (the hull's support: a climb on its edge graph, a scan for small
+  // hulls) and, of its neighbours (of all vertices for small hulls, which have no edge graph), the
+  // farthest u
   const int nv = static_cast<int>(b.vertices.rows());
-  int v = 0;
-  S best = along(0);
-  for (int i = 1; i < nv; ++i) {
-    const S x = along(i);
-    if (x > best) {
-      best = x;
-      v = i;
-    }
-  }
+  const int v = support_vertex(b, d);
+  const S best = along(v);
   int u = -1;
   S second = -std::numeric_limits<S>::infinity();
   const auto consider = [&](int i) {
