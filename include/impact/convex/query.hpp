@@ -33,7 +33,11 @@
 ///                                     boolean and distance as the other pairs below
 ///   cylinder – cylinder               boolean: separating and proving tests on the centres and
 ///                                     the axes, then GJK (convex/cylinder_intersect.hpp);
-///                                     distance and penetration as the other pairs below
+///                                     distance: that boolean test, GJK to a coarse gap, then the
+///                                     nearest features (caps, sides, rims) certified by the
+///                                     supporting planes, else GJK to the tolerance
+///                                     (convex/cylinder_pair_distance.hpp); penetration as the
+///                                     other pairs below
 ///   cylinder – box                    boolean: separating planes and common points, then GJK;
 ///                                     penetration: separating planes, the certified candidates,
 ///                                     else GJK and EPA with the local certificate
@@ -77,6 +81,7 @@
 #include "impact/convex/closed_form.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_box_pair.hpp"
+#include "impact/convex/cylinder_pair_distance.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/cylinder_intersect.hpp"
 #include "impact/convex/general_pair.hpp"
@@ -348,6 +353,9 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
     return round_distance(a, pose_a, b, pose_b, options);
   } else if constexpr (method == PairMethod::OtherRound) {
     return swapped(round_distance(b, pose_b, a, pose_a, options));
+  } else if constexpr (std::is_same_v<A, Cylinder<S>> && std::is_same_v<B, Cylinder<S>>) {  // convex/cylinder_pair_distance.hpp
+    const S scale = query_scale<S>(a, b);
+    return cylinder_pair_distance(a, pose_a, b, pose_b, scale, options.relative_tolerance * scale, options.max_iterations);
   } else {  // BoxBox and General: GJK
     const S tol = options.relative_tolerance * query_scale<S>(a, b);
     if constexpr (general_swapped_v<S, A, B>) {
