@@ -48,6 +48,8 @@ template <class S> inline std::optional<S> brute_first_t(const TriangleMesh<S>& 
 
 template <class S, int W> void check_structure(const TriangleMesh<S>& m, const WideBvh<S, W>& w, int leaf_size) {
   ASSERT_EQ(w.num_triangles(), m.num_triangles());
+  ASSERT_EQ(w.box()[3], 0.0);
+  ASSERT_EQ(w.box()[7], 0.0);
   std::vector<int> seen(static_cast<std::size_t>(m.num_triangles()), 0);
   for (std::int32_t k = 0; k < w.num_triangles(); ++k) {
     const int id = w.triangle_id(k);
@@ -82,6 +84,10 @@ template <class S, int W> void check_structure(const TriangleMesh<S>& m, const W
       ++children;
       Item child{n.first[c], {}, {}};
       for (int k = 0; k < 3; ++k) child.lo[k] = n.bounds[2 * k][c], child.hi[k] = n.bounds[2 * k + 1][c];
+      for (std::size_t k = 0; k < 3; ++k) {  // within the tree's box (the AVX cast's reach relies on it)
+        ASSERT_LE(w.box()[k], double(child.lo[k]));
+        ASSERT_GE(w.box()[4 + k], double(child.hi[k]));
+      }
       if (n.count[c] > 0) {
         // a leaf's blocks: its triangles lane by lane in leaf order, zeros in the unused lanes
         const std::int32_t block = n.first[c], first = w.block_first(block), blocks = (n.count[c] + 3) / 4;

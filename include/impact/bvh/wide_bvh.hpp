@@ -187,6 +187,11 @@ template <class S, int W = 4> class WideBvh {
   int depth() const { return depth_; }
   /// An upper bound of |x|_inf over the vertices (the scale of the casts' rounding).
   S coordinate_bound() const { return coordinate_bound_; }
+  /// The union of every node's child boxes (floats, kept in double): box()[0..2] its lower
+  /// corner, box()[4..6] its upper one, box()[3] = box()[7] = 0 (the layout the AVX cast's set-up
+  /// loads). No child box pokes out of it, so a ray's exit from it bounds the entry of every box
+  /// the cast can enter (query/wide_fused_slab.hpp). All zeros for an empty tree.
+  const std::array<double, 8>& box() const { return box_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
@@ -338,6 +343,14 @@ template <class S, int W = 4> class WideBvh {
       nodes_[static_cast<std::size_t>(dst)] = node;
     }
     nodes_.shrink_to_fit();
+    box_ = {FLT_MAX, FLT_MAX, FLT_MAX, 0.0, -FLT_MAX, -FLT_MAX, -FLT_MAX, 0.0};
+    for (const Node& nd : nodes_)
+      for (int c = 0; c < W; ++c)
+        if (nd.count[c] >= 0)
+          for (std::size_t a = 0; a < 3; ++a) {
+            box_[a] = std::min(box_[a], double(nd.bounds[2 * a][c]));
+            box_[4 + a] = std::max(box_[4 + a], double(nd.bounds[2 * a + 1][c]));
+          }
     // the blocks: each leaf from a new block, in leaf order; the leaves' references become blocks
     struct LeafRef {
       std::int32_t pos, count;
@@ -377,6 +390,7 @@ template <class S, int W = 4> class WideBvh {
   std::vector<std::int32_t> ids_;
   std::vector<bool> repeats_;  // repeats_previous() by leaf-order position; empty when none repeats
   S coordinate_bound_ = S(0);
+  std::array<double, 8> box_{};  // box(): the union of the child boxes
   int depth_ = 0;
   bool packed_without_repeats_ = false;
 };

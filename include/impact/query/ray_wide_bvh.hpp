@@ -410,7 +410,7 @@ template <class S, int W = 4> struct WideCast {
   void run_without_avx() {
     if constexpr (W == 8) {
       if (fused_scalar && !use_simd) {
-        const WideFusedRay fused(o, inv, wide.coordinate_bound());
+        const WideFusedRay fused(o, inv, wide.coordinate_bound(), wide.box(), double(t_max));
         if (fused.usable()) {
           slab_error = fused.e;
           run_on_stack(fused);
@@ -572,7 +572,11 @@ template <class S, int W = 4> struct WideCast {
         float fk[W];
         int mask;
         if (in_float) {
-          mask = float_slab.entered_scalar(n, exit_f, bound_f, fk);
+          if constexpr (std::is_same_v<Slab, WideFusedRay>) {
+            mask = float_slab.entered_scalar(n, bound_f, fk);  // (its bound_f <= exit_f: no exit of its own)
+          } else {
+            mask = float_slab.entered_scalar(n, exit_f, bound_f, fk);
+          }
           int ties = 0;
           for (int c = 0; c < W; ++c) ties |= (fk[c] >= tie_f ? 1 : 0) << c;
           if (IMPACT_UNLIKELY(mask & ties)) mask = redecide(n, fk);
@@ -597,9 +601,9 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
   static_assert(W == 8, "the AVX node loop: 8-wide nodes");
   WideFusedAvx fs;  // in registers for the node loop
   if constexpr (std::is_same_v<S, double>) {
-    if (!fs.set(o, inv, double(wide.coordinate_bound()), slab_error)) return false;
+    if (!fs.set(o, inv, double(wide.coordinate_bound()), wide.box(), t_max, slab_error)) return false;
   } else {
-    const WideFusedRay fused(o, inv, wide.coordinate_bound());
+    const WideFusedRay fused(o, inv, wide.coordinate_bound(), wide.box(), double(t_max));
     if (!fused.usable()) return false;
     slab_error = fused.e;
     fs.set(fused);
@@ -609,14 +613,14 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
   const Node* nodes = wide.nodes().data();
   std::int32_t first = 0, count = 0;  // the root: an inner node
   for (;;) {
-    const __m256 exit_v = _mm256_set1_ps(exit_f), bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
+    const __m256 bound_v = _mm256_set1_ps(bound_f), tie_v = _mm256_set1_ps(tie_f);
     const float bound = bound_f;
     while (count == 0) {
       const Node& n = nodes[first];
       prefetch_references(n);
       ++node_tests;  // (in memory: the loop has more live integers than registers)
       __m256 lo, entered;
-      int mask = fs.entered(n, exit_v, bound_v, lo, entered);
+      int mask = fs.entered(n, bound_v, lo, entered);
       if (mask) {
         // an entered child's key at or above tie_f (the sign bits of both comparisons: vtestps)
         if (IMPACT_UNLIKELY(!_mm256_testz_ps(_mm256_cmp_ps(lo, tie_v, _CMP_GE_OQ), entered))) {

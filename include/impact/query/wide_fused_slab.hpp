@@ -3,14 +3,16 @@
 /// The node test of the 8-wide AVX cast (query/ray_wide_bvh.hpp): the slab test of one ray
 /// against the eight float boxes of a WideBvhNode8 with one fused multiply-add a plane,
 /// b * (1 / d) - o * (1 / d), the near and far planes chosen once per ray by the direction's signs,
-/// and one multiply-add each after the reductions that widens the entry and exit by a bound on
-/// the rounding, so that the test enters every box the double slab test (WideSlab,
-/// query/wide_slab.hpp) enters, its key never above WideSlab's entry. WideFusedRay holds the
-/// per-ray values (made in double, rounded once to float); entered_scalar is the test as a scalar
-/// loop of the same IEEE operations (std::fma), the AVX test (compiled for AVX and FMA by a target
-/// attribute on GCC and Clang for x86, used when the CPU has both: wide_fma_available) gives the
-/// same keys and mask bit for bit. The error bound is proved in docs/rays.md (issue 14, the
-/// node test in one multiply-add a plane) and tested in tests/query/test_ray_wide_bvh8.cpp.
+/// the origin's term of each plane moved by a per-ray margin (a near plane's value never above
+/// its exact parameter, a far plane's never below it, over the parameters the ray can reach), so
+/// that the test enters every box the double slab test (WideSlab, query/wide_slab.hpp) enters,
+/// its key never above WideSlab's entry, with no correction after the reductions. WideFusedRay
+/// holds the per-ray values (made in double, rounded once to float) and the proof;
+/// entered_scalar is the test as a scalar loop of the same IEEE operations (std::fma), the AVX
+/// test (compiled for AVX and FMA by a target attribute on GCC and Clang for x86, used when the
+/// CPU has both: wide_fma_available) gives the same keys and mask bit for bit. Tested in
+/// tests/query/test_ray_wide_bvh8.cpp; docs/rays.md (issue 14, the seventeenth and
+/// twenty-third steps).
 #pragma once
 
 #include "impact/bvh/wide_bvh.hpp"
@@ -18,6 +20,7 @@
 #include "impact/query/wide_slab.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 
@@ -43,51 +46,96 @@ inline bool wide_fma_available() {
 /// The per-ray values of the fused node test of an 8-wide node, and the test as a scalar loop.
 ///
 /// For a ray o + t d: inv[i] = float(1 / d_i) (1 / d_i as the cast computed it, in S, rounded to
-/// float), oi[i] = float(o_i * inv[i]) (the product in double, then rounded), e a float >=
-/// 2^-23 M + 2^-100 with M = max_i |o_i inv[i]| (in double; error_bound). A plane b's parameter is
-/// p = fma(b, inv, -oi), within 2.01 u |t| + 0.51 e of the exact (b - o) / d (u = 2^-24); the
-/// entry t0 = max(0, near planes) becomes lo = fma(t0, 1 - 2^-19, -e), the exit t1 = min(t_max
-/// rounded up, far planes) becomes hi = fma(t1, 1 + 2^-19, e), and a child is entered when
-/// lo <= min(hi, bound). The maxima and minima are taken as trees, (a0 max a1) max (a2 max 0),
-/// two deep rather than three on the node loop's dependent chain: no operand is NaN (see
-/// WideFusedAvx::entered), so any order gives the same values up to the sign of a zero, which
-/// the corrections turn into the same -e or e: the keys and masks of any order, bit for bit.
-/// Usable for origins and tree coordinates within 2^60, 1 / d within [2^-60, 2^60] in magnitude and M <= 2^63 (so e < 2^41: an empty slot, lower plane FLT_MAX and
-/// upper -FLT_MAX, gives lo > 2^66 > 0 > hi and is never entered).
+/// float), and two offsets an axis in place of the origin's term: a near plane b's value is
+/// fma(b, inv[i], -oi[i]), a far plane's fma(b, inv[i], -oi[3 + i]), oi[i] above o_i inv[i] and
+/// oi[3 + i] below it by a margin that covers every rounding of the test over the parameters that
+/// can matter (up to the ray's reach on that axis: t_max, or its exit from the tree's box if
+/// sooner). So a near value is never above its plane's exact parameter and a far value never
+/// below, with no correction after the reductions: lo = max(0, near values), and a child is
+/// entered when lo <= min(far values, bound) (bound <= the float t_max rounded up, so t_max
+/// needs no lane of its own). The maxima and minima are taken as trees, (a0 max a1) max (a2 max
+/// 0), two deep on the node loop's dependent chain; no operand is NaN and lo is never -0 (a max
+/// with +0 last), so any order gives the same keys and masks.
+///
+/// The offsets, in double: x_i = the exit from the box's slab on axis i times 2^-19 (the larger
+/// of its two planes' (b - o_i)(2^-19 / d_i)), l_i = min(x_i, t_max 2^-19), H_i = max(l_i,
+/// 2^-126); oi[i] = float(fma(o_i, inv[i] (1 + c), H_i)), oi[3 + i] = float(fma(o_i, inv[i] (1 -
+/// c), -H_i)), c = 2^-23 with the sign of o_i inv[i] (the products inv[i] (1 +- c) of two floats
+/// are exact in double); e = float(max_i (H_i (1 + 2^-20) + |o_i inv[i]| 2^-22) + 2^-99) bounds
+/// the margins from above (the cast's tie bound uses it). Why the test enters every box WideSlab
+/// enters, its key never above WideSlab's entry (u = 2^-24; t = (b - o_i) / d_i a plane's exact
+/// parameter, q = o_i inv[i] exactly, T = max(0, exact near t) a box's exact entry, A = min(t_max,
+/// exact far t) its exact exit):
+/// - WideSlab (query/wide_slab.hpp: three roundings a plane, the same 1 / d in a plane's entry
+///   and exit, its exit padded by 8 u in float) enters a box only if T <= t_max (1 + 3.1 u) and
+///   T <= A (1 + 16 u) (in double 2^-51 and 2^-48), every far t >= -2^-149 (an underflow of its
+///   exit to -0), and then its entry is at least T (1 - 3.1 u).
+/// - Every child box lies in WideBvh::box, so A <= its far t on axis i <= the exit from the box's
+///   slab: T <= 2^19 l_i (1 + 17.2 u) on every axis (x_i's roundings in double, and the rounding
+///   of 1 / d in a float ray, cost 1.1 u).
+/// - The margin eta = oi[i] - q (near) or q - oi[3 + i] (far): fma(...) is q +- (|q| 2^-23 + H_i)
+///   rounded once in double, then to float (2^-24 |.| + 2^-150), which the 2^-23 |q| covers:
+///   H_i (1 - 2^-22) <= eta <= H_i (1 + 2^-23) + 1.51 2^-23 |q| + 2^-150 <= e.
+/// - inv[i] = (1 / d_i)(1 + r), |r| <= u + 2^-53, so b inv[i] - oi[i] = t (1 + r) - eta, rounded
+///   once by the fma (u relative, 2^-150 below the normal range, the sign kept): a near value is at
+///   most t (1 + 2.01 u) - eta + 2^-150 for t > 0 and at most 0 for t <= 0; a far value at least
+///   t (1 - 2.01 u) + eta (1 - u) - 2^-150 for t >= 0, and eta (1 - u) - 2^-148 > 0 for t >= -2^-149.
+/// - Entry: for a box WideSlab enters, every near t <= T, and eta (>= max(2^-19 T / (1 + 17.3 u),
+///   2^-126)(1 - 2^-22)) exceeds 5.11 u t + 2^-150: a near value <= t (1 - 3.1 u), so lo <=
+///   WideSlab's entry: a key never exceeds it (pruning stays exact), and lo, a float at most the
+///   cast's limit, is at most its float bound.
+/// - Exit: every far t >= A >= T / (1 + 16 u), so a far value is at least T (1 - 18.01 u) + eta
+///   (1 - u) - 2^-150 >= T >= lo (eta (1 - u) >= 18.01 u T + 2^-150, with 32 u against 18.01 u);
+///   for T = 0, lo = 0 < every far value. So lo <= min(far values, bound): entered.
+/// - Ties: WideSlab's entry - lo <= 5.2 u T + eta (1 + u) + 2^-150 <= 5.2 u T + 1.001 e, within the
+///   slack 4 (t 2^-19 + e) of the cast's tie bound: a key below it is entered before the hit.
+/// - Empty slots (lower plane FLT_MAX, upper -FLT_MAX): usable rays have |o|, tree coordinates
+///   <= 2^60, |1 / d| in [2^-60, 2^60], |q| <= 2^63 and l_i <= 2^61 (so |oi| < 2^64): a near
+///   value >= 2^67 - 2^64 > 0 > a far value, never entered. No NaN: a real plane's |b inv| <=
+///   2^121, an empty slot's may overflow to the infinity of its sign, and the offsets are finite.
 struct WideFusedRay {
-  static constexpr float kLow = 1.0f - 0x1p-19f, kHigh = 1.0f + 0x1p-19f;
-  float inv[3], oi[3];
+  float inv[3];
+  float oi[6];  // the near planes' offsets of x, y, z (above o inv), then the far planes' (below)
   float e = 0.0f;
   int planes[6];  // byte offsets in a WideBvhNode8 of the near planes of x, y, z, then of the far ones
   bool ok = false;
 
-  /// The values of the ray (o, inv = 1 / d computed in S); `coordinate_bound` bounds the tree's
-  /// coordinates (WideBvh::coordinate_bound).
-  template <class S> WideFusedRay(const Vec3<S>& o, const Vec3<S>& inv_d, S coordinate_bound) {
+  /// The values of the ray (o, inv = 1 / d computed in S, t_max >= 0 or +infinity);
+  /// `coordinate_bound` bounds the tree's coordinates (WideBvh::coordinate_bound), `box` is
+  /// WideBvh::box (or any box holding every child box, in its layout).
+  template <class S>
+  WideFusedRay(const Vec3<S>& o, const Vec3<S>& inv_d, S coordinate_bound, const std::array<double, 8>& box, double t_max) {
+    // each step as the AVX set-up takes it: maxpd / minpd (the second operand unless the first
+    // wins), the products and sums in double in the same order
     bool in = double(coordinate_bound) <= 0x1p60;
-    double m = 0.0;
+    const double reach_max = t_max * 0x1p-19;
+    double bound = 0.0;  // the largest H (1 + 2^-20) + |p| 2^-22
     for (int i = 0; i < 3; ++i) {
       const double od = double(o[i]), id = double(inv_d[i]), ai = std::abs(id);
-      in = in & (std::abs(od) <= 0x1p60) & (ai <= 0x1p60) & (ai >= 0x1p-60);  // false for NaN
       inv[i] = static_cast<float>(id);
-      const double p = od * double(inv[i]);
-      oi[i] = static_cast<float>(p);
-      m = std::max(m, std::abs(p));
-      planes[i] = static_cast<int>(sizeof(float[8])) * (2 * i + (id < 0.0 ? 1 : 0));
+      const double fi = double(inv[i]), ap = std::abs(od * fi);
+      const double x0 = (box[static_cast<std::size_t>(i)] - od) * (id * 0x1p-19), x1 = (box[static_cast<std::size_t>(4 + i)] - od) * (id * 0x1p-19);
+      const double x = x0 > x1 ? x0 : x1;  // the exit from the box's slab (its far plane), times 2^-19
+      const double l = x < reach_max ? x : reach_max;
+      const double h = l > 0x1p-126 ? l : 0x1p-126;
+      in = in & (std::abs(od) <= 0x1p60) & (ai <= 0x1p60) & (ai >= 0x1p-60) & (ap <= 0x1p63) & (l <= 0x1p61);  // false for NaN
+      const double c = std::signbit(od) != std::signbit(id) ? -0x1p-23 : 0x1p-23;  // 2^-23 with the sign of p
+      oi[i] = static_cast<float>(std::fma(od, fi * (1.0 + c), h));
+      oi[3 + i] = static_cast<float>(std::fma(od, fi * (1.0 - c), -h));
+      const double eb = h * 0x1.00001p0 + ap * 0x1p-22;
+      bound = eb > bound ? eb : bound;
+      planes[i] = static_cast<int>(sizeof(float[8])) * (2 * i + (std::signbit(id) ? 1 : 0));
       planes[3 + i] = planes[i] ^ static_cast<int>(sizeof(float[8]));
     }
-    ok = in && m <= 0x1p63;
-    e = ok ? error_bound(m) : 0.0f;
+    ok = in;
+    e = ok ? static_cast<float>(bound + 0x1p-99) : 0.0f;
   }
-  /// e for M = m: at least 2^-23 M + 2^-100 (the double operations and the rounding to float
-  /// lose less than the 2^-20 M 2^-23 and 2^-100 added for them), in three operations.
-  static float error_bound(double m) { return static_cast<float>(m * 0x1.00001p-23 + 0x1p-99); }
   /// False when some magnitude is out of range (see above): the cast uses another node test.
   bool usable() const { return ok; }
 
-  /// The children of `n` entered before `bound` (bit c), keys[c] = lo[c] (the others anything);
-  /// `t_max_up` a float >= t_max. The AVX test's operations one lane at a time.
-  int entered_scalar(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
+  /// The children of `n` entered before `bound` (bit c; `bound` at most the float t_max rounded
+  /// up), keys[c] = lo[c] (the others anything). The AVX test's operations one lane at a time.
+  int entered_scalar(const WideBvhNode8& n, float bound, float (&keys)[8]) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
     // maxps / minps: the second operand unless the first wins
     const auto maxps = [](float x, float y) { return x > y ? x : y; };
@@ -97,12 +145,11 @@ struct WideFusedRay {
       float a[3], b[3];
       for (int i = 0; i < 3; ++i) {
         a[i] = std::fma(reinterpret_cast<const float*>(p + planes[i])[c], inv[i], -oi[i]);
-        b[i] = std::fma(reinterpret_cast<const float*>(p + planes[3 + i])[c], inv[i], -oi[i]);
+        b[i] = std::fma(reinterpret_cast<const float*>(p + planes[3 + i])[c], inv[i], -oi[3 + i]);
       }
-      const float t0 = maxps(maxps(a[0], a[1]), maxps(a[2], 0.0f)), t1 = minps(minps(b[0], b[1]), minps(b[2], t_max_up));
-      const float lo = std::fma(t0, kLow, -e), hi = std::fma(t1, kHigh, e);
+      const float lo = maxps(maxps(a[0], a[1]), maxps(a[2], 0.0f)), hi = minps(minps(b[0], b[1]), minps(b[2], bound));
       keys[c] = lo;
-      mask |= (lo <= minps(hi, bound) ? 1 : 0) << c;
+      mask |= (lo <= hi ? 1 : 0) << c;
     }
     return mask;
   }
@@ -111,38 +158,52 @@ struct WideFusedRay {
 #if defined(IMPACT_WIDE_AVX)
 /// The fused node test in 256-bit AVX with FMA (call only when wide_fma_available()).
 struct WideFusedAvx {
-  __m256 inv[3], oi[3], e;  // WideFusedRay's values broadcast
+  __m256 inv[3], oi[6];  // WideFusedRay's values broadcast
   int planes[6];
 
   /// The state of a ray in double, in one pass of 256-bit AVX over the three axes: WideFusedRay's
   /// checks and values bit for bit (tested). False when WideFusedRay would not be usable; `e` gets
   /// its e (0 when not usable). Its limits (2^60) are within CoordinateRange<double>: the public
   /// 8-wide cast relies on them as its argument check (query/ray_wide_bvh.hpp).
-  IMPACT_WIDE_FMA_TARGET bool set(const Vec3<double>& o, const Vec3<double>& inv_d, double coordinate_bound, float& e_out) {
+  IMPACT_WIDE_FMA_TARGET bool set(const Vec3<double>& o, const Vec3<double>& inv_d, double coordinate_bound, const std::array<double, 8>& box,
+                                  double t_max, float& e_out) {
     const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
-    // (x, y, z, 0) and (1/dx, 1/dy, 1/dz, 1): the fourth lane passes every check and adds 0 to M
+    // (x, y, z, 0) and (1/dx, 1/dy, 1/dz, 1): the fourth lane passes every check, adds nothing to e
     const __m256d vo = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(o.data())), _mm_load_sd(o.data() + 2), 1);
     const __m256d vi = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(inv_d.data())), _mm_set_pd(1.0, inv_d[2]), 1);
     const __m256d ai = _mm256_and_pd(vi, abs_mask);
-    const __m256d big = _mm256_set1_pd(0x1p60);
-    const __m256d in = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(vo, abs_mask), big, _CMP_LE_OQ), _mm256_cmp_pd(ai, big, _CMP_LE_OQ)),
-                                     _mm256_cmp_pd(ai, _mm256_set1_pd(0x1p-60), _CMP_GE_OQ));
     const __m128 invf = _mm256_cvtpd_ps(vi);
-    const __m256d p = _mm256_mul_pd(vo, _mm256_cvtps_pd(invf));
-    const __m128 oif = _mm256_cvtpd_ps(p);
-    const __m256d ap = _mm256_and_pd(p, abs_mask);
-    const __m128d m2 = _mm_max_pd(_mm256_castpd256_pd128(ap), _mm256_extractf128_pd(ap, 1));
-    const double m = _mm_cvtsd_f64(_mm_max_sd(m2, _mm_unpackhi_pd(m2, m2)));  // (NaN only when a check fails)
-    if (!((_mm256_movemask_pd(in) == 15) & (coordinate_bound <= 0x1p60) & (m <= 0x1p63))) {
+    const __m256d fi = _mm256_cvtps_pd(invf);
+    const __m256d ap = _mm256_and_pd(_mm256_mul_pd(vo, fi), abs_mask);
+    // the exit from the tree's box on each axis times 2^-19 (the larger of its two planes'), at most t_max 2^-19
+    const __m256d is = _mm256_mul_pd(vi, _mm256_set1_pd(0x1p-19));
+    const __m256d x = _mm256_max_pd(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(box.data()), vo), is),
+                                    _mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(box.data() + 4), vo), is));
+    const __m256d l = _mm256_min_pd(x, _mm256_set1_pd(t_max * 0x1p-19));
+    const __m256d h = _mm256_max_pd(l, _mm256_set1_pd(0x1p-126));
+    const __m256d big = _mm256_set1_pd(0x1p60);
+    const __m256d in = _mm256_and_pd(
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(vo, abs_mask), big, _CMP_LE_OQ), _mm256_cmp_pd(ai, big, _CMP_LE_OQ)),
+                      _mm256_cmp_pd(ai, _mm256_set1_pd(0x1p-60), _CMP_GE_OQ)),
+        _mm256_and_pd(_mm256_cmp_pd(ap, _mm256_set1_pd(0x1p63), _CMP_LE_OQ), _mm256_cmp_pd(l, _mm256_set1_pd(0x1p61), _CMP_LE_OQ)));
+    if (!((_mm256_movemask_pd(in) == 15) & (coordinate_bound <= 0x1p60))) {
       e_out = 0.0f;
       return false;
     }
-    e_out = WideFusedRay::error_bound(m);
+    // 2^-23 with the sign of o inv: (1 +- 2^-23) 1 / d, exact in double, makes p + |p| 2^-23
+    const __m256d c = _mm256_or_pd(_mm256_and_pd(_mm256_xor_pd(vo, vi), _mm256_set1_pd(-0.0)), _mm256_set1_pd(0x1p-23));
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m128 near = _mm256_cvtpd_ps(_mm256_fmadd_pd(vo, _mm256_mul_pd(fi, _mm256_add_pd(one, c)), h));
+    const __m128 farf = _mm256_cvtpd_ps(_mm256_fmsub_pd(vo, _mm256_mul_pd(fi, _mm256_sub_pd(one, c)), h));
+    const __m256d eb = _mm256_add_pd(_mm256_mul_pd(h, _mm256_set1_pd(0x1.00001p0)), _mm256_mul_pd(ap, _mm256_set1_pd(0x1p-22)));
+    const __m128d e2 = _mm_max_pd(_mm256_castpd256_pd128(eb), _mm256_extractf128_pd(eb, 1));
+    e_out = static_cast<float>(_mm_cvtsd_f64(_mm_max_sd(e2, _mm_unpackhi_pd(e2, e2))) + 0x1p-99);
     const __m256 i2 = _mm256_insertf128_ps(_mm256_castps128_ps256(invf), invf, 1);
-    const __m256 o2 = _mm256_insertf128_ps(_mm256_castps128_ps256(oif), oif, 1);
+    const __m256 n2 = _mm256_insertf128_ps(_mm256_castps128_ps256(near), near, 1);
+    const __m256 f2 = _mm256_insertf128_ps(_mm256_castps128_ps256(farf), farf, 1);
     inv[0] = _mm256_permute_ps(i2, 0x00), inv[1] = _mm256_permute_ps(i2, 0x55), inv[2] = _mm256_permute_ps(i2, 0xAA);
-    oi[0] = _mm256_permute_ps(o2, 0x00), oi[1] = _mm256_permute_ps(o2, 0x55), oi[2] = _mm256_permute_ps(o2, 0xAA);
-    e = _mm256_set1_ps(e_out);
+    oi[0] = _mm256_permute_ps(n2, 0x00), oi[1] = _mm256_permute_ps(n2, 0x55), oi[2] = _mm256_permute_ps(n2, 0xAA);
+    oi[3] = _mm256_permute_ps(f2, 0x00), oi[4] = _mm256_permute_ps(f2, 0x55), oi[5] = _mm256_permute_ps(f2, 0xAA);
     std::memcpy(planes, kPlanes[_mm256_movemask_pd(vi)], sizeof planes);  // (bit i: 1 / d_i negative; bit 3: 0)
     return true;
   }
@@ -150,11 +211,10 @@ struct WideFusedAvx {
   IMPACT_WIDE_FMA_TARGET void set(const WideFusedRay& r) {
     for (int i = 0; i < 3; ++i) {
       inv[i] = _mm256_set1_ps(r.inv[i]);
-      oi[i] = _mm256_set1_ps(r.oi[i]);
       planes[i] = r.planes[i];
       planes[3 + i] = r.planes[3 + i];
     }
-    e = _mm256_set1_ps(r.e);
+    for (int j = 0; j < 6; ++j) oi[j] = _mm256_set1_ps(r.oi[j]);
   }
 
   /// kPlanes[sign]: WideFusedRay::planes for the direction's sign bits (bit i: component i negative).
@@ -162,36 +222,23 @@ struct WideFusedAvx {
                                         {32, 96, 128, 0, 64, 160}, {0, 64, 160, 32, 96, 128}, {32, 64, 160, 0, 96, 128},
                                         {0, 96, 160, 32, 64, 128}, {32, 96, 160, 0, 64, 128}};
 
-  /// WideFusedRay::entered_scalar of the eight children at once, the keys left in a register.
-  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys) const {
-    __m256 in;
-    return entered(n, t_max_up, bound, keys, in);
-  }
-  /// entered() with the comparison's lanes too (all ones where entered).
-  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 t_max_up, __m256 bound, __m256& keys, __m256& in) const {
+  /// WideFusedRay::entered_scalar of the eight children at once, the keys left in a register and
+  /// the comparison's lanes in `in` (all ones where entered).
+  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, __m256 bound, __m256& keys, __m256& in) const {
     const char* p = reinterpret_cast<const char*>(n.bounds);
     __m256 a[3], b[3];
     for (int i = 0; i < 3; ++i) {
       a[i] = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[i])), inv[i], oi[i]);
-      b[i] = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[3 + i])), inv[i], oi[i]);
+      b[i] = _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(p + planes[3 + i])), inv[i], oi[3 + i]);
     }
-    // No operand is NaN (a usable ray's products are finite or infinite, no sum adds opposite
-    // infinities), so the order of the maxima and minima changes at most the sign of a zero:
-    // taken as trees, two deep on the node loop's dependent chain instead of three.
-    const __m256 t0 = _mm256_max_ps(_mm256_max_ps(a[0], a[1]), _mm256_max_ps(a[2], _mm256_setzero_ps()));
-    const __m256 t1 = _mm256_min_ps(_mm256_min_ps(b[0], b[1]), _mm256_min_ps(b[2], t_max_up));
-    const __m256 lo = _mm256_fmsub_ps(t0, _mm256_set1_ps(WideFusedRay::kLow), e);
-    const __m256 hi = _mm256_fmadd_ps(t1, _mm256_set1_ps(WideFusedRay::kHigh), e);
-    keys = lo;
-    // lo <= hi and lo <= bound as one comparison (two side by side and an `and`, one operation
-    // shorter on the chain, measured no faster: docs/rays.md)
-    in = _mm256_cmp_ps(lo, _mm256_min_ps(hi, bound), _CMP_LE_OQ);
+    keys = _mm256_max_ps(_mm256_max_ps(a[0], a[1]), _mm256_max_ps(a[2], _mm256_setzero_ps()));
+    in = _mm256_cmp_ps(keys, _mm256_min_ps(_mm256_min_ps(b[0], b[1]), _mm256_min_ps(b[2], bound)), _CMP_LE_OQ);
     return _mm256_movemask_ps(in);
   }
   /// entered() with the keys stored (for the tests).
-  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, float t_max_up, float bound, float (&keys)[8]) const {
-    __m256 lo;
-    const int m = entered(n, _mm256_set1_ps(t_max_up), _mm256_set1_ps(bound), lo);
+  IMPACT_WIDE_FMA_TARGET int entered(const WideBvhNode8& n, float bound, float (&keys)[8]) const {
+    __m256 lo, in;
+    const int m = entered(n, _mm256_set1_ps(bound), lo, in);
     _mm256_storeu_ps(keys, lo);
     return m;
   }
