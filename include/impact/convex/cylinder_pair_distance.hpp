@@ -129,16 +129,6 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
   const Mat3<S>& R = f.R;
   const Vec3<S>& t = f.t;
   ConvexDistance<S> out;
-  {  // 1. contact proven by the boolean test
-    bool limit = false;
-    if (cylinder_pair_intersect(a, b, R, t, scale, tolerance, max_iterations, limit)) {
-      out.intersecting = true;
-      out.limit_reached = limit;
-      out.point_a = pa.t;
-      out.point_b = pb.t;
-      return out;
-    }
-  }
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const auto to_world = [&](ConvexDistance<S> r) {
@@ -146,10 +136,42 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
     r.point_b = pa.apply(r.point_b);
     return r;
   };
-  // 2. GJK to a coarse gap
+  // max_iterations is one budget for the whole query: each GJK run gets what the runs before it
+  // left (`spent` support calls so far), the query's iterations are their sum (and one for the
+  // certificate of step 4), and a stage that finds nothing left returns the last run's answer
+  // with limit_reached.
+  int spent = 0;
+  ConvexDistance<S> run;
+  {  // 1. contact proven by the boolean test
+    bool limit = false;
+    const bool hit = cylinder_pair_intersect(a, b, R, t, scale, tolerance, max_iterations, limit, &run);
+    spent = run.iterations;
+    if (hit) {
+      out.intersecting = true;
+      out.limit_reached = limit;
+      out.iterations = spent;
+      out.point_a = pa.t;
+      out.point_b = pb.t;
+      return out;
+    }
+  }
+  // `r` (an upper bound and its witnesses), as the query's answer stopped by the bound
+  const auto stopped = [&](ConvexDistance<S> r) {
+    r.iterations = spent;
+    r.limit_reached = true;
+    return to_world(r);
+  };
+  if (run.limit_reached || spent >= max_iterations) return stopped(run);
+  // 2. GJK to a coarse gap, with what the boolean test left
   const S coarse = std::max(tolerance, S(kCylinderDistanceCoarse) * scale);
-  const ConvexDistance<S> g = gjk_distance<S>(sa, sb, Vec3<S>(-t), coarse, max_iterations);
-  if (g.limit_reached) return to_world(gjk_distance<S>(sa, sb, Vec3<S>(-t), tolerance, max_iterations));
+  const ConvexDistance<S> g = gjk_distance<S>(sa, sb, Vec3<S>(-t), coarse, max_iterations - spent);
+  spent += g.iterations;
+  if (spent >= max_iterations) return stopped(g);
+  if (g.limit_reached) {  // a rounding stall: GJK again to the tolerance, from the start
+    ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(-t), tolerance, max_iterations - spent);
+    r.iterations += spent;
+    return to_world(r);
+  }
   // 3. candidates
   CylinderDistanceCandidate<S> best;
   const Vec3<S> v = R.col(2), e1b = R.col(0), e2b = R.col(1);
@@ -206,14 +228,14 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
         out.distance = D;
         out.point_a = pa.apply(best.x);
         out.point_b = pa.apply(best.y);
-        out.iterations = g.iterations + 1;
+        out.iterations = spent + 1;
         return out;
       }
     }
   }
   // 5. GJK to the tolerance from the coarse direction
-  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(g.point_a - g.point_b), tolerance, max_iterations);
-  r.iterations += g.iterations;
+  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(g.point_a - g.point_b), tolerance, max_iterations - spent);
+  r.iterations += spent;
   return to_world(r);
 }
 
