@@ -53,6 +53,20 @@ struct CylinderDistanceCandidate {
   }
 };
 
+/// One Newton step on an angle t, (c, s) = (cos t, sin t), for a stationary point of a function
+/// whose half first and second derivatives in t are d1 and d2 (a fixed step of 0.5 downhill where
+/// d2 is not positive; every step clamped to 0.5 rad); true when the step fell below 1e-7 rad.
+template <class S>
+bool newton_angle_step(S d1, S d2, S& c, S& s) {
+  S step = d2 > S(0) ? -d1 / d2 : (d1 > S(0) ? S(-0.5) : S(0.5));
+  step = std::clamp(step, S(-0.5), S(0.5));
+  const S cs = std::cos(step), sn = std::sin(step);
+  const S nc = c * cs - s * sn;
+  s = s * cs + c * sn;
+  c = nc;
+  return std::abs(step) < S(1e-7);
+}
+
 /// Newton on the angle of the circle c0 + rho (cos t e1 + sin t e2) (e1, e2 orthonormal) for its
 /// point nearest the line q0 + s v (v unit), from (c, s) = (cos t, sin t); returns the point.
 template <class S>
@@ -65,13 +79,7 @@ Vec3<S> circle_nearest_line(const Vec3<S>& c0, const Vec3<S>& e1, const Vec3<S>&
     const S wv = g0 + rho * (c * a1 + s * a2), xv = rho * (c * a2 - s * a1);
     const S f1 = rho * (c * g2 - s * g1) - wv * xv;
     const S f2 = -rho * (c * g1 + s * g2) - xv * xv + wv * rho * (c * a1 + s * a2);
-    S step = f2 > S(0) ? -f1 / f2 : (f1 > S(0) ? S(-0.5) : S(0.5));
-    step = std::clamp(step, S(-0.5), S(0.5));
-    const S cs = std::cos(step), sn = std::sin(step);
-    const S nc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = nc;
-    if (std::abs(step) < S(1e-7)) break;
+    if (newton_angle_step(f1, f2, c, s)) break;
   }
   return c0 + rho * (c * e1 + s * e2);
 }
@@ -90,13 +98,7 @@ bool circle_nearest_rim(const Vec3<S>& c0, const Vec3<S>& e1, const Vec3<S>& e2,
     // g = (q - r)^2 + (x_z - zc)^2; half its derivatives
     const S g1 = (q - r) * q1 + (x.z() - zc) * x1.z();
     const S g2 = q1 * q1 + (q - r) * q2 + x1.z() * x1.z() + (x.z() - zc) * x2.z();
-    S step = g2 > S(0) ? -g1 / g2 : (g1 > S(0) ? S(-0.5) : S(0.5));
-    step = std::clamp(step, S(-0.5), S(0.5));
-    const S cs = std::cos(step), sn = std::sin(step);
-    const S nc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = nc;
-    if (std::abs(step) < S(1e-7)) break;
+    if (newton_angle_step(g1, g2, c, s)) break;
   }
   point = c0 + rho * (c * e1 + s * e2);
   return true;
