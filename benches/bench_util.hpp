@@ -181,13 +181,13 @@ inline std::uint64_t parse_seed(const std::string& option, const std::string& te
   return std::uint64_t(v);
 }
 
-/// Checks at once that the --json file can be written (it is created, or opened for appending
-/// when it exists), so that a bad path is reported before the bench runs, not after minutes of
-/// work. The bench writes the file whole at its end.
-inline void check_writable(const std::string& path, const char* usage) {
+/// Checks at once that the file given to `option` (--json by default) can be written (it is
+/// created, or opened for appending when it exists), so that a bad path is reported before the
+/// bench runs, not after minutes of work. The bench writes the file whole at its end.
+inline void check_writable(const std::string& path, const char* usage, const std::string& option = "--json") {
   if (path.empty()) return;
   std::ofstream f(path, std::ios::app);
-  if (!f) exit_usage("cannot write the JSON file '" + path + "'", usage);
+  if (!f) exit_usage("cannot write the " + option + " file '" + path + "'", usage);
 }
 
 /// A word of the command line that is no option the bench knows: "-h" and "--help" print the
