@@ -663,7 +663,7 @@ TEST(WideBvh8, FusedSlabEntersTheFloatSlabsWorstMisses) {
 
 // The AVX cast's one-pass set-up in double (WideFusedAvx::set) against WideFusedRay: the same
 // usability (rays beyond its range, zero and tiny direction components, origins far off, |o / d|
-// beyond 2^63, a reach beyond 2^82), the same e, offsets and plane offsets and, node by node, the
+// beyond 2^63, a reach beyond 2^80), the same e, offsets and plane offsets and, node by node, the
 // same mask and keys bit for bit (a wrong axis, sign or rounding in the set-up changes them); the
 // tree's box around the node's boxes, or off to a side (the ray may leave it before t = 0).
 TEST(WideBvh8, AvxSetUpMatchesTheScalarTest) {
