@@ -842,6 +842,34 @@ TEST(ConvexQuery, IterationBoundIsOneBudget) {
   EXPECT_GT(limited, 100);
 }
 
+// A round shape whose core meets the other shape, with a bound that stops the own EPA's GJK on the
+// core: no plane was found, so the depth is not bracketed by the radius (sphere against hull,
+// bounds 5-7: a depth of 0.5 within 6e-11 was reported for a true 0.55); the depth stays an upper
+// bound of the full query's.
+TEST(ConvexQuery, BoundedRoundContactStaysAnUpperBound) {
+  const auto& z = zoo();
+  int limited = 0;
+  const auto check = [&](const auto& a, const auto& b, const char* what) {
+    const double scale = std::max(shape_size(a), shape_size(b));
+    for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 40 : 120, 0.6 * (shape_size(a) + shape_size(b)), 4242)) {
+      const auto full = convex_penetration(a, pa, b, pb);
+      if (!full.intersecting || full.limit_reached) continue;
+      for (int m = 1; m <= 16; ++m) {
+        ConvexQueryOptions<double> o;
+        o.max_iterations = m;
+        const auto c = convex_penetration(a, pa, b, pb, o);
+        if (!c.limit_reached || !c.intersecting) continue;
+        ++limited;
+        EXPECT_GE(c.depth, full.depth - 1e-9 * scale) << what << " bound " << m;
+      }
+    }
+  };
+  check(z.sphere, z.hull, "sphere-hull");
+  check(z.capsule, z.hull, "capsule-hull");
+  check(z.capsule, z.box, "capsule-box");
+  EXPECT_GT(limited, 100);
+}
+
 TEST(ConvexQuery, MprAndGjkBooleansAgree) {
   const auto& z = zoo();
   ConvexQueryOptions<double> gjk;

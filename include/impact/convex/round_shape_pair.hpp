@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace impact {
@@ -141,6 +142,7 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
     ConvexContact<S> c = own_epa(core, pa, core_interior(core), b, pb, interior_point(b), scale, rest, failed);
     if (!failed) {
       c.iterations += d.iterations;
+      const bool epa_stopped = c.limit_reached;  // the bound, not a plane, ended EPA's GJK
       c.limit_reached = c.limit_reached || d.limit_reached;
       if (!c.intersecting) {
         // The core comes within GJK's tolerance of b, and EPA's GJK found a plane between them: the
@@ -154,7 +156,10 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
         const S apart = d.intersecting ? tol : d.distance;
         c.intersecting = true;
         c.normal = len > S(0) ? Vec3<S>(gap / len) : Vec3<S>(Vec3<S>::UnitZ());
-        c.depth = r;
+        // When the bound stopped EPA's GJK, no plane was found and the core may overlap b: the depth
+        // is then bounded above only by the overlap along the normal (sphere against hull, bounds
+        // 5-7 left by the core's GJK: a depth of r, 0.5, bracketed within 6e-11, for a true 0.55).
+        c.depth = epa_stopped ? std::numeric_limits<S>::infinity() : r;
         c.point = (d.point_a + d.point_b) / S(2);
         settle_certified_contact(a, pa, b, pb, c);
         c.depth_gap = std::max(c.depth - std::max(r - apart, S(0)), S(0));
