@@ -8,7 +8,11 @@
 #include "support/obj_reader.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -130,6 +134,60 @@ inline bool write_file(const std::string& path, const std::string& text) {
 inline std::string option_value(int argc, char** argv, int& i, const char* usage) {
   if (i + 1 >= argc) exit_usage("missing value after " + std::string(argv[i]), usage);
   return argv[++i];
+}
+
+/// The integer an option was given, which must lie in [lo, hi]: the whole of `text` a decimal
+/// integer (an optional sign, digits, nothing after them), else the bench exits through exit_usage
+/// naming the option, its range and the text. atoi would take "12x" for 12, "abc" for 0 and
+/// overflow silently; a bench must not run on a number nobody typed.
+inline long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi,
+                               const char* usage) {
+  const auto bad = [&] {
+    exit_usage(option + " wants an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], not '" + text + "'",
+               usage);
+  };
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) bad();
+  errno = 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(text.c_str(), &end, 10);
+  if (errno != 0 || end != text.c_str() + text.size() || v < lo || v > hi) bad();
+  return v;
+}
+
+/// The real number an option was given: the whole of `text` a finite number in [lo, hi], else the
+/// bench exits through exit_usage as parse_integer does.
+inline double parse_real(const std::string& option, const std::string& text, double lo, double hi, const char* usage) {
+  const auto bad = [&] {
+    std::ostringstream range;
+    range << option << " wants a number in [" << lo << ", " << hi << "], not '" << text << "'";
+    exit_usage(range.str(), usage);
+  };
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) bad();
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (errno == ERANGE || end != text.c_str() + text.size() || !std::isfinite(v) || !(v >= lo && v <= hi)) bad();
+  return v;
+}
+
+/// A seed: the whole of `text` an unsigned 64-bit decimal integer, else exit_usage.
+inline std::uint64_t parse_seed(const std::string& option, const std::string& text, const char* usage) {
+  const auto bad = [&] { exit_usage(option + " wants an unsigned 64-bit integer, not '" + text + "'", usage); };
+  if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) bad();
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (errno != 0 || end != text.c_str() + text.size()) bad();
+  return std::uint64_t(v);
+}
+
+/// Checks at once that the file given to `option` (--json by default) can be written (it is
+/// created, or opened for appending when it exists), so that a bad path is reported before the
+/// bench runs, not after minutes of work. The bench writes the file whole at its end.
+inline void check_writable(const std::string& path, const char* usage, const std::string& option = "--json") {
+  if (path.empty()) return;
+  std::ofstream f(path, std::ios::app);
+  if (!f) exit_usage("cannot write the " + option + " file '" + path + "'", usage);
 }
 
 /// A word of the command line that is no option the bench knows: "-h" and "--help" print the

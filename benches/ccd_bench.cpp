@@ -190,29 +190,26 @@ int main(int argc, char** argv) {
   std::size_t generated = 0;
   bool sweep = true, metamorphic = true;
   std::string transform;
+  const char* usage =
+      "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--recheck N] "
+      "[--repeat R] [--generated N] [--no-sweep] [--transform NAME] [--no-metamorphic]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "missing value after %s\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+    auto next = [&] { return impact::bench::option_value(argc, argv, i, usage); };
     if (a == "--json")
       json = next();
     else if (a == "--min-separation")
-      opt.min_separation = std::stod(next());
+      opt.min_separation = impact::bench::parse_real(a, next(), 0, 1e100, usage);
     else if (a == "--tolerance")
-      opt.tolerance = std::stod(next());
+      opt.tolerance = impact::bench::parse_real(a, next(), 0, 1e100, usage);
     else if (a == "--max-iterations")
-      opt.max_iterations = std::stoll(next());
+      opt.max_iterations = impact::bench::parse_integer(a, next(), 1, std::int64_t(1) << 22, usage);
     else if (a == "--recheck")
-      opt.recheck_iterations = std::stoll(next());
+      opt.recheck_iterations = impact::bench::parse_integer(a, next(), 0, std::int64_t(1) << 22, usage);
     else if (a == "--repeat")
-      g_repeat = std::max(1, std::stoi(next()));
+      g_repeat = int(impact::bench::parse_integer(a, next(), 1, 1000, usage));
     else if (a == "--generated")
-      generated = std::stoul(next());
+      generated = std::size_t(impact::bench::parse_integer(a, next(), 0, 10000000, usage));
     else if (a == "--no-sweep")
       sweep = false;
     else if (a == "--no-metamorphic")
@@ -226,19 +223,17 @@ int main(int argc, char** argv) {
       }
     }
     else if (a == "--help" || a == "-h") {
-      std::printf(
-          "usage: impact-ccd-bench [DIR...] [--json FILE] [--min-separation D] [--tolerance T] [--max-iterations N] [--recheck N] "
-          "[--repeat R] [--generated N] [--no-sweep] [--transform NAME] [--no-metamorphic]\n");
+      std::printf("%s", usage);
       std::printf("transforms:");
       for (const auto& n : impact::test::ccd_transform_names()) std::printf(" %s", n.c_str());
       std::printf("\n");
       return 0;
     } else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "unknown option %s\n", a.c_str());
-      return 2;
+      impact::bench::reject_option(a, usage);
     } else
       dirs.push_back(a);
   }
+  impact::bench::check_writable(json, usage);
   std::vector<QuerySet> sets;
   try {
     if (dirs.empty() && generated == 0) {

@@ -102,14 +102,11 @@ bool write_final_obj(const std::string& path, const bench::ClothScene& s, double
   return bool(f);
 }
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K] [--steps S]\n"
-               "                          [--dt DT] [--thickness H] [--method harmon|rigid|impulses] [--obstacle MESH]\n"
-               "                          [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K] [--json FILE]\n"
-               "                          [--write-final FILE.obj]\n");
-  return 2;
-}
+constexpr const char* kUsage =
+    "usage: impact-cloth-bench [--scene drape|twist|layers|spin|shot] [--resolution N] [--layers K] [--steps S]\n"
+    "                          [--dt DT] [--thickness H] [--method harmon|rigid|impulses] [--obstacle MESH]\n"
+    "                          [--speed V] [--impulse-passes P] [--proximity-rounds R] [--threads T] [--every K] [--json FILE]\n"
+    "                          [--write-final FILE.obj]\n";
 
 }  // namespace
 
@@ -117,29 +114,34 @@ int main(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (s == "--scene" && (v = next())) a.scene.scene = v;
-    else if (s == "--resolution" && (v = next())) a.scene.resolution = std::atoi(v);
-    else if (s == "--layers" && (v = next())) a.scene.layers = std::atoi(v);
-    else if (s == "--steps" && (v = next())) a.steps = std::atoi(v);
-    else if (s == "--dt" && (v = next())) a.dt = std::atof(v);
-    else if (s == "--thickness" && (v = next())) a.thickness = std::atof(v);
-    else if (s == "--method" && (v = next())) a.method = v;
-    else if (s == "--obstacle" && (v = next())) a.obstacle = v;
-    else if (s == "--speed" && (v = next())) a.scene.speed = std::atof(v);
-    else if (s == "--impulse-passes" && (v = next())) a.impulse_passes = std::atoi(v);
-    else if (s == "--proximity-rounds" && (v = next())) a.proximity_rounds = std::atoi(v);
-    else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
-    else if (s == "--every" && (v = next())) a.every = std::atoi(v);
-    else if (s == "--json" && (v = next())) a.json = v;
-    else if (s == "--write-final" && (v = next())) a.write_final = v;
-    else return usage();
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
+    auto integer = [&](long long lo, long long hi) { return int(bench::parse_integer(s, next(), lo, hi, kUsage)); };
+    auto real = [&](double lo, double hi) { return bench::parse_real(s, next(), lo, hi, kUsage); };
+    if (s == "--scene") a.scene.scene = next();
+    else if (s == "--resolution") a.scene.resolution = integer(1, 2000);
+    else if (s == "--layers") a.scene.layers = integer(1, 1000);
+    else if (s == "--steps") a.steps = integer(1, 1000000);
+    else if (s == "--dt") a.dt = real(0, 1e3);
+    else if (s == "--thickness") a.thickness = real(0, 1e3);
+    else if (s == "--method") a.method = next();
+    else if (s == "--obstacle") a.obstacle = next();
+    else if (s == "--speed") a.scene.speed = real(0, 1e9);
+    else if (s == "--impulse-passes") a.impulse_passes = integer(0, 1000000);
+    else if (s == "--proximity-rounds") a.proximity_rounds = integer(0, 1000000);
+    else if (s == "--threads") a.threads = integer(1, 1024);
+    else if (s == "--every") a.every = integer(1, 1000000);
+    else if (s == "--json") a.json = next();
+    else if (s == "--write-final") a.write_final = next();
+    else bench::reject_option(s, kUsage);
   }
   if (a.steps < 0) a.steps = default_steps(a.scene.scene);
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // one line per step, also into a file
-  if (!(a.dt > 0) || !(a.thickness > 0) || a.threads < 1 || a.every < 1 || a.steps < 1) return usage();
-  if (a.method != "harmon" && a.method != "rigid" && a.method != "impulses") return usage();
+  if (!(a.dt > 0)) bench::exit_usage("--dt must be above 0", kUsage);
+  if (!(a.thickness > 0)) bench::exit_usage("--thickness must be above 0", kUsage);
+  if (a.method != "harmon" && a.method != "rigid" && a.method != "impulses")
+    bench::exit_usage("--method must be harmon, rigid or impulses", kUsage);
+  bench::check_writable(a.json, kUsage);
+  bench::check_writable(a.write_final, kUsage, "--write-final");
 
   TriangleMesh<double> obstacle_mesh;
   std::unique_ptr<bench::ClothScene> scene;

@@ -24,6 +24,7 @@
 #include "impact/geometry/mesh_generators.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -115,6 +116,11 @@ inline std::unique_ptr<ClothScene> make_cloth_scene(const ClothSceneConfig& c) {
   using namespace detail_scene;
   if (c.resolution < 1 || c.resolution > 2000) throw InvalidInput("cloth scene: resolution must be in [1, 2000]");
   if (c.layers < 1 || c.layers > 1000) throw InvalidInput("cloth scene: layers must be in [1, 1000]");
+  // (resolution + 1)^2 vertices a cloth: the product of the two largest values would be 4e9, past
+  // an int's vertex index and tens of GB; 10^7 vertices is a hundred times the largest scene.
+  const std::int64_t cloth_vertices = std::int64_t(c.resolution + 1) * (c.resolution + 1) * (c.scene == "layers" ? c.layers : 1);
+  if (cloth_vertices > 10000000)
+    throw InvalidInput("cloth scene: (resolution + 1)^2 x layers must be at most 10^7 vertices, is " + std::to_string(cloth_vertices));
   auto s = std::make_unique<ClothScene>();
   s->name = c.scene;
   const int n = c.resolution;

@@ -59,25 +59,22 @@ Args parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
     auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
-    if (s == "--poses") a.poses = std::atoi(next().c_str());
-    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    if (s == "--poses") a.poses = int(bench::parse_integer(s, next(), 1, 10000000, kUsage));
+    else if (s == "--seed") a.seed = bench::parse_seed(s, next(), kUsage);
     else if (s == "--bv") a.bv = next();
     else if (s == "--json") a.json = next();
     else if (s == "--split") a.split = next();
-    else if (s == "--leaf") a.leaf = std::atoi(next().c_str());
-    else if (s == "--repeat") a.repeat = std::atoi(next().c_str());
-    else if (s == "--rounds") a.rounds = std::atoi(next().c_str());
+    else if (s == "--leaf") a.leaf = int(bench::parse_integer(s, next(), 1, 1024, kUsage));
+    else if (s == "--repeat") a.repeat = int(bench::parse_integer(s, next(), 1, 1000, kUsage));
+    else if (s == "--rounds") a.rounds = int(bench::parse_integer(s, next(), 1, 1000, kUsage));
     else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else pos.push_back(s);
   }
   if (pos.size() > 2) usage("at most two meshes");
-  if (a.poses < 1) usage("--poses must be >= 1");
-  if (a.leaf < 1) usage("--leaf must be >= 1");
-  if (a.repeat < 1 || a.repeat > 1000) usage("--repeat must be in [1, 1000]");
-  if (a.rounds < 1 || a.rounds > 1000) usage("--rounds must be in [1, 1000]");
   if (a.bv != "sphere" && a.bv != "aabb" && a.bv != "obb" && a.bv != "all") usage("--bv must be sphere, aabb, obb or all");
   if (a.split != "middle" && a.split != "median" && a.split != "sah" && a.split != "bottom-up" && a.split != "incremental")
     usage("--split must be middle, median, sah, bottom-up or incremental");
+  bench::check_writable(a.json, kUsage);
   if (!pos.empty()) a.mesh_a = pos[0];
   a.mesh_b = pos.size() > 1 ? pos[1] : a.mesh_a;
   return a;

@@ -35,15 +35,15 @@ int main(int argc, char** argv) {
   std::vector<std::string> paths;
   std::string json;
   int repeat = 5;
+  const char* usage = "usage: impact-fit-bench [MESH...] [--repeat R] [--json FILE]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    if (s == "--json" && i + 1 < argc) json = argv[++i];
-    else if (s == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (!s.empty() && s[0] == '-') {
-      std::fprintf(stderr, "usage: impact-fit-bench [MESH...] [--repeat R] [--json FILE]\n");
-      return 2;
-    } else paths.push_back(s);
+    if (s == "--json") json = bench::option_value(argc, argv, i, usage);
+    else if (s == "--repeat") repeat = int(bench::parse_integer(s, bench::option_value(argc, argv, i, usage), 1, 1000, usage));
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, usage);
+    else paths.push_back(s);
   }
+  bench::check_writable(json, usage);
   std::vector<std::pair<std::string, TriangleMesh<double>>> meshes;
   try {
     if (paths.empty()) {

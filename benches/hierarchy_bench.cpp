@@ -56,26 +56,22 @@ struct Args {
 constexpr const char* kUsage =
     "usage: impact-hierarchy-bench [MESH...] [--poses N] [--rays N] [--seed S] [--threads T] [--copies N] [--json FILE]\n";
 
-[[noreturn]] void usage(const char* msg) { bench::exit_usage(msg, kUsage); }
 
 Args parse(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
     auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
-    if (s == "--poses") a.poses = std::atoi(next().c_str());
-    else if (s == "--rays") a.rays = std::atoi(next().c_str());
-    else if (s == "--seed") a.seed = std::strtoull(next().c_str(), nullptr, 10);
+    if (s == "--poses") a.poses = int(bench::parse_integer(s, next(), 1, 10000000, kUsage));
+    else if (s == "--rays") a.rays = int(bench::parse_integer(s, next(), 1, 10000000, kUsage));
+    else if (s == "--seed") a.seed = bench::parse_seed(s, next(), kUsage);
     else if (s == "--json") a.json = next();
-    else if (s == "--threads") a.threads = std::atoi(next().c_str());
-    else if (s == "--copies") a.copies = std::atoi(next().c_str());
+    else if (s == "--threads") a.threads = int(bench::parse_integer(s, next(), 0, 1024, kUsage));
+    else if (s == "--copies") a.copies = int(bench::parse_integer(s, next(), 0, 10000000, kUsage));
     else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
     else a.meshes.push_back(s);
   }
-  if (a.poses < 1) usage("--poses must be >= 1");
-  if (a.rays < 1) usage("--rays must be >= 1");
-  if (a.threads < 0) usage("--threads must be >= 0 (0: the hardware concurrency)");
-  if (a.copies < 0 || a.copies > 10000000) usage("--copies must be in [0, 1e7]");
+  bench::check_writable(a.json, kUsage);
   return a;
 }
 

@@ -60,11 +60,11 @@ Args parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
     if (s == "--steps")
-      a.steps = std::atoi(bench::option_value(argc, argv, i, kUsage).c_str());
+      a.steps = int(bench::parse_integer(s, bench::option_value(argc, argv, i, kUsage), 1, 100000, kUsage));
     else if (s == "--threads")
-      a.threads = std::atoi(bench::option_value(argc, argv, i, kUsage).c_str());
+      a.threads = int(bench::parse_integer(s, bench::option_value(argc, argv, i, kUsage), 0, 1024, kUsage));
     else if (s == "--check-steps")
-      a.check_steps = std::atoi(bench::option_value(argc, argv, i, kUsage).c_str());
+      a.check_steps = int(bench::parse_integer(s, bench::option_value(argc, argv, i, kUsage), 0, 100000, kUsage));
     else if (s == "--json")
       a.json = bench::option_value(argc, argv, i, kUsage);
     else if (!s.empty() && s[0] == '-')
@@ -74,9 +74,7 @@ Args parse(int argc, char** argv) {
     else
       bench::exit_usage("more than one mesh given", kUsage);
   }
-  if (a.steps < 1 || a.steps > 100000) bench::exit_usage("--steps must be in [1, 100000]", kUsage);
-  if (a.threads < 0 || a.threads > 1024) bench::exit_usage("--threads must be in [0, 1024]", kUsage);
-  if (a.check_steps < 0) bench::exit_usage("--check-steps must be >= 0", kUsage);
+  bench::check_writable(a.json, kUsage);
   return a;
 }
 

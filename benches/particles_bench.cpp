@@ -551,40 +551,40 @@ template <class S> int run_all(const Args& a) {
   return 0;
 }
 
+constexpr const char* kUsage =
+    "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
+    "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
+    "                              [--grid G] [--compact C] [--wide 0|1] [--threads T] [--seed X] [--quick] [--json FILE]\n";
+
 int main(int argc, char** argv) {
   Args a;
-  auto usage = [] {
-    std::fprintf(stderr,
-                 "usage: impact-particles-bench [MESH] [--particles N] [--steps S] [--dt DT] [--naive-particles M]\n"
-                 "                              [--ref-particles R] [--substeps K] [--free-ball F] [--sort-every N] [--float] [--leaf L]\n"
-                 "                              [--grid G] [--compact C] [--wide 0|1] [--threads T] [--seed X] [--quick] [--json FILE]\n");
-    return 2;
-  };
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (s == "--particles" && (v = next())) a.particles = std::max(1, std::atoi(v));
-    else if (s == "--steps" && (v = next())) a.steps = std::max(1, std::atoi(v));
-    else if (s == "--dt" && (v = next())) a.dt = std::atof(v);
-    else if (s == "--naive-particles" && (v = next())) a.naive_particles = std::max(0, std::atoi(v));
-    else if (s == "--ref-particles" && (v = next())) a.ref_particles = std::max(0, std::atoi(v));
-    else if (s == "--substeps" && (v = next())) a.substeps = std::max(1, std::atoi(v));
-    else if (s == "--free-ball" && (v = next())) a.free_ball = std::atof(v);
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
+    auto integer = [&](long long lo, long long hi) { return int(bench::parse_integer(s, next(), lo, hi, kUsage)); };
+    if (s == "--particles") a.particles = integer(1, 10000000);
+    else if (s == "--steps") a.steps = integer(1, 1000000);
+    else if (s == "--dt") a.dt = bench::parse_real(s, next(), 0, 1e3, kUsage);
+    else if (s == "--naive-particles") a.naive_particles = integer(0, 1000000);
+    else if (s == "--ref-particles") a.ref_particles = integer(0, 10000000);
+    else if (s == "--substeps") a.substeps = integer(1, 1024);
+    else if (s == "--free-ball") a.free_ball = bench::parse_real(s, next(), 0, 1e6, kUsage);
     else if (s == "--float") a.use_float = true;
     else if (s == "--quick") a.quick = true;
-    else if (s == "--leaf" && (v = next())) a.leaf = std::max(1, std::atoi(v));
-    else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
-    else if (s == "--compact" && (v = next())) a.compact = std::max(0, std::atoi(v));
-    else if (s == "--wide" && (v = next())) a.wide = std::atoi(v) != 0;
-    else if (s == "--sort-every" && (v = next())) a.sort_every = std::max(0, std::atoi(v));
-    else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
-    else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
-    else if (s == "--json" && (v = next())) a.json = v;
-    else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
-    else return usage();
+    else if (s == "--leaf") a.leaf = integer(1, 1024);
+    else if (s == "--grid") a.grid = integer(0, 4096);
+    else if (s == "--compact") a.compact = integer(0, 1024);
+    else if (s == "--wide") a.wide = integer(0, 1);
+    else if (s == "--sort-every") a.sort_every = integer(0, 1000000);
+    else if (s == "--threads") a.threads = integer(0, 1024);
+    else if (s == "--seed") a.seed = bench::parse_seed(s, next(), kUsage);
+    else if (s == "--json") a.json = next();
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
+    else if (a.mesh.empty()) a.mesh = s;
+    else bench::exit_usage("more than one mesh given", kUsage);
   }
-  if (!(a.dt > 0)) return usage();
+  if (!(a.dt > 0)) bench::exit_usage("--dt must be above 0", kUsage);
+  bench::check_writable(a.json, kUsage);
 
   return a.use_float ? run_all<float>(a) : run_all<double>(a);
 }

@@ -262,32 +262,33 @@ bool is_closed(const TriangleMesh<double>& m) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: impact-ray-bench [MESH] [--rays N] [--set short|long|edges|all] [--threads T] [--repeat K]\n"
+    "                        [--grid G] [--compact C] [--wide-leaf L] [--seed X] [--verbose] [--json FILE]\n";
+
 int main(int argc, char** argv) {
   Args a;
-  auto usage = [] {
-    std::fprintf(stderr,
-                 "usage: impact-ray-bench [MESH] [--rays N] [--set short|long|edges|all] [--threads T] [--repeat K]\n"
-                 "                        [--grid G] [--compact C] [--wide-leaf L] [--seed X] [--verbose] [--json FILE]\n");
-    return 2;
-  };
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (s == "--rays" && (v = next())) a.rays = std::max(1L, std::atol(v));
-    else if (s == "--set" && (v = next())) a.set = v;
-    else if (s == "--threads" && (v = next())) a.threads = std::atoi(v);
-    else if (s == "--repeat" && (v = next())) a.repeat = std::max(1, std::atoi(v));
-    else if (s == "--grid" && (v = next())) a.grid = std::max(0, std::atoi(v));
-    else if (s == "--compact" && (v = next())) a.compact = std::max(1, std::atoi(v));
-    else if (s == "--wide-leaf" && (v = next())) a.wide_leaf = std::max(1, std::atoi(v));
+    auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
+    auto integer = [&](long long lo, long long hi) { return int(bench::parse_integer(s, next(), lo, hi, kUsage)); };
+    if (s == "--rays") a.rays = integer(1, 10000000);
+    else if (s == "--set") a.set = next();
+    else if (s == "--threads") a.threads = integer(0, 1024);
+    else if (s == "--repeat") a.repeat = integer(1, 1000);
+    else if (s == "--grid") a.grid = integer(0, 4096);
+    else if (s == "--compact") a.compact = integer(1, 1024);
+    else if (s == "--wide-leaf") a.wide_leaf = integer(1, 1024);
     else if (s == "--verbose") a.verbose = true;
-    else if (s == "--seed" && (v = next())) a.seed = std::strtoull(v, nullptr, 10);
-    else if (s == "--json" && (v = next())) a.json = v;
-    else if (!s.empty() && s[0] != '-' && a.mesh.empty()) a.mesh = s;
-    else return usage();
+    else if (s == "--seed") a.seed = bench::parse_seed(s, next(), kUsage);
+    else if (s == "--json") a.json = next();
+    else if (!s.empty() && s[0] == '-') bench::reject_option(s, kUsage);
+    else if (a.mesh.empty()) a.mesh = s;
+    else bench::exit_usage("more than one mesh given", kUsage);
   }
-  if (a.set != "all" && a.set != "short" && a.set != "long" && a.set != "edges") return usage();
+  if (a.set != "all" && a.set != "short" && a.set != "long" && a.set != "edges")
+    bench::exit_usage("--set must be short, long, edges or all", kUsage);
+  bench::check_writable(a.json, kUsage);
 
   TriangleMesh<double> source;
   try {

@@ -92,36 +92,33 @@ Args parse(int argc, char** argv) {
     const std::string s = argv[i];
     auto next = [&] { return bench::option_value(argc, argv, i, kUsage); };
     if (s == "--objects")
-      a.objects = std::atol(next().c_str());
+      a.objects = long(bench::parse_integer(s, next(), 2, 10000000, kUsage));
     else if (s == "--dynamic")
-      a.dynamic = std::atof(next().c_str());
+      a.dynamic = bench::parse_real(s, next(), 0, 1, kUsage);
     else if (s == "--steps")
-      a.steps = std::atoi(next().c_str());
+      a.steps = int(bench::parse_integer(s, next(), 1, 1000000, kUsage));
     else if (s == "--warmup")
-      a.warmup = std::atoi(next().c_str());
+      a.warmup = int(bench::parse_integer(s, next(), 0, 1000000, kUsage));
     else if (s == "--seed")
-      a.seed = std::strtoull(next().c_str(), nullptr, 10);
+      a.seed = bench::parse_seed(s, next(), kUsage);
     else if (s == "--allpairs-max")
-      a.allpairs_max = std::atol(next().c_str());
+      a.allpairs_max = long(bench::parse_integer(s, next(), 0, 10000000, kUsage));
     else if (s == "--scaling-max")
-      a.scaling_max = std::atol(next().c_str());
+      a.scaling_max = long(bench::parse_integer(s, next(), 0, 10000000, kUsage));
     else if (s == "--bullet-prediction")
-      a.bullet_prediction = std::atof(next().c_str());
+      a.bullet_prediction = bench::parse_real(s, next(), 0, 1e6, kUsage);
     else if (s == "--bullet-deferred")
-      a.bullet_deferred = std::atoi(next().c_str()) != 0;
+      a.bullet_deferred = bench::parse_integer(s, next(), 0, 1, kUsage) != 0;
     else if (s == "--only")
       a.only = next();
     else if (s == "--threads")
-      a.threads = std::atoi(next().c_str());
+      a.threads = int(bench::parse_integer(s, next(), 0, 1024, kUsage));
     else if (s == "--json")
       a.json = next();
     else
       bench::reject_option(s, kUsage);
   }
-  if (a.objects < 2) usage("--objects must be >= 2");
-  if (!(a.dynamic >= 0 && a.dynamic <= 1)) usage("--dynamic must be in [0, 1]");
-  if (a.steps < 1) usage("--steps must be >= 1");
-  if (a.warmup < 0) usage("--warmup must be >= 0");
+  bench::check_writable(a.json, kUsage);
   return a;
 }
 

@@ -14,6 +14,7 @@
 #include "impact/cloth/collision_step.hpp"
 #include "impact/geometry/mesh_generators.hpp"
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -23,6 +24,15 @@
 using namespace impact;
 
 namespace {
+
+/// A whole-number option in [1, max]: the whole text digits, else 0 (the caller prints the usage).
+/// std::atoi would take "12x" for 12 and "abc" for 0 without a word.
+int count_arg(const char* text, long max) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  return errno == 0 && end != text && *end == '\0' && v >= 1 && v <= max ? int(v) : 0;
+}
 
 bool write_frame(const std::string& path, const Vertices<double>& cloth, const Faces& F, const TriangleMesh<double>& sphere,
                  const TriangleMesh<double>& ground) {
@@ -47,12 +57,12 @@ int main(int argc, char** argv) {
   int n = 16, steps = 120, every = 12;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    if (s == "--resolution" && i + 1 < argc) n = std::max(1, std::atoi(argv[++i]));
-    else if (s == "--steps" && i + 1 < argc) steps = std::max(1, std::atoi(argv[++i]));
-    else if (s == "--every" && i + 1 < argc) every = std::max(1, std::atoi(argv[++i]));
-    else if (!s.empty() && s[0] != '-') out = s;
+    if (s == "--resolution" && i + 1 < argc && (n = count_arg(argv[++i], 1000)) > 0) continue;
+    if (s == "--steps" && i + 1 < argc && (steps = count_arg(argv[++i], 1000000)) > 0) continue;
+    if (s == "--every" && i + 1 < argc && (every = count_arg(argv[++i], 1000000)) > 0) continue;
+    if (!s.empty() && s[0] != '-') out = s;
     else {
-      std::fprintf(stderr, "usage: example-cloth [OUT_DIR] [--resolution N] [--steps S] [--every K]\n");
+      std::fprintf(stderr, "usage: example-cloth [OUT_DIR] [--resolution N (1-1000)] [--steps S] [--every K]\n");
       return 2;
     }
   }

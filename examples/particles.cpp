@@ -15,6 +15,7 @@
 #include "impact/io/load_mesh.hpp"
 #endif
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -39,6 +40,15 @@ TriangleMesh<double> make_bowl() {
   return b;
 }
 
+/// A whole-number option in [1, max]: the whole text digits, else 0 (the caller prints the usage).
+/// std::atoi would take "12x" for 12 and "abc" for 0 without a word.
+int count_arg(const char* text, long max) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  return errno == 0 && end != text && *end == '\0' && v >= 1 && v <= max ? int(v) : 0;
+}
+
 bool write_frame(const std::string& path, const std::vector<Particle<double>>& ps, bool ply) {
   std::ofstream f(path);
   if (ply) {
@@ -58,9 +68,9 @@ int main(int argc, char** argv) {
   bool ply = false;
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
+    if (s == "--steps" && i + 1 < argc && (steps = count_arg(argv[++i], 1000000)) > 0) continue;
+    if (s == "--every" && i + 1 < argc && (every = count_arg(argv[++i], 1000000)) > 0) continue;
     if (s == "--mesh" && i + 1 < argc) mesh_path = argv[++i];
-    else if (s == "--steps" && i + 1 < argc) steps = std::max(1, std::atoi(argv[++i]));
-    else if (s == "--every" && i + 1 < argc) every = std::max(1, std::atoi(argv[++i]));
     else if (s == "--ply") ply = true;
     else if (!s.empty() && s[0] != '-') out = s;
     else {

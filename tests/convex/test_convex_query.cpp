@@ -808,6 +808,40 @@ TEST(ConvexQuery, IterationBoundIsReportedNeverHangs) {
   EXPECT_TRUE(convex_intersect(z.cone, pa, z.hull, deep));
 }
 
+// max_iterations is one budget for a whole penetration query, shared by its solvers (GJK, the own
+// EPA, libccd's attempts, the fallback after a failed solver): on pairs without closed-form
+// candidates (whose fixed support calls come on top), under every bound from 1 to 32, the
+// reported support calls stay within the bound, and an answer without limit_reached is the full
+// query's.
+TEST(ConvexQuery, IterationBoundIsOneBudget) {
+  const auto& z = zoo();
+  ConvexQueryOptions<double> ccd;
+  ccd.libccd_penetration = true;
+  int limited = 0;
+  const auto check = [&](const auto& a, const auto& b, const ConvexQueryOptions<double>& base, const char* what) {
+    const double scale = std::max(shape_size(a), shape_size(b));
+    for (const auto& [pa, pb] : convex_poses(IMPACT_TEST_SANITIZED ? 6 : 24, 0.5 * (shape_size(a) + shape_size(b)), 1517)) {
+      const auto full = convex_penetration(a, pa, b, pb, base);
+      for (int m = 1; m <= 32; ++m) {
+        ConvexQueryOptions<double> o = base;
+        o.max_iterations = m;
+        const auto c = convex_penetration(a, pa, b, pb, o);
+        EXPECT_LE(c.iterations, m) << what << " bound " << m;
+        limited += c.limit_reached;
+        if (c.limit_reached || full.limit_reached) continue;
+        EXPECT_EQ(c.intersecting, full.intersecting) << what << " bound " << m;
+        EXPECT_NEAR(c.depth, full.depth, 1e-9 * scale) << what << " bound " << m;
+      }
+    }
+  };
+  check(z.hull, z.hull, {}, "hull-hull");
+  check(z.capsule, z.hull, {}, "capsule-hull");
+  check(z.capsule, z.cone, {}, "capsule-cone");
+  check(z.cone, z.hull, ccd, "cone-hull, libccd");
+  check(z.cylinder, z.cylinder, ccd, "cylinder-cylinder, libccd");
+  EXPECT_GT(limited, 100);
+}
+
 TEST(ConvexQuery, MprAndGjkBooleansAgree) {
   const auto& z = zoo();
   ConvexQueryOptions<double> gjk;

@@ -124,4 +124,46 @@ TEST(CylinderPairDistance, MatchesTheOracleBracket) {
   EXPECT_GT(compared, n / 2);
 }
 
+// max_iterations is one budget for the whole query (the boolean test's GJK, the coarse run and the
+// run to the tolerance share it): on the random poses that need more than 12 support calls (the
+// run to the tolerance after the candidates; and every hundredth of the rest), under every bound from 1 to 2 past the full query's calls, the
+// reported calls stay within the bound; a bound above the full query's calls (and the
+// certificate's one) changes nothing; and a bounded answer without limit_reached is the full one.
+TEST(CylinderPairDistance, IterationBoundIsOneBudget) {
+  test::Rng rng(1516);
+  const int n = IMPACT_TEST_SANITIZED ? 1000 : 4000;
+  int checked = 0, limited = 0;
+  for (int k = 0; k < n; ++k) {
+    const Cylinder<double> a(rng.uniform(0.05, 1.0), rng.uniform(0.05, 1.0)), b(rng.uniform(0.05, 1.0), rng.uniform(0.05, 1.0));
+    const double scale = std::max(shape_size(a), shape_size(b)), reach = 0.8 * (shape_size(a) + shape_size(b));
+    const Pose pa{rng.rotation(), rng.vec(-2, 2)};
+    const Pose pb{rng.rotation(), Eigen::Vector3d(pa.t + rng.vec(-reach, reach))};
+    const ConvexDistance<double> full = convex_distance(a, pa, b, pb);
+    ASSERT_FALSE(full.limit_reached) << "pose " << k;
+    if (full.iterations <= 12 && k % 100 != 0) continue;
+    ++checked;
+    for (int m = 1; m <= full.iterations + 2; ++m) {
+      ConvexQueryOptions<double> o;
+      o.max_iterations = m;
+      const ConvexDistance<double> d = convex_distance(a, pa, b, pb, o);
+      EXPECT_LE(d.iterations, m) << "pose " << k << " bound " << m;
+      if (d.limit_reached) {
+        ++limited;
+        if (!d.intersecting) {
+          EXPECT_GE(d.distance, full.distance - 1e-10 * scale) << "pose " << k << " bound " << m;  // an upper bound
+        }
+        continue;
+      }
+      EXPECT_EQ(d.intersecting, full.intersecting) << "pose " << k << " bound " << m;
+      EXPECT_NEAR(d.distance, full.distance, 1e-10 * scale) << "pose " << k << " bound " << m;
+      if (full.iterations + 1 <= m) {
+        EXPECT_EQ(d.distance, full.distance) << "pose " << k << " bound " << m;
+        EXPECT_EQ(d.iterations, full.iterations) << "pose " << k << " bound " << m;
+      }
+    }
+  }
+  EXPECT_GT(checked, n / 50);
+  EXPECT_GT(limited, 2 * checked);
+}
+
 }  // namespace

@@ -552,8 +552,8 @@ TEST(WideBvh8, FusedSlabEntersBoxesTheRayGrazes) {
 // on another at t1 (1 - delta), delta from -4 u to 24 u (a miss by up to 24 u of t1), the box alone
 // in the node, so the tree's box is the box itself and the reach ends at its exit (the smallest
 // margin the fused test takes). Every box WideSlab enters is entered, its key at most WideSlab's
-// entry; some of them are misses the padding enters (the fused test needs 18 u of margin there,
-// against 2 u for a ray in double).
+// entry; some of them are misses the padding enters (which need more than 4 u of margin a plane;
+// WideFusedRay's proof asks 7.51 u).
 TEST(WideBvh8, FusedSlabEntersBoxesTheFloatSlabPads) {
   test::Rng rng(113);
   int entered = 0, padded = 0;
@@ -594,6 +594,71 @@ TEST(WideBvh8, FusedSlabEntersBoxesTheFloatSlabPads) {
   }
   EXPECT_GT(entered, 4000 / kWide8Samples);
   EXPECT_GT(padded, 1000 / kWide8Samples);
+}
+
+// The float rays that need the most of the fused test's margin (WideFusedRay, whose proof asks
+// 7.51 u a plane, u = 2^-24): misses of about 11 u that WideSlab<float> enters because every one of
+// its roundings and the fused test's runs the same way. All values are near 1. On the entry axis
+// the origin is tiny, so WideSlab's b - o rounds, down by nearly u, and its product rounds down by
+// nearly u; on the exit axis both round up and the 8 u padding's sum rounds up; WideSlab's entry
+// and exit are then the same float. The fused near value rounds up, the far one down (the exit
+// axis's far value below 1, where the float grid is twice as fine). Found by a search over such
+// rays; a margin of 5 u misses both boxes. Each case is checked on every pair of axes and both
+// signs of each (a mirrored axis gives the same roundings), the box alone in the node (its exit
+// is the reach) and t_max just past it.
+TEST(WideBvh8, FusedSlabEntersTheFloatSlabsWorstMisses) {
+  struct Plane {
+    float o, b, d;  // the origin, the plane crossed and the direction on that axis
+  };
+  struct Case {
+    Plane entry, exit;
+  };
+  const Case cases[] = {
+      {{-0x1.49b598p-18f, 0x1.64041p-1f, 0x1.6404b2p-1f}, {0x1.775f84p-19f, 0x1.02cd7cp+0f, 0x1.02cd56p+0f}},
+      {{-0x1.ea7bc2p-25f, 0x1.331054p+0f, 0x1.33105p+0f}, {0x1.04231cp-30f, 0x1.65fb18p-1f, 0x1.65fb22p-1f}},
+  };
+  const float t_max = 1.0f + 0x1p-17f;
+  int checked = 0;
+  for (const Case& k : cases)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        if (a == b) continue;
+        const int c = 3 - a - b;
+        for (int signs = 0; signs < 4; ++signs) {
+          const float sa = signs & 1 ? -1.0f : 1.0f, sb = signs & 2 ? -1.0f : 1.0f;
+          Vec3<float> o, d;
+          o[a] = sa * k.entry.o, d[a] = sa * k.entry.d;
+          o[b] = sb * k.exit.o, d[b] = sb * k.exit.d;
+          o[c] = 0.0f, d[c] = 1.0f;
+          WideBvhNode8 n;
+          const auto set = [&](int axis, float p, float q) { n.bounds[2 * axis][0] = std::min(p, q), n.bounds[2 * axis + 1][0] = std::max(p, q); };
+          set(a, sa * k.entry.b, sa * 4.0f);  // entered at the first plane, left far beyond
+          set(b, sb * k.exit.b, -sb * 4.0f);  // left at the first plane
+          set(c, -4.0f, 4.0f);
+          n.count[0] = 1;
+          // a miss in exact arithmetic: the exit's parameter below the entry's
+          const long double t_in = ((long double)k.entry.b - k.entry.o) / k.entry.d, t_out = ((long double)k.exit.b - k.exit.o) / k.exit.d;
+          EXPECT_GT(t_in, t_out);
+          const Vec3<float> inv = detail::safe_inverse(d);
+          float exact[8], keys[8];
+          detail::WideSlab<float>(o, inv).keys(n, t_max, exact, false);
+          ASSERT_LE(exact[0], t_max) << a << b << signs;  // the float slab test enters it
+          const detail::WideFusedRay fr(o, inv, 4.0f, union_box(n), double(t_max));
+          ASSERT_TRUE(fr.usable());
+          EXPECT_EQ(fr.entered_scalar(n, t_max, keys) & 1, 1) << "entry axis " << a << ", exit axis " << b << ", signs " << signs;
+          EXPECT_LE(keys[0], exact[0]) << a << b << signs;
+#if defined(IMPACT_WIDE_AVX)
+          if (detail::wide_fma_available()) {
+            detail::WideFusedAvx avx;
+            avx.set(fr);
+            float avx_keys[8];
+            EXPECT_EQ(avx.entered(n, t_max, avx_keys) & 1, 1) << a << b << signs;
+          }
+#endif
+          ++checked;
+        }
+      }
+  EXPECT_EQ(checked, 48);
 }
 
 // The AVX cast's one-pass set-up in double (WideFusedAvx::set) against WideFusedRay: the same

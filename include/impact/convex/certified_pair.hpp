@@ -72,6 +72,19 @@ Enclosure enclose_origin(const SupportA& sa, const SupportB& sb, const Vec3<S>& 
   return limit || failed ? Enclosure::Unsure : Enclosure::Apart;
 }
 
+/// The general path after an Unsure enclosure that took `calls` support calls: with what is
+/// left of the bound (max_iterations is one budget for the query), its calls added; nothing left:
+/// out_of_budget.
+template <class S, class A, class B>
+ConvexContact<S> general_after(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
+                               const ConvexQueryOptions<S>& o, int calls) {
+  ConvexQueryOptions<S> rest;
+  if (!budget_left(o, calls, rest)) return out_of_budget<S>(calls);
+  ConvexContact<S> c = general_penetration(a, pa, b, pb, rest);
+  c.iterations += calls;
+  return c;
+}
+
 /// What the paths of a (its frame) and b with their own stages share: the pair's frame, the
 /// larger shape's size and the tolerance, both support functions in a's frame, the line between
 /// the interior points (stage 1: separated) and stage 3 from it (enclose). Holds
@@ -124,7 +137,7 @@ struct PairPath {
   /// calls and `extra` more; unsure: the general path from scratch).
   bool enclose(SimplexPoint<S> (&simplex)[4], int& its, int extra, ConvexContact<S>& answer, const Vec3<S>* first = nullptr) const {
     switch (enclose_origin(sa, sb, first ? Vec3<S>(-*first) : Vec3<S>(-centre_line), scale, o, simplex, its)) {
-      case Enclosure::Unsure: answer = general_penetration(a, pa, b, pb, o); return false;
+      case Enclosure::Unsure: answer = general_after(a, pa, b, pb, o, its + extra); return false;
       case Enclosure::Apart: answer = no_contact<S>(its + extra); return false;
       case Enclosure::Enclosed: break;
     }
@@ -207,7 +220,7 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   SimplexPoint<S> simplex[4];
   int its = 0;
   switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its + c.iterations);
     case Enclosure::Apart: return no_contact<S>(its + c.iterations);
     case Enclosure::Enclosed: break;
   }
@@ -370,7 +383,7 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   // side of D: fewer steps to enclose the origin than from the centre line)
   const Vec3<S> start = cand.depth < std::numeric_limits<S>::infinity() ? Vec3<S>(-cand.normal) : Vec3<S>(-f.t);
   switch (enclose_origin(sa, sb, start, scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_penetration(a, pa, b, pb, o);
+    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its + cand.iterations);
     case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
     case Enclosure::Enclosed: break;
   }

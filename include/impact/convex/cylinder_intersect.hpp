@@ -45,11 +45,13 @@ inline bool point_in_cylinder(const Cylinder<S>& c, const Vec3<S>& x) {
 
 /// Whether cylinders a (its frame) and b (placed by R, t there) touch or overlap, by the tests of
 /// the file comment; `scale` the larger shape's size, `tolerance` GJK's (absolute), limit_reached
-/// set when GJK's iteration bound decided.
+/// set when GJK's iteration bound decided; `gjk_run`, when given, receives GJK's answer (its
+/// iterations 0 when steps 1-3 decided).
 template <class S>
 bool cylinder_pair_intersect(const Cylinder<S>& a, const Cylinder<S>& b, const Mat3<S>& R, const Vec3<S>& t, S scale, S tolerance,
-                             int max_iterations, bool& limit_reached) {
+                             int max_iterations, bool& limit_reached, ConvexDistance<S>* gjk_run = nullptr) {
   limit_reached = false;
+  if (gjk_run) *gjk_run = ConvexDistance<S>{};
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
   // 1. the line between the centres: a plane normal to it separates them by more than rounding
@@ -96,6 +98,7 @@ bool cylinder_pair_intersect(const Cylinder<S>& a, const Cylinder<S>& b, const M
   const Vec3<S> first = pq.squaredNorm() > S(0) ? Vec3<S>(-pq) : Vec3<S>(-t);
   const ConvexDistance<S> d = gjk_distance<S>(sa, sb, first, tolerance, max_iterations, tolerance);
   limit_reached = d.limit_reached;
+  if (gjk_run) *gjk_run = d;
   return d.intersecting;
 }
 

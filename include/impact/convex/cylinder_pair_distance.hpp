@@ -53,6 +53,20 @@ struct CylinderDistanceCandidate {
   }
 };
 
+/// One Newton step on an angle t, (c, s) = (cos t, sin t), for a stationary point of a function
+/// whose half first and second derivatives in t are d1 and d2 (a fixed step of 0.5 downhill where
+/// d2 is not positive; every step clamped to 0.5 rad); true when the step fell below 1e-7 rad.
+template <class S>
+bool newton_angle_step(S d1, S d2, S& c, S& s) {
+  S step = d2 > S(0) ? -d1 / d2 : (d1 > S(0) ? S(-0.5) : S(0.5));
+  step = std::clamp(step, S(-0.5), S(0.5));
+  const S cs = std::cos(step), sn = std::sin(step);
+  const S nc = c * cs - s * sn;
+  s = s * cs + c * sn;
+  c = nc;
+  return std::abs(step) < S(1e-7);
+}
+
 /// Newton on the angle of the circle c0 + rho (cos t e1 + sin t e2) (e1, e2 orthonormal) for its
 /// point nearest the line q0 + s v (v unit), from (c, s) = (cos t, sin t); returns the point.
 template <class S>
@@ -65,13 +79,7 @@ Vec3<S> circle_nearest_line(const Vec3<S>& c0, const Vec3<S>& e1, const Vec3<S>&
     const S wv = g0 + rho * (c * a1 + s * a2), xv = rho * (c * a2 - s * a1);
     const S f1 = rho * (c * g2 - s * g1) - wv * xv;
     const S f2 = -rho * (c * g1 + s * g2) - xv * xv + wv * rho * (c * a1 + s * a2);
-    S step = f2 > S(0) ? -f1 / f2 : (f1 > S(0) ? S(-0.5) : S(0.5));
-    step = std::clamp(step, S(-0.5), S(0.5));
-    const S cs = std::cos(step), sn = std::sin(step);
-    const S nc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = nc;
-    if (std::abs(step) < S(1e-7)) break;
+    if (newton_angle_step(f1, f2, c, s)) break;
   }
   return c0 + rho * (c * e1 + s * e2);
 }
@@ -90,13 +98,7 @@ bool circle_nearest_rim(const Vec3<S>& c0, const Vec3<S>& e1, const Vec3<S>& e2,
     // g = (q - r)^2 + (x_z - zc)^2; half its derivatives
     const S g1 = (q - r) * q1 + (x.z() - zc) * x1.z();
     const S g2 = q1 * q1 + (q - r) * q2 + x1.z() * x1.z() + (x.z() - zc) * x2.z();
-    S step = g2 > S(0) ? -g1 / g2 : (g1 > S(0) ? S(-0.5) : S(0.5));
-    step = std::clamp(step, S(-0.5), S(0.5));
-    const S cs = std::cos(step), sn = std::sin(step);
-    const S nc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = nc;
-    if (std::abs(step) < S(1e-7)) break;
+    if (newton_angle_step(g1, g2, c, s)) break;
   }
   point = c0 + rho * (c * e1 + s * e2);
   return true;
@@ -127,16 +129,6 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
   const Mat3<S>& R = f.R;
   const Vec3<S>& t = f.t;
   ConvexDistance<S> out;
-  {  // 1. contact proven by the boolean test
-    bool limit = false;
-    if (cylinder_pair_intersect(a, b, R, t, scale, tolerance, max_iterations, limit)) {
-      out.intersecting = true;
-      out.limit_reached = limit;
-      out.point_a = pa.t;
-      out.point_b = pb.t;
-      return out;
-    }
-  }
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const auto to_world = [&](ConvexDistance<S> r) {
@@ -144,10 +136,42 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
     r.point_b = pa.apply(r.point_b);
     return r;
   };
-  // 2. GJK to a coarse gap
+  // max_iterations is one budget for the whole query: each GJK run gets what the runs before it
+  // left (`spent` support calls so far), the query's iterations are their sum (and one for the
+  // certificate of step 4), and a stage that finds nothing left returns the last run's answer
+  // with limit_reached.
+  int spent = 0;
+  ConvexDistance<S> run;
+  {  // 1. contact proven by the boolean test
+    bool limit = false;
+    const bool hit = cylinder_pair_intersect(a, b, R, t, scale, tolerance, max_iterations, limit, &run);
+    spent = run.iterations;
+    if (hit) {
+      out.intersecting = true;
+      out.limit_reached = limit;
+      out.iterations = spent;
+      out.point_a = pa.t;
+      out.point_b = pb.t;
+      return out;
+    }
+  }
+  // `r` (an upper bound and its witnesses), as the query's answer stopped by the bound
+  const auto stopped = [&](ConvexDistance<S> r) {
+    r.iterations = spent;
+    r.limit_reached = true;
+    return to_world(r);
+  };
+  if (run.limit_reached || spent >= max_iterations) return stopped(run);
+  // 2. GJK to a coarse gap, with what the boolean test left
   const S coarse = std::max(tolerance, S(kCylinderDistanceCoarse) * scale);
-  const ConvexDistance<S> g = gjk_distance<S>(sa, sb, Vec3<S>(-t), coarse, max_iterations);
-  if (g.limit_reached) return to_world(gjk_distance<S>(sa, sb, Vec3<S>(-t), tolerance, max_iterations));
+  const ConvexDistance<S> g = gjk_distance<S>(sa, sb, Vec3<S>(-t), coarse, max_iterations - spent);
+  spent += g.iterations;
+  if (spent >= max_iterations) return stopped(g);
+  if (g.limit_reached) {  // a rounding stall: GJK again to the tolerance, from the start
+    ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(-t), tolerance, max_iterations - spent);
+    r.iterations += spent;
+    return to_world(r);
+  }
   // 3. candidates
   CylinderDistanceCandidate<S> best;
   const Vec3<S> v = R.col(2), e1b = R.col(0), e2b = R.col(1);
@@ -204,14 +228,14 @@ ConvexDistance<S> cylinder_pair_distance(const Cylinder<S>& a, const RigidTransf
         out.distance = D;
         out.point_a = pa.apply(best.x);
         out.point_b = pa.apply(best.y);
-        out.iterations = g.iterations + 1;
+        out.iterations = spent + 1;
         return out;
       }
     }
   }
   // 5. GJK to the tolerance from the coarse direction
-  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(g.point_a - g.point_b), tolerance, max_iterations);
-  r.iterations += g.iterations;
+  ConvexDistance<S> r = gjk_distance<S>(sa, sb, Vec3<S>(g.point_a - g.point_b), tolerance, max_iterations - spent);
+  r.iterations += spent;
   return to_world(r);
 }
 

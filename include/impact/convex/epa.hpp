@@ -263,10 +263,14 @@ bool gjk_enclose(const SupportA& support_a, const SupportB& support_b, Vec3<S> f
   if (inside) return true;
   const S eps = std::numeric_limits<S>::epsilon() * S(1024) * scale;
   if (v.squaredNorm() > eps * eps) {
+    if (iterations >= max_iterations) {  // nothing left of the bound for the distance solver
+      limit = true;
+      return false;
+    }
     // Stalled farther from the origin than rounding explains (fuzzing: a float cylinder and cone
     // 0.11 apart, 2.5e-4 of the size, stalled there and were called touching): the distance
     // solver decides whether the shapes are apart; if not, the simplex is completed as below.
-    const ConvexDistance<S> d = gjk_distance<S>(support_a, support_b, v, eps, max_iterations, eps);
+    const ConvexDistance<S> d = gjk_distance<S>(support_a, support_b, v, eps, max_iterations - iterations, eps);
     iterations += d.iterations;
     if (!d.intersecting && !d.limit_reached) {
       // Apart only if the plane normal to the witnesses' line separates them by more than

@@ -100,6 +100,26 @@ CcdSettings ccd_settings(const ConvexQueryOptions<S>& o, S scale) {
   return c;
 }
 
+/// max_iterations is one budget for a whole query: `rest` receives the options of a later stage
+/// (another solver, a retry) after `spent` support calls, with what is left as its bound; false
+/// when nothing is left, and the caller answers with out_of_budget.
+template <class S>
+bool budget_left(const ConvexQueryOptions<S>& o, int spent, ConvexQueryOptions<S>& rest) {
+  rest = o;
+  rest.max_iterations = o.max_iterations - spent;
+  return rest.max_iterations >= 1;
+}
+
+/// The answer of a penetration query whose bound ran out after `spent` support calls before any
+/// solver decided: no contact found, limit_reached (as EPA's when its GJK hits the bound).
+template <class S>
+ConvexContact<S> out_of_budget(int spent) {
+  ConvexContact<S> c;
+  c.iterations = spent;
+  c.limit_reached = true;
+  return c;
+}
+
 /// A libccd penetration result as a contact: whether the shapes intersect, the normal, the point
 /// and the solver's counters. The depth is left to settle_contact, which measures it.
 template <class S>
@@ -162,6 +182,13 @@ ConvexContact<S> epa(const A& a, const RigidTransform<S>& pa, const B& b, const 
   const double frames[3] = {1.0, 0.77, 1.3};
   for (int attempt = 0; attempt < 4; ++attempt) {
     CcdSettings st = settings;
+    if (attempt > 0) {  // a retry gets what the attempts before it left of the bound
+      st.max_iterations = settings.max_iterations - best.iterations;
+      if (st.max_iterations < 1) {
+        best.limit_reached = true;
+        break;
+      }
+    }
     CcdAlgorithm algo = o.penetration_algorithm;
     if (attempt < 3) {
       st.length_scale = settings.length_scale * frames[attempt];
@@ -304,6 +331,12 @@ ConvexContact<S> general_penetration(const A& a, const RigidTransform<S>& pa, co
         return separated_by_normal(c);
       return c;
     }
+    // libccd with what the own EPA left of the bound
+    ConvexQueryOptions<S> rest;
+    if (!budget_left(o, c.iterations, rest)) return out_of_budget<S>(c.iterations);
+    ConvexContact<S> l = epa(a, pa, b, pb, rest);
+    l.iterations += c.iterations;
+    return l;
   }
   return epa(a, pa, b, pb, o);
 }

@@ -16,7 +16,7 @@
 /// wider than 4 tolerances, it runs again from there on the same support points in a wider type
 /// (float in double, double in long double) and returns that run's answer if it converges. When
 /// the iteration bound is hit, or the wider run stalls too, limit_reached is set and the best upper
-/// bound found so far is returned. A boolean query (a margin, stop_within_margin) answers "apart"
+/// bound found so far is returned. max_iterations bounds the support calls of both runs together. A boolean query (a margin, stop_within_margin) answers "apart"
 /// only on a separating plane beyond the margin: a stall runs again in the wider type whatever its
 /// gap, and when that run cannot decide either but the gap was within 4 tolerances, the sets count
 /// as touching.
@@ -225,12 +225,13 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
     // thin cone against a small float box stalled at 5e-4 of the size). The same support points are
     // exact in a wider type, so the query runs again there from v, and its answer, when it
     // converges, is this one's (distance and witnesses rounded back to S).
-    if (stalled) {
+    // The wider run gets what is left of the bound (max_iterations is one budget for the query).
+    if (stalled && out.iterations < max_iterations) {
       using W = std::conditional_t<std::is_same_v<S, float>, double, long double>;
       const auto wide_a = [&](const Vec3<W>& d) { return Vec3<W>(support_a(Vec3<S>(d.template cast<S>())).template cast<W>()); };
       const auto wide_b = [&](const Vec3<W>& d) { return Vec3<W>(support_b(Vec3<S>(d.template cast<S>())).template cast<W>()); };
-      const ConvexDistance<W> w = gjk_distance<W>(wide_a, wide_b, Vec3<W>(v.template cast<W>()), W(tolerance), max_iterations,
-                                                  W(margin), stop_within_margin);
+      const ConvexDistance<W> w = gjk_distance<W>(wide_a, wide_b, Vec3<W>(v.template cast<W>()), W(tolerance),
+                                                  max_iterations - out.iterations, W(margin), stop_within_margin);
       if (!w.limit_reached) {
         out.intersecting = w.intersecting;
         out.distance = S(w.distance);

@@ -65,7 +65,8 @@
 ///
 /// Validation: each call throws InvalidInput on an invalid shape (validate_shape), pose
 /// (validate_pose) or options, before computing anything. Iterative solvers are bounded by
-/// options.max_iterations; a result stopped by the bound says limit_reached, and so does a
+/// options.max_iterations, one budget for the whole query (ConvexQueryOptions); a result stopped by
+/// the bound says limit_reached, and so does a
 /// penetration whose bracket rounding or a degenerate polytope left open (penetration_unchecked).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
 ///

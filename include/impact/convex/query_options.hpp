@@ -20,7 +20,11 @@ namespace impact {
 
 template <class S>
 struct ConvexQueryOptions {
-  /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000.
+  /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000. One budget
+  /// for the whole query: its solvers share it (a later run, retry or fallback gets what the runs
+  /// before it left). A pair's closed-form candidates make a fixed number of support calls besides
+  /// (up to 12 over the bounds 1-40 on 300 poses of each pair; a capsule's segment against a
+  /// cylinder up to 64 evaluations), which the reported iterations include.
   int max_iterations = 512;
   /// Tolerance of the iterative solvers relative to the larger shape's size (shape_size()); in
   /// (0, 0.1]. The default is 1e-10 for double, 1e-5 for float.

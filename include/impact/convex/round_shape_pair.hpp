@@ -133,9 +133,12 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
     if (flip) c.normal = -c.normal;
     return c;
   }
-  if (!o.libccd_penetration) {  // the core meets b: EPA on the core, plus the radius
+  // the core meets b: EPA on the core, plus the radius, with what GJK left of the bound
+  ConvexQueryOptions<S> rest;
+  if (!budget_left(o, d.iterations, rest)) return out_of_budget<S>(d.iterations);
+  if (!o.libccd_penetration) {
     bool failed = false;
-    ConvexContact<S> c = own_epa(core, pa, core_interior(core), b, pb, interior_point(b), scale, o, failed);
+    ConvexContact<S> c = own_epa(core, pa, core_interior(core), b, pb, interior_point(b), scale, rest, failed);
     if (!failed) {
       c.iterations += d.iterations;
       c.limit_reached = c.limit_reached || d.limit_reached;
@@ -163,7 +166,9 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
       return c;
     }
   }
-  return flip ? epa(b, pb, a, pa, o) : epa(a, pa, b, pb, o);
+  ConvexContact<S> l = flip ? epa(b, pb, a, pa, rest) : epa(a, pa, b, pb, rest);
+  l.iterations += d.iterations;
+  return l;
 }
 
 template <class S, class R, class B>

@@ -57,43 +57,55 @@ inline bool wide_fma_available() {
 /// 0), two deep on the node loop's dependent chain; no operand is NaN and lo is never -0 (a max
 /// with +0 last), so any order gives the same keys and masks.
 ///
-/// The offsets, in double: x_i = the exit from the box's slab on axis i times 2^-19 (the larger
-/// of its two planes' (b - o_i)(2^-19 / d_i)), l_i = min(x_i, t_max 2^-19), H_i = max(l_i,
-/// 2^-126); oi[i] = float(fma(o_i, inv[i] (1 + c), H_i)), oi[3 + i] = float(fma(o_i, inv[i] (1 -
-/// c), -H_i)), c = 2^-23 with the sign of o_i inv[i] (the products inv[i] (1 +- c) of two floats
-/// are exact in double); e = float(max_i (H_i (1 + 2^-20) + |o_i inv[i]| 2^-22) + 2^-99) bounds
-/// the margins from above (the cast's tie bound uses it). Why the test enters every box WideSlab
-/// enters, its key never above WideSlab's entry (u = 2^-24; t = (b - o_i) / d_i a plane's exact
-/// parameter, q = o_i inv[i] exactly, T = max(0, exact near t) a box's exact entry, A = min(t_max,
-/// exact far t) its exact exit):
-/// - WideSlab (query/wide_slab.hpp: three roundings a plane, the same 1 / d in a plane's entry
-///   and exit, its exit padded by 8 u in float) enters a box only if T <= t_max (1 + 3.1 u) and
-///   T <= A (1 + 16 u) (in double 2^-51 and 2^-48), every far t >= -2^-149 (an underflow of its
-///   exit to -0), and then its entry is at least T (1 - 3.1 u).
-/// - Every child box lies in WideBvh::box, so A <= its far t on axis i <= the exit from the box's
-///   slab: T <= 2^19 l_i (1 + 17.2 u) on every axis (x_i's roundings in double, and the rounding
-///   of 1 / d in a float ray, cost 1.1 u).
+/// The offsets, in double, with the margin M = kMargin = 2^-19: x_i = M times the exit from the
+/// tree's box through its slab on axis i (the larger of its two planes' (b - o_i)(M / d_i), 1 /
+/// d_i as the cast computed it, in S), l_i = min(x_i, t_max M), H_i = max(l_i, 2^-126); oi[i] =
+/// float(fma(o_i, inv[i] (1 + c), H_i)), oi[3 + i] = float(fma(o_i, inv[i] (1 - c), -H_i)), c =
+/// 2^-23 with the sign of o_i inv[i] (the products inv[i] (1 +- c) of two floats are exact in
+/// double); e = float(max_i (H_i (1 + 2^-20) + |o_i inv[i]| 2^-22) + 2^-99) bounds the margins
+/// from above (the cast's tie bound uses it). Why the test enters every box WideSlab enters, its
+/// key never above WideSlab's entry (u = 2^-24, v = u in float and 2^-53 in double; for a plane b
+/// on axis i, p = (b - o_i) inv[i] and p_S = (b - o_i)(1 / d_i in S), exactly; q = o_i inv[i]):
+/// - WideSlab<S> (query/wide_slab.hpp: the subtraction and the product rounded, its exit padded by
+///   8 v) gives a near plane p_S (1 +- v)^2 and a far plane at most p_S (1 + v)^3 (1 + 8 v). So it
+///   enters a box only if, over its near planes i and far planes j, p_S,j >= p_S,i (1 - 13.01 v)
+///   and t_max >= p_S,i (1 - v)^2 (every p_S,j >= -2^-149: an underflow of its exit to -0), and
+///   its entry is at least max(0, p_S,i (1 - v)^2).
+/// - A float ray's inv[i] is its 1 / d_i in S, so p = p_S: the same rounded inverse in both tests
+///   cancels. A double ray's inv[i] is its 1 / d_i rounded to float: p = p_S (1 + r), |r| <= u.
+/// - Every child box lies in WideBvh::box: the box's far plane on axis i is a far plane j of the
+///   box with x_i >= M p_S,j (1 - 2^-51), so for a box WideSlab enters, H_i >= M P (1 - 13.02 v)
+///   on every axis, P = max_i p_S,i the largest near plane's (and H_i >= 2^-126).
 /// - The margin eta = oi[i] - q (near) or q - oi[3 + i] (far): fma(...) is q +- (|q| 2^-23 + H_i)
 ///   rounded once in double, then to float (2^-24 |.| + 2^-150), which the 2^-23 |q| covers:
-///   H_i (1 - 2^-22) <= eta <= H_i (1 + 2^-23) + 1.51 2^-23 |q| + 2^-150 <= e.
-/// - inv[i] = (1 / d_i)(1 + r), |r| <= u + 2^-53, so b inv[i] - oi[i] = t (1 + r) - eta, rounded
-///   once by the fma (u relative, 2^-150 below the normal range, the sign kept): a near value is at
-///   most t (1 + 2.01 u) - eta + 2^-150 for t > 0 and at most 0 for t <= 0; a far value at least
-///   t (1 - 2.01 u) + eta (1 - u) - 2^-150 for t >= 0, and eta (1 - u) - 2^-148 > 0 for t >= -2^-149.
-/// - Entry: for a box WideSlab enters, every near t <= T, and eta (>= max(2^-19 T / (1 + 17.3 u),
-///   2^-126)(1 - 2^-22)) exceeds 5.11 u t + 2^-150: a near value <= t (1 - 3.1 u), so lo <=
-///   WideSlab's entry: a key never exceeds it (pruning stays exact), and lo, a float at most the
-///   cast's limit, is at most its float bound.
-/// - Exit: every far t >= A >= T / (1 + 16 u), so a far value is at least T (1 - 18.01 u) + eta
-///   (1 - u) - 2^-150 >= T >= lo (eta (1 - u) >= 18.01 u T + 2^-150, with 32 u against 18.01 u);
-///   for T = 0, lo = 0 < every far value. So lo <= min(far values, bound): entered.
-/// - Ties: WideSlab's entry - lo <= 5.2 u T + eta (1 + u) + 2^-150 <= 5.2 u T + 1.001 e, within the
+///   H_i (1 - 2^-22) <= eta <= H_i (1 + 2^-23) + 1.51 2^-23 |q| + 2^-150 <= e. So eta >= max(31.99 u
+///   P, 2^-126 (1 - 2^-22)).
+/// - The fused values: b inv[i] - oi[i] = p - eta exactly, rounded once by the fma (u relative,
+///   2^-150 below the normal range, the sign kept): a near value is at most (p - eta)(1 + u) +
+///   2^-150 when p > eta, else at most 0; a far value at least (p + eta)(1 - u) - 2^-150.
+/// - Entry: a near value is at most p_S (1 - v)^2 <= WideSlab's entry, as eta (1 + u) >= 3.01 u p +
+///   2^-149 (float) or >= 2.01 u p_S + 2^-149 (double): lo never exceeds WideSlab's entry (pruning
+///   stays exact), and lo, a float at most the cast's limit, is at most its float bound.
+/// - Exit: a near value i is at most a far value j when (p_i - eta_i)(1 + u) + 2^-150 <= (p_j +
+///   eta_j)(1 - u) - 2^-150. In float p_j >= p_i (1 - 13.01 u), so it suffices that eta_i + eta_j
+///   >= 15.02 u p_i + 2^-148 (the float slab's 8 u padding, its five roundings and the fused test's
+///   two): they are >= 2 max(31.99 u P, 2^-126 (1 - 2^-22)), which is. In double it suffices that
+///   eta_i + eta_j >= 4.02 u p_S,i + 2^-148 (the rounding of the inverse on two axes). Every far
+///   value is > 0 (p_S,j >= -2^-149, eta_j >= 2^-126 (1 - 2^-22)). So lo <= min(far values,
+///   bound): entered. (Rays that need the most: WideSlab<float> enters a miss of about 11 u whose
+///   every rounding runs the same way; tests/query/test_ray_wide_bvh8.cpp has such rays, which a
+///   margin of 5 u misses. A box the ray truly enters needs only eta_i + eta_j >= 4.02 u T.)
+/// - Ties: WideSlab's entry - lo <= 5.2 u P + eta (1 + u) + 2^-150 <= 5.2 u P + 1.001 e, within the
 ///   slack 4 (t 2^-19 + e) of the cast's tie bound: a key below it is entered before the hit.
 /// - Empty slots (lower plane FLT_MAX, upper -FLT_MAX): usable rays have |o|, tree coordinates
 ///   <= 2^60, |1 / d| in [2^-60, 2^60], |q| <= 2^63 and l_i <= 2^61 (so |oi| < 2^64): a near
 ///   value >= 2^67 - 2^64 > 0 > a far value, never entered. No NaN: a real plane's |b inv| <=
 ///   2^121, an empty slot's may overflow to the infinity of its sign, and the offsets are finite.
 struct WideFusedRay {
+  // M: a plane's margin per unit of the ray's reach (see above). The proof needs 7.51 u (u = 2^-24);
+  // M = 2^-19 = 32 u keeps four times that, as slack against an error in the proof. 2^-21 = 8 u
+  // would also be sound, with 6 % to spare; a smaller margin buys no speed (the same operations).
+  static constexpr double kMargin = 0x1p-19;
   float inv[3];
   float oi[6];  // the near planes' offsets of x, y, z (above o inv), then the far planes' (below)
   float e = 0.0f;
@@ -108,14 +120,14 @@ struct WideFusedRay {
     // each step as the AVX set-up takes it: maxpd / minpd (the second operand unless the first
     // wins), the products and sums in double in the same order
     bool in = double(coordinate_bound) <= 0x1p60;
-    const double reach_max = t_max * 0x1p-19;
+    const double reach_max = t_max * kMargin;
     double bound = 0.0;  // the largest H (1 + 2^-20) + |p| 2^-22
     for (int i = 0; i < 3; ++i) {
       const double od = double(o[i]), id = double(inv_d[i]), ai = std::abs(id);
       inv[i] = static_cast<float>(id);
       const double fi = double(inv[i]), ap = std::abs(od * fi);
-      const double x0 = (box[static_cast<std::size_t>(i)] - od) * (id * 0x1p-19), x1 = (box[static_cast<std::size_t>(4 + i)] - od) * (id * 0x1p-19);
-      const double x = x0 > x1 ? x0 : x1;  // the exit from the box's slab (its far plane), times 2^-19
+      const double x0 = (box[static_cast<std::size_t>(i)] - od) * (id * kMargin), x1 = (box[static_cast<std::size_t>(4 + i)] - od) * (id * kMargin);
+      const double x = x0 > x1 ? x0 : x1;  // the exit from the box's slab (its far plane), times M
       const double l = x < reach_max ? x : reach_max;
       const double h = l > 0x1p-126 ? l : 0x1p-126;
       in = in & (std::abs(od) <= 0x1p60) & (ai <= 0x1p60) & (ai >= 0x1p-60) & (ap <= 0x1p63) & (l <= 0x1p61);  // false for NaN
@@ -175,11 +187,11 @@ struct WideFusedAvx {
     const __m128 invf = _mm256_cvtpd_ps(vi);
     const __m256d fi = _mm256_cvtps_pd(invf);
     const __m256d ap = _mm256_and_pd(_mm256_mul_pd(vo, fi), abs_mask);
-    // the exit from the tree's box on each axis times 2^-19 (the larger of its two planes'), at most t_max 2^-19
-    const __m256d is = _mm256_mul_pd(vi, _mm256_set1_pd(0x1p-19));
+    // the exit from the tree's box on each axis times M (the larger of its two planes'), at most t_max M
+    const __m256d is = _mm256_mul_pd(vi, _mm256_set1_pd(WideFusedRay::kMargin));
     const __m256d x = _mm256_max_pd(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(box.data()), vo), is),
                                     _mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(box.data() + 4), vo), is));
-    const __m256d l = _mm256_min_pd(x, _mm256_set1_pd(t_max * 0x1p-19));
+    const __m256d l = _mm256_min_pd(x, _mm256_set1_pd(t_max * WideFusedRay::kMargin));
     const __m256d h = _mm256_max_pd(l, _mm256_set1_pd(0x1p-126));
     const __m256d big = _mm256_set1_pd(0x1p60);
     const __m256d in = _mm256_and_pd(

@@ -1,0 +1,26 @@
+# SPDX-License-Identifier: MIT
+# Runs a bench with bad command lines and checks that each is refused before any work: exit status
+# 2 (not a crash, not a run on a number nobody typed) and a message on stderr that names the
+# problem. OPTION is one of the bench's integer options; MISSING_DIR a folder that does not exist.
+function(expect_refused what pattern)
+  execute_process(COMMAND ${EXE} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 30)
+  if(NOT rc STREQUAL "2")
+    message(FATAL_ERROR "${what}: ${EXE} exited with '${rc}', not 2\nstdout: ${out}\nstderr: ${err}")
+  endif()
+  if(NOT err MATCHES "${pattern}")
+    message(FATAL_ERROR "${what}: the message does not match '${pattern}'\nstderr: ${err}")
+  endif()
+endfunction()
+
+# Values no integer option may take: words, trailing characters, overflow, NaN, a fraction.
+foreach(value abc 12x 99999999999999999999 nan 1e999 2.5 -99999999999)
+  expect_refused("${OPTION} ${value}" "${OPTION} wants" ${OPTION} ${value})
+endforeach()
+# an empty value (a list element cannot be empty, so not through expect_refused)
+execute_process(COMMAND ${EXE} ${OPTION} "" RESULT_VARIABLE rc ERROR_VARIABLE err TIMEOUT 30)
+if(NOT rc STREQUAL "2" OR NOT err MATCHES "${OPTION} wants")
+  message(FATAL_ERROR "${OPTION} '': ${EXE} exited with '${rc}'\nstderr: ${err}")
+endif()
+expect_refused("${OPTION} without its value" "missing value" ${OPTION})
+expect_refused("an unknown option" "unknown option" --no-such-option)
+expect_refused("--json into a missing folder" "cannot write the --json file" --json ${MISSING_DIR}/out.json)
