@@ -475,27 +475,23 @@ int main(int argc, char** argv) {
   const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--pairs" && i + 1 < argc) {
-      n_poses = std::atoi(argv[++i]);
-    } else if (arg == "--json" && i + 1 < argc) {
-      json = argv[++i];
-    } else if (arg == "--min-time" && i + 1 < argc) {
-      min_time = std::atof(argv[++i]);
-    } else if (arg == "--mesh" && i + 1 < argc) {
-      mesh_path = argv[++i];
-    } else if (arg == "--mesh-poses" && i + 1 < argc) {
-      mesh_poses = std::atoi(argv[++i]);
-    } else if (arg == "--only" && i + 1 < argc) {
-      only = argv[++i];
+    if (arg == "--pairs") {
+      n_poses = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 10000000, usage));
+    } else if (arg == "--json") {
+      json = bench::option_value(argc, argv, i, usage);
+    } else if (arg == "--min-time") {
+      min_time = bench::parse_real(arg, bench::option_value(argc, argv, i, usage), 0, 3600, usage);
+    } else if (arg == "--mesh") {
+      mesh_path = bench::option_value(argc, argv, i, usage);
+    } else if (arg == "--mesh-poses") {
+      mesh_poses = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 10000000, usage));
+    } else if (arg == "--only") {
+      only = bench::option_value(argc, argv, i, usage);
     } else {
-      std::fprintf(stderr, "%s", usage);
-      return 2;
+      bench::reject_option(arg, usage);
     }
   }
-  if (n_poses < 1 || mesh_poses < 1 || !(min_time >= 0)) {
-    std::fprintf(stderr, "impact-convex-bench: --pairs and --mesh-poses must be >= 1 and --min-time >= 0\n");
-    return 2;
-  }
+  bench::check_writable(json, usage);
   TriangleMesh<double> mesh;
   std::string mesh_name = "generated torus";
   try {
@@ -560,6 +556,7 @@ int main(int argc, char** argv) {
     mesh_row("mesh-hull", mesh, convex_hull(hv), mesh_poses, min_time, rows);
   }
 
+  if (rows.empty()) bench::exit_usage("--only " + only + " names no pair", usage);
   std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s %10s %10s\n", "pair", "query", "library", "queries/s", "mean err", "max err",
               "mism", "samples", "impact/FCL", "mean ang", "max ang");
   std::vector<std::string> items;
