@@ -129,7 +129,8 @@ double depth_error(double depth, const Reference& r) {
 /// threefold per level to 1e-12, from each start; the minimisers whose f is within `tie` of the
 /// least.
 template <class A, class B>
-std::vector<V3> referee_normals(const A& a, const Pose& pa, const B& b, const Pose& pb, const std::vector<V3>& starts, double tie) {
+std::vector<V3> referee_normals(const A& a, const Pose& pa, const B& b, const Pose& pb, const std::vector<V3>& starts,
+                                double tie) {
   std::vector<std::pair<double, V3>> found;
   for (V3 n : starts) {
     if (!(n.squaredNorm() > 0.5)) continue;
@@ -557,8 +558,8 @@ int main(int argc, char** argv) {
   }
 
   if (rows.empty()) bench::exit_usage("--only " + only + " names no pair", usage);
-  std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s %10s %10s\n", "pair", "query", "library", "queries/s", "mean err", "max err",
-              "mism", "samples", "impact/FCL", "mean ang", "max ang");
+  std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s %10s %10s\n", "pair", "query", "library", "queries/s", "mean err",
+              "max err", "mism", "samples", "impact/FCL", "mean ang", "max ang");
   std::vector<std::string> items;
   for (const Row& r : rows) {
     double ratio = 0;
@@ -572,8 +573,8 @@ int main(int argc, char** argv) {
       std::snprintf(angle_text[0], sizeof angle_text[0], "%.2e", r.mean_angle);
       std::snprintf(angle_text[1], sizeof angle_text[1], "%.2e", r.max_angle);
     }
-    std::printf("%-18s %-12s %-7s %12.0f %10.2e %10.2e %5d %7d %14s %10s %10s\n", r.pair.c_str(), r.query.c_str(), r.library.c_str(), r.qps,
-                r.mean_error, r.max_error, r.mismatches, r.samples, ratio_text, angle_text[0], angle_text[1]);
+    std::printf("%-18s %-12s %-7s %12.0f %10.2e %10.2e %5d %7d %14s %10s %10s\n", r.pair.c_str(), r.query.c_str(), r.library.c_str(),
+                r.qps, r.mean_error, r.max_error, r.mismatches, r.samples, ratio_text, angle_text[0], angle_text[1]);
     JsonObject o;
     o.add("pair", r.pair).add("query", r.query).add("library", r.library).add("queries_per_s", r.qps).add("mean_error", r.mean_error);
     o.add("max_error", r.max_error).add("mismatches", r.mismatches).add("samples", r.samples);
