@@ -9,6 +9,13 @@
 //                pattern search from the grid's direction (ray_depth_upper; only a depth above
 //                it counts as error)
 //   boolean      mismatches against the oracle's sign where |signed distance| > 1e-6 of the size
+//   normal angle penetration rows: the angle in radians between a library's normal and a referee's,
+//                the least overlap f(n) = h_A(n) + h_B(-n) minimised over unit n by nested grids
+//                (referee_normals) from three starts: the oracle's direction search, impact's
+//                normal and FCL's; the angle is to the nearest of those minimisers whose f is
+//                within 1e-9 of the size of the least (two directions can tie); its floor is about
+//                1e-8 rad where f is smooth at its minimum (f is quadratic there, resolved to
+//                rounding), below where it has a kink (polytopes)
 // Errors are relative to the larger shape's size (shape_size). FCL is set up as its users do:
 // fcl::Sphere / Capsule / Cylinder / Cone / Box / Convex, fcl::collide and fcl::distance on
 // CollisionGeometry + Transform3 with default requests (its default narrow-phase solver, the libccd
@@ -45,12 +52,15 @@
 #include <fcl/math/bv/OBBRSS.h>
 #endif
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -66,12 +76,14 @@ struct Row {
   std::string pair, query, library;
   double qps = 0, mean_error = 0, max_error = 0;
   int mismatches = 0, samples = 0;
+  double mean_angle = -1, max_angle = -1;  ///< penetration rows: normal angle against the referee (rad)
 };
 
 struct Reference {
   double signed_distance = 0;  // > 0 separated (bracket midpoint), < 0 minus the depth reference
   bool separated = false, intersecting = false;
   bool exact_depth = false;  // polytope pairs: the depth reference is exact, else an upper bound
+  V3 normal = V3::UnitZ();   // intersecting: the direction search's least-overlap normal
 };
 
 template <class A, class B>
@@ -85,6 +97,7 @@ Reference reference(const A& a, const Pose& pa, const B& b, const Pose& pb, doub
     return r;
   }
   const auto o = test::signed_distance_oracle(a, pa, b, pb);
+  r.normal = o.normal;
   double depth = -o.value;
   if (depth > 1e-6 * scale) depth = std::min(depth, test::ray_depth_upper(a, pa, b, pb, o.normal));
   constexpr bool polytopes = (std::is_same_v<A, Box<double>> || std::is_same_v<A, ConvexHull<double>>)&&(
@@ -109,6 +122,49 @@ Reference reference(const A& a, const Pose& pa, const B& b, const Pose& pb, doub
 double depth_error(double depth, const Reference& r) {
   const double ref = -r.signed_distance;
   return r.exact_depth ? std::abs(depth - ref) : std::max(depth - ref, 0.0);
+}
+
+/// The referee of the normal (see the file comment): f(n) = h_A(n) + h_B(-n) minimised by nested
+/// 11 x 11 grids over a cap about the best direction so far, its angular radius from 1e-2 shrinking
+/// threefold per level to 1e-12, from each start; the minimisers whose f is within `tie` of the
+/// least.
+template <class A, class B>
+std::vector<V3> referee_normals(const A& a, const Pose& pa, const B& b, const Pose& pb, const std::vector<V3>& starts,
+                                double tie) {
+  std::vector<std::pair<double, V3>> found;
+  for (V3 n : starts) {
+    if (!(n.squaredNorm() > 0.5)) continue;
+    n.normalize();
+    double fn = test::overlap_along(a, pa, b, pb, n);
+    for (double rho = 1e-2; rho > 1e-12; rho /= 3) {
+      const V3 u = (std::abs(n.x()) < 0.6 ? V3::UnitX() : V3::UnitY()).cross(n).normalized(), w = n.cross(u);
+      V3 bn = n;
+      for (int i = -5; i <= 5; ++i)
+        for (int j = -5; j <= 5; ++j) {
+          const V3 c = (n + rho * (i / 5.0) * u + rho * (j / 5.0) * w).normalized();
+          const double f = test::overlap_along(a, pa, b, pb, c);
+          if (f < fn) {
+            fn = f;
+            bn = c;
+          }
+        }
+      n = bn;
+    }
+    found.emplace_back(fn, n);
+  }
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& [f, n] : found) least = std::min(least, f);
+  std::vector<V3> out;
+  for (const auto& [f, n] : found)
+    if (f <= least + tie) out.push_back(n);
+  return out;
+}
+
+/// The angle (rad) between unit n and the nearest of `refs`.
+double angle_to(const V3& n, const std::vector<V3>& refs) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const V3& m : refs) best = std::min(best, std::atan2(n.cross(m).norm(), n.dot(m)));
+  return best;
 }
 
 /// Runs body(i) over the poses repeatedly for at least min_time seconds; queries per second.
@@ -190,6 +246,9 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     rows.push_back(make_row(name, query, lib, qps, e, scale));
   };
 
+  // the normals of each library's penetrations (valid where set), for the angle column
+  std::vector<V3> impact_normal(n, V3::Zero()), fcl_normal(n, V3::Zero());
+  std::size_t impact_row = 0, fcl_row = 0;
   // impact
   {
     Errors eb, ed, ep;
@@ -205,7 +264,10 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
         ep.mismatches += c.intersecting != ref[i].intersecting;
       }
       if (ref[i].separated && !d.intersecting) ed.add(std::abs(d.distance - ref[i].signed_distance));
-      if (ref[i].intersecting && c.intersecting) ep.add(depth_error(c.depth, ref[i]));
+      if (ref[i].intersecting && c.intersecting) {
+        ep.add(depth_error(c.depth, ref[i]));
+        impact_normal[i] = c.normal;
+      }
     }
     const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_impact_boolean(a, poses[i].first, b, poses[i].second); });
     const double qd =
@@ -215,6 +277,7 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     });
     add("boolean", "impact", qb, eb);
     add("distance", "impact", qd, ed);
+    impact_row = rows.size();
     add("penetration", "impact", qp, ep);
   }
 #ifdef IMPACT_HAVE_FCL
@@ -236,7 +299,10 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
         ep.mismatches += pen != ref[i].intersecting;
       }
       if (ref[i].separated && d > 0) ed.add(std::abs(d - ref[i].signed_distance));
-      if (ref[i].intersecting && pen) ep.add(depth_error(depth, ref[i]));
+      if (ref[i].intersecting && pen) {
+        ep.add(depth_error(depth, ref[i]));
+        fcl_normal[i] = normal;
+      }
     }
     V3 wa, wb;
     double depth;
@@ -249,9 +315,26 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
     });
     add("boolean", "fcl", qb, eb);
     add("distance", "fcl", qd, ed);
+    fcl_row = rows.size();
     add("penetration", "fcl", qp, ep);
   }
 #endif
+  // the normal angle against the referee, on the poses the oracle calls intersecting
+  Errors ai, af;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!ref[i].intersecting) continue;
+    const auto& [pa, pb] = poses[i];
+    const std::vector<V3> refs = referee_normals(a, pa, b, pb, {ref[i].normal, impact_normal[i], fcl_normal[i]}, 1e-9 * scale);
+    if (impact_normal[i].squaredNorm() > 0) ai.add(angle_to(impact_normal[i], refs));
+    if (fcl_normal[i].squaredNorm() > 0) af.add(angle_to(fcl_normal[i], refs));
+  }
+  const auto set_angles = [&](std::size_t row, const Errors& e) {
+    if (row >= rows.size() || e.n == 0) return;
+    rows[row].mean_angle = e.sum / e.n;
+    rows[row].max_angle = e.max;
+  };
+  set_angles(impact_row, ai);
+  if (fcl_row > 0) set_angles(fcl_row, af);
 }
 
 
@@ -393,27 +476,23 @@ int main(int argc, char** argv) {
   const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--pairs" && i + 1 < argc) {
-      n_poses = std::atoi(argv[++i]);
-    } else if (arg == "--json" && i + 1 < argc) {
-      json = argv[++i];
-    } else if (arg == "--min-time" && i + 1 < argc) {
-      min_time = std::atof(argv[++i]);
-    } else if (arg == "--mesh" && i + 1 < argc) {
-      mesh_path = argv[++i];
-    } else if (arg == "--mesh-poses" && i + 1 < argc) {
-      mesh_poses = std::atoi(argv[++i]);
-    } else if (arg == "--only" && i + 1 < argc) {
-      only = argv[++i];
+    if (arg == "--pairs") {
+      n_poses = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 10000000, usage));
+    } else if (arg == "--json") {
+      json = bench::option_value(argc, argv, i, usage);
+    } else if (arg == "--min-time") {
+      min_time = bench::parse_real(arg, bench::option_value(argc, argv, i, usage), 0, 3600, usage);
+    } else if (arg == "--mesh") {
+      mesh_path = bench::option_value(argc, argv, i, usage);
+    } else if (arg == "--mesh-poses") {
+      mesh_poses = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 10000000, usage));
+    } else if (arg == "--only") {
+      only = bench::option_value(argc, argv, i, usage);
     } else {
-      std::fprintf(stderr, "%s", usage);
-      return 2;
+      bench::reject_option(arg, usage);
     }
   }
-  if (n_poses < 1 || mesh_poses < 1 || !(min_time >= 0)) {
-    std::fprintf(stderr, "impact-convex-bench: --pairs and --mesh-poses must be >= 1 and --min-time >= 0\n");
-    return 2;
-  }
+  bench::check_writable(json, usage);
   TriangleMesh<double> mesh;
   std::string mesh_name = "generated torus";
   try {
@@ -478,8 +557,9 @@ int main(int argc, char** argv) {
     mesh_row("mesh-hull", mesh, convex_hull(hv), mesh_poses, min_time, rows);
   }
 
-  std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s\n", "pair", "query", "library", "queries/s", "mean err", "max err", "mism",
-              "samples", "impact/FCL");
+  if (rows.empty()) bench::exit_usage("--only " + only + " names no pair", usage);
+  std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s %10s %10s\n", "pair", "query", "library", "queries/s", "mean err",
+              "max err", "mism", "samples", "impact/FCL", "mean ang", "max ang");
   std::vector<std::string> items;
   for (const Row& r : rows) {
     double ratio = 0;
@@ -488,11 +568,17 @@ int main(int argc, char** argv) {
         if (o.library == "fcl" && o.pair == r.pair && o.query == r.query) ratio = r.qps / o.qps;
     char ratio_text[32] = "";
     if (ratio > 0) std::snprintf(ratio_text, sizeof ratio_text, "%.2fx", ratio);
-    std::printf("%-18s %-12s %-7s %12.0f %10.2e %10.2e %5d %7d %14s\n", r.pair.c_str(), r.query.c_str(), r.library.c_str(), r.qps,
-                r.mean_error, r.max_error, r.mismatches, r.samples, ratio_text);
+    char angle_text[2][32] = {"", ""};
+    if (r.max_angle >= 0) {
+      std::snprintf(angle_text[0], sizeof angle_text[0], "%.2e", r.mean_angle);
+      std::snprintf(angle_text[1], sizeof angle_text[1], "%.2e", r.max_angle);
+    }
+    std::printf("%-18s %-12s %-7s %12.0f %10.2e %10.2e %5d %7d %14s %10s %10s\n", r.pair.c_str(), r.query.c_str(), r.library.c_str(),
+                r.qps, r.mean_error, r.max_error, r.mismatches, r.samples, ratio_text, angle_text[0], angle_text[1]);
     JsonObject o;
     o.add("pair", r.pair).add("query", r.query).add("library", r.library).add("queries_per_s", r.qps).add("mean_error", r.mean_error);
     o.add("max_error", r.max_error).add("mismatches", r.mismatches).add("samples", r.samples);
+    if (r.max_angle >= 0) o.add("mean_normal_angle", r.mean_angle).add("max_normal_angle", r.max_angle);
     items.push_back(o.str());
   }
   if (!json.empty()) {

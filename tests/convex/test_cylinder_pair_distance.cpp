@@ -126,9 +126,10 @@ TEST(CylinderPairDistance, MatchesTheOracleBracket) {
 
 // max_iterations is one budget for the whole query (the boolean test's GJK, the coarse run and the
 // run to the tolerance share it): on the random poses that need more than 12 support calls (the
-// run to the tolerance after the candidates; and every hundredth of the rest), under every bound from 1 to 2 past the full query's calls, the
-// reported calls stay within the bound; a bound above the full query's calls (and the
-// certificate's one) changes nothing; and a bounded answer without limit_reached is the full one.
+// run to the tolerance after the candidates; and every hundredth of the rest), under every bound
+// from 1 to 2 past the full query's calls, the reported calls stay within the bound; a bound above
+// the full query's calls (and the certificate's one) changes nothing; and a bounded answer without
+// limit_reached is the full one.
 TEST(CylinderPairDistance, IterationBoundIsOneBudget) {
   test::Rng rng(1516);
   const int n = IMPACT_TEST_SANITIZED ? 1000 : 4000;

@@ -16,10 +16,10 @@
 /// wider than 4 tolerances, it runs again from there on the same support points in a wider type
 /// (float in double, double in long double) and returns that run's answer if it converges. When
 /// the iteration bound is hit, or the wider run stalls too, limit_reached is set and the best upper
-/// bound found so far is returned. max_iterations bounds the support calls of both runs together. A boolean query (a margin, stop_within_margin) answers "apart"
-/// only on a separating plane beyond the margin: a stall runs again in the wider type whatever its
-/// gap, and when that run cannot decide either but the gap was within 4 tolerances, the sets count
-/// as touching.
+/// bound found so far is returned; max_iterations bounds the support calls of both runs together.
+/// A boolean query (a margin, stop_within_margin) answers "apart" only on a separating plane
+/// beyond the margin: a stall runs again in the wider type whatever its gap, and when that run
+/// cannot decide either but the gap was within 4 tolerances, the sets count as touching.
 #pragma once
 
 #include "impact/convex/signed_volumes.hpp"

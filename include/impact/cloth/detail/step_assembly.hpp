@@ -132,6 +132,11 @@ void Stepper<S>::check_start() {
       if (r.hit) bad.push_back(p);
     }
   }
+  // The proximity pairs in a fixed order of their vertices (Prim's), not in the order the tree's
+  // walk found them: the relaxation is Gauss-Seidel, so its path (and the step's result) follows
+  // this order, which must not depend on the tree (its shape comes from the first step's motion).
+  std::sort(near_.begin(), near_.end(), [](const Near& x, const Near& y) { return x.p < y.p; });
+  std::sort(bad.begin(), bad.end());
   std::sort(pierced_.begin(), pierced_.end());
   if (!pierced_.empty()) {
     if (opt_.on_start_violation == StartViolation::Throw) {

@@ -196,8 +196,8 @@ void Stepper<S>::regather() {
   // triangle pair that owns its primitives, kept iff pairs_of's box tests hold, and boxes only
   // grow, so a pair is among the candidates iff those tests held for the boxes before this
   // gathering (old_gbox_, old_tbox_). Each triangle pair is visited once, so no pair twice;
-  // sorted, so that the candidates' order (and the hits' order among equal times) is the one
-  // of a sorted, deduplicated search.
+  // sorted, the order of a sorted, deduplicated search (the step's result does not depend on
+  // the candidates' order: the proximity pairs and the hits are ordered by their primitives).
   std::sort(found.begin(), found.end());
   const std::size_t added = found.size();
   cand_.insert(cand_.end(), found.begin(), found.end());

@@ -66,7 +66,7 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::detect() {
 /// listed in increasing index order, less those whose proof from an earlier pass still holds
 /// (kept); each listed one is proved apart by a bound or by sampling (its key noted), or else
 /// tested, the CCD's search deciding unless sampling found a clear hit. Returns the hits,
-/// earliest first (in index order among equal times).
+/// earliest first (in the order of their primitive pairs, Prim's, among equal times).
 template <class S>
 std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   note_moves();
@@ -164,7 +164,10 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   for (std::size_t k = 0; k < run.size(); ++k)
     if (res[k].hit) hits.push_back({cand_[todo[run[k]]], res[k], todo[run[k]]});
   std::fill(changed_.begin(), changed_.end(), 0);
-  std::stable_sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi < y.r.toi; });
+  // Earliest first, equal times in the order of their vertices (not their candidate index, which
+  // follows the tree's walk): the impulses, the relaxation and the zones take the hits in this
+  // order, so the step's result does not depend on the tree.
+  std::sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.r.toi != y.r.toi ? x.r.toi < y.r.toi : x.p < y.p; });
   last_hits_ = hits;
   return hits;
 }
