@@ -4,7 +4,7 @@
 # FCL it runs without the FCL rows, without libccd it is not built. Its mesh rows (mesh against each
 # shape) take --mesh FILE through impact::io when assimp is there.
 if(TARGET impact::convex)
-  impact_add_bench(impact-convex-bench convex_bench.cpp LIBS impact::convex SMOKE_ARGS --pairs 6 --mesh-poses 4 --min-time 0 BAD_OPTION --pairs)
+  impact_add_bench(impact-convex-bench convex_bench.cpp LIBS impact::convex SMOKE_ARGS --pairs 6 --mesh-poses 4 --min-time 0 BAD_OPTION --pairs REAL_OPTION --min-time)
   if(TARGET impact::io)  # --mesh FILE through the assimp loader
     target_link_libraries(impact-convex-bench PRIVATE impact::io)
     target_compile_definitions(impact-convex-bench PRIVATE IMPACT_HAVE_IO=1)
