@@ -40,10 +40,13 @@ struct SignedDistance {
 /// each refined by nested grids on the sphere (21 x 21 directions over a cap of angular radius rho
 /// about the best so far, rho shrinking threefold per level down to 1e-11). A grid is used rather
 /// than a descent method because f has ridges (the supports jump between features) on which local
-/// descent stalls; the grid's error at the last level is about the slope of f times 1e-12.
+/// descent stalls; the grid's error at the last level is about the slope of f times 1e-12. `finest`
+/// stops the refinement at a coarser cap (a cheaper oracle whose value is within about the slope
+/// of f times `finest` of the grid's minimum).
 template <class A, class B>
 SignedDistance signed_distance_oracle(const A& a, const RigidTransform<double>& pa, const B& b, const RigidTransform<double>& pb,
-                                      int samples = IMPACT_TEST_SANITIZED ? 1000 : 3000, int starts = IMPACT_TEST_SANITIZED ? 1 : 2) {
+                                      int samples = IMPACT_TEST_SANITIZED ? 1000 : 3000, int starts = IMPACT_TEST_SANITIZED ? 1 : 2,
+                                      double finest = 1e-11) {
   std::vector<std::pair<double, Eigen::Vector3d>> coarse;
   coarse.reserve(static_cast<std::size_t>(samples));
   const double golden = M_PI * (3 - std::sqrt(5.0));
@@ -60,7 +63,7 @@ SignedDistance signed_distance_oracle(const A& a, const RigidTransform<double>& 
   for (int s = 0; s < starts; ++s) {
     Eigen::Vector3d n = coarse[static_cast<std::size_t>(s)].second;
     double fn = coarse[static_cast<std::size_t>(s)].first;
-    for (double rho = 4.0 / std::sqrt(double(samples)); rho > 1e-11; rho /= (IMPACT_TEST_SANITIZED ? 2.5 : 3)) {
+    for (double rho = 4.0 / std::sqrt(double(samples)); rho > finest; rho /= (IMPACT_TEST_SANITIZED ? 2.5 : 3)) {
       const Eigen::Vector3d u = (std::abs(n.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(n).normalized();
       const Eigen::Vector3d w = n.cross(u);
       Eigen::Vector3d bn = n;

@@ -36,6 +36,8 @@ struct ConvexContact {
   int iterations = 0;                 ///< support calls of the iterative solver used (0: closed form)
   /// The solver stopped before its tolerance: an iteration bound, or (penetration) rounding or a
   /// degenerate polytope left the bracket [depth - depth_gap, depth] wider than it (query.hpp).
+  /// `intersecting` is then not decided (either value may be wrong); the bracket still holds the
+  /// true depth, with depth - depth_gap > 0 only when the intersection was proven.
   bool limit_reached = false;
   /// Iterative solvers (EPA, MPR): depth minus a certified lower bound of the true depth (the
   /// distance from the origin to the boundary of the solver's inner polytope of the Minkowski

@@ -40,7 +40,9 @@ struct ConvexDistance {
   Vec3<S> point_b = Vec3<S>::Zero();  ///< closest point of the second shape (unspecified when intersecting)
   bool intersecting = false;       ///< the shapes touch or overlap (within the tolerance)
   int iterations = 0;              ///< support-point evaluations of each shape
-  bool limit_reached = false;      ///< the iteration bound or a rounding stall stopped the solver before its tolerance
+  /// The iteration bound or a rounding stall stopped the solver before its tolerance: `intersecting`
+  /// is then not decided (either value may be wrong); the distance is still an upper bound.
+  bool limit_reached = false;
 };
 
 namespace detail {
@@ -232,12 +234,12 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
       const auto wide_b = [&](const Vec3<W>& d) { return Vec3<W>(support_b(Vec3<S>(d.template cast<S>())).template cast<W>()); };
       const ConvexDistance<W> w = gjk_distance<W>(wide_a, wide_b, Vec3<W>(v.template cast<W>()), W(tolerance),
                                                   max_iterations - out.iterations, W(margin), stop_within_margin);
+      out.iterations += w.iterations;  // counted whether or not it decides
       if (!w.limit_reached) {
         out.intersecting = w.intersecting;
         out.distance = S(w.distance);
         out.point_a = w.point_a.template cast<S>();
         out.point_b = w.point_b.template cast<S>();
-        out.iterations += w.iterations;
         out.limit_reached = false;
         return out;
       }

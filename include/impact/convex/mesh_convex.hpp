@@ -80,7 +80,8 @@
 /// (validate_shape), a pose that is not rigid or finite (validate_pose) or bad options; a MeshBvh
 /// cannot be empty (its constructor throws). Iterative solvers are bounded by
 /// options.convex.max_iterations per triangle; a result that relied on a stopped solver says
-/// limit_reached.
+/// limit_reached, and is then not decided (convex/query.hpp: a flagged boolean may be wrong either
+/// way; depths and distances still bound the truth).
 /// Thread safety: the functions only read the tree and the shape: any number of threads may query
 /// one tree at once (see MeshBvh).
 #pragma once

@@ -68,6 +68,11 @@
 /// options.max_iterations, one budget for the whole query (ConvexQueryOptions); a result stopped by
 /// the bound says limit_reached, and so does a
 /// penetration whose bracket rounding or a degenerate polytope left open (penetration_unchecked).
+/// An answer without limit_reached is decided. A flagged one is not: its boolean (the value of
+/// convex_intersect, `intersecting` of a distance or penetration) may be wrong either way, while
+/// its numbers still hold: a distance is never below the true one, and a penetration's
+/// [depth - depth_gap, depth] holds the true depth, its lower end above 0 only when the
+/// intersection was proven (docs/convex.md, note 27).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
 ///
 /// Where the parts live: the options and the validation in convex/query_options.hpp; the general
@@ -368,7 +373,7 @@ ConvexDistance<S> convex_distance(const A& a, const RigidTransform<S>& pose_a, c
 }
 
 /// Boolean test: do shapes a and b touch or overlap? `limit_reached`, when not null, says whether
-/// an iteration bound decided the answer.
+/// an iteration bound stopped the test: the answer is then not decided (either value may be wrong).
 template <class S, class A, class B>
 bool convex_intersect(const A& a, const RigidTransform<S>& pose_a, const B& b, const RigidTransform<S>& pose_b,
                       const ConvexQueryOptions<S>& options = {}, bool* limit_reached = nullptr) {

@@ -131,15 +131,23 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
     c.depth = r - d.distance;
     c.point = (d.point_a + r * c.normal + d.point_b) / S(2);
     settle_contact(a, pa, b, pb, c);
+    // GJK's distance is an upper bound of the core's (a point of the Minkowski difference), so
+    // r - d.distance is a lower bound of the depth (r + the core's depth when the core meets b);
+    // the settled depth, the overlap along the normal, is an upper bound. A bound that stopped GJK
+    // early leaves them far apart (bounds 1-4: the overlap along the first directions, up to twice
+    // the true depth, had been given a gap of 0).
+    if (d.limit_reached) c.depth_gap = std::max(c.depth - std::max(r - d.distance, S(0)), S(0));
     if (flip) c.normal = -c.normal;
     return c;
   }
   // the core meets b: EPA on the core, plus the radius, with what GJK left of the bound
   ConvexQueryOptions<S> rest;
   if (!budget_left(o, d.iterations, rest)) return out_of_budget<S>(d.iterations);
+  int epa_calls = 0;  // of a failed own EPA
   if (!o.libccd_penetration) {
     bool failed = false;
     ConvexContact<S> c = own_epa(core, pa, core_interior(core), b, pb, interior_point(b), scale, rest, failed);
+    epa_calls = c.iterations;
     if (!failed) {
       c.iterations += d.iterations;
       const bool epa_stopped = c.limit_reached;  // the bound, not a plane, ended EPA's GJK
@@ -171,8 +179,11 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
       return c;
     }
   }
+  // libccd on the whole shapes, with what GJK and a failed own EPA left of the bound
+  const int spent = d.iterations + epa_calls;
+  if (!budget_left(o, spent, rest)) return out_of_budget<S>(spent);
   ConvexContact<S> l = flip ? epa(b, pb, a, pa, rest) : epa(a, pa, b, pb, rest);
-  l.iterations += d.iterations;
+  l.iterations += spent;
   return l;
 }
 
