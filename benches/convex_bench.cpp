@@ -21,7 +21,9 @@
 // CollisionGeometry + Transform3 with default requests (its default narrow-phase solver, the libccd
 // one: GST_LIBCCD), contacts requested for penetration (CollisionRequest(1, true)) and nearest
 // points for distance (DistanceRequest(true)), since impact returns both.
-//
+// The bench exits with status 3 when any impact answer disagrees with the oracle where the oracle
+// decides (the mism column of impact's rows; FCL's mismatches are reported, not judged), so its
+// smoke run fails on a wrong answer, as the scene and CCD benches do.
 //
 // Mesh against convex (convex/mesh_convex.hpp), rows "mesh-<shape>": a triangle mesh in a MeshBvh
 // (OBB tree) against each shape, the shape's centre near a random vertex (within 1.5 of its size),
@@ -36,7 +38,28 @@
 // contacts-mpr: impact with MeshConvexOptions::fast_contacts (MPR per triangle, as FCL), time only.
 // The shapes are scaled to 1/8 of the mesh's bounding-box diagonal.
 //
+// Hull builds, `--hulls` (only these rows then; issue 15's "own quickhull or qhull, measured"):
+// convex_hull() against qhull (Debian libqhull_r; benches/qhull_peer.hpp: qh_new_qhull with
+// "qhull Qt", the hull's vertices and triangles read back, qhull's memory freed: what a user does
+// to get a hull) on point sets a user would pass, at 10, 100, ... up to --hull-max-points points:
+//   ball-N          uniform in the unit ball (few hull vertices)
+//   sphere-N        uniform on the unit sphere (every point a vertex)
+//   cube-corners-N  the 8 corners of a cube, each repeated, moved by up to 1e-6 per coordinate
+//                   (clusters of nearly coincident and nearly coplanar points)
+//   cube-faces-N    the 8 corners and points on the cube's faces (coplanar points, 8 vertices)
+//   flat-disc-N     points in a disc in z = 0 (no hull: both must refuse)
+//   mesh-FILE       the vertices of each mesh of $IMPACT_DATA_DIR/meshes (or of --mesh FILE)
+// Each build is timed over --hull-reps repetitions of at least --min-time / reps seconds, the two
+// libraries alternating; the table gives the median and range per build and qhull's median over
+// impact's. Agreement: the sorted vertex coordinates of both hulls are compared; a vertex of one
+// that the other lacks must lie within 1e-9 of the extent (half the bounding box's largest side)
+// inside the other hull (qhull merges, and impact drops, points that close to a face), and the
+// volumes must agree within 1e-9 relatively; where one refuses (InvalidInput, a qhull error) the
+// other must too. A disagreement counts as a mismatch, and the bench then exits with status 3.
+// Without qhull the rows say "absent".
+//
 //   impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]
+//   impact-convex-bench --hulls [--hull-max-points N] [--hull-reps N] [--min-time SECONDS] [--mesh FILE] [--only TEXT] [--json FILE]
 // --only runs the rows whose pair name contains TEXT (e.g. "cylinder", "mesh-"). Without --mesh a generated mesh is used (a torus of 7,200 triangles with its vertices moved by
 // up to 5 %).
 #include "bench_util.hpp"
@@ -51,13 +74,19 @@
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/math/bv/OBBRSS.h>
 #endif
+#ifdef IMPACT_HAVE_QHULL
+#include "qhull_peer.hpp"
+#endif
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <utility>
@@ -465,6 +494,319 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
 #endif
 }
 
+
+// ---- hull builds (--hulls) ----
+
+/// One point set of the hull rows: its name and points (n x 3).
+struct HullSet {
+  std::string name;
+  Vertices<double> points;
+};
+
+/// The generated point sets of the hull rows at n points (see the file comment).
+std::vector<HullSet> generated_hull_sets(int n) {
+  std::vector<HullSet> sets;
+  test::Rng rng(1000 + std::uint64_t(n));
+  const auto in_ball = [&] {
+    for (;;) {
+      const V3 x = rng.vec(-1, 1);
+      if (x.squaredNorm() <= 1 && x.squaredNorm() > 1e-6) return x;
+    }
+  };
+  const std::string size = "-" + std::to_string(n);
+  HullSet ball{"ball" + size, Vertices<double>(n, 3)}, sphere{"sphere" + size, Vertices<double>(n, 3)};
+  HullSet corners{"cube-corners" + size, Vertices<double>(n, 3)}, faces{"cube-faces" + size, Vertices<double>(n, 3)};
+  HullSet flat{"flat-disc" + size, Vertices<double>(n, 3)};
+  for (int i = 0; i < n; ++i) {
+    ball.points.row(i) = in_ball().transpose();
+    sphere.points.row(i) = in_ball().normalized().transpose();
+    const V3 corner((i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0);
+    corners.points.row(i) = (corner + rng.vec(-1e-6, 1e-6)).transpose();
+    V3 f = rng.vec(-1, 1);
+    if (i < 8) {
+      f = corner;  // the cube's corners exactly, then points on its faces
+    } else {
+      const int axis = int(rng.index(3));
+      f[axis] = rng.uniform() < 0.5 ? -1.0 : 1.0;
+    }
+    faces.points.row(i) = f.transpose();
+    V3 d = in_ball();
+    d.z() = 0;
+    flat.points.row(i) = d.transpose();
+  }
+  sets.push_back(std::move(ball));
+  sets.push_back(std::move(sphere));
+  sets.push_back(std::move(corners));
+  sets.push_back(std::move(faces));
+  sets.push_back(std::move(flat));
+  return sets;
+}
+
+/// One library's build of one set: median and range of the build time over the repetitions, and
+/// the hull (vertex coordinates, triangles' planes, volume), or its refusal.
+struct HullBuild {
+  bool refused = false;
+  std::string error;
+  std::vector<double> times;  // seconds per build, one per repetition
+  std::vector<std::array<double, 3>> vertices;  // sorted
+  std::vector<std::array<double, 4>> planes;    // unit outward normal n, offset o: n . x = o
+  int triangles = 0, faces = -1;
+  double volume = 0;
+};
+
+/// The volume of a closed convex triangulation: tetrahedra from an interior point c (any order of
+/// the triangles' vertices, since each is taken in absolute value).
+template <class Corner>
+double hull_volume(std::size_t triangles, const V3& c, const Corner& corner) {
+  double v = 0;
+  for (std::size_t t = 0; t < triangles; ++t) v += std::abs((corner(t, 0) - c).dot((corner(t, 1) - c).cross(corner(t, 2) - c))) / 6;
+  return v;
+}
+
+/// Times `build` (which returns whether it built a hull) for at least `rep_time` seconds of whole
+/// builds (at least one); appends the seconds per build to out.times.
+template <class Build>
+void time_builds(double rep_time, HullBuild& out, const Build& build) {
+  std::size_t count = 0;
+  const auto t0 = Clock::now();
+  double t = 0;
+  do {
+    g_sink = g_sink + double(build());
+    ++count;
+    t = seconds_since(t0);
+  } while (t < rep_time);
+  out.times.push_back(t / double(count));
+}
+
+/// impact's hull of p (or its refusal), untimed.
+HullBuild impact_hull_build(const Vertices<double>& p) {
+  HullBuild b;
+  ConvexHull<double> h;
+  try {
+    h = convex_hull(p);
+  } catch (const InvalidInput& e) {
+    b.refused = true;
+    b.error = e.what();
+  }
+  if (b.refused) return b;
+  for (Eigen::Index i = 0; i < h.vertices.rows(); ++i) b.vertices.push_back({h.vertices(i, 0), h.vertices(i, 1), h.vertices(i, 2)});
+  std::sort(b.vertices.begin(), b.vertices.end());
+  b.triangles = int(h.triangles.rows());
+  b.faces = int(h.faces.size());
+  const auto corner = [&](std::size_t t, int k) -> V3 { return h.vertices.row(h.triangles(Eigen::Index(t), k)).transpose(); };
+  for (std::size_t t = 0; t < std::size_t(b.triangles); ++t) {
+    const V3 n = (corner(t, 1) - corner(t, 0)).cross(corner(t, 2) - corner(t, 0)).normalized();
+    b.planes.push_back({n.x(), n.y(), n.z(), n.dot(corner(t, 0))});
+  }
+  b.volume = hull_volume(std::size_t(b.triangles), h.centroid, corner);
+  return b;
+}
+
+#ifdef IMPACT_HAVE_QHULL
+/// qhull's hull of p (or its refusal), untimed.
+HullBuild qhull_hull_build(const Vertices<double>& p, FILE* err) {
+  HullBuild b;
+  std::vector<double> xyz(p.data(), p.data() + 3 * p.rows());
+  const bench::QhullHull q = bench::qhull_hull(xyz, int(p.rows()), err);
+  if (!q.ok) {
+    b.refused = true;
+    b.error = q.error.empty() ? "qhull failed" : q.error;
+    return b;
+  }
+  V3 c = V3::Zero();
+  for (int v : q.vertices) {
+    c += p.row(v).transpose();
+    b.vertices.push_back({p(v, 0), p(v, 1), p(v, 2)});
+  }
+  c /= double(q.vertices.size());
+  std::sort(b.vertices.begin(), b.vertices.end());
+  b.triangles = int(q.triangles.size());
+  for (const auto& pl : q.planes) b.planes.push_back({pl[0], pl[1], pl[2], -pl[3]});
+  b.volume = hull_volume(q.triangles.size(), c, [&](std::size_t t, int k) -> V3 {
+    return p.row(q.triangles[t][static_cast<std::size_t>(k)]).transpose();
+  });
+  return b;
+}
+#endif
+
+#ifdef IMPACT_HAVE_QHULL
+/// How far the points lie outside the hull of `planes` (the largest n . x - o; <= 0 inside).
+double outside_distance(const std::vector<std::array<double, 3>>& points, const std::vector<std::array<double, 4>>& planes) {
+  double worst = -std::numeric_limits<double>::infinity();
+  for (const auto& x : points) {
+    double d = -std::numeric_limits<double>::infinity();
+    for (const auto& pl : planes) d = std::max(d, pl[0] * x[0] + pl[1] * x[1] + pl[2] * x[2] - pl[3]);
+    worst = std::max(worst, d);
+  }
+  return worst;
+}
+
+/// The agreement of two builds of one set (see the file comment).
+struct HullAgreement {
+  bool agree = true;
+  int vertex_difference = 0;   // vertices in one hull and not the other
+  double max_outside = 0;      // of those, the farthest outside the other hull, relative to the extent
+  double volume_difference = 0;  // |V_impact - V_qhull| / V_qhull
+};
+
+constexpr double kHullOutsideTolerance = 1e-9, kHullVolumeTolerance = 1e-9;
+
+HullAgreement compare_hulls(const HullBuild& a, const HullBuild& b, double extent) {
+  HullAgreement r;
+  if (a.refused || b.refused) {
+    r.agree = a.refused && b.refused;
+    return r;
+  }
+  std::vector<std::array<double, 3>> only_a, only_b;
+  std::set_difference(a.vertices.begin(), a.vertices.end(), b.vertices.begin(), b.vertices.end(), std::back_inserter(only_a));
+  std::set_difference(b.vertices.begin(), b.vertices.end(), a.vertices.begin(), a.vertices.end(), std::back_inserter(only_b));
+  r.vertex_difference = int(only_a.size() + only_b.size());
+  if (!only_a.empty()) r.max_outside = std::max(r.max_outside, outside_distance(only_a, b.planes) / extent);
+  if (!only_b.empty()) r.max_outside = std::max(r.max_outside, outside_distance(only_b, a.planes) / extent);
+  r.volume_difference = std::abs(a.volume - b.volume) / b.volume;
+  r.agree = r.max_outside <= kHullOutsideTolerance && r.volume_difference <= kHullVolumeTolerance;
+  return r;
+}
+#endif
+
+/// The meshes of the hull rows: `mesh_path` when given, else every mesh file in
+/// $IMPACT_DATA_DIR/meshes (none without it or without a mesh loader), sorted by name.
+std::vector<std::string> hull_mesh_files(const std::string& mesh_path) {
+  if (!mesh_path.empty()) return {mesh_path};
+  std::vector<std::string> files;
+#ifdef IMPACT_HAVE_IO
+  const char* d = std::getenv("IMPACT_DATA_DIR");
+  if (!d || !*d) return files;
+  const std::filesystem::path dir = std::filesystem::path(d) / "meshes";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) return files;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string ext = e.path().extension().string();
+    if (ext == ".obj" || ext == ".off" || ext == ".ply" || ext == ".stl") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+#endif
+  return files;
+}
+
+/// The hull rows: build every set with impact and qhull, print the table, add the JSON rows;
+/// returns the number of sets where the two disagree.
+int run_hulls(const std::vector<int>& sizes, const std::string& mesh_path, int max_points, int reps, double min_time,
+              const std::function<bool(const std::string&)>& wanted, std::vector<std::string>& items) {
+  std::vector<HullSet> sets;
+  for (int n : sizes)
+    for (HullSet& s : generated_hull_sets(n))
+      if (wanted(s.name)) sets.push_back(std::move(s));
+  for (const std::string& f : hull_mesh_files(mesh_path)) {
+    const std::string name = "mesh-" + f.substr(f.find_last_of('/') + 1);
+    if (!wanted(name)) continue;
+    TriangleMesh<double> m;
+    try {
+      m = bench::load_mesh_or_exit(f, "");
+    } catch (const std::exception& e) {
+      std::printf("%s: not loaded (%s)\n", name.c_str(), e.what());
+      continue;
+    }
+    if (m.V.rows() > max_points) {
+      std::printf("%s: %d vertices, more than --hull-max-points %d: left out\n", name.c_str(), int(m.V.rows()), max_points);
+      continue;
+    }
+    sets.push_back({name, m.V});
+  }
+#ifdef IMPACT_HAVE_QHULL
+  FILE* err = std::tmpfile();
+#endif
+  const double rep_time = min_time / reps;
+  std::printf("hull builds: impact convex_hull() and %s, %d repetitions of >= %.3f s each; times per build, median (min-max)\n",
+#ifdef IMPACT_HAVE_QHULL
+              (std::string("qhull qh_new_qhull \"") + bench::qhull_options() + "\"").c_str(),
+#else
+              "qhull (absent: built without libqhull_r)",
+#endif
+              reps, rep_time);
+  std::printf("%-26s %7s %15s %15s %24s %24s %9s %6s %9s %9s %5s\n", "set", "points", "impact V/T/F", "qhull V/T", "impact ms",
+              "qhull ms", "qh/impact", "Vdiff", "outside", "vol diff", "agree");
+  int mismatches = 0;
+  for (const HullSet& s : sets) {
+    const int n = int(s.points.rows());
+    HullBuild ib = impact_hull_build(s.points);
+    const auto ms = [](const HullBuild& b) {
+      const auto [lo_it, hi_it] = std::minmax_element(b.times.begin(), b.times.end());
+      char text[64];
+      std::snprintf(text, sizeof text, "%.4g (%.4g-%.4g)", 1e3 * bench::summarize(b.times).median, 1e3 * *lo_it, 1e3 * *hi_it);
+      return std::string(text);
+    };
+    const auto shape = [](const HullBuild& b, bool with_faces) {
+      if (b.refused) return std::string("refused");
+      return std::to_string(b.vertices.size()) + "/" + std::to_string(b.triangles) + (with_faces ? "/" + std::to_string(b.faces) : "");
+    };
+    const auto row = [&](const char* lib, const HullBuild& b) {
+      JsonObject o;
+      o.add("pair", "hull-" + s.name).add("query", "hull-build").add("library", lib).add("points", n);
+      const bench::Summary t = bench::summarize(b.times);
+      o.add("median_build_s", t.median).add("min_build_s", *std::min_element(b.times.begin(), b.times.end())).add("max_build_s", t.max);
+      o.add("builds_per_s", 1 / t.median).add("refused", b.refused);
+      if (b.refused) {
+        o.add("error", b.error);
+      } else {
+        o.add("hull_vertices", b.vertices.size()).add("triangles", b.triangles).add("volume", b.volume);
+        if (b.faces >= 0) o.add("faces", b.faces);
+      }
+      return o;
+    };
+    const auto impact_build = [&] {
+      try {
+        return convex_hull(s.points).vertices.rows() > 0;
+      } catch (const InvalidInput&) {
+        return false;
+      }
+    };
+#ifdef IMPACT_HAVE_QHULL
+    HullBuild qb = qhull_hull_build(s.points, err);
+    const Vec3<double> lo = s.points.colwise().minCoeff().transpose(), hi = s.points.colwise().maxCoeff().transpose();
+    const double extent = std::max((hi - lo).maxCoeff() / 2, std::numeric_limits<double>::min());
+    std::vector<double> xyz(s.points.data(), s.points.data() + 3 * n);
+    // the repetitions alternate between the two libraries, the first library alternating too
+    for (int r = 0; r < reps; ++r) {
+      const auto qhull_build = [&] { return bench::qhull_hull(xyz, n, err).ok; };
+      if (r % 2 == 0) {
+        time_builds(rep_time, ib, impact_build);
+        time_builds(rep_time, qb, qhull_build);
+      } else {
+        time_builds(rep_time, qb, qhull_build);
+        time_builds(rep_time, ib, impact_build);
+      }
+    }
+    const HullAgreement a = compare_hulls(ib, qb, extent);
+    mismatches += !a.agree;
+    const double ratio = bench::summarize(qb.times).median / bench::summarize(ib.times).median;
+    char ratio_text[32];
+    std::snprintf(ratio_text, sizeof ratio_text, "%.2fx", ratio);
+    std::printf("%-26s %7d %15s %15s %24s %24s %9s %6d %9.1e %9.1e %5s\n", s.name.c_str(), n, shape(ib, true).c_str(), shape(qb, false).c_str(),
+                ms(ib).c_str(), ms(qb).c_str(), ratio_text, a.vertex_difference, a.max_outside, a.volume_difference, a.agree ? "yes" : "NO");
+    JsonObject oi = row("impact", ib);
+    oi.add("mismatches", int(!a.agree)).add("vertex_difference", a.vertex_difference).add("max_outside", a.max_outside);
+    oi.add("volume_difference", a.volume_difference).add("qhull_time_over_impact", ratio);
+    items.push_back(oi.str());
+    items.push_back(row("qhull", qb).str());
+#else
+    for (int r = 0; r < reps; ++r) time_builds(rep_time, ib, impact_build);
+    std::printf("%-26s %7d %15s %15s %24s %24s %9s %6s %9s %9s %5s\n", s.name.c_str(), n, shape(ib, true).c_str(), "absent", ms(ib).c_str(),
+                "absent", "", "", "", "", "");
+    items.push_back(row("impact", ib).str());
+    JsonObject oq;
+    oq.add("pair", "hull-" + s.name).add("query", "hull-build").add("library", "qhull").add("points", n).add("absent", true);
+    items.push_back(oq.str());
+#endif
+    std::fflush(stdout);
+  }
+#ifdef IMPACT_HAVE_QHULL
+  if (err) std::fclose(err);
+#endif
+  if (sets.empty()) std::printf("no hull set selected\n");
+  return mismatches;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -473,7 +815,11 @@ int main(int argc, char** argv) {
   std::string json, mesh_path;
   int mesh_poses = 200;
   std::string only;
-  const char* usage = "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]\n";
+  bool hulls = false;
+  int hull_max_points = 200000, hull_reps = 5;
+  const char* usage =
+      "usage: impact-convex-bench [--pairs N] [--json FILE] [--min-time SECONDS] [--mesh FILE] [--mesh-poses N] [--only TEXT]\n"
+      "       impact-convex-bench --hulls [--hull-max-points N] [--hull-reps N] [--min-time SECONDS] [--mesh FILE] [--only TEXT] [--json FILE]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--pairs") {
@@ -488,11 +834,46 @@ int main(int argc, char** argv) {
       mesh_poses = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 10000000, usage));
     } else if (arg == "--only") {
       only = bench::option_value(argc, argv, i, usage);
+    } else if (arg == "--hulls") {
+      hulls = true;
+    } else if (arg == "--hull-max-points") {
+      hull_max_points = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 10, 10000000, usage));
+    } else if (arg == "--hull-reps") {
+      hull_reps = int(bench::parse_integer(arg, bench::option_value(argc, argv, i, usage), 1, 1000, usage));
     } else {
       bench::reject_option(arg, usage);
     }
   }
   bench::check_writable(json, usage);
+  if (hulls) {
+    std::vector<int> sizes;
+    for (int s = 10; s <= hull_max_points; s *= 10) sizes.push_back(s);
+    std::vector<std::string> items;
+    const int mismatches =
+        run_hulls(sizes, mesh_path, hull_max_points, hull_reps, min_time, [&](const std::string& name) { return only.empty() || name.find(only) != std::string::npos; },
+                  items);
+    if (!json.empty()) {
+      JsonObject top;
+      top.add("bench", "impact-convex-bench").add("mode", "hulls").add("hull_max_points", hull_max_points).add("hull_reps", hull_reps);
+      top.add("min_time_s", min_time);
+      if (!only.empty()) top.add("only", only);
+#ifdef IMPACT_HAVE_QHULL
+      top.add("peer", std::string(qh_version2) + " (libqhull_r), qh_new_qhull \"" + bench::qhull_options() + "\"");
+#else
+      top.add("peer", "qhull absent (built without libqhull_r)");
+#endif
+      top.raw("rows", JsonObject::array(items));
+      if (!impact::bench::write_file(json, top.str())) {
+        std::fprintf(stderr, "impact-convex-bench: cannot write %s\n", json.c_str());
+        return 1;
+      }
+    }
+    if (mismatches) {
+      std::fprintf(stderr, "impact-convex-bench: %d hull sets where impact and qhull disagree (see the agree column)\n", mismatches);
+      return 3;
+    }
+    return 0;
+  }
   TriangleMesh<double> mesh;
   std::string mesh_name = "generated torus";
   try {
@@ -561,7 +942,9 @@ int main(int argc, char** argv) {
   std::printf("%-18s %-12s %-7s %12s %10s %10s %5s %7s %14s %10s %10s\n", "pair", "query", "library", "queries/s", "mean err",
               "max err", "mism", "samples", "impact/FCL", "mean ang", "max ang");
   std::vector<std::string> items;
+  int impact_mismatches = 0;  // impact's answers against the oracle's decided ones (FCL's are only reported)
   for (const Row& r : rows) {
+    if (r.library == "impact") impact_mismatches += r.mismatches;
     double ratio = 0;
     if (r.library == "impact")
       for (const Row& o : rows)
@@ -596,6 +979,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "impact-convex-bench: cannot write %s\n", json.c_str());
       return 1;
     }
+  }
+  if (impact_mismatches) {
+    std::fprintf(stderr, "impact-convex-bench: %d impact answers disagree with the oracle away from touching (see the mism column)\n",
+                 impact_mismatches);
+    return 3;
   }
   return 0;
 }

@@ -14,7 +14,8 @@ mode="${1:-test}"
 [ $# -gt 0 ] && shift
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev libboost-dev)
+# libqhull-dev: qhull, the peer of impact-convex-bench --hulls (its smoke test runs in the test mode)
+packages=(cmake ninja-build g++ libeigen3-dev libassimp-dev libccd-dev libfcl-dev libbullet-dev libgtest-dev libbenchmark-dev libboost-dev libqhull-dev)
 # the test suite also reads Debian's sample models (about 150 files in many formats) as loader input
 [ "$mode" = test ] && packages+=(assimp-testmodels)
 # the bench mode also installs matplotlib for benches/plot.py (charts from the benches' --json)

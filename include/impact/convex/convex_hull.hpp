@@ -188,15 +188,21 @@ class QuickHull {
     add_face(i0, i3, i1);
     add_face(i1, i3, i2);
     add_face(i2, i3, i0);
+    for (int f = 0; f < 4; ++f)  // each directed edge of one face runs backwards in its neighbour
+      for (int k = 0; k < 3; ++k)
+        for (int g = 0; g < 4; ++g)
+          for (int j = 0; j < 3; ++j)
+            if (faces_[g].v[j] == faces_[f].v[(k + 1) % 3] && faces_[g].v[(j + 1) % 3] == faces_[f].v[k]) faces_[f].nb[k] = g;
     // Initial conflict lists.
     const int n = static_cast<int>(p_.rows());
+    start_face_.assign(static_cast<std::size_t>(n), -1);
     for (int i = 0; i < n; ++i) {
       if (i == i0 || i == i1 || i == i2 || i == i3) continue;
       assign(i, 0, 4);
     }
     std::vector<int> visible, stack, orphans;
-    std::vector<std::array<int, 2>> horizon;
-    std::vector<char> seen;
+    std::vector<std::array<int, 3>> horizon;  // edge u -> w of a visible face, the hidden face across it
+    int round = 0;  // faces met by this step's flood fill carry its number (no per-step clearing)
     for (std::size_t f = 0; f < faces_.size(); ++f) {
       if (!faces_[f].alive || faces_[f].outside.empty()) continue;
       // Farthest point of this face's conflict list.
@@ -213,8 +219,8 @@ class QuickHull {
       // Visible faces: flood fill from f across edges.
       visible.clear();
       stack.assign(1, static_cast<int>(f));
-      seen.assign(faces_.size(), 0);
-      seen[f] = 1;
+      ++round;
+      faces_[f].seen = round;
       horizon.clear();
       while (!stack.empty()) {
         const int g = stack.back();
@@ -222,14 +228,14 @@ class QuickHull {
         visible.push_back(g);
         for (int k = 0; k < 3; ++k) {
           const int u = faces_[g].v[k], w = faces_[g].v[(k + 1) % 3];
-          const int h = edge_face(w, u);
-          if (h < 0) continue;  // cannot happen on a closed hull
-          if (seen[h] == 1) continue;
+          const int h = faces_[g].nb[k];
+          if (h < 0 || !faces_[h].alive) continue;  // cannot happen on a closed hull
+          if (faces_[h].seen == round) continue;
           if (faces_[h].n.dot(e) - faces_[h].d > eps_) {
-            seen[h] = 1;
+            faces_[h].seen = round;
             stack.push_back(h);
           } else {
-            horizon.push_back({u, w});
+            horizon.push_back({u, w, h});
           }
         }
       }
@@ -237,14 +243,28 @@ class QuickHull {
       for (int g : visible) {
         Face& fg = faces_[g];
         fg.alive = false;
-        for (int k = 0; k < 3; ++k) edges_.erase(key(fg.v[k], fg.v[(k + 1) % 3]));
         for (int q : fg.outside)
           if (q != eye) orphans.push_back(q);
         fg.outside.clear();
         fg.outside.shrink_to_fit();
       }
       const int first_new = static_cast<int>(faces_.size());
-      for (const auto& he : horizon) add_face(he[0], he[1], eye);
+      // The cone from the horizon to the eye: new face (u, w, eye) borders the hidden face across
+      // u -> w, and across w -> eye the new face that starts at w (the horizon is a loop, each of
+      // its vertices starts one edge).
+      for (const auto& he : horizon) {
+        const int id = add_face(he[0], he[1], eye);
+        Face& hidden = faces_[static_cast<std::size_t>(he[2])];
+        for (int j = 0; j < 3; ++j)
+          if (hidden.v[j] == he[1] && hidden.v[(j + 1) % 3] == he[0]) hidden.nb[j] = id;
+        faces_[static_cast<std::size_t>(id)].nb[0] = he[2];
+        start_face_[static_cast<std::size_t>(he[0])] = id;
+      }
+      for (int id = first_new; id < static_cast<int>(faces_.size()); ++id) {
+        const int next = start_face_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(id)].v[1])];
+        faces_[static_cast<std::size_t>(id)].nb[1] = next;
+        if (next >= 0) faces_[static_cast<std::size_t>(next)].nb[2] = id;
+      }
       for (int q : orphans) assign(q, first_new, static_cast<int>(faces_.size()));
     }
     std::vector<std::array<int, 3>> out;
@@ -259,16 +279,13 @@ class QuickHull {
     Vec3<S> n;
     S d;
     bool alive = true;
+    int seen = 0;  ///< the last step whose flood fill met this face
+    int nb[3] = {-1, -1, -1};  ///< the face across edge v[k] -> v[k + 1]
     std::vector<int> outside;
   };
   Vec3<S> pt(int i) const { return p_.row(i).transpose(); }
-  static std::uint64_t key(int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); }
-  int edge_face(int a, int b) const {
-    const auto it = edges_.find(key(a, b));
-    return it == edges_.end() ? -1 : it->second;
-  }
   S distance(const Face& f, int q) const { return f.n.dot(pt(q)) - f.d; }
-  void add_face(int a, int b, int c) {
+  int add_face(int a, int b, int c) {
     Face f;
     f.v[0] = a;
     f.v[1] = b;
@@ -277,9 +294,8 @@ class QuickHull {
     const S len = n.norm();
     f.n = len > S(0) ? Vec3<S>(n / len) : Vec3<S>::Zero();
     f.d = f.n.dot(pt(a));
-    const int id = static_cast<int>(faces_.size());
-    for (int k = 0; k < 3; ++k) edges_[key(f.v[k], f.v[(k + 1) % 3])] = id;
     faces_.push_back(std::move(f));
+    return static_cast<int>(faces_.size()) - 1;
   }
   /// Puts point q in the conflict list of the face among [lo, hi) it is farthest outside of.
   void assign(int q, int lo, int hi) {
@@ -299,7 +315,7 @@ class QuickHull {
   const Vertices<S>& p_;
   S eps_;
   std::vector<Face> faces_;
-  std::unordered_map<std::uint64_t, int> edges_;
+  std::vector<int> start_face_;  ///< per point: the newest cone face whose first vertex it is
 };
 
 }  // namespace detail

@@ -216,7 +216,7 @@ template <class S, int W = 4> struct WideCast {
   }
   /// A new best hit: triangle in lane c of block b at t (>= 0). The float bounds from one rounding
   /// of t (float_hit_bounds); the tie bound at most t - 4 (t 2^-19 + e) (float_tie_bound: the
-  /// slack of docs/rays.md, e = slab_error >= 2^-100, set by the node loop before any leaf).
+  /// slack of docs/rays-history.md, e = slab_error >= 2^-100, set by the node loop before any leaf).
   void record(std::int32_t b, int c, S t, const Vec3<S>& bary) {
     best = t;
     best_block = b;
@@ -641,7 +641,7 @@ IMPACT_WIDE_FMA_TARGET bool WideCast<S, W>::run_avx() {
     // The stack's bottom is tested here and after each leaf's pop, apart from the leaves' loop and
     // its exit to the node loop: GCC spills the node test's AVX registers around the leaf calls,
     // and with one test at the loop's top every cast paid that spill on its way out (bunny short
-    // 323.8 -> 312.2 instructions a ray, docs/rays.md).
+    // 323.8 -> 312.2 instructions a ray, docs/rays-history.md).
     if (count < 0) return true;
     for (;;) {
       if (wide.packed()) prefetch_child(first, count);  // (before the spill and the call: the block test reads it late)

@@ -11,7 +11,7 @@
 /// entered_scalar is the test as a scalar loop of the same IEEE operations (std::fma), the AVX
 /// test (compiled for AVX and FMA by a target attribute on GCC and Clang for x86, used when the
 /// CPU has both: wide_fma_available) gives the same keys and mask bit for bit. Tested in
-/// tests/query/test_ray_wide_bvh8.cpp; docs/rays.md (issue 14, the seventeenth and
+/// tests/query/test_ray_wide_bvh8.cpp; docs/rays-history.md (issue 14, the seventeenth and
 /// twenty-third steps).
 #pragma once
 

@@ -187,7 +187,7 @@ inline void float_hit_bounds(double x, float& up, float& below) {
   std::memcpy(&below, &db, sizeof below);
 }
 /// A float at most x - 4 (x 2^-19 + e) for every x > `below` (float_hit_bounds' bound of a hit at
-/// x >= 0) and e >= 2^-100: the cast's tie bound (docs/rays.md), in two float operations (or one
+/// x >= 0) and e >= 2^-100: the cast's tie bound (docs/rays-history.md), in two float operations (or one
 /// multiply-add where the compiler contracts them). With k = 1 - 2^-16, P = below k rounded is at
 /// most x k (1 + 2^-24) <= x (1 - 2^-17) - x 2^-24 (P <= 0 for below < 0), c = 5 e rounded is at
 /// least 4.99 e, and P - c rounded is at most (P - c)(1 + 2^-24) <= P (1 + 2^-24) - c when P - c >= 0,

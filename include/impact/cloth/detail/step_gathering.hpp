@@ -18,12 +18,20 @@
 #include <utility>
 #include <vector>
 
+// The walks' and pairs_of's small helpers are inlined by force: GCC left them as calls inside
+// those large functions (a call per node pair or edge box). Undefined at the end of the file.
+#if defined(__GNUC__) || defined(__clang__)
+#define IMPACT_CLOTH_INLINE __attribute__((always_inline)) inline
+#else
+#define IMPACT_CLOTH_INLINE inline
+#endif
+
 namespace impact::detail::cloth {
 
 /// Whether two closed boxes share a point: overlap() written out in scalar comparisons, so that
 /// it is inlined into the walks' and pairs_of's loops (the same answer, NaN included).
 template <class S>
-inline bool boxes_meet(const Aabb<S>& a, const Aabb<S>& b) {
+IMPACT_CLOTH_INLINE bool boxes_meet(const Aabb<S>& a, const Aabb<S>& b) {
   return a.min[0] <= b.max[0] && b.min[0] <= a.max[0] && a.min[1] <= b.max[1] && b.min[1] <= a.max[1] && a.min[2] <= b.max[2] &&
          b.min[2] <= a.max[2];
 }
@@ -217,6 +225,31 @@ void Stepper<S>::regather() {
   broad_acc_ += ms;
 }
 
+/// A vector filled as a plain array: n() elements pushed over whatever it held, grown by doubling
+/// when full, so that a push is inlined into the loop that makes it (the vector's push_back was a
+/// call per element in the walks and the passes' listing). Used as a stack (pop) by the walks,
+/// and as a list by the front and the listing, whose vector finish() cuts to the elements pushed.
+/// The same elements in the same order as push_back and pop_back on the vector.
+template <class T>
+class Appender {
+ public:
+  explicit Appender(std::vector<T>& v) : v_(v) {}
+  IMPACT_CLOTH_INLINE void push(const T& x) {
+    if (n_ == v_.size()) v_.resize(2 * v_.size() + 64);
+    v_[n_++] = x;
+  }
+  IMPACT_CLOTH_INLINE bool empty() const { return n_ == 0; }
+  IMPACT_CLOTH_INLINE T pop() { return v_[--n_]; }
+  std::size_t n() const { return n_; }
+  void finish() { v_.resize(n_); }
+
+ private:
+  std::vector<T>& v_;
+  std::size_t n_ = 0;
+};
+
+using PairStack = Appender<std::pair<std::int32_t, std::int32_t>>;
+
 /// Calls visit(fa, fb) once for every pair of distinct triangles with overlapping boxes (tbox_)
 /// of which at least one is among `tris` (marked in grown_tri_): a walk of the tree against
 /// itself that enters only node pairs with a marked node, the marks set from the triangles'
@@ -241,13 +274,11 @@ void Stepper<S>::grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visi
     if ((grown_tri_[std::size_t(fa)] || grown_tri_[std::size_t(fb)]) && boxes_meet(tbox_[std::size_t(fa)], tbox_[std::size_t(fb)])) visit(fa, fb);
   };
   auto size = [](const Aabb<S>& b) { return (b.max - b.min).sum(); };
-  std::vector<std::pair<std::int32_t, std::int32_t>>& stack = pair_stack_;
   auto walk = [&](std::pair<std::int32_t, std::int32_t> seed) {
-    stack.clear();
-    stack.push_back(seed);
+    PairStack stack(pair_stack_);
+    stack.push(seed);
     while (!stack.empty()) {
-      const auto ij = stack.back();
-      stack.pop_back();
+      const auto ij = stack.pop();
       const std::int32_t i = ij.first, j = ij.second;
       const auto& ni = t.nodes[std::size_t(i)];
       const auto& nj = t.nodes[std::size_t(j)];
@@ -257,9 +288,9 @@ void Stepper<S>::grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visi
           for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
             for (std::int32_t q = p + 1; q < ni.first + ni.count; ++q) tri_pair(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
         } else {
-          stack.push_back({ni.left(), ni.right()});
-          stack.push_back({ni.right(), ni.right()});
-          stack.push_back({ni.left(), ni.left()});
+          stack.push({ni.left(), ni.right()});
+          stack.push({ni.right(), ni.right()});
+          stack.push({ni.left(), ni.left()});
         }
         continue;
       }
@@ -268,11 +299,11 @@ void Stepper<S>::grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visi
         for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
           for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q) tri_pair(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
       } else if (nj.is_leaf() || (!ni.is_leaf() && size(ni.bv) >= size(nj.bv))) {
-        stack.push_back({ni.right(), j});
-        stack.push_back({ni.left(), j});
+        stack.push({ni.right(), j});
+        stack.push({ni.left(), j});
       } else {
-        stack.push_back({i, nj.right()});
-        stack.push_back({i, nj.left()});
+        stack.push({i, nj.right()});
+        stack.push({i, nj.left()});
       }
     }
   };
@@ -308,33 +339,31 @@ void Stepper<S>::self_pairs(Visit&& visit) {
   std::vector<std::pair<std::int32_t, std::int32_t>>& next = sys_.front_next;
   const bool from_root = front.empty();
   if (from_root) front.push_back({0, 0});
-  next.clear();
-  next.reserve(front.size() + front.size() / 4);
+  Appender<std::pair<std::int32_t, std::int32_t>> out(next);
   std::size_t apart = 0, leaves = 0;
-  std::vector<std::pair<std::int32_t, std::int32_t>>& stack = pair_stack_;
+  PairStack stack(pair_stack_);
   for (const auto& e : front) {
-    stack.clear();
-    stack.push_back(e);
+    stack.push(e);
     while (!stack.empty()) {
-      const std::int32_t i = stack.back().first, j = stack.back().second;
-      stack.pop_back();
+      const auto ij = stack.pop();
+      const std::int32_t i = ij.first, j = ij.second;
       const auto& ni = t.nodes[std::size_t(i)];
       if (i == j) {
         if (ni.is_leaf()) {
           if (ni.count < 2) continue;  // no pair within it: not kept
           for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
             for (std::int32_t q = p + 1; q < ni.first + ni.count; ++q) visit(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
-          next.push_back({i, i});
+          out.push({i, i});
         } else {
-          stack.push_back({ni.left(), ni.right()});
-          stack.push_back({ni.right(), ni.right()});
-          stack.push_back({ni.left(), ni.left()});
+          stack.push({ni.left(), ni.right()});
+          stack.push({ni.right(), ni.right()});
+          stack.push({ni.left(), ni.left()});
         }
         continue;
       }
       const auto& nj = t.nodes[std::size_t(j)];
       if (!boxes_meet(ni.bv, nj.bv)) {
-        next.push_back({i, j});
+        out.push({i, j});
         ++apart;
         continue;
       }
@@ -342,17 +371,18 @@ void Stepper<S>::self_pairs(Visit&& visit) {
       if (li && lj) {
         for (std::int32_t p = ni.first; p < ni.first + ni.count; ++p)
           for (std::int32_t q = nj.first; q < nj.first + nj.count; ++q) visit(t.primitives[std::size_t(p)], t.primitives[std::size_t(q)]);
-        next.push_back({i, j});
+        out.push({i, j});
         ++leaves;
       } else if (lj || (!li && cnt[std::size_t(i)] >= cnt[std::size_t(j)])) {
-        stack.push_back({ni.right(), j});
-        stack.push_back({ni.left(), j});
+        stack.push({ni.right(), j});
+        stack.push({ni.left(), j});
       } else {
-        stack.push_back({i, nj.right()});
-        stack.push_back({i, nj.left()});
+        stack.push({i, nj.right()});
+        stack.push({i, nj.left()});
       }
     }
   }
+  out.finish();
   front.swap(next);
   const double per_leaf = static_cast<double>(apart) / static_cast<double>(std::max<std::size_t>(leaves, 1));
   if (from_root)
@@ -405,22 +435,53 @@ void Stepper<S>::refit_grown(const std::vector<std::int32_t>& tris) {
   }
 }
 
+/// An edge's box as pairs_of forms it: the hull of its two vertices' boxes, in plain scalars
+/// (min and max are exact, so the same box as merge() gives, without Aabb's default-filled
+/// members or a call to extend(), which the compiler did not inline into pairs_of).
+template <class S>
+struct EdgeBox {
+  S lo[3], hi[3];
+};
+
+template <class S>
+IMPACT_CLOTH_INLINE EdgeBox<S> edge_box(const Aabb<S>& a, const Aabb<S>& b) {
+  EdgeBox<S> e;
+  for (int k = 0; k < 3; ++k) e.lo[k] = std::min(a.min[k], b.min[k]), e.hi[k] = std::max(a.max[k], b.max[k]);
+  return e;
+}
+
+/// Whether two closed boxes share a point (boxes_meet for edge boxes).
+template <class S>
+IMPACT_CLOTH_INLINE bool boxes_meet(const EdgeBox<S>& a, const EdgeBox<S>& b) {
+  return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] && a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
+}
+
+template <class S>
+IMPACT_CLOTH_INLINE bool boxes_meet(const EdgeBox<S>& a, const Aabb<S>& b) {
+  return a.lo[0] <= b.max[0] && b.min[0] <= a.hi[0] && a.lo[1] <= b.max[1] && b.min[1] <= a.hi[1] && a.lo[2] <= b.max[2] && b.min[2] <= a.hi[2];
+}
+
 /// The candidate primitive pairs of the triangle pair (fa, fb) (not both obstacle): the
 /// vertices and edges each owns against the other's face and edges, kept when their grown
 /// envelopes overlap and they share no vertex. An edge's grown envelope is the union of its two
-/// vertices' (gbox_), formed here: min and max are exact, so these are the boxes a stored copy
-/// per edge would hold, without the 3 boxes per triangle (144 bytes in double) the tests would
-/// read from memory far from the vertices' boxes.
+/// vertices' (gbox_), formed here (edge_box): min and max are exact, so these are the boxes a
+/// stored copy per edge would hold, without the 3 boxes per triangle (144 bytes in double) the
+/// tests would read from memory far from the vertices' boxes. fb's owned edges (sorted ends and
+/// boxes) are formed once per call, when the first edge of fa meets fb's box.
 /// With OnlyNew, only the pairs whose tests fail for the boxes before the current
 /// re-gathering (old_gbox_, old_tbox_), i.e. those not among the candidates yet (regather); a
 /// primitive pair with no vertex grown in this re-gathering (grown_vert_; its face's triangle not
 /// in grown_tri_) has the boxes it had before, so it is passed over before any box test.
+/// The pairs come out in the same order whichever form: fa's vertices against fb, fb's against
+/// fa, then fa's edges (in the face's order) each against fb's (in the face's order).
 template <class S>
 template <bool OnlyNew>
 void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out) const {
-  if (sys_.tri_obstacle[std::size_t(fa)] && sys_.tri_obstacle[std::size_t(fb)]) return;
+  const std::uint8_t* obstacle = sys_.tri_obstacle.data();
+  if (obstacle[fa] && obstacle[fb]) return;
   const Faces& F = sys_.F;
   const std::int32_t A[3] = {F(fa, 0), F(fa, 1), F(fa, 2)}, B[3] = {F(fb, 0), F(fb, 1), F(fb, 2)};
+  const Aabb<S>* g = gbox_.data();
   const Aabb<S>& tba = tbox_[std::size_t(fa)];
   const Aabb<S>& tbb = tbox_[std::size_t(fb)];
   // owned vertices of triangle x (vertices X, owner bits o) against face y (vertices Y, box ty)
@@ -429,7 +490,7 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
       if (!(o & (1u << k))) continue;
       const std::int32_t v = X[k];
       if (OnlyNew && !grown_vert_[std::size_t(v)] && !grown_tri_[std::size_t(fy)]) continue;  // boxes unchanged: known
-      if (v == Y[0] || v == Y[1] || v == Y[2] || !boxes_meet(gbox_[std::size_t(v)], ty)) continue;  // both grown
+      if (v == Y[0] || v == Y[1] || v == Y[2] || !boxes_meet(g[v], ty)) continue;  // both grown
       if (OnlyNew && boxes_meet(old_gbox_[std::size_t(v)], old_tbox_[std::size_t(fy)])) continue;
       Prim p;
       p.ee = 0;
@@ -438,34 +499,43 @@ void Stepper<S>::pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& o
     }
   };
   const std::uint8_t oa = sys_.own[std::size_t(fa)], ob = sys_.own[std::size_t(fb)];
-  vf(A, oa, B, tbb, fb);
-  vf(B, ob, A, tba, fa);
+  if (oa & 7) vf(A, oa, B, tbb, fb);
+  if (ob & 7) vf(B, ob, A, tba, fa);
   if (!(oa & 0x38) || !(ob & 0x38)) return;
-  Aabb<S> eb[3];  // fb's owned edges' grown envelopes, formed when first needed
-  bool eb_made = false;
+  // fb's owned edges, formed when first needed: sorted ends and boxes
+  std::int32_t b0s[3], b1s[3];
+  EdgeBox<S> eb[3];
+  int nb = -1;
   for (int i = 0; i < 3; ++i) {
     if (!(oa & (8u << i))) continue;
     std::int32_t a0 = A[i], a1 = A[(i + 1) % 3];
     if (a0 > a1) std::swap(a0, a1);
     const bool grown_a = OnlyNew && (grown_vert_[std::size_t(a0)] || grown_vert_[std::size_t(a1)]);
     if (OnlyNew && !grown_a && !grown_tri_[std::size_t(fb)]) continue;  // every box of its pairs unchanged: known
-    const Aabb<S> ea = merge(gbox_[std::size_t(a0)], gbox_[std::size_t(a1)]);
+    const EdgeBox<S> ea = edge_box(g[a0], g[a1]);
     if (!boxes_meet(ea, tbb)) continue;
-    if (!eb_made) {
-      for (int j = 0; j < 3; ++j)
-        if (ob & (8u << j)) eb[j] = merge(gbox_[std::size_t(B[j])], gbox_[std::size_t(B[(j + 1) % 3])]);
-      eb_made = true;
+    if (nb < 0) {
+      nb = 0;
+      for (int j = 0; j < 3; ++j) {
+        if (!(ob & (8u << j))) continue;
+        std::int32_t b0 = B[j], b1 = B[(j + 1) % 3];
+        if (b0 > b1) std::swap(b0, b1);
+        b0s[nb] = b0, b1s[nb] = b1, eb[nb] = edge_box(g[b0], g[b1]);
+        ++nb;
+      }
     }
-    const bool was_a = OnlyNew && boxes_meet(merge(old_gbox_[std::size_t(a0)], old_gbox_[std::size_t(a1)]), old_tbox_[std::size_t(fb)]);
-    for (int j = 0; j < 3; ++j) {
-      if (!(ob & (8u << j))) continue;
-      std::int32_t b0 = B[j], b1 = B[(j + 1) % 3];
-      if (b0 > b1) std::swap(b0, b1);
+    bool was_a = false;
+    EdgeBox<S> old_ea;
+    if (OnlyNew) {
+      old_ea = edge_box(old_gbox_[std::size_t(a0)], old_gbox_[std::size_t(a1)]);
+      was_a = boxes_meet(old_ea, old_tbox_[std::size_t(fb)]);
+    }
+    for (int j = 0; j < nb; ++j) {
+      const std::int32_t b0 = b0s[j], b1 = b1s[j];
       if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
       if (OnlyNew && !grown_a && !grown_vert_[std::size_t(b0)] && !grown_vert_[std::size_t(b1)]) continue;  // boxes unchanged: known
       if (!boxes_meet(ea, eb[j])) continue;  // both grown
-      if (was_a && boxes_meet(merge(old_gbox_[std::size_t(a0)], old_gbox_[std::size_t(a1)]), merge(old_gbox_[std::size_t(b0)], old_gbox_[std::size_t(b1)])))
-        continue;
+      if (was_a && boxes_meet(old_ea, edge_box(old_gbox_[std::size_t(b0)], old_gbox_[std::size_t(b1)]))) continue;
       Prim p;
       p.ee = 1;
       const bool first = std::make_pair(a0, a1) < std::make_pair(b0, b1);
@@ -570,3 +640,5 @@ void Stepper<S>::build_incidence() {
 }
 
 }  // namespace impact::detail::cloth
+
+#undef IMPACT_CLOTH_INLINE

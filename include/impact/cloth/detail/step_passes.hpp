@@ -6,6 +6,7 @@
 /// Part of cloth_collision_step's internals (stepper.hpp); not part of the interface.
 #pragma once
 
+#include "impact/cloth/detail/step_gathering.hpp"
 #include "impact/cloth/detail/stepper.hpp"
 
 #include <algorithm>
@@ -75,7 +76,6 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   // candidate index (the candidates appended since it was built by a scan of those), then
   // sorted, or listed by a scan of the stamps when many were marked (cheaper than sorting).
   std::vector<std::uint32_t>& todo = todo_;
-  todo.clear();
   std::size_t moved = 0, listed = 0;
   for (auto c : changed_) moved += c;
   if (++stamp_now_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), stamp_now_ = 1;
@@ -83,29 +83,33 @@ std::vector<typename Stepper<S>::Hit> Stepper<S>::test_changed() {
   auto touched = [&](const Prim& p) {
     return changed_[std::size_t(p.v[0])] || changed_[std::size_t(p.v[1])] || changed_[std::size_t(p.v[2])] || changed_[std::size_t(p.v[3])];
   };
+  Appender<std::uint32_t> list(todo);  // fills todo (push_back inlined)
   if (moved * 8 >= changed_.size()) {
     for (std::size_t c = 0; c < cand_.size(); ++c)
       if (stamp_[c] == stamp_now_ || touched(cand_[c])) {
         ++listed;
-        if (!kept(c)) todo.push_back(static_cast<std::uint32_t>(c));
+        if (!kept(c)) list.push(static_cast<std::uint32_t>(c));
       }
+    list.finish();
   } else {
-    for (const auto& h : last_hits_) todo.push_back(h.c);
+    for (const auto& h : last_hits_) list.push(h.c);
     if (moved > 0) {
       if (inc_off_.empty() || 4 * (cand_.size() - inc_n_) > inc_n_) build_incidence();
       for (std::size_t v = 0; v < changed_.size(); ++v) {
         if (!changed_[v]) continue;
         for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
-          if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, todo.push_back(inc_[k]);
+          if (stamp_[inc_[k]] != stamp_now_) stamp_[inc_[k]] = stamp_now_, list.push(inc_[k]);
       }
       for (std::size_t c = inc_n_; c < cand_.size(); ++c)
-        if (stamp_[c] != stamp_now_ && touched(cand_[c])) todo.push_back(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
+        if (stamp_[c] != stamp_now_ && touched(cand_[c])) list.push(static_cast<std::uint32_t>(c)), stamp_[c] = stamp_now_;
     }
-    if (todo.size() * 16 >= cand_.size()) {
-      todo.clear();
+    if (list.n() * 16 >= cand_.size()) {
+      Appender<std::uint32_t> again(todo);
       for (std::size_t c = 0; c < cand_.size(); ++c)
-        if (stamp_[c] == stamp_now_) todo.push_back(static_cast<std::uint32_t>(c));
+        if (stamp_[c] == stamp_now_) again.push(static_cast<std::uint32_t>(c));
+      again.finish();
     } else {
+      list.finish();
       std::sort(todo.begin(), todo.end());
     }
     listed = todo.size();
