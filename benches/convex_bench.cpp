@@ -236,7 +236,7 @@ Row make_row(const std::string& pair, const char* query, const char* lib, double
 volatile double g_sink = 0;
 
 // Each library's query behind a function that is never inlined, so that callgrind can count its
-// instructions alone (docs/convex.md: valgrind --tool=callgrind
+// instructions alone (docs/convex-notes.md, note 10: valgrind --tool=callgrind
 // --toggle-collect='*bench_impact_penetration*', and likewise bench_fcl_penetration,
 // bench_impact_boolean, bench_fcl_boolean, bench_impact_distance, bench_fcl_distance). The error
 // pass and the timed loop both call them.

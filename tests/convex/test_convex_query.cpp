@@ -789,7 +789,7 @@ TEST(ConvexQuery, IterationBoundIsReportedNeverHangs) {
   // EPA on two cylinders needs far more than 2 support calls
   const auto c = convex_penetration(z.cylinder, pa, z.cylinder, deep, o);
   EXPECT_TRUE(c.limit_reached);
-  // GJK's 2 (one budget for the query: docs/convex.md, note 25), and the centre line's and candidates' 6
+  // GJK's 2 (one budget for the query: docs/convex-notes.md, note 25), and the centre line's and candidates' 6
   EXPECT_LE(c.iterations, 4 * 2);
   const auto c_full = convex_penetration(z.cylinder, pa, z.cylinder, deep);
   EXPECT_TRUE(c_full.intersecting);
@@ -872,7 +872,7 @@ TEST(ConvexQuery, BoundedRoundContactStaysAnUpperBound) {
   EXPECT_GT(limited, 100);
 }
 
-// What a bounded answer claims (docs/convex.md, "Iteration bounds"): an answer without
+// What a bounded answer claims (docs/convex-notes.md, note 28): an answer without
 // limit_reached is decided; a flagged one is not (its boolean may be wrong either way), but its
 // numbers still hold: a distance is at least the true one, and a penetration's bracket
 // [depth - depth_gap, depth] holds the true depth, with a lower bound above 0 only when the

@@ -145,7 +145,7 @@ int cs_check_scene(const ConvexScene<double>& scene, const CsObjects& objs, cons
   // b whatever the order of the kinds (the dispatch); b moved by depth + 1e-5 along the normal is
   // apart by the oracle (the normal's direction, the depth an upper bound); and the depth is near
   // the oracle's least overlap (loosely: libccd's EPA, which answers sphere-cylinder and the
-  // general pairs, is off by up to 7e-2 of the size on a few poses, docs/convex.md)
+  // general pairs, is off by up to 7e-2 of the size on a few poses, docs/convex-notes.md)
   for (const auto& c : full.contacts) {
     const auto& sa = objs.shapes[c.a];
     const auto& sb = objs.shapes[c.b];

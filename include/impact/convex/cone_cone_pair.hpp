@@ -22,7 +22,7 @@
 /// cone inside the other with the first's points deepest across the other's nearer faces
 /// (cone_points_bound). (Not here: the least overlap along either cone's side normals,
 /// cone_side_minimum of convex/cylinder_pair.hpp, which cylinder–cone runs last: on cone pairs it cost
-/// more time on the poses it left to EPA than it saved; docs/convex.md.)
+/// more time on the poses it left to EPA than it saved; docs/convex-notes.md, note 15.)
 /// At the true contact of these kinds the bounds meet (up to rounding and Newton's last step);
 /// when the best upper and lower bounds are within the tolerance the answer is certified as EPA's
 /// is (depth = the upper bound, depth_gap = upper - lower); otherwise (a rim against a rim, deep

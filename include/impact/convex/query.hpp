@@ -72,7 +72,7 @@
 /// convex_intersect, `intersecting` of a distance or penetration) may be wrong either way, while
 /// its numbers still hold: a distance is never below the true one, and a penetration's
 /// [depth - depth_gap, depth] holds the true depth, its lower end above 0 only when the
-/// intersection was proven (docs/convex.md, note 28).
+/// intersection was proven (docs/convex-notes.md, note 28).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
 ///
 /// Where the parts live: the options and the validation in convex/query_options.hpp; the general
