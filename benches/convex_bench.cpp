@@ -16,7 +16,10 @@
 //                within 1e-9 of the size of the least (two directions can tie); its floor is about
 //                1e-8 rad where f is smooth at its minimum (f is quadratic there, resolved to
 //                rounding), below where it has a kink (polytopes)
-// Errors are relative to the larger shape's size (shape_size). FCL is set up as its users do:
+// Errors are relative to the larger shape's size (shape_size). Timing: each query's libraries run
+// side by side in short blocks, taking turns (the first of each round alternating too), and a row
+// gives the median block rate (side_by_side_rates); the answers and errors come from an untimed pass.
+// FCL is set up as its users do:
 // fcl::Sphere / Capsule / Cylinder / Cone / Box / Convex, fcl::collide and fcl::distance on
 // CollisionGeometry + Transform3 with default requests (its default narrow-phase solver, the libccd
 // one: GST_LIBCCD), contacts requested for penetration (CollisionRequest(1, true)) and nearest
@@ -196,17 +199,38 @@ double angle_to(const V3& n, const std::vector<V3>& refs) {
   return best;
 }
 
-/// Runs body(i) over the poses repeatedly for at least min_time seconds; queries per second.
-double rate(std::size_t n, double min_time, const std::function<void(std::size_t)>& body) {
-  std::size_t count = 0;
-  const auto t0 = Clock::now();
-  double t = 0;
-  do {
-    for (std::size_t i = 0; i < n; ++i) body(i);
-    count += n;
-    t = seconds_since(t0);
-  } while (t < min_time);
-  return double(count) / t;
+/// The libraries' bodies timed side by side (body(i) runs one query on pose i): short blocks of
+/// each in turn, a block being whole passes over the n poses for at least min_time / kBlocks
+/// seconds (at least one pass), the library that opens each round rotating (impact, FCL; FCL,
+/// impact; ...), until every library has run for at least min_time seconds (one block each when
+/// min_time is 0). Returns each library's median block rate, in queries per second. Load that
+/// drifts during a row (other work on the machine) then moves every library's blocks alike,
+/// where timing one library's queries after the other's moved their ratio by up to 40 %.
+constexpr int kBlocks = 15;
+std::vector<double> side_by_side_rates(std::size_t n, double min_time, const std::vector<std::function<void(std::size_t)>>& bodies) {
+  const std::size_t k = bodies.size();
+  std::vector<std::vector<double>> block_rates(k);
+  std::vector<double> total(k, 0.0);
+  const double block_time = min_time / kBlocks;
+  for (std::size_t round = 0;; ++round) {
+    for (std::size_t j = 0; j < k; ++j) {
+      const std::size_t lib = (round + j) % k;
+      std::size_t count = 0;
+      const auto t0 = Clock::now();
+      double t = 0;
+      do {
+        for (std::size_t i = 0; i < n; ++i) bodies[lib](i);
+        count += n;
+        t = seconds_since(t0);
+      } while (t < block_time);
+      total[lib] += t;
+      block_rates[lib].push_back(double(count) / t);
+    }
+    if (*std::min_element(total.begin(), total.end()) >= min_time) break;
+  }
+  std::vector<double> rates;
+  for (const auto& r : block_rates) rates.push_back(bench::summarize(r).median);
+  return rates;
 }
 
 struct Errors {
@@ -278,9 +302,11 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
   // the normals of each library's penetrations (valid where set), for the angle column
   std::vector<V3> impact_normal(n, V3::Zero()), fcl_normal(n, V3::Zero());
   std::size_t impact_row = 0, fcl_row = 0;
-  // impact
+  // the error passes (untimed), impact's then FCL's; then the three queries timed side by side
+  std::vector<std::function<void(std::size_t)>> boolean_bodies, distance_bodies, penetration_bodies;
+  Errors ieb, ied, iep;
   {
-    Errors eb, ed, ep;
+    Errors &eb = ieb, &ed = ied, &ep = iep;
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [pa, pb] = poses[i];
       const bool hit = bench_impact_boolean(a, pa, b, pb);
@@ -298,21 +324,19 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
         impact_normal[i] = c.normal;
       }
     }
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_impact_boolean(a, poses[i].first, b, poses[i].second); });
-    const double qd =
-        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_impact_distance(a, poses[i].first, b, poses[i].second).distance; });
-    const double qp = rate(n, min_time, [&](std::size_t i) {
-      g_sink = g_sink + bench_impact_penetration(a, poses[i].first, b, poses[i].second).depth;
-    });
-    add("boolean", "impact", qb, eb);
-    add("distance", "impact", qd, ed);
-    impact_row = rows.size();
-    add("penetration", "impact", qp, ep);
+    boolean_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + bench_impact_boolean(a, poses[i].first, b, poses[i].second); });
+    distance_bodies.emplace_back(
+        [&](std::size_t i) { g_sink = g_sink + bench_impact_distance(a, poses[i].first, b, poses[i].second).distance; });
+    penetration_bodies.emplace_back(
+        [&](std::size_t i) { g_sink = g_sink + bench_impact_penetration(a, poses[i].first, b, poses[i].second).depth; });
   }
 #ifdef IMPACT_HAVE_FCL
+  const test::FclShapePair fcl{test::to_fcl_shape(a), test::to_fcl_shape(b)};
+  Errors feb, fed, fep;
+  V3 fcl_wa, fcl_wb, fcl_normal_sink, fcl_point_sink;
+  double fcl_depth_sink = 0;
   {
-    const test::FclShapePair fcl{test::to_fcl_shape(a), test::to_fcl_shape(b)};
-    Errors eb, ed, ep;
+    Errors &eb = feb, &ed = fed, &ep = fep;
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [pa, pb] = poses[i];
       const bool hit = bench_fcl_boolean(fcl, pa, pb);
@@ -333,20 +357,26 @@ void run_pair(const std::string& name, const A& a, const B& b, int n_poses, doub
         fcl_normal[i] = normal;
       }
     }
-    V3 wa, wb;
-    double depth;
-    V3 normal, point;
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_fcl_boolean(fcl, poses[i].first, poses[i].second); });
-    const double qd =
-        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + bench_fcl_distance(fcl, poses[i].first, poses[i].second, &wa, &wb); });
-    const double qp = rate(n, min_time, [&](std::size_t i) {
-      g_sink = g_sink + bench_fcl_penetration(fcl, poses[i].first, poses[i].second, depth, normal, point);
+    boolean_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + bench_fcl_boolean(fcl, poses[i].first, poses[i].second); });
+    distance_bodies.emplace_back(
+        [&](std::size_t i) { g_sink = g_sink + bench_fcl_distance(fcl, poses[i].first, poses[i].second, &fcl_wa, &fcl_wb); });
+    penetration_bodies.emplace_back([&](std::size_t i) {
+      g_sink = g_sink + bench_fcl_penetration(fcl, poses[i].first, poses[i].second, fcl_depth_sink, fcl_normal_sink, fcl_point_sink);
     });
-    add("boolean", "fcl", qb, eb);
-    add("distance", "fcl", qd, ed);
-    fcl_row = rows.size();
-    add("penetration", "fcl", qp, ep);
   }
+#endif
+  const std::vector<double> qb = side_by_side_rates(n, min_time, boolean_bodies);
+  const std::vector<double> qd = side_by_side_rates(n, min_time, distance_bodies);
+  const std::vector<double> qp = side_by_side_rates(n, min_time, penetration_bodies);
+  add("boolean", "impact", qb[0], ieb);
+  add("distance", "impact", qd[0], ied);
+  impact_row = rows.size();
+  add("penetration", "impact", qp[0], iep);
+#ifdef IMPACT_HAVE_FCL
+  add("boolean", "fcl", qb[1], feb);
+  add("distance", "fcl", qd[1], fed);
+  fcl_row = rows.size();
+  add("penetration", "fcl", qp[1], fep);
 #endif
   // the normal angle against the referee, on the poses the oracle calls intersecting
   Errors ai, af;
@@ -422,8 +452,14 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
   const auto add = [&](const char* query, const char* lib, double qps, const Errors& e) {
     rows.push_back(make_row(name, query, lib, qps, e, size));
   };
+  // the error passes (untimed), impact's then FCL's; then each query timed side by side (the
+  // contacts: impact's default, impact's fast_contacts and FCL's in turn)
+  std::vector<std::function<void(std::size_t)>> boolean_bodies, distance_bodies, contact_bodies;
+  Errors ieb, ied, iec;
+  MeshConvexOptions<double> fast;
+  fast.fast_contacts = true;
   {
-    Errors eb, ed, ec;
+    Errors &eb = ieb, &ed = ied, &ec = iec;
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [pm, ps] = poses[i];
       const bool hit = mesh_convex_collides(tree, pm, s, ps);
@@ -438,39 +474,34 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
       }
       if (ref[i].separated && !d.intersecting) ed.add(std::abs(d.distance - ref[i].distance));
     }
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + mesh_convex_collides(tree, poses[i].first, s, poses[i].second); });
-    const double qd =
-        rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + mesh_convex_distance(tree, poses[i].first, s, poses[i].second).distance; });
-    const double qc = rate(n, min_time, [&](std::size_t i) {
+    boolean_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + mesh_convex_collides(tree, poses[i].first, s, poses[i].second); });
+    distance_bodies.emplace_back(
+        [&](std::size_t i) { g_sink = g_sink + mesh_convex_distance(tree, poses[i].first, s, poses[i].second).distance; });
+    contact_bodies.emplace_back([&](std::size_t i) {
       g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second).contacts.size());
     });
-    MeshConvexOptions<double> fast;
-    fast.fast_contacts = true;
-    const double qf = rate(n, min_time, [&](std::size_t i) {
+    contact_bodies.emplace_back([&](std::size_t i) {
       g_sink = g_sink + double(mesh_convex_contacts(tree, poses[i].first, s, poses[i].second, fast).contacts.size());
     });
-    add("boolean", "impact", qb, eb);
-    add("distance", "impact", qd, ed);
-    add("contacts", "impact", qc, ec);
-    add("contacts-mpr", "impact", qf, Errors{});
   }
 #ifdef IMPACT_HAVE_FCL
+  const auto model = test::make_fcl_model<fcl::OBBRSSd>(m);
+  const auto shape = test::to_fcl_shape(s);
+  const auto collide = [&](std::size_t i, std::size_t max_contacts, bool contacts) {
+    fcl::CollisionRequestd req(max_contacts, contacts);
+    fcl::CollisionResultd res;
+    fcl::collide(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
+    return contacts ? res.numContacts() : std::size_t(res.isCollision());
+  };
+  const auto distance = [&](std::size_t i) {
+    fcl::DistanceRequestd req;
+    fcl::DistanceResultd res;
+    fcl::distance(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
+    return res.min_distance;
+  };
+  Errors feb, fed, fec;
   {
-    const auto model = test::make_fcl_model<fcl::OBBRSSd>(m);
-    const auto shape = test::to_fcl_shape(s);
-    const auto collide = [&](std::size_t i, std::size_t max_contacts, bool contacts) {
-      fcl::CollisionRequestd req(max_contacts, contacts);
-      fcl::CollisionResultd res;
-      fcl::collide(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
-      return contacts ? res.numContacts() : std::size_t(res.isCollision());
-    };
-    const auto distance = [&](std::size_t i) {
-      fcl::DistanceRequestd req;
-      fcl::DistanceResultd res;
-      fcl::distance(model.get(), test::to_fcl(poses[i].first), shape.get(), test::to_fcl(poses[i].second), req, res);
-      return res.min_distance;
-    };
-    Errors eb, ed, ec;
+    Errors &eb = feb, &ed = fed, &ec = fec;
     for (std::size_t i = 0; i < n; ++i) {
       const bool hit = collide(i, 1, false) != 0;
       const double d = distance(i);
@@ -484,13 +515,22 @@ void run_mesh(const std::string& name, const TriangleMesh<double>& m, const Shap
       }
       if (ref[i].separated && d > 0) ed.add(std::abs(d - ref[i].distance));
     }
-    const double qb = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + double(collide(i, 1, false)); });
-    const double qd = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + distance(i); });
-    const double qc = rate(n, min_time, [&](std::size_t i) { g_sink = g_sink + double(collide(i, 100000, true)); });
-    add("boolean", "fcl", qb, eb);
-    add("distance", "fcl", qd, ed);
-    add("contacts", "fcl", qc, ec);
+    boolean_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + double(collide(i, 1, false)); });
+    distance_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + distance(i); });
+    contact_bodies.emplace_back([&](std::size_t i) { g_sink = g_sink + double(collide(i, 100000, true)); });
   }
+#endif
+  const std::vector<double> qb = side_by_side_rates(n, min_time, boolean_bodies);
+  const std::vector<double> qd = side_by_side_rates(n, min_time, distance_bodies);
+  const std::vector<double> qc = side_by_side_rates(n, min_time, contact_bodies);
+  add("boolean", "impact", qb[0], ieb);
+  add("distance", "impact", qd[0], ied);
+  add("contacts", "impact", qc[0], iec);
+  add("contacts-mpr", "impact", qc[1], Errors{});
+#ifdef IMPACT_HAVE_FCL
+  add("boolean", "fcl", qb[1], feb);
+  add("distance", "fcl", qd[1], fed);
+  add("contacts", "fcl", qc[2], fec);
 #endif
 }
 

@@ -146,10 +146,12 @@ inline constexpr int kGjkLevelSteps = 8;
 /// `stop_within_margin` false it stops early only on a lower bound beyond the margin (cleared,
 /// distance > margin) and otherwise converges to the tolerance as without a margin: the exact
 /// distance where it is needed, the cheap answer where it is not (a round shape's core farther
-/// than its radius).
+/// than its radius). `plane`, when given, receives the direction v of GJK's best lower bound of the
+/// distance (the separating plane {x : v . x = lower |v|} of the Minkowski difference A - B; the
+/// unit normal from A towards B is -v / |v|), zero when no plane was found.
 template <class S, class SupportA, class SupportB>
 ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& support_b, Vec3<S> first, S tolerance,
-                               int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
+                               int max_iterations, S margin = S(-1), bool stop_within_margin = true, Vec3<S>* plane = nullptr) {
   ConvexDistance<S> out;
   if (!(first.squaredNorm() > S(0))) first = Vec3<S>::UnitX();
   SimplexPoint<S> s[4];
@@ -163,6 +165,7 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   const S tol2 = tolerance * tolerance;
   bool converged = false;
   S lower = S(0);       // the best lower bound of the distance so far
+  Vec3<S> lower_v = Vec3<S>::Zero();  // the v that gave it
   int level_steps = 0;  // steps kept without coming nearer (gjk_step's Level)
   GjkSavedSimplex<S> level_saved;  // the nearest simplex a Level step left
   bool stalled = false;            // rounding stopped the solver with its gap still wide
@@ -188,7 +191,10 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
       break;
     }
     const S len = std::sqrt(vv);
-    if (vw > S(0)) lower = std::max(lower, vw / len);
+    if (vw > S(0) && vw / len > lower) {
+      lower = vw / len;
+      lower_v = v;
+    }
     if (len - lower <= tolerance) {
       converged = true;
       break;
@@ -232,10 +238,12 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
       using W = std::conditional_t<std::is_same_v<S, float>, double, long double>;
       const auto wide_a = [&](const Vec3<W>& d) { return Vec3<W>(support_a(Vec3<S>(d.template cast<S>())).template cast<W>()); };
       const auto wide_b = [&](const Vec3<W>& d) { return Vec3<W>(support_b(Vec3<S>(d.template cast<S>())).template cast<W>()); };
+      Vec3<W> wide_plane = Vec3<W>::Zero();
       const ConvexDistance<W> w = gjk_distance<W>(wide_a, wide_b, Vec3<W>(v.template cast<W>()), W(tolerance),
-                                                  max_iterations - out.iterations, W(margin), stop_within_margin);
+                                                  max_iterations - out.iterations, W(margin), stop_within_margin, &wide_plane);
       out.iterations += w.iterations;  // counted whether or not it decides
       if (!w.limit_reached) {
+        if (plane) *plane = wide_plane.squaredNorm() > W(0) ? Vec3<S>(wide_plane.template cast<S>()) : lower_v;
         out.intersecting = w.intersecting;
         out.distance = S(w.distance);
         out.point_a = w.point_a.template cast<S>();
@@ -267,6 +275,7 @@ ConvexDistance<S> gjk_distance(const SupportA& support_a, const SupportB& suppor
   out.point_a = pa;
   out.point_b = pb;
   out.distance = out.intersecting ? S(0) : v.norm();
+  if (plane) *plane = lower_v;
   return out;
 }
 

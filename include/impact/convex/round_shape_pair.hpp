@@ -26,12 +26,52 @@ namespace detail {
 /// when the segment stays clear of the cylinder (GJK otherwise).
 template <class S, class C, class B>
 ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
-                                int max_iterations, S margin = S(-1), bool stop_within_margin = true) {
+                                int max_iterations, S margin = S(-1), bool stop_within_margin = true, Vec3<S>* plane = nullptr) {
   if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
     ConvexDistance<S> d;
-    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) return d;
+    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) {
+      if (plane) *plane = Vec3<S>::Zero();
+      return d;
+    }
   }
-  return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin);
+  return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin, plane);
+}
+
+/// The contact of round shape a (core + radius r) with b whose core is apart from b (core_distance
+/// d, not intersecting, d.distance in (0, r]), along the better of two normals: the witnesses'
+/// direction and GJK's best separating plane's (`plane`, zero if none). The depth is the overlap
+/// along it (settled: an upper bound of the true depth), and depth_gap its distance to
+/// r - d.distance, a lower bound (d.distance is an upper bound of the core's distance, a point of
+/// the Minkowski difference). Why two normals: GJK's distance converges to its tolerance, its
+/// witnesses' direction only to about the square root of it, and where the other shape has a kink
+/// near the normal (a cone's apex and rim) the overlap along that direction stood up to 1.6e-9 of
+/// the size above the depth, with a depth_gap of 0 (docs/convex-notes.md, note 30); along the
+/// plane's normal the overlap is r minus GJK's lower bound, within its tolerance of the depth. A
+/// bound that stops GJK early leaves the two ends far apart, and the gap says so (bounds 1-4: the
+/// overlap along the first directions, up to twice the true depth).
+template <class S, class R, class B>
+ConvexContact<S> round_contact_apart(const R& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const ConvexDistance<S>& d,
+                                     const Vec3<S>& plane, S r) {
+  ConvexContact<S> c;
+  c.intersecting = true;
+  // the witnesses' difference, normalised: GJK's distance and the witnesses' distance differ by
+  // rounding (fuzzing: by 1.4e-3 of the distance in float, and the overlap along the unnormalised
+  // normal was that much too deep)
+  const Vec3<S> gap = d.point_b - d.point_a;
+  const S len = gap.norm();
+  c.normal = len > S(0) ? Vec3<S>(gap / len) : Vec3<S>(Vec3<S>::UnitZ());
+  c.depth = r - d.distance;
+  c.point = (d.point_a + r * c.normal + d.point_b) / S(2);
+  settle_contact(a, pa, b, pb, c);
+  const S plane_len = plane.norm();
+  if (plane_len > S(0)) {
+    ConvexContact<S> p = c;
+    p.normal = -plane / plane_len;
+    settle_contact(a, pa, b, pb, p);
+    if (p.depth < c.depth) c = p;
+  }
+  c.depth_gap = std::max(c.depth - std::max(r - d.distance, S(0)), S(0));
+  return c;
 }
 
 /// The part of capsule a (at pa) that decides its penetration with a shape b whose ball (centre cb
@@ -115,28 +155,18 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
   const S r = round_radius(a);
   // the radius as margin, stopping only when the core is farther than it (no contact: the common
   // case, decided as cheaply as the boolean); else converged as without a margin
-  const ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations, r, false);
+  Vec3<S> plane = Vec3<S>::Zero();
+  const ConvexDistance<S> d = core_distance(core, pa, b, pb, tol, o.max_iterations, r, false, &plane);
   if (!d.intersecting && d.distance > tol) {
-    ConvexContact<S> c;
+    if (d.distance > r) {
+      ConvexContact<S> c;
+      c.iterations = d.iterations;
+      c.limit_reached = d.limit_reached;
+      return c;
+    }
+    ConvexContact<S> c = round_contact_apart(a, pa, b, pb, d, plane, r);
     c.iterations = d.iterations;
     c.limit_reached = d.limit_reached;
-    if (d.distance > r) return c;
-    c.intersecting = true;
-    // the witnesses' difference, normalised: GJK's distance and the witnesses' distance differ by
-    // rounding (fuzzing: by 1.4e-3 of the distance in float, and the overlap along the unnormalised
-    // normal was that much too deep)
-    const Vec3<S> gap = d.point_b - d.point_a;
-    const S len = gap.norm();
-    c.normal = len > S(0) ? Vec3<S>(gap / len) : Vec3<S>(Vec3<S>::UnitZ());
-    c.depth = r - d.distance;
-    c.point = (d.point_a + r * c.normal + d.point_b) / S(2);
-    settle_contact(a, pa, b, pb, c);
-    // GJK's distance is an upper bound of the core's (a point of the Minkowski difference), so
-    // r - d.distance is a lower bound of the depth (r + the core's depth when the core meets b);
-    // the settled depth, the overlap along the normal, is an upper bound. A bound that stopped GJK
-    // early leaves them far apart (bounds 1-4: the overlap along the first directions, up to twice
-    // the true depth, had been given a gap of 0).
-    if (d.limit_reached) c.depth_gap = std::max(c.depth - std::max(r - d.distance, S(0)), S(0));
     if (flip) c.normal = -c.normal;
     return c;
   }
