@@ -1040,6 +1040,33 @@ TEST(ConvexQuery, CapsuleConeNormalsAgainstReferee) {
   }
 }
 
+// Two cylinders whose contact EPA answered on its depth tolerance rather than its local
+// certificate: the impact-convex-bench's poses 41 and 1784 (its 2000, seed
+// std::hash("cylinder-cylinder") & 0xffff = 17419; a cap against a rim), where EPA's normal was
+// 4.6e-6 and 1.1e-5 rad from the referee's (f quadratic at its minimum: a depth within 1.3e-11 of
+// the size says little of the normal). The normal within 1e-6 rad of the referee's minimiser, the
+// depth within 1e-10 of the size of the least overlap and the bracket holding it.
+TEST(ConvexQuery, CylinderPairNormalsAgainstReferee) {
+  const auto& z = zoo();
+  const double scale = shape_size(z.cylinder);
+  const auto poses = convex_poses(2000, 0.9 * 2 * shape_size(z.cylinder), 17419);
+  for (const std::size_t i : {std::size_t(41), std::size_t(1784)}) {
+    const auto& [pa, pb] = poses[i];
+    const auto c = convex_penetration(z.cylinder, pa, z.cylinder, pb);
+    ASSERT_TRUE(c.intersecting) << "pose " << i;
+    EXPECT_FALSE(c.limit_reached) << "pose " << i;
+    const auto o = signed_distance_oracle(z.cylinder, pa, z.cylinder, pb);
+    V3 from_oracle = o.normal, from_answer = c.normal;
+    const double fo = refereed_overlap(z.cylinder, pa, z.cylinder, pb, from_oracle);
+    const double fa = refereed_overlap(z.cylinder, pa, z.cylinder, pb, from_answer);
+    const V3 referee = fo <= fa ? from_oracle : from_answer;
+    const double least = std::min({-o.value, fo, fa});
+    EXPECT_LT(std::atan2(c.normal.cross(referee).norm(), c.normal.dot(referee)), 1e-6) << "pose " << i;
+    EXPECT_LE(c.depth, least + 1e-10 * scale) << "pose " << i;
+    EXPECT_LE(c.depth - c.depth_gap, least + 1e-13 * scale) << "pose " << i;
+  }
+}
+
 // A capsule's segment against a cone (convex/segment_cone.hpp), as SegmentCylinderMatchesGjk:
 // wherever it answers, the distance agrees with GJK on the core within the tolerance, its points
 // lie on the segment and on the cone's boundary at that distance, the direction it hands out is
