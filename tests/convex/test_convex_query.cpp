@@ -504,6 +504,52 @@ TEST(ConvexQuery, EpaClosestFaceScan) {
   }
 }
 
+// EPA's faces keep their normal unnormalised and, as key, the signed square of their distance
+// from the origin (one division a face, the square root only for the faces EPA expands): against
+// a long-double plane through each triangle, key_distance(key) is the signed distance and
+// unit_normal the outward unit normal, for faces on both sides of the origin; a collinear triple
+// is degenerate (-2 - id), float and double.
+template <class S>
+void epa_face_keys(double tol) {
+  using L = long double;
+  test::Rng rng(sizeof(S) == 4 ? 92 : 93);
+  auto& P = detail::epa_scratch<S>();
+  int checked_negative = 0, checked_positive = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    P.nv = P.nf = P.nfree = 0;
+    const S scale = S(std::pow(2.0, double(int(rng.index(41))) - 20.0));  // 2^-20 .. 2^20
+    for (int i = 0; i < 3; ++i) P.vtx[i].w = (double(scale) * rng.vec(-1, 1)).template cast<S>();
+    const int id = P.make_face(0, 1, 2);
+    ASSERT_GE(id, 0);
+    Eigen::Matrix<L, 3, 1> a = P.vtx[0].w.template cast<L>(), b = P.vtx[1].w.template cast<L>(), c = P.vtx[2].w.template cast<L>();
+    const Eigen::Matrix<L, 3, 1> m = (b - a).cross(c - a);
+    const L len = m.norm();
+    const L d = m.dot(a) / len;  // the signed distance of the plane from the origin
+    const L reach = std::max({a.norm(), b.norm(), c.norm()});
+    if (len < L(0.05) * reach * reach) continue;  // slivers: their planes are rounding
+    const S got = detail::EpaPolytope<S>::key_distance(P.key[id]);
+    ASSERT_LE(std::abs(L(got) - d), L(tol) * reach) << "trial " << trial;
+    const Vec3<S> n = P.unit_normal(id);
+    ASSERT_LE((n.template cast<L>() - m / len).norm(), L(tol)) << "trial " << trial;
+    const Vec3<S> centroid = (P.vtx[0].w + P.vtx[1].w + P.vtx[2].w) / S(3);
+    ASSERT_TRUE(P.visible(id, Vec3<S>(centroid + scale * n))) << "trial " << trial;
+    ASSERT_FALSE(P.visible(id, Vec3<S>(centroid - scale * n))) << "trial " << trial;
+    (d < 0 ? checked_negative : checked_positive) += 1;
+  }
+  EXPECT_GE(checked_negative, 100);
+  EXPECT_GE(checked_positive, 100);
+  // a collinear triple is degenerate
+  P.nv = P.nf = P.nfree = 0;
+  P.vtx[0].w = Vec3<S>(1, 2, 3);
+  P.vtx[1].w = Vec3<S>(2, 4, 6);
+  P.vtx[2].w = Vec3<S>(3, 6, 9);
+  EXPECT_LE(P.make_face(0, 1, 2), -2);
+}
+TEST(ConvexQuery, EpaFaceKeysAreSignedSquaredDistances) {
+  epa_face_keys<double>(1e-13);
+  epa_face_keys<float>(2e-5);
+}
+
 // The Newton refinement (ConvexQueryOptions::newton_refinement, off by default) keeps the depth
 // within the tolerance where it is accepted, and hands back to EPA where it is not.
 TEST(ConvexQuery, NewtonRefinementKeepsTheDepth) {

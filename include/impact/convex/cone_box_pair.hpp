@@ -69,12 +69,16 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
     return n.dot(support(a, n)) - n.dot(t) + b.half.x() * std::abs(m.x()) + b.half.y() * std::abs(m.y()) + b.half.z() * std::abs(m.z());
   };
   CandidateBounds<S> k;
+  const S L = cone_slant(a);  // once for every inside_ball of the cone below
   // the box's faces: the cone's deepest point x across each, in the box's frame y (the overlap
-  // along the face's inward normal s R_i is e_i + s y_i)
+  // along the face's inward normal s R_i is e_i + s y_i); x is support(a, n) with |n_xy| taken
+  // once for both faces of an axis
   for (int i = 0; i < 3; ++i) {
+    const S r_xy = std::sqrt(R(0, i) * R(0, i) + R(1, i) * R(1, i));
     for (const S s : {S(1), S(-1)}) {
       const Vec3<S> n = s * R.col(i);
-      const Vec3<S> x = support(a, n);
+      const Vec3<S> x = a.half_length * n.z() >= a.radius * r_xy - a.half_length * n.z() ? Vec3<S>(S(0), S(0), a.half_length)
+                                                                                            : rim_support(a.radius, -a.half_length, n, r_xy);
       const Vec3<S> y = R.transpose() * (x - t);
       const InsideBall<S> ball = inside_ball(b, y);
       if (ball.rho > S(0)) k.offer(n, b.half[i] + s * y[i], x, ball.rho);
@@ -84,7 +88,7 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
   // the box's corners inside the cone, pushed out through its nearest side or base
   for (int v = 0; v < 8; ++v) {
     const Vec3<S> x = t + ((v & 1) ? hc[0] : Vec3<S>(-hc[0])) + ((v & 2) ? hc[1] : Vec3<S>(-hc[1])) + ((v & 4) ? hc[2] : Vec3<S>(-hc[2]));
-    const InsideBall<S> ball = inside_ball(a, x);
+    const InsideBall<S> ball = inside_ball(a, x, L);
     if (ball.rho > S(0)) {
       const Vec3<S> n = -ball.push;
       k.offer(n, overlap(n), x, ball.rho);
@@ -94,7 +98,7 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
   // an edge of the box across the cone's side: n the side normal orthogonal to the edge (2h u . e
   // = -r e_z, u the azimuth), the edge the box's deepest along -n, x its point at azimuth u
   // (box_edge_at_azimuth)
-  const S r = a.radius, h = a.half_length, len = std::sqrt(S(4) * h * h + r * r);
+  const S r = a.radius, h = a.half_length, len = L;
   for (int i = 0; i < 3; ++i) {
     const Vec3<S> e = R.col(i);
     const S m2 = e.x() * e.x() + e.y() * e.y(), c = -r * e.z() / (S(2) * h);
@@ -105,7 +109,7 @@ bool cone_box_contact(const Cone<S>& a, const Box<S>& b, const Mat3<S>& R, const
       const Vec3<S> n(S(2) * h * ux / len, S(2) * h * uy / len, r / len);
       Vec3<S> x;
       if (!box_edge_at_azimuth(R, t, hc, i, n, ux, uy, x)) continue;
-      const InsideBall<S> ball = inside_ball(a, x);
+      const InsideBall<S> ball = inside_ball(a, x, L);
       if (ball.rho > S(0)) k.offer(n, overlap(n), x, ball.rho);
     }
   }

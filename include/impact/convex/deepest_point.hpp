@@ -61,14 +61,17 @@ InsideBall<S> inside_ball(const Cylinder<S>& c, const Vec3<S>& x) {
 /// Cone: base disc of radius R at z = -h, apex (0, 0, h); its side's outward normal at azimuth u
 /// is (2h u + R z^) / L with L = sqrt(4h^2 + R^2), the side's tangent plane at x's azimuth the
 /// nearest one.
+/// `L` is the cone's slant factor sqrt(4h^2 + R^2) (cone_slant), which a caller testing many
+/// points computes once; a point below the base costs no square root.
 template <class S>
-InsideBall<S> inside_ball(const Cone<S>& c, const Vec3<S>& x) {
+InsideBall<S> inside_ball(const Cone<S>& c, const Vec3<S>& x, S L) {
   const S R = c.radius, h = c.half_length;
-  const S rho_xy = std::sqrt(x.x() * x.x() + x.y() * x.y());
-  const S L = std::sqrt(S(4) * h * h + R * R);
-  const S base = x.z() + h, side = (R * (h - x.z()) - S(2) * h * rho_xy) / L;
+  const S base = x.z() + h;
   InsideBall<S> b;
-  if (!(side >= S(0) && base >= S(0))) return b;
+  if (!(base >= S(0))) return b;
+  const S rho_xy = std::sqrt(x.x() * x.x() + x.y() * x.y());
+  const S side = (R * (h - x.z()) - S(2) * h * rho_xy) / L;
+  if (!(side >= S(0))) return b;
   if (base <= side) {
     b.rho = base;
     b.push = Vec3<S>::UnitZ();
@@ -78,6 +81,18 @@ InsideBall<S> inside_ball(const Cone<S>& c, const Vec3<S>& x) {
     b.push = Vec3<S>(-S(2) * h * ux / L, -S(2) * h * uy / L, -R / L);
   }
   return b;
+}
+
+/// The cone's slant factor sqrt(4h^2 + R^2) (its side's outward normal at azimuth u is
+/// (2h u + R z^) / L).
+template <class S>
+S cone_slant(const Cone<S>& c) {
+  return std::sqrt(S(4) * c.half_length * c.half_length + c.radius * c.radius);
+}
+
+template <class S>
+InsideBall<S> inside_ball(const Cone<S>& c, const Vec3<S>& x) {
+  return inside_ball(c, x, cone_slant(c));
 }
 
 /// Box: the nearest of its six faces (the first axis on ties).

@@ -99,8 +99,8 @@ struct EpaFace {
   int v[3];
   int adj[3];       // face across edge i (v[i] -> v[i+1])
   int adj_edge[3];  // that edge's index in the neighbour
-  Vec3<S> n;
-  S dist;
+  Vec3<S> n;        // outward normal, not normalised (EpaPolytope::unit_normal)
+  S nn;             // n . n
   bool alive;
 };
 
@@ -109,7 +109,10 @@ template <class S>
 struct EpaPolytope {
   SimplexPoint<S> vtx[kEpaMaxVertices];
   EpaFace<S> face[kEpaMaxFaces];
-  S key[kEpaMaxFaces];  // a face's distance while alive, +infinity once removed: the scan for the closest face reads only this
+  /// A face's key while alive: its signed distance d from the origin as d |d| (the same order as d,
+  /// without a square root; key_distance(key) is d), +infinity once removed: the scan for the
+  /// closest face reads only this
+  S key[kEpaMaxFaces];
   int nv = 0, nf = 0;
   int free_list[kEpaMaxFaces];
   int nfree = 0;
@@ -120,8 +123,16 @@ struct EpaPolytope {
   int dead[kEpaMaxFaces];
   int ndead = 0;
 
+  /// The signed distance of a face from its key (a square root: taken only for the faces EPA
+  /// chooses, not for every face it makes).
+  static S key_distance(S k) { return k < S(0) ? -std::sqrt(-k) : std::sqrt(k); }
+  /// A face's outward unit normal.
+  Vec3<S> unit_normal(int fi) const { return face[fi].n / std::sqrt(face[fi].nn); }
+
   /// A new face (a, b, c) counter-clockwise seen from outside: its id, -1 when full, -2 - id when
   /// degenerate. Written out in scalars (the Eigen expression executed about twice the instructions).
+  /// Its normal stays unnormalised and its key is the signed square of its distance: one division
+  /// per face, the square root only for the faces EPA expands (unit_normal, key_distance).
   int make_face(int a, int b, int c) {
     int id;
     if (nfree > 0) {
@@ -140,16 +151,16 @@ struct EpaPolytope {
     const S ux = pb.x() - pa.x(), uy = pb.y() - pa.y(), uz = pb.z() - pa.z();
     const S vx = pc.x() - pa.x(), vy = pc.y() - pa.y(), vz = pc.z() - pa.z();
     const S mx = uy * vz - uz * vy, my = uz * vx - ux * vz, mz = ux * vy - uy * vx;
-    const S len = std::sqrt(mx * mx + my * my + mz * mz);
-    if (!(len > S(0))) {  // degenerate
+    const S nn = mx * mx + my * my + mz * mz;
+    if (!(nn > S(0))) {  // degenerate
       key[id] = std::numeric_limits<S>::infinity();
       return -2 - id;
     }
-    const S inv = S(1) / len;
-    f.n = Vec3<S>(mx * inv, my * inv, mz * inv);
-    f.dist = f.n.x() * pa.x() + f.n.y() * pa.y() + f.n.z() * pa.z();
+    f.n = Vec3<S>(mx, my, mz);
+    f.nn = nn;
+    const S d = mx * pa.x() + my * pa.y() + mz * pa.z();  // the distance times |n|
     f.alive = true;
-    key[id] = f.dist;
+    key[id] = d / nn * std::abs(d);
     return id;
   }
 
@@ -361,17 +372,19 @@ int epa_face_outside_cap(const EpaPolytope<S>& P, int fi, S dmin, const LocalCer
   const S rho = cert.lower;
   if (dmin < rho * cert.cos_cap) return fi;  // the nearest face alone fails
   const S margin = S(64) * std::numeric_limits<S>::epsilon();
+  const S rho_key = rho * std::abs(rho);  // keys are signed squares of the distances
   int worst = -1;
-  S worst_d = std::numeric_limits<S>::infinity();
+  S worst_key = std::numeric_limits<S>::infinity();
   for (int i = 0; i < P.nf; ++i) {
-    const S d = P.key[i];
-    if (!(d < rho) || d >= worst_d) continue;  // removed faces are +infinity
-    const S ca = d / rho, cb = P.face[i].n.dot(cert.normal);
+    const S k = P.key[i];
+    if (!(k < rho_key) || k >= worst_key) continue;  // removed faces are +infinity
+    const S d = EpaPolytope<S>::key_distance(k);
+    const S ca = d / rho, cb = P.face[i].n.dot(cert.normal) / std::sqrt(P.face[i].nn);
     // cos(alpha + beta) >= cos(cap), alpha = acos(ca), beta = acos(cb), both below pi / 2
     const S sa = std::sqrt(std::max(S(1) - ca * ca, S(0))), sb = std::sqrt(std::max(S(1) - cb * cb, S(0)));
     if (ca > S(0) && cb > S(0) && ca * cb - sa * sb >= cert.cos_cap + margin) continue;
     worst = i;
-    worst_d = d;
+    worst_key = k;
   }
   return worst;
 }
@@ -499,12 +512,13 @@ EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const Support
   // capacity or a degenerate step: `limit` / `failed` say which; no progress possible counts as reached).
   const auto expand = [&](S stop_gap) -> bool {
     while (true) {
-      S dmin;
-      const int fi = detail::epa_closest_face(P.key, P.nf, dmin);
+      S kmin;
+      const int fi = detail::epa_closest_face(P.key, P.nf, kmin);
       if (fi < 0) {
         failed = true;
         return false;
       }
+      const S dmin = detail::EpaPolytope<S>::key_distance(kmin);
       lower = std::max(lower, dmin);
       if (upper - lower <= stop_gap) return true;
       int fx = fi;  // the face to expand
@@ -525,8 +539,8 @@ EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const Support
         limit = true;
         return false;
       }
-      const Vec3<S> n = P.face[fx].n;
-      const S dx = P.key[fx];
+      const Vec3<S> n = P.unit_normal(fx);
+      const S dx = fx == fi ? dmin : detail::EpaPolytope<S>::key_distance(P.key[fx]);
       const SimplexPoint<S> p = supp(n);
       const S up = n.dot(p.w);
       if (up < upper) {
@@ -537,7 +551,7 @@ EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const Support
         best_on_face = up - dx <= st.tolerance;
         if (best_on_face) {  // unless on a face of D: the face's point of the contact region (at the end)
           const detail::EpaFace<S>& f = P.face[fx];
-          best_foot = f.dist * f.n;
+          best_foot = dx * n;
           for (int i = 0; i < 3; ++i) best_face[i] = P.vtx[f.v[i]];
         }
       }
