@@ -1,15 +1,17 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// A round shape (sphere or capsule: a core plus a radius) against any convex shape, for the pairs
-/// without a closed form: the core's GJK distance minus the radius while the core stays clear
-/// (a capsule's segment against a cylinder by convex/segment_cylinder.hpp), the own EPA on the
-/// core plus the radius when the core touches; a capsule much longer than the other shape goes on
-/// as the part of it that decides (capsule_window). Needs the impact::convex target (libccd).
+/// without a closed form: the core's GJK distance minus the radius while the core stays clear (a
+/// capsule's segment against a cylinder or a cone by convex/segment_cylinder.hpp and
+/// convex/segment_cone.hpp), the own EPA on the core plus the radius when the core touches; a
+/// capsule much longer than the other shape goes on as the part of it that decides
+/// (capsule_window). Needs the impact::convex target (libccd).
 #pragma once
 
 #include "impact/convex/closed_form.hpp"
 #include "impact/convex/general_pair.hpp"
 #include "impact/convex/query_options.hpp"
+#include "impact/convex/segment_cone.hpp"
 #include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 
@@ -22,8 +24,9 @@ namespace impact {
 namespace detail {
 
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
-/// against a cylinder by the certified 1-D minimisation of convex/segment_cylinder.hpp instead
-/// when the segment stays clear of the cylinder (GJK otherwise).
+/// against a cylinder or a cone by the certified 1-D minimisation of convex/segment_cylinder.hpp
+/// and convex/segment_cone.hpp instead when the segment stays clear of it (GJK otherwise). `plane`
+/// as gjk_distance's (zero from the segment-cylinder search).
 template <class S, class C, class B>
 ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
                                 int max_iterations, S margin = S(-1), bool stop_within_margin = true, Vec3<S>* plane = nullptr) {
@@ -33,6 +36,24 @@ ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, cons
       if (plane) *plane = Vec3<S>::Zero();
       return d;
     }
+  }
+  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cone<S>>) {
+    ConvexDistance<S> d;
+    if (segment_cone_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
+    // declined (the segment meets the cone or touches it): GJK with what is left of the bound
+    const int spent = d.iterations;
+    if (spent >= max_iterations) {
+      ConvexDistance<S> none;  // undecided; the distance an upper bound
+      none.distance = std::numeric_limits<S>::infinity();
+      none.iterations = spent;
+      none.limit_reached = true;
+      if (plane) *plane = Vec3<S>::Zero();
+      return none;
+    }
+    ConvexDistance<S> g = gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations - spent, margin,
+                              stop_within_margin, plane);
+    g.iterations += spent;
+    return g;
   }
   return gjk(core, pa, core_interior(core), b, pb, interior_point(b), tolerance, max_iterations, margin, stop_within_margin, plane);
 }
