@@ -14,23 +14,30 @@
 /// a sliver triangle is a true face, never a fold). A point is dropped as inside only when it is
 /// certainly (by a rounding bound per face, exactly for slivers) within eps of the planes of the
 /// hull at that step (eps = options.relative_tolerance times the extent, the default 1000 machine
-/// epsilons); the hull then only grows, and on about 78,000 sets of random, near-duplicate
+/// epsilons) and, if it is above a plane at all, within eps of that face's triangle (near a sharp
+/// edge a point can lie in the planes around it yet beyond the edge's end); the hull then only
+/// grows, and on about 78,000 sets of random, near-duplicate
 /// (relative offsets 1e-12 to 1e-3) and near-collinear points (the tests and two drivers) every
 /// input point was within 2 eps of every triangle's plane (worst 1.8 eps; not a proven bound).
 /// The vertices are input points.
 /// Cost of the exactness: one filtered orient3d per visibility test and per eye, the exact stage
 /// only in near-degenerate cases (measured in docs/convex.md, "Hull builds"). Faces whose normals
-/// differ by less than options.merge_angle are merged into one polygon.
+/// differ by less than options.merge_angle are merged into one polygon; each polygon's offset is
+/// the hull's support value along its normal (a climb over the vertex graph), so every face plane
+/// is a supporting plane of the hull up to the rounding of a dot product, even where a sliver's
+/// normal is tilted (the pair tests take the offsets as the hull's extent along the normals).
+/// `tests/fuzz/fuzz_hull.cpp` checks this contract on float and double point sets.
 ///
 /// Degenerate input throws impact::InvalidInput (never a silent flat hull): fewer than 4 points,
 /// NaN or infinite coordinates, coordinates outside CoordinateRange, all points coincident,
-/// collinear or coplanar within eps (the message says which). Expected cost O(n log n), worst
+/// collinear or coplanar within eps or exactly (the message says which). Expected cost O(n log n), worst
 /// O(n^2) (n = point count).
 #pragma once
 
 #include "impact/convex/shapes.hpp"
 #include "impact/core/types.hpp"
 #include "impact/core/validate.hpp"
+#include "impact/narrow/closest_point.hpp"
 #include "impact/narrow/predicates.hpp"
 
 #include <algorithm>
@@ -374,7 +381,7 @@ class QuickHull {
         best = g;
       }
     }
-    if (best < 0) return;
+    if (best < 0) return keep_if_beyond(q, lo, hi);
     if (best_d <= faces_[best].err && !above(faces_[best], q)) {
       best = -1;
       best_d = -std::numeric_limits<S>::infinity();
@@ -386,9 +393,36 @@ class QuickHull {
           best = g;
         }
       }
-      if (best < 0) return;
+      if (best < 0) return keep_if_beyond(q, lo, hi);
     }
     faces_[best].outside.push_back(q);
+  }
+  /// Point q is below, on or within eps of the plane of every face in [lo, hi). It is dropped only
+  /// when it is also within eps of the hull: near a sharp edge a point can lie in or just above the
+  /// planes of the faces around it and still be far beyond them (on the edge's line, past its end:
+  /// a float set of 5 points left one 0.1 extents outside this way). Its distance to the hull is
+  /// its distance to the nearest triangle it is above, so it is kept, on the face it is farthest
+  /// above, unless a triangle it is exactly above is within eps of it (less that face's rounding
+  /// bound). It then becomes an eye of a later step. (An orphan is tested against the step's new
+  /// faces only: the nearest triangle may be an older one, so it may be kept where it could have
+  /// been dropped, a vertex more, never the other way round.)
+  void keep_if_beyond(int q, int lo, int hi) {
+    int keep = -1;
+    S keep_d = -std::numeric_limits<S>::infinity();
+    const Vec3<S> x = pt(q);
+    for (int g = lo; g < hi; ++g) {
+      const Face& f = faces_[static_cast<std::size_t>(g)];
+      if (!f.alive) continue;
+      const S dist = distance(f, q);
+      if (dist < -2 * f.err || !above(f, q)) continue;
+      const Triangle<S> tri(pt(f.v[0]), pt(f.v[1]), pt(f.v[2]));
+      if ((closest_point_on_triangle(x, tri).point - x).norm() <= f.drop_below) return;  // within eps of the hull
+      if (dist > keep_d) {
+        keep_d = dist;
+        keep = g;
+      }
+    }
+    if (keep >= 0) faces_[static_cast<std::size_t>(keep)].outside.push_back(q);
   }
 
   const Vertices<S>& p_;
@@ -462,6 +496,11 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     exact_copy = points.template cast<double>();
     exact = exact_copy.data();
   }
+  // The first tetrahedron must be solid exactly too: with a tolerance below the rounding of S the
+  // distance tests above can pass on points that are exactly coplanar (three distinct points and
+  // copies of them), where quickhull has no solid start.
+  if (detail::orient3d_double(exact + 3 * i0, exact + 3 * i1, exact + 3 * i2, exact + 3 * i3) == 0)
+    throw InvalidInput("convex_hull: all points are collinear or coplanar (within the rounding of the coordinates)");
   detail::QuickHull<S> qh(p, exact, eps, extent);
   const auto tris = qh.run(static_cast<int>(i0), static_cast<int>(i1), static_cast<int>(i2), static_cast<int>(i3));
 
@@ -485,11 +524,18 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
 
   // Merge adjacent triangles with (nearly) parallel normals into polygons (union–find over edges).
   const Eigen::Index nt = h.triangles.rows();
+  // Each triangle's area vector, in double across its two shorter edges (as quickhull's faces: a
+  // sliver's two long edges are nearly parallel, their cross product in float rounding noise).
+  std::vector<Eigen::Vector3d> area(static_cast<std::size_t>(nt));
   std::vector<Vec3<S>> tn(static_cast<std::size_t>(nt));
   for (Eigen::Index t = 0; t < nt; ++t) {
-    const Vec3<S> x = h.vertices.row(h.triangles(t, 0)).transpose(), y = h.vertices.row(h.triangles(t, 1)).transpose(),
-                  z = h.vertices.row(h.triangles(t, 2)).transpose();
-    tn[static_cast<std::size_t>(t)] = (y - x).cross(z - x).normalized();
+    const Eigen::Vector3d x = h.vertices.row(h.triangles(t, 0)).transpose().template cast<double>(),
+                          y = h.vertices.row(h.triangles(t, 1)).transpose().template cast<double>(),
+                          z = h.vertices.row(h.triangles(t, 2)).transpose().template cast<double>();
+    const Eigen::Vector3d xy = y - x, yz = z - y, zx = x - z;
+    const double lxy = xy.squaredNorm(), lyz = yz.squaredNorm(), lzx = zx.squaredNorm();
+    area[static_cast<std::size_t>(t)] = lxy >= lyz && lxy >= lzx ? yz.cross(zx) : (lyz >= lzx ? zx.cross(xy) : xy.cross(yz));
+    tn[static_cast<std::size_t>(t)] = area[static_cast<std::size_t>(t)].normalized().template cast<S>();
   }
   std::vector<int> parent(static_cast<std::size_t>(nt));
   std::iota(parent.begin(), parent.end(), 0);
@@ -509,28 +555,50 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
       if (tn[static_cast<std::size_t>(t)].dot(tn[static_cast<std::size_t>(it->second)]) >= cos_merge)
         parent[static_cast<std::size_t>(find(static_cast<int>(t)))] = find(it->second);
     }
+  const auto support_value = [&h](const Vec3<S>& dir, int v) {
+    const auto along = [&](int u) { return dir.dot(h.vertices.row(u).transpose()); };
+    S top = along(v);
+    if (h.neighbors.empty()) {
+      for (Eigen::Index u = 0; u < h.vertices.rows(); ++u) top = std::max(top, along(static_cast<int>(u)));
+      return top;
+    }
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (int k = h.neighbor_start[static_cast<std::size_t>(v)]; k < h.neighbor_start[static_cast<std::size_t>(v) + 1]; ++k) {
+        const int u = h.neighbors[static_cast<std::size_t>(k)];
+        const S x = along(u);
+        if (x > top) {
+          top = x;
+          v = u;
+          moved = true;
+        }
+      }
+    }
+    return top;
+  };
   std::unordered_map<int, int> group_face;
-  std::vector<Vec3<S>> normal_sum;
+  std::vector<Eigen::Vector3d> normal_sum;
   for (Eigen::Index t = 0; t < nt; ++t) {
     const int r = find(static_cast<int>(t));
     auto [it, fresh] = group_face.emplace(r, static_cast<int>(h.faces.size()));
     if (fresh) {
       h.faces.emplace_back();
-      normal_sum.push_back(Vec3<S>::Zero());
+      normal_sum.push_back(Eigen::Vector3d::Zero());
     }
     HullFace<S>& f = h.faces[static_cast<std::size_t>(it->second)];
-    const Vec3<S> x = h.vertices.row(h.triangles(t, 0)).transpose(), y = h.vertices.row(h.triangles(t, 1)).transpose(),
-                  z = h.vertices.row(h.triangles(t, 2)).transpose();
-    normal_sum[static_cast<std::size_t>(it->second)] += (y - x).cross(z - x);
+    normal_sum[static_cast<std::size_t>(it->second)] += area[static_cast<std::size_t>(t)];
     for (int k = 0; k < 3; ++k)
       if (std::find(f.vertices.begin(), f.vertices.end(), h.triangles(t, k)) == f.vertices.end()) f.vertices.push_back(h.triangles(t, k));
   }
   for (std::size_t i = 0; i < h.faces.size(); ++i) {
     HullFace<S>& f = h.faces[i];
-    f.normal = normal_sum[i].normalized();
     Vec3<S> c = Vec3<S>::Zero();
     for (int v : f.vertices) c += h.vertices.row(v).transpose();
     c /= S(f.vertices.size());
+    const double len = normal_sum[i].norm();
+    // (a zero or unrepresentable sum: a needle whose area vector rounds away; the direction from
+    // the interior centroid to the face's centre is outward on a solid hull)
+    f.normal = len > 0 && std::isfinite(len) ? Vec3<S>((normal_sum[i] / len).template cast<S>()) : Vec3<S>((c - h.centroid).normalized());
     // Counter-clockwise order about the normal.
     const Vec3<S> u = (Vec3<S>(h.vertices.row(f.vertices[0]).transpose()) - c).normalized();
     const Vec3<S> w = f.normal.cross(u);
@@ -541,9 +609,13 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     }
     std::sort(ang.begin(), ang.end());
     for (std::size_t k = 0; k < ang.size(); ++k) f.vertices[k] = ang[k].second;
-    S off = -std::numeric_limits<S>::infinity();
-    for (int v : f.vertices) off = std::max(off, f.normal.dot(h.vertices.row(v).transpose()));
-    f.offset = off;
+    // The offset is the hull's support value along the normal, not only the face's own vertices'
+    // largest: the pair tests (separating axes, the particle colliders) take it as the hull's
+    // extent along the normal, and a sliver's normal can tilt away from the plane of the hull's
+    // other vertices by more than the tolerance. The hull is exactly convex, so the climb over
+    // its vertex graph from the face's first vertex (a few steps: the face's vertices are nearly
+    // the farthest already) ends at a farthest vertex; small hulls are scanned.
+    f.offset = support_value(f.normal, f.vertices.front());
   }
   const std::size_t nf = h.faces.size();
   h.face_planes.resize(4 * nf);
