@@ -562,9 +562,10 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
       for (Eigen::Index u = 0; u < h.vertices.rows(); ++u) top = std::max(top, along(static_cast<int>(u)));
       return top;
     }
-    for (bool moved = true; moved;) {
+    for (bool moved = true; moved;) {  // each round scans the neighbours of the vertex it starts at
       moved = false;
-      for (int k = h.neighbor_start[static_cast<std::size_t>(v)]; k < h.neighbor_start[static_cast<std::size_t>(v) + 1]; ++k) {
+      const int from = v;
+      for (int k = h.neighbor_start[static_cast<std::size_t>(from)], end = h.neighbor_start[static_cast<std::size_t>(from) + 1]; k < end; ++k) {
         const int u = h.neighbors[static_cast<std::size_t>(k)];
         const S x = along(u);
         if (x > top) {
