@@ -8,6 +8,7 @@
 // certified lower bound lies below the true depth, so a certificate that certifies a wrong (too
 // large) depth shows as depth - depth_gap above the oracle.
 #include "impact/convex/cone_box_pair.hpp"
+#include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/query.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/random.hpp"
@@ -98,6 +99,66 @@ TEST(ConeBoxPair, CertifiedDepthsAgainstTheOracle) {
   EXPECT_GT(face, IMPACT_TEST_SANITIZED ? 0 : 5);
   EXPECT_GT(body, IMPACT_TEST_SANITIZED ? 0 : 5);
   EXPECT_EQ(compared, certified);
+}
+
+// The local certificate on the body inside the cone along a side ruling (cone_box_side_certificate,
+// convex/cone_box_terms.hpp), at each box edge's side normal as the edge candidate takes it
+// (the side normal orthogonal to the edge): where it holds as the query accepts it (the overlap
+// along its normal within the tolerance of its lower bound), that bound is at most the oracle's
+// overlap (long double) at its normal and at every direction sampled in its cap (random ones
+// and ones along the two kink circles through it: the ruling's side normals and the directions
+// normal to the edge), so the certificate is a true bound there. Checked to fail: the body's disc
+// as large as the base (add_cone_side_body's radius rc instead of rc (1 - s1): a body outside
+// the cone).
+TEST(ConeBoxPair, SideCertificatesBoundTheOverlapOnTheirCaps) {
+  test::Rng rng(518);
+  int held = 0, sampled = 0;
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 40 : 300, 517)) {
+    const double scale = std::max(shape_size(c.cone), shape_size(c.box)), tol = 1e-10 * scale;
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    const auto overlap = [&](const Eigen::Vector3d& w) { return overlap_ld(c.cone, c.box, f.R, f.t, w.cast<LD>()); };
+    const double r = c.cone.radius, h = c.cone.half_length, L = std::sqrt(4 * h * h + r * r);
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d d = f.R.col(i);
+      const double m2 = d.x() * d.x() + d.y() * d.y(), k = -r * d.z() / (2 * h);
+      if (!(m2 > 1e-12) || k * k >= m2) continue;
+      for (const double sign : {1.0, -1.0}) {
+        const double along = k / m2, across = std::sqrt(m2 - k * k) / m2;
+        const double ux = along * d.x() - sign * across * d.y(), uy = along * d.y() + sign * across * d.x();
+        const Eigen::Vector3d n(2 * h * ux / L, 2 * h * uy / L, r / L);
+        const auto lc = detail::cone_box_side_certificate(c.cone, c.box, f.R, f.t, n);
+        if (!lc.ok || !(double(overlap(lc.normal)) - lc.lower <= tol)) continue;
+        ++held;
+        EXPECT_LE(lc.lower, double(overlap(lc.normal)) + 1e-12 * scale) << "bound above the overlap at its normal";
+        EXPECT_NEAR(lc.upper, double(overlap(lc.normal)), 1e-12 * scale);
+        // directions in the cap: n* + y, |y| <= tan(cap), y normal to n*
+        const Eigen::Vector3d e1 = detail::any_orthogonal(lc.normal), e2 = lc.normal.cross(e1);
+        const double T = std::tan(lc.cap);
+        std::vector<Eigen::Vector3d> dirs;
+        for (int j = 0; j < 24; ++j) {
+          const double a = rng.uniform(0, 2 * M_PI), rad = T * std::sqrt(rng.uniform(0, 1));
+          dirs.push_back((lc.normal + rad * (std::cos(a) * e1 + std::sin(a) * e2)).normalized());
+        }
+        // along the ruling's side normals (azimuth turned) and normal to the edge (about d)
+        const Eigen::Vector3d az(lc.normal.x(), lc.normal.y(), 0);
+        for (int j = 1; j <= 6; ++j) {
+          const double a = lc.cap * j / 6.0;
+          for (const double s : {a, -a}) {
+            const Eigen::Vector3d u = Eigen::AngleAxisd(s, Eigen::Vector3d::UnitZ()) * az.normalized();
+            dirs.push_back(Eigen::Vector3d(2 * h * u.x() / L, 2 * h * u.y() / L, r / L));
+            dirs.push_back(Eigen::AngleAxisd(s, d) * lc.normal);
+          }
+        }
+        for (const Eigen::Vector3d& w : dirs) {
+          if (!(w.dot(lc.normal) >= lc.cos_cap)) continue;
+          ++sampled;
+          EXPECT_LE(lc.lower, double(overlap(w)) + 1e-12 * scale) << "bound above the overlap in its cap";
+        }
+      }
+    }
+  }
+  EXPECT_GT(held, IMPACT_TEST_SANITIZED ? 3 : 40);
+  EXPECT_GT(sampled, 20 * held);
 }
 
 // The whole query, both argument orders, on every intersecting pose (candidates, EPA with the

@@ -8,7 +8,7 @@
 ///      certificate, a positive lower bound of the depth within the tolerance of the upper bound,
 ///      proves the intersection and the depth without GJK (settled);
 ///   3. GJK until its simplex encloses the origin or a plane separates the shapes (enclose_origin;
-///      cones run it before their candidates, which cost more than GJK on separated poses);
+///      cone–cone runs it before its candidates, which cost more than GJK on separated poses);
 ///   4. EPA from GJK's tetrahedron, seeded with the best candidate's normal and stopped early by a
 ///      local certificate on the pair's overlap terms (epa_from_simplex; convex/epa.hpp and
 ///      convex/local_certificate.hpp).
@@ -340,14 +340,15 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
 }
 
 /// A cone (a) and a box (b): planes normal to the line between the centres and to the box's axes
-/// (separating: no contact), GJK until it encloses the origin or separates them (no contact), then
-/// the certified candidates of convex/cone_box_pair.hpp (a face of the box against the cone's
-/// deepest point, a corner or an edge of the box through the cone's side or base), else
-/// EPA from GJK's tetrahedron, stopped early by the local certificate of
+/// (separating: no contact), the certified candidates of convex/cone_box_pair.hpp (a face of the
+/// box against the cone's deepest point, a corner or an edge of the box through the cone's side or
+/// base), else GJK from the best candidate's normal until it encloses the origin or separates them
+/// (no contact), and EPA from GJK's tetrahedron, stopped early by the local certificate of
 /// convex/local_certificate.hpp on the terms of convex/cone_box_terms.hpp (the cone's branch active
-/// at EPA's normal; none on a side ruling). A bound through one branch is exact only where that
-/// branch touches the contact, so a certificate is accepted when the true overlap at its normal is
-/// within the tolerance of its lower bound.
+/// at EPA's normal; near a side ruling, a body inside the cone along the ruling the box touches).
+/// A bound through one branch or body is exact only where it touches the contact, so a
+/// certificate is accepted when the true overlap at its normal is within the tolerance of its
+/// lower bound.
 template <class S>
 ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>& pa, const Box<S>& b, const RigidTransform<S>& pb,
                                       const ConvexQueryOptions<S>& o) {
@@ -361,14 +362,26 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   // a plane normal to one of the box's axes (about half of the separated poses left, without GJK)
   if (cone_box_apart_along_box_axes(a, b, f.R, f.t, std::numeric_limits<S>::epsilon() * S(16) * path.scale))
     return one_plane_apart<S>();
+  // the certified candidates of convex/cone_box_pair.hpp (a certified lower bound is positive, so
+  // it proves the intersection: no GJK), else GJK from the best candidate's normal, when one
+  // applied (its first support point, deep in D, is then a vertex of EPA's first polytope), and
+  // EPA from its tetrahedron. Before GJK: on the bench's 2000 poses, instructions per query
+  // 3,126 -> 2,928 (intersecting poses 13,172 -> 11,695; support calls 4,369 -> 3,631), the
+  // separated poses left to GJK (80) paying for the candidates
+  ConvexContact<S> cand;
+  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
   SimplexPoint<S> simplex[4];
   int its = 1;
-  ConvexContact<S> cand;
-  if (!path.enclose(simplex, its, 0, cand)) return cand;
-  // intersecting: the certified candidates of convex/cone_box_pair.hpp (after GJK, which decides
-  // the separated poses more cheaply than they would), else EPA from GJK's tetrahedron
-  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
+  ConvexContact<S> answer;
+  const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
+  if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
+    // near a side ruling (its branches within 0.02 of the size): the body inside the cone along
+    // the ruling the box touches (a box edge across the side: 90 of the bench's 239 EPA poses)
+    if (std::abs(cone_branch_gap(a, n)) <= S(0.02) * (a.half_length + a.radius)) {
+      const LocalCertificate<S> lc = cone_box_side_certificate(a, b, f.R, f.t, n);
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
+    }
     OverlapTerms<S> terms;
     if (cone_box_terms(a, b, f.R, f.t, n, terms)) {
       const LocalCertificate<S> lc = local_certificate(terms, n);

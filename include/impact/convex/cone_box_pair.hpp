@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// A certified shortcut for the penetration of an intersecting cone and box (convex/certified_pair.hpp
-/// runs it once GJK has enclosed the origin, before EPA), built as convex/cylinder_pair.hpp is: with f(n) = h_A(n) + h_B(-n), the
+/// runs it after the separating planes, before GJK and EPA), built as convex/cylinder_pair.hpp is: with f(n) = h_A(n) + h_B(-n), the
 /// overlap along a unit direction n (the depth is min_n f(n)), each candidate gives an upper bound
 /// f(n) at its direction and a lower bound rho from a point x of one shape inside the other, rho
 /// its distance to that shape's boundary (the ball of radius rho about x lies inside it, so every
@@ -26,6 +26,9 @@
 /// line between the centres leaves (3,450 -> 3,386). Where the candidates fail (239 of the 362
 /// intersecting poses go on to EPA), the commonest case is a box edge across the cone's side (90):
 /// the edge candidate's upper bound is the depth on all 90, but its ball is cut, by the base on 56.
+/// EPA then starts from that normal (its upper bound, and GJK's first direction) and stops by the
+/// local certificate on a body inside the cone along the ruling the edge crosses
+/// (cone_box_side_certificate, convex/cone_box_terms.hpp).
 ///
 /// Numerical contract: APPROXIMATE, as EPA's: depth is f(normal) computed from the supports (an
 /// upper bound up to rounding), depth - depth_gap a certified lower bound up to rounding.
