@@ -373,15 +373,22 @@ class QuickHull {
   void assign(int q, int lo, int hi) {
     int best = -1;
     S best_d = -std::numeric_limits<S>::infinity();
+    bool near = false;  // q within rounding of a plane or above it: keep_if_beyond may keep it
     for (int g = lo; g < hi; ++g) {
       if (!faces_[g].alive) continue;
       const S dist = distance(faces_[g], q);
+      near = near || dist >= -2 * faces_[g].err;
       if (dist > faces_[g].drop_below && dist > best_d) {
         best_d = dist;
         best = g;
       }
     }
-    if (best < 0) return keep_if_beyond(q, lo, hi);
+    // Below every plane by more than its rounding bound (most interior points): keep_if_beyond
+    // would skip every face, so it is not called to compute the same distances again.
+    if (best < 0) {
+      if (near) keep_if_beyond(q, lo, hi);
+      return;
+    }
     if (best_d <= faces_[best].err && !above(faces_[best], q)) {
       best = -1;
       best_d = -std::numeric_limits<S>::infinity();
