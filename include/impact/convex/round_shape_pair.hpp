@@ -25,22 +25,19 @@ namespace detail {
 
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
 /// against a cylinder or a cone by the certified 1-D minimisation of convex/segment_cylinder.hpp
-/// and convex/segment_cone.hpp instead when the segment stays clear of it (GJK otherwise). `plane`
-/// as gjk_distance's (zero from the segment-cylinder search).
+/// and convex/segment_cone.hpp instead when the segment stays clear of it (GJK otherwise, with what
+/// the search left of the bound). `plane` as gjk_distance's.
 template <class S, class C, class B>
 ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
                                 int max_iterations, S margin = S(-1), bool stop_within_margin = true, Vec3<S>* plane = nullptr) {
-  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
+  if constexpr (std::is_same_v<C, SegmentCore<S>> && (std::is_same_v<B, Cylinder<S>> || std::is_same_v<B, Cone<S>>)) {
     ConvexDistance<S> d;
-    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) {
-      if (plane) *plane = Vec3<S>::Zero();
-      return d;
+    if constexpr (std::is_same_v<B, Cylinder<S>>) {
+      if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
+    } else {
+      if (segment_cone_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
     }
-  }
-  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cone<S>>) {
-    ConvexDistance<S> d;
-    if (segment_cone_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
-    // declined (the segment meets the cone or touches it): GJK with what is left of the bound
+    // declined (the segment meets the solid or touches it): GJK with what is left of the bound
     const int spent = d.iterations;
     if (spent >= max_iterations) {
       ConvexDistance<S> none;  // undecided; the distance an upper bound
