@@ -48,7 +48,6 @@
 #include <numeric>
 #include <string>
 #include <type_traits>
-#include <unordered_map>
 #include <vector>
 
 namespace impact {
@@ -200,8 +199,13 @@ class QuickHull {
   /// row (n x 3), for the exact visibility test; eps: the tolerance; extent: the points' extent.
   QuickHull(const Vertices<S>& p, const double* x, S eps, S extent) : p_(p), x_(x), eps_(eps), extent_(extent) {}
 
-  /// Runs quickhull from the tetrahedron (i0, i1, i2, i3); returns the triangles (point indices).
-  std::vector<std::array<int, 3>> run(int i0, int i1, int i2, int i3) {
+  /// The hull's triangles (point indices, outward) and, for each, the triangle across its edge
+  /// k -> k + 1 (an index into the same list).
+  struct Triangles {
+    std::vector<std::array<int, 3>> vertices, across;
+  };
+  /// Runs quickhull from the tetrahedron (i0, i1, i2, i3).
+  Triangles run(int i0, int i1, int i2, int i3) {
     // Orient the tetrahedron so that its faces point outwards.
     if (orient3d_double(xp(i0), xp(i1), xp(i2), xp(i3)) > 0) std::swap(i1, i2);
     add_face(i0, i1, i2);
@@ -266,7 +270,10 @@ class QuickHull {
         for (int q : fg.outside)
           if (q != eye) orphans.push_back(q);
         fg.outside.clear();
-        fg.outside.shrink_to_fit();
+        // A short list's storage goes to a later face (on a sphere nearly every list is short
+        // and allocating them was a third of the build); a long one is freed.
+        if (fg.outside.capacity() <= kSpareCapacity) spare_.push_back(std::move(fg.outside));
+        std::vector<int>().swap(fg.outside);
       }
       const int first_new = static_cast<int>(faces_.size());
       // The cone from the horizon to the eye: new face (u, w, eye) borders the hidden face across
@@ -291,9 +298,21 @@ class QuickHull {
       }
       for (int q : orphans) assign(q, first_new, static_cast<int>(faces_.size()));
     }
-    std::vector<std::array<int, 3>> out;
+    Triangles out;
+    std::vector<int> index(faces_.size(), -1);
+    for (std::size_t f = 0; f < faces_.size(); ++f)
+      if (faces_[f].alive) {
+        index[f] = static_cast<int>(out.vertices.size());
+        out.vertices.push_back({faces_[f].v[0], faces_[f].v[1], faces_[f].v[2]});
+      }
+    out.across.reserve(out.vertices.size());
     for (const Face& f : faces_)
-      if (f.alive) out.push_back({f.v[0], f.v[1], f.v[2]});
+      if (f.alive) {
+        std::array<int, 3> a{-1, -1, -1};
+        for (int k = 0; k < 3; ++k)
+          if (f.nb[k] >= 0) a[static_cast<std::size_t>(k)] = index[static_cast<std::size_t>(f.nb[k])];
+        out.across.push_back(a);
+      }
     return out;
   }
 
@@ -324,6 +343,10 @@ class QuickHull {
   S distance(const Face& f, int q) const { return f.n.dot(pt(q)) - f.d; }
   int add_face(int a, int b, int c) {
     Face f;
+    if (!spare_.empty()) {
+      f.outside = std::move(spare_.back());
+      spare_.pop_back();
+    }
     f.v[0] = a;
     f.v[1] = b;
     f.v[2] = c;
@@ -373,15 +396,22 @@ class QuickHull {
   void assign(int q, int lo, int hi) {
     int best = -1;
     S best_d = -std::numeric_limits<S>::infinity();
+    bool near = false;  // q within rounding of a plane or above it: keep_if_beyond may keep it
     for (int g = lo; g < hi; ++g) {
       if (!faces_[g].alive) continue;
       const S dist = distance(faces_[g], q);
+      near = near || dist >= -2 * faces_[g].err;
       if (dist > faces_[g].drop_below && dist > best_d) {
         best_d = dist;
         best = g;
       }
     }
-    if (best < 0) return keep_if_beyond(q, lo, hi);
+    // Below every plane by more than its rounding bound (most interior points): keep_if_beyond
+    // would skip every face, so it is not called to compute the same distances again.
+    if (best < 0) {
+      if (near) keep_if_beyond(q, lo, hi);
+      return;
+    }
     if (best_d <= faces_[best].err && !above(faces_[best], q)) {
       best = -1;
       best_d = -std::numeric_limits<S>::infinity();
@@ -429,6 +459,8 @@ class QuickHull {
   const double* x_;
   S eps_, extent_;
   std::vector<Face> faces_;
+  static constexpr std::size_t kSpareCapacity = 64;
+  std::vector<std::vector<int>> spare_;  ///< emptied conflict lists' storage, reused by add_face
   std::vector<int> start_face_;  ///< per point: the newest cone face whose first vertex it is
 };
 
@@ -502,7 +534,10 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
   if (detail::orient3d_double(exact + 3 * i0, exact + 3 * i1, exact + 3 * i2, exact + 3 * i3) == 0)
     throw InvalidInput("convex_hull: all points are collinear or coplanar (within the rounding of the coordinates)");
   detail::QuickHull<S> qh(p, exact, eps, extent);
-  const auto tris = qh.run(static_cast<int>(i0), static_cast<int>(i1), static_cast<int>(i2), static_cast<int>(i3));
+  const auto run = qh.run(static_cast<int>(i0), static_cast<int>(i1), static_cast<int>(i2), static_cast<int>(i3));
+  const auto& tris = run.vertices;
+  // (the triangle across each edge, from quickhull's face links: a closed hull has one at each)
+  const auto across = [&run](Eigen::Index t, int k) { return run.across[static_cast<std::size_t>(t)][static_cast<std::size_t>(k)]; };
 
   // Keep only the vertices used, in input order.
   std::vector<int> remap(static_cast<std::size_t>(n), -1);
@@ -543,17 +578,13 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
     return x;
   };
-  std::unordered_map<std::uint64_t, int> edge_tri;
-  const auto key = [](int u, int v) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(u)) << 32) | static_cast<std::uint32_t>(v); };
-  for (Eigen::Index t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k) edge_tri[key(h.triangles(t, k), h.triangles(t, (k + 1) % 3))] = static_cast<int>(t);
   const S cos_merge = S(std::cos(options.merge_angle));
   for (Eigen::Index t = 0; t < nt; ++t)
     for (int k = 0; k < 3; ++k) {
-      const auto it = edge_tri.find(key(h.triangles(t, (k + 1) % 3), h.triangles(t, k)));
-      if (it == edge_tri.end()) continue;
-      if (tn[static_cast<std::size_t>(t)].dot(tn[static_cast<std::size_t>(it->second)]) >= cos_merge)
-        parent[static_cast<std::size_t>(find(static_cast<int>(t)))] = find(it->second);
+      const int o = across(t, k);
+      if (o < 0) continue;
+      if (tn[static_cast<std::size_t>(t)].dot(tn[static_cast<std::size_t>(o)]) >= cos_merge)
+        parent[static_cast<std::size_t>(find(static_cast<int>(t)))] = find(o);
     }
   const auto support_value = [&h](const Vec3<S>& dir, int v) {
     const auto along = [&](int u) { return dir.dot(h.vertices.row(u).transpose()); };
@@ -577,20 +608,22 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     }
     return top;
   };
-  std::unordered_map<int, int> group_face;
+  std::vector<int> group_face(static_cast<std::size_t>(nt), -1);  // per union-find root: its face
   std::vector<Eigen::Vector3d> normal_sum;
   for (Eigen::Index t = 0; t < nt; ++t) {
-    const int r = find(static_cast<int>(t));
-    auto [it, fresh] = group_face.emplace(r, static_cast<int>(h.faces.size()));
-    if (fresh) {
+    int& face = group_face[static_cast<std::size_t>(find(static_cast<int>(t)))];
+    if (face < 0) {
+      face = static_cast<int>(h.faces.size());
       h.faces.emplace_back();
+      h.faces.back().vertices.reserve(3);
       normal_sum.push_back(Eigen::Vector3d::Zero());
     }
-    HullFace<S>& f = h.faces[static_cast<std::size_t>(it->second)];
-    normal_sum[static_cast<std::size_t>(it->second)] += area[static_cast<std::size_t>(t)];
+    HullFace<S>& f = h.faces[static_cast<std::size_t>(face)];
+    normal_sum[static_cast<std::size_t>(face)] += area[static_cast<std::size_t>(t)];
     for (int k = 0; k < 3; ++k)
       if (std::find(f.vertices.begin(), f.vertices.end(), h.triangles(t, k)) == f.vertices.end()) f.vertices.push_back(h.triangles(t, k));
   }
+  std::vector<std::pair<S, int>> ang;
   for (std::size_t i = 0; i < h.faces.size(); ++i) {
     HullFace<S>& f = h.faces[i];
     Vec3<S> c = Vec3<S>::Zero();
@@ -600,16 +633,22 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
     // (a zero or unrepresentable sum: a needle whose area vector rounds away; the direction from
     // the interior centroid to the face's centre is outward on a solid hull)
     f.normal = len > 0 && std::isfinite(len) ? Vec3<S>((normal_sum[i] / len).template cast<S>()) : Vec3<S>((c - h.centroid).normalized());
-    // Counter-clockwise order about the normal.
-    const Vec3<S> u = (Vec3<S>(h.vertices.row(f.vertices[0]).transpose()) - c).normalized();
-    const Vec3<S> w = f.normal.cross(u);
-    std::vector<std::pair<S, int>> ang;
-    for (int v : f.vertices) {
-      const Vec3<S> x = h.vertices.row(v).transpose() - c;
-      ang.push_back({std::atan2(x.dot(w), x.dot(u)), v});
+    // Counter-clockwise order about the normal, from the vertex at the least angle in (-pi, pi]
+    // measured from the first one. A face of one triangle (three vertices) is in its outward
+    // order already: its last vertex is the one below the first.
+    if (f.vertices.size() == 3) {
+      std::rotate(f.vertices.begin(), f.vertices.begin() + 2, f.vertices.end());
+    } else {
+      const Vec3<S> u = (Vec3<S>(h.vertices.row(f.vertices[0]).transpose()) - c).normalized();
+      const Vec3<S> w = f.normal.cross(u);
+      ang.clear();
+      for (int v : f.vertices) {
+        const Vec3<S> x = h.vertices.row(v).transpose() - c;
+        ang.push_back({std::atan2(x.dot(w), x.dot(u)), v});
+      }
+      std::sort(ang.begin(), ang.end());
+      for (std::size_t k = 0; k < ang.size(); ++k) f.vertices[k] = ang[k].second;
     }
-    std::sort(ang.begin(), ang.end());
-    for (std::size_t k = 0; k < ang.size(); ++k) f.vertices[k] = ang[k].second;
     // The offset is the hull's support value along the normal, not only the face's own vertices'
     // largest: the pair tests (separating axes, the particle colliders) take it as the hull's
     // extent along the normal, and a sliver's normal can tilt away from the plane of the hull's
@@ -628,10 +667,9 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
   for (Eigen::Index t = 0; t < nt; ++t)
     for (int k = 0; k < 3; ++k) {
       const int u = h.triangles(t, k), v = h.triangles(t, (k + 1) % 3);
-      if (u > v) continue;
-      const auto it = edge_tri.find(key(v, u));
-      if (it == edge_tri.end()) continue;
-      const int f0 = group_face[find(static_cast<int>(t))], f1 = group_face[find(it->second)];
+      const int o = across(t, k);
+      if (u > v || o < 0) continue;
+      const int f0 = group_face[static_cast<std::size_t>(find(static_cast<int>(t)))], f1 = group_face[static_cast<std::size_t>(find(o))];
       if (f0 != f1) h.edges.push_back(HullEdge{u, v, f0, f1});
     }
   return h;
