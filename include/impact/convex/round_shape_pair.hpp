@@ -8,6 +8,7 @@
 /// (capsule_window). Needs the impact::convex target (libccd).
 #pragma once
 
+#include "impact/convex/certified_pair.hpp"
 #include "impact/convex/closed_form.hpp"
 #include "impact/convex/general_pair.hpp"
 #include "impact/convex/query_options.hpp"
@@ -25,22 +26,19 @@ namespace detail {
 
 /// GJK between a round shape's core (at pa) and shape b (at pb), as gjk(); a capsule's segment
 /// against a cylinder or a cone by the certified 1-D minimisation of convex/segment_cylinder.hpp
-/// and convex/segment_cone.hpp instead when the segment stays clear of it (GJK otherwise). `plane`
-/// as gjk_distance's (zero from the segment-cylinder search).
+/// and convex/segment_cone.hpp instead when the segment stays clear of it (GJK otherwise, with what
+/// the search left of the bound). `plane` as gjk_distance's.
 template <class S, class C, class B>
 ConvexDistance<S> core_distance(const C& core, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, S tolerance,
                                 int max_iterations, S margin = S(-1), bool stop_within_margin = true, Vec3<S>* plane = nullptr) {
-  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cylinder<S>>) {
+  if constexpr (std::is_same_v<C, SegmentCore<S>> && (std::is_same_v<B, Cylinder<S>> || std::is_same_v<B, Cone<S>>)) {
     ConvexDistance<S> d;
-    if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, d)) {
-      if (plane) *plane = Vec3<S>::Zero();
-      return d;
+    if constexpr (std::is_same_v<B, Cylinder<S>>) {
+      if (segment_cylinder_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
+    } else {
+      if (segment_cone_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
     }
-  }
-  if constexpr (std::is_same_v<C, SegmentCore<S>> && std::is_same_v<B, Cone<S>>) {
-    ConvexDistance<S> d;
-    if (segment_cone_distance(core.h, pa, b, pb, tolerance, margin, max_iterations, d, plane)) return d;
-    // declined (the segment meets the cone or touches it): GJK with what is left of the bound
+    // declined (the segment meets the solid or touches it): GJK with what is left of the bound
     const int spent = d.iterations;
     if (spent >= max_iterations) {
       ConvexDistance<S> none;  // undecided; the distance an upper bound
@@ -140,6 +138,19 @@ bool capsule_window(const Capsule<S>& a, const RigidTransform<S>& pa, const B& b
   return true;
 }
 
+/// The overlap of a capsule's segment (half length h along a's z axis, a's frame) and cylinder b
+/// placed by R, t there, as the terms of convex/local_certificate.hpp: the segment is a cylinder of
+/// radius 0. The capsule's overlap is this plus its radius, so the two share their minimiser.
+template <class S>
+OverlapTerms<S> segment_cylinder_terms(S h, const Cylinder<S>& b, const Mat3<S>& R, const Vec3<S>& t) {
+  OverlapTerms<S> f;
+  f.add(Vec3<S>::UnitZ(), h, false);
+  f.add(R.col(2), b.radius, true);
+  f.add(R.col(2), b.half_length, false);
+  f.linear = -t;
+  return f;
+}
+
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
 /// core touches b. `flip` swaps the roles back for the caller (b was the round one). A capsule
 /// much longer than b goes on as the part of it that decides (capsule_window).
@@ -225,6 +236,14 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
       } else {  // EPA's depth plus the radius is the overlap along its normal too: settled, the smaller
         c.depth += r;
         settle_certified_contact(a, pa, b, pb, c);
+        // EPA stops on its depth's tolerance; its normal is then within only about the square root
+        // of it of the minimiser where the overlap is smooth (a capsule's segment through a
+        // cylinder: up to 2.6e-5 rad, docs/convex-notes.md, note 32): Newton from EPA's normal on
+        // the overlap's closed form (refine_normal_locally), kept where it is no deeper
+        if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cylinder<S>>) {
+          const PairFrame<S> f(pa, pb);
+          refine_normal_locally(a, pa, b, pb, segment_cylinder_terms(a.half_length, b, f.R, f.t), c);
+        }
       }
       if (flip) c.normal = -c.normal;
       return c;

@@ -13,7 +13,8 @@
 ///
 /// Numerical contract: APPROXIMATE, as GJK's: the distance is an upper bound within `tolerance`
 /// of the true one (up to rounding). Declines (returns false, the caller runs GJK) when the segment
-/// meets the solid, when the distance is within the tolerance of 0, or after 64 evaluations.
+/// meets the solid, when the distance is within the tolerance of 0, or after 64 evaluations; the
+/// caller's bound on the evaluations is kept (ConvexQueryOptions::max_iterations: one budget).
 /// Thread safety: pure functions.
 #pragma once
 
@@ -110,10 +111,15 @@ SegmentSearch segment_solid_minimum(const Eval& eval, S tolerance, S stop_slope,
 
 /// The segment of half length h along a's z axis (pose pa) against cylinder c (pose pc): true and
 /// `out` set (distance, point_a on the segment, point_b on the cylinder, world; iterations counts
-/// the evaluations of f) when the segment stays more than `tolerance` from the cylinder.
+/// the evaluations of f) when the segment stays more than `tolerance` from the cylinder; `plane`
+/// (world) then receives the unit direction from the cylinder's closest point towards the
+/// segment's. `margin` and `max_evaluations` as segment_cone_distance's (convex/segment_cone.hpp):
+/// one budget with the caller's (ConvexQueryOptions::max_iterations); when it runs out (below 64)
+/// `out` holds the nearest point evaluated, an upper bound, with limit_reached set. Declined,
+/// out.iterations still counts the evaluations spent.
 template <class S>
-bool segment_cylinder_distance(S h, const RigidTransform<S>& pa, const Cylinder<S>& c, const RigidTransform<S>& pc, S tolerance,
-                               ConvexDistance<S>& out) {
+bool segment_cylinder_distance(S h, const RigidTransform<S>& pa, const Cylinder<S>& c, const RigidTransform<S>& pc, S tolerance, S margin,
+                               int max_evaluations, ConvexDistance<S>& out, Vec3<S>* plane = nullptr) {
   const RigidTransform<S> rel = pc.inverse() * pa;  // a's frame into the cylinder's
   const Vec3<S> p0 = rel.apply(Vec3<S>(S(0), S(0), -h)), d = rel.rotate(Vec3<S>(S(0), S(0), S(2) * h));
   const auto eval = [&](S t) {
@@ -125,18 +131,23 @@ bool segment_cylinder_distance(S h, const RigidTransform<S>& pa, const Cylinder<
     e.q = Vec3<S>(e.p.x() * s, e.p.y() * s, std::clamp(e.p.z(), -c.half_length, c.half_length));
     const Vec3<S> v = e.p - e.q;
     e.f = v.norm();
-    e.g = e.f > S(0) ? d.dot(v) / e.f : S(0);
+    if (e.f > S(0)) {
+      e.n = v / e.f;
+      e.g = d.dot(e.n);
+    }
     return e;
   };
   SegmentSolidPoint<S> best;
   int evaluations = 0;
-  if (segment_solid_minimum(eval, tolerance, tolerance, S(-1), 64, best, evaluations) != SegmentSearch::Answered) return false;
+  const SegmentSearch r = segment_solid_minimum(eval, tolerance, tolerance, margin, max_evaluations, best, evaluations);
+  out.iterations = evaluations;
+  if (r == SegmentSearch::Declined) return false;
   out.distance = best.f;
   out.point_a = pc.apply(best.p);
   out.point_b = pc.apply(best.q);
   out.intersecting = false;
-  out.limit_reached = false;
-  out.iterations = evaluations;
+  out.limit_reached = r == SegmentSearch::Bound;
+  if (plane) *plane = pc.rotate(best.n);
   return true;
 }
 
