@@ -31,9 +31,12 @@
 #include "impact/convex/local_certificate.hpp"
 #include "impact/convex/parallel_axes.hpp"
 #include "impact/convex/query_options.hpp"
+#include "impact/convex/segment_cylinder.hpp"
 #include "impact/convex/shapes.hpp"
 #include "impact/geometry/transform.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <type_traits>
 
@@ -213,6 +216,73 @@ void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, 
   g = r;
 }
 
+/// Where cone b's side touches the contact, the overlap f(n) = h_A(n) + h_B(-n) has a kink along
+/// the circle of b's side normals (-n = m(u), u the azimuth: b's support along -n is a whole ruling,
+/// its apex and its rim point tie) and its minimiser lies on that circle; EPA stops on its depth's
+/// tolerance with its normal off along the circle by up to about the square root of it (1.7e-5 rad
+/// on a cone-cone pose, 1.3e-5 on a capsule-cone: docs/convex-notes.md, note 32). On the circle
+/// f = m . (apex - s_A(-m)) in closed form and its slope along the azimuth is m' . (apex - s_A(-m))
+/// (the support point is the gradient of the support function), so the convex 1-D search of
+/// convex/segment_cylinder.hpp finds its least value within 1e-3 rad of EPA's azimuth. In a's
+/// frame (b placed by R, t there; `sa` a's support there), from EPA's normal n0 within 1e-3 rad of
+/// the circle; true and `n` set when the least value lies inside that window (a local minimum of f
+/// on the circle, the minimiser of f where the contact is the side's).
+template <class S, class SupportA>
+bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n0, S scale,
+                             Vec3<S>& n) {
+  const Vec3<S> bz = R.col(2), apex = t + b.half_length * bz;
+  const S len = std::sqrt(S(4) * b.half_length * b.half_length + b.radius * b.radius);
+  const S ku = S(2) * b.half_length / len, kz = b.radius / len;  // m(u) = ku u + kz bz
+  const Vec3<S> v = -n0, pv = v - bz.dot(v) * bz;
+  const S pl = pv.norm();
+  if (!(pl > S(1e-9))) return false;
+  const Vec3<S> e1 = pv / pl, e2 = bz.cross(e1);
+  if (!((ku * e1 + kz * bz).dot(v) > std::cos(S(1e-3)))) return false;  // not near the side normals
+  const S window = S(1e-3);
+  const auto eval = [&](S x) {
+    SegmentSolidPoint<S> e;
+    e.t = x;
+    const S phi = window * (S(2) * x - S(1)), c = std::cos(phi), s = std::sin(phi);
+    const Vec3<S> m = ku * (c * e1 + s * e2) + kz * bz, dm = ku * (c * e2 - s * e1);
+    const Vec3<S> gap = apex - sa(Vec3<S>(-m));
+    e.f = m.dot(gap);
+    e.g = S(2) * window * dm.dot(gap);
+    e.n = -m;
+    return e;
+  };
+  const S stop = S(2) * window * std::max(S(1e-10) * scale, S(64) * std::numeric_limits<S>::epsilon() * scale);
+  SegmentSolidPoint<S> best;
+  int evaluations = 0;
+  if (segment_solid_minimum(eval, S(0), stop, S(-1), 32, best, evaluations) != SegmentSearch::Answered) return false;
+  if (!(best.t > S(0) && best.t < S(1))) return false;  // the least value at the window's edge: not found
+  n = best.n;
+  return true;
+}
+
+/// EPA's contact g of a and cone b refined on b's side (cone_side_valley_normal): the normal taken
+/// where the true overlap along it is no larger; EPA's lower bound stays the bracket's lower end.
+/// `mirror`: b is the first shape of the query (g's normal points from b towards a).
+template <class S, class A>
+void refine_on_cone_side(const A& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb, ConvexContact<S>& g,
+                         bool mirror = false) {
+  if (!g.intersecting || g.limit_reached) return;
+  const PairFrame<S> f(pa, pb);
+  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
+  const Vec3<S> n0 = pa.R.transpose() * (mirror ? Vec3<S>(-g.normal) : g.normal);
+  Vec3<S> n;
+  if (!cone_side_valley_normal(sa, b, f.R, f.t, n0, query_scale<S>(a, b), n)) return;
+  ConvexContact<S> r = g;
+  r.normal = pa.rotate(mirror ? Vec3<S>(-n) : n);
+  if (mirror) {
+    settle_contact(b, pb, a, pa, r);
+  } else {
+    settle_contact(a, pa, b, pb, r);
+  }
+  if (!(r.depth <= g.depth)) return;
+  r.depth_gap = std::max(r.depth - (g.depth - g.depth_gap), S(0));
+  g = r;
+}
+
 /// A cylinder and a cylinder or cone: the overlap along the line between their centres (a negative
 /// one separates them: no contact; 85-90 % of the bench's separated poses end here), then
 /// the certified candidates of convex/cylinder_pair.hpp (caps, rulings, a ruling or a side against
@@ -274,7 +344,15 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   };
   ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c, f);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
-  if constexpr (std::is_same_v<B, Cylinder<S>>) refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g);
+  if constexpr (std::is_same_v<B, Cylinder<S>>) {
+    refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g);
+  } else {
+    OverlapTerms<S> terms;
+    if (g.intersecting && cylinder_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
+      refine_normal_locally(a, pa, b, pb, terms, g);
+    }
+    refine_on_cone_side(a, pa, b, pb, g);
+  }
   return g;
 }
 
@@ -336,6 +414,12 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   };
   ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  OverlapTerms<S> terms;
+  if (g.intersecting && cone_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
+    refine_normal_locally(a, pa, b, pb, terms, g);
+  }
+  refine_on_cone_side(a, pa, b, pb, g);
+  refine_on_cone_side(b, pb, a, pa, g, true);
   return g;
 }
 
@@ -389,7 +473,9 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  refine_on_cone_side(b, pb, a, pa, g, true);
+  return g;
 }
 
 /// A cylinder (a) and a box (b): the planes of convex/cylinder_box_pair.hpp (the line between the

@@ -151,6 +151,27 @@ OverlapTerms<S> segment_cylinder_terms(S h, const Cylinder<S>& b, const Mat3<S>&
   return f;
 }
 
+/// The same for cone b, with the cone's branch active along n (its apex, or its base rim, as
+/// cylinder_cone_terms of convex/local_certificate.hpp); false where the two tie within 1e-6 of
+/// the size (n a side normal: refine_on_cone_side's case).
+template <class S>
+bool segment_cone_terms(S h, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
+  f = OverlapTerms<S>();
+  f.add(Vec3<S>::UnitZ(), h, false);
+  const Vec3<S> bz = R.col(2);
+  const S bn = bz.dot(n), apex = -b.half_length * bn, rim = b.half_length * bn + b.radius * std::sqrt(std::max(S(1) - bn * bn, S(0)));
+  if (!(std::abs(apex - rim) > S(1e-6) * (b.half_length + b.radius))) return false;
+  f.linear = -t;
+  if (apex > rim) {
+    f.linear -= b.half_length * bz;
+  } else {
+    f.linear += b.half_length * bz;
+    f.add(bz, b.radius, true);
+  }
+  f.magnitude += b.half_length;
+  return true;
+}
+
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
 /// core touches b. `flip` swaps the roles back for the caller (b was the round one). A capsule
 /// much longer than b goes on as the part of it that decides (capsule_window).
@@ -243,6 +264,13 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
         if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cylinder<S>>) {
           const PairFrame<S> f(pa, pb);
           refine_normal_locally(a, pa, b, pb, segment_cylinder_terms(a.half_length, b, f.R, f.t), c);
+        } else if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cone<S>>) {
+          const PairFrame<S> f(pa, pb);
+          OverlapTerms<S> terms;
+          if (segment_cone_terms(a.half_length, b, f.R, f.t, Vec3<S>(pa.R.transpose() * c.normal), terms)) {
+            refine_normal_locally(a, pa, b, pb, terms, c);
+          }
+          refine_on_cone_side(a, pa, b, pb, c);
         }
       }
       if (flip) c.normal = -c.normal;
