@@ -162,15 +162,35 @@ bool certificate_holds(const LocalCertificate<S>& lc, const SupportA& sa, const 
 /// normal when one has a finite depth (an upper bound near the answer, and the local
 /// certificate's first start), and stopped early by `local` unless options.local_certificate is
 /// off; the candidates' support calls are added to the count. `f` is PairFrame(pa, pb), the frame
-/// of `simplex` (computed once a query).
+/// of `simplex` (computed once a query). `newton_normal`, when given, is set to whether the answer's
+/// normal is that of a certificate `local` gave (Newton's minimiser of the overlap's terms, the
+/// overlap along it within the tolerance of the certified lower bound): no refinement after EPA
+/// moves such a normal by more than rounding, so the callers skip theirs there.
 template <class S, class A, class B, class Local>
 ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                   const ConvexQueryOptions<S>& o, const SimplexPoint<S> (&simplex)[4], int calls, const Local& local,
-                                  const ConvexContact<S>& cand, const PairFrame<S>& f) {
+                                  const ConvexContact<S>& cand, const PairFrame<S>& f, bool* newton_normal = nullptr) {
   const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
-  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, local, seed, &f)
+  bool given = false;  // the last certificate `local` gave, in a's frame
+  Vec3<S> given_normal = Vec3<S>::Zero();
+  const auto recorded = [&](const Vec3<S>& n) {
+    const LocalCertificate<S> lc = local(n);
+    if (lc.ok) {
+      given = true;
+      given_normal = lc.normal;
+    }
+    return lc;
+  };
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, recorded, seed, &f)
                                            : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed, &f);
   g.iterations += cand.iterations;
+  if (newton_normal) {
+    // EPA's normal is the certificate's (best_n = cert.normal, translated and rotated back) unless
+    // a face's overlap was lower; 64 ulps allow for the rotation's rounding
+    const S eps = S(64) * std::numeric_limits<S>::epsilon();
+    *newton_normal = given && g.intersecting && !g.limit_reached &&
+                     (Vec3<S>(pa.R.transpose() * g.normal) - given_normal).squaredNorm() <= eps * eps;
+  }
   return g;
 }
 
@@ -342,11 +362,12 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
       return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
     }
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c, f);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   if constexpr (std::is_same_v<B, Cylinder<S>>) {
     refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g);
-  } else {
+  } else if (!newton_normal) {  // a certificate's normal is the terms' minimiser already
     OverlapTerms<S> terms;
     if (g.intersecting && cylinder_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
       refine_normal_locally(a, pa, b, pb, terms, g);
@@ -412,8 +433,10 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  if (newton_normal) return g;  // a certificate's normal is the terms' minimiser already
   OverlapTerms<S> terms;
   if (g.intersecting && cone_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
     refine_normal_locally(a, pa, b, pb, terms, g);
@@ -473,8 +496,9 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
-  refine_on_cone_side(b, pb, a, pa, g, true);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
+  if (!newton_normal) refine_on_cone_side(b, pb, a, pa, g, true);  // else the terms' minimiser already
   return g;
 }
 
