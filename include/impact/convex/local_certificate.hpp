@@ -353,19 +353,14 @@ OverlapTerms<S> cylinder_pair_terms(const Cylinder<S>& a, const Cylinder<S>& b, 
   return f;
 }
 
-/// The overlap of cylinder a (its frame) and cone b placed by R, t there, with the cone's branch
-/// active along n (its apex or its base rim; none when they tie within `kink` of the size: a ruling,
-/// false).
+/// Adds to f cone b's term h_B(-w) (b placed by R, t in f's frame) with the branch active along n:
+/// h_B(-w) = -t . w + max(-h bz . w, h bz . w + r |P w|), its apex or its base rim; false, f's linear
+/// part unset, when the two tie within 1e-6 of the cone's size (n a side normal: a ruling).
 template <class S>
-bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n,
-                         OverlapTerms<S>& f) {
-  f = OverlapTerms<S>();
-  f.add(Vec3<S>::UnitZ(), a.radius, true);
-  f.add(Vec3<S>::UnitZ(), a.half_length, false);
+bool add_cone_branch_terms(const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
   const Vec3<S> bz = R.col(2);
-  // h_B(-w) = -t . w + max(-h bz . w, h bz . w + r |P w|)
   const S bn = bz.dot(n), apex = -b.half_length * bn, rim = b.half_length * bn + b.radius * std::sqrt(std::max(S(1) - bn * bn, S(0)));
-  if (std::abs(apex - rim) <= S(1e-6) * (b.half_length + b.radius)) return false;
+  if (!(std::abs(apex - rim) > S(1e-6) * (b.half_length + b.radius))) return false;
   f.linear = -t;
   if (apex > rim) {
     f.linear -= b.half_length * bz;
@@ -375,6 +370,17 @@ bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& 
   }
   f.magnitude += b.half_length;
   return true;
+}
+
+/// The overlap of cylinder a (its frame) and cone b placed by R, t there, with the cone's branch
+/// active along n (add_cone_branch_terms; false on a ruling).
+template <class S>
+bool cylinder_cone_terms(const Cylinder<S>& a, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n,
+                         OverlapTerms<S>& f) {
+  f = OverlapTerms<S>();
+  f.add(Vec3<S>::UnitZ(), a.radius, true);
+  f.add(Vec3<S>::UnitZ(), a.half_length, false);
+  return add_cone_branch_terms(b, R, t, n, f);
 }
 
 /// The body inside cone b (placed by R, t in the terms' frame) along the ruling whose side normal

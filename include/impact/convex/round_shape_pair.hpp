@@ -158,18 +158,7 @@ template <class S>
 bool segment_cone_terms(S h, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n, OverlapTerms<S>& f) {
   f = OverlapTerms<S>();
   f.add(Vec3<S>::UnitZ(), h, false);
-  const Vec3<S> bz = R.col(2);
-  const S bn = bz.dot(n), apex = -b.half_length * bn, rim = b.half_length * bn + b.radius * std::sqrt(std::max(S(1) - bn * bn, S(0)));
-  if (!(std::abs(apex - rim) > S(1e-6) * (b.half_length + b.radius))) return false;
-  f.linear = -t;
-  if (apex > rim) {
-    f.linear -= b.half_length * bz;
-  } else {
-    f.linear += b.half_length * bz;
-    f.add(bz, b.radius, true);
-  }
-  f.magnitude += b.half_length;
-  return true;
+  return add_cone_branch_terms(b, R, t, n, f);
 }
 
 /// Round shape a (core + radius) against any shape b: exact from the core's distance unless the
