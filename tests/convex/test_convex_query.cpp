@@ -1179,7 +1179,7 @@ TEST(ConvexQuery, ConeNormalsAgainstReferee) {
 }
 
 // The search along a cone's side normals that refines EPA's normal (cone_side_valley_normal,
-// refine_on_cone_side; docs/convex-notes.md, note 34). From a normal 1e-5 rad along the circle of
+// refine_on_cone_side; docs/convex-notes.md, note 35). From a normal 1e-5 rad along the circle of
 // the cone's side normals and 1e-6 off it from the least overlap on that circle (the reference:
 // 4096 samples of the whole circle, then ternary search), against a box, a capsule and a cone:
 // where that least value is smooth, it is found (on the circle, as low as the reference, no
@@ -1260,6 +1260,23 @@ TEST(ConvexQuery, ConeSideValleySearch) {
   std::printf("  smooth %d (found %d, %.2f evaluations)\n", smooth, found, double(evals_found) / std::max(found, 1));
   EXPECT_GE(smooth, 15);
   EXPECT_LE(evals_found, 5 * found);
+}
+
+// Where one shape's support along the contact normal is a whole straight edge (a hull's edge, a
+// capsule's segment) and the other's a curved rim, the minimiser lies on the kink of the edge's
+// term, where EPA stopped on its depth tolerance up to 3.4e-6 rad off and Newton on the overlap's
+// terms cannot stay (its certificate jumps to a nearby disc kink, the cap's axis); the worst poses
+// of the sweeps of docs/convex-notes.md, note 34: cylinder-hull 1705 of 2000 at 0.25 of the sizes,
+// seed 3000231 (1.19e-6 rad) and 732 at 0.6, seed 9000249 (3.4e-6), capsule-cylinder 1294 at
+// 0.25, seed 8000849 (2.42e-6): the 1-D search along the normals orthogonal to the edge
+// (refine_on_hull_edge, refine_on_capsule_segment); cone-hull 1565 at 0.25, seed 7000689 (1.38e-6,
+// a hull vertex against the cone's side: refine_on_cone_side).
+TEST(ConvexQuery, EdgeValleyNormalsAgainstReferee) {
+  const auto& z = zoo();
+  expect_normal_against_referee("cylinder-hull, deep", z.cylinder, z.hull, 2000, 0.25, 3000231u, {1705}, 1e-7);
+  expect_normal_against_referee("cylinder-hull", z.cylinder, z.hull, 2000, 0.6, 9000249u, {732}, 1e-7);
+  expect_normal_against_referee("capsule-cylinder, deep", z.capsule, z.cylinder, 2000, 0.25, 8000849u, {1294}, 1e-7);
+  expect_normal_against_referee("cone-hull, deep", z.cone, z.hull, 2000, 0.25, 7000689u, {1565}, 1e-7);
 }
 
 // A capsule's segment against a cone (convex/segment_cone.hpp), as SegmentCylinderMatchesGjk:

@@ -26,6 +26,7 @@
 #include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/cylinder_pair.hpp"
+#include "impact/convex/edge_valley.hpp"
 #include "impact/convex/epa.hpp"
 #include "impact/convex/general_pair.hpp"
 #include "impact/convex/local_certificate.hpp"
@@ -250,7 +251,7 @@ void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, 
 /// is both ends' pieces (each with its end's support held) with lo's still falling and hi's rising,
 /// the least value is on that kink. The search of convex/segment_cylinder.hpp over the whole
 /// window, which this replaces, took 15-32 evaluations a call on the bench's poses; this about 4
-/// where it finds the minimum (docs/convex-notes.md, note 34). In a's frame (b placed by R, t there; `sa` a's support
+/// where it finds the minimum (docs/convex-notes.md, note 35). In a's frame (b placed by R, t there; `sa` a's support
 /// there), from EPA's normal n0 within 1e-3 rad of the circle; true and `n` set when the least value
 /// lies inside the window with its slope within 1e-10 of the size (a local minimum of f on the
 /// circle, the minimiser of f where the contact is the side's); `evaluations_out`, when given,
@@ -626,6 +627,23 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
 }
 
+/// The normal of a contact g of a cylinder or cone a and hull b refined when `uncertain` (EPA
+/// stopped on its depth tolerance, or a candidate certified its depth only: the normal then within
+/// only about the square root of the tolerance of the minimiser) along the valley of a hull edge
+/// orthogonal to it (refine_on_hull_edge, convex/edge_valley.hpp: the minimiser on the kink
+/// of the edge's term, where Newton on the overlap's terms cannot stay) and, for a cone, along
+/// the valley of its side normals (refine_on_cone_side), each kept where the true overlap along
+/// it is no larger. (Newton on cylinder_hull_terms where the overlap is smooth,
+/// tried too, changed no pose of the sweep the valley search left above 1e-8 rad: note 34.)
+template <class S, class A>
+ConvexContact<S> refined_hull_normal(const A& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
+                                     ConvexContact<S> g, bool uncertain) {
+  if (!uncertain) return g;
+  refine_on_hull_edge(a, pa, b, pb, g);
+  if constexpr (std::is_same_v<A, Cone<S>>) refine_on_cone_side(b, pb, a, pa, g, true);  // a hull vertex on a's side
+  return g;
+}
+
 /// A cylinder (a) and a convex hull (b): a plane normal to the line between the centres, then the
 /// candidates of convex/cylinder_hull_pair.hpp (the hull's face planes, which also separate most
 /// of the separated poses left; faces, caps and edges across the side, certified by a ball inside
@@ -648,19 +666,28 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   ConvexContact<S> cand;
   const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
   if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
-  if (verdict == CylinderHullVerdict::Certified) return settled(a, pa, b, pb, cand, 1);
+  // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
+  if (verdict == CylinderHullVerdict::Certified) {
+    return refined_hull_normal(a, pa, b, pb, settled(a, pa, b, pb, cand, 1), cand.depth_gap > S(0));
+  }
   SimplexPoint<S> simplex[4];
   int its = 1;
   ConvexContact<S> answer;
   // GJK's first support along the best candidate's normal, when one applied (as cylinder–box)
   const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
   if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
+  Vec3<S> certified = Vec3<S>::Zero();  // the last local certificate that held: its normal is the minimiser
   const auto local = [&](const Vec3<S>& n) {
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
-    if (certificate_holds(lc, sa, sb, tol)) return lc;
+    if (certificate_holds(lc, sa, sb, tol)) {
+      certified = lc.normal;
+      return lc;
+    }
     return LocalCertificate<S>();
   };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  const bool uncertain = !((pa.R.transpose() * g.normal - certified).norm() <= S(64) * std::numeric_limits<S>::epsilon());
+  return refined_hull_normal(a, pa, b, pb, g, uncertain);
 }
 
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
@@ -683,6 +710,12 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   int its = 1;
   ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded
   if (!path.enclose(simplex, its, 0, none)) return none;
+  Vec3<S> certified = Vec3<S>::Zero();  // the last local certificate that held: its normal is the minimiser
+  const auto holds = [&](const LocalCertificate<S>& lc) {
+    if (!certificate_holds(lc, sa, sb, tol)) return false;
+    certified = lc.normal;
+    return true;
+  };
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
     const S gap = cone_branch_gap(a, n);
@@ -690,7 +723,7 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
       // away from the cone's side: its active branch (a side contact's branch terms never hold)
       if (cone_hull_terms(a, b, f.R, f.t, n, cone_branch_of_gap(a, gap), terms)) {
         const LocalCertificate<S> lc = local_certificate(terms, n);
-        if (certificate_holds(lc, sa, sb, tol)) return lc;
+        if (holds(lc)) return lc;
       }
       return LocalCertificate<S>();
     }
@@ -703,12 +736,14 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
     const Vec3<S> p(a.radius * e.x(), a.radius * e.y(), -a.half_length), d = Vec3<S>(S(0), S(0), a.half_length) - p;
     if (cone_side_hull_terms(a, b, f.R, f.t, m, e, side_body_end((x - p).dot(d) / d.dot(d)), terms)) {
       const LocalCertificate<S> lc = local_certificate(terms, m);
-      if (certificate_holds(lc, sa, sb, tol)) return lc;
+      if (holds(lc)) return lc;
     }
     return LocalCertificate<S>();
   };
   none.depth = std::numeric_limits<S>::infinity();
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f);
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f);
+  const bool uncertain = !((pa.R.transpose() * g.normal - certified).norm() <= S(64) * std::numeric_limits<S>::epsilon());
+  return refined_hull_normal(a, pa, b, pb, g, uncertain);
 }
 
 }  // namespace detail
