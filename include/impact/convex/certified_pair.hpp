@@ -229,12 +229,7 @@ void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, 
   const Vec3<S> n0 = pa.R.transpose() * g.normal;
   const LocalCertificate<S> lc = local_certificate(terms, n0);
   if (!lc.ok || !(lc.normal.dot(n0) >= lc.cos_cap)) return;
-  ConvexContact<S> r = g;
-  r.normal = pa.rotate(lc.normal);
-  settle_contact(a, pa, b, pb, r);
-  if (!(r.depth <= g.depth)) return;
-  r.depth_gap = std::max(r.depth - (g.depth - g.depth_gap), S(0));
-  g = r;
+  keep_if_no_deeper(a, pa, b, pb, lc.normal, g);
 }
 
 /// Where cone b's side touches the contact, the overlap f(n) = h_A(n) + h_B(-n) has a kink along
@@ -676,18 +671,14 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   // GJK's first support along the best candidate's normal, when one applied (as cylinder–box)
   const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
   if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
-  Vec3<S> certified = Vec3<S>::Zero();  // the last local certificate that held: its normal is the minimiser
   const auto local = [&](const Vec3<S>& n) {
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
-    if (certificate_holds(lc, sa, sb, tol)) {
-      certified = lc.normal;
-      return lc;
-    }
+    if (certificate_holds(lc, sa, sb, tol)) return lc;
     return LocalCertificate<S>();
   };
-  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
-  const bool uncertain = !((pa.R.transpose() * g.normal - certified).norm() <= S(64) * std::numeric_limits<S>::epsilon());
-  return refined_hull_normal(a, pa, b, pb, g, uncertain);
+  bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal);
 }
 
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
@@ -710,12 +701,6 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   int its = 1;
   ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded
   if (!path.enclose(simplex, its, 0, none)) return none;
-  Vec3<S> certified = Vec3<S>::Zero();  // the last local certificate that held: its normal is the minimiser
-  const auto holds = [&](const LocalCertificate<S>& lc) {
-    if (!certificate_holds(lc, sa, sb, tol)) return false;
-    certified = lc.normal;
-    return true;
-  };
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
     const S gap = cone_branch_gap(a, n);
@@ -723,7 +708,7 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
       // away from the cone's side: its active branch (a side contact's branch terms never hold)
       if (cone_hull_terms(a, b, f.R, f.t, n, cone_branch_of_gap(a, gap), terms)) {
         const LocalCertificate<S> lc = local_certificate(terms, n);
-        if (holds(lc)) return lc;
+        if (certificate_holds(lc, sa, sb, tol)) return lc;
       }
       return LocalCertificate<S>();
     }
@@ -736,14 +721,14 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
     const Vec3<S> p(a.radius * e.x(), a.radius * e.y(), -a.half_length), d = Vec3<S>(S(0), S(0), a.half_length) - p;
     if (cone_side_hull_terms(a, b, f.R, f.t, m, e, side_body_end((x - p).dot(d) / d.dot(d)), terms)) {
       const LocalCertificate<S> lc = local_certificate(terms, m);
-      if (holds(lc)) return lc;
+      if (certificate_holds(lc, sa, sb, tol)) return lc;
     }
     return LocalCertificate<S>();
   };
   none.depth = std::numeric_limits<S>::infinity();
-  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f);
-  const bool uncertain = !((pa.R.transpose() * g.normal - certified).norm() <= S(64) * std::numeric_limits<S>::epsilon());
-  return refined_hull_normal(a, pa, b, pb, g, uncertain);
+  bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f, &newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal);
 }
 
 }  // namespace detail
