@@ -14,7 +14,7 @@
 ///      convex/local_certificate.hpp).
 /// Cone against hull has no candidates yet: stages 1, 3 and 4 only. After stage 4, some paths
 /// refine EPA's normal (refine_normal_locally, refine_on_cone_side).
-/// options.max_iterations is one budget for the whole path (docs/convex-notes.md, notes 25 and 34):
+/// options.max_iterations is one budget for the whole path (docs/convex-notes.md, notes 25 and 36):
 /// every stage's support calls count in it (`its`, the calls so far, is handed from stage to stage
 /// and reported). A stage of a fixed most (the planes, the candidates: kCandidateCalls*) runs only
 /// when that most fits in what is left, else it is skipped (the candidates' absence changes no
@@ -33,6 +33,7 @@
 #include "impact/convex/cylinder_box_pair.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/cylinder_pair.hpp"
+#include "impact/convex/edge_valley.hpp"
 #include "impact/convex/epa.hpp"
 #include "impact/convex/general_pair.hpp"
 #include "impact/convex/local_certificate.hpp"
@@ -205,14 +206,35 @@ bool certificate_holds(const LocalCertificate<S>& lc, const SupportA& sa, const 
 /// counting them), seeded with the best candidate's normal when one has a finite depth (an upper
 /// bound near the answer, and the local certificate's first start), and stopped early by `local`
 /// unless options.local_certificate is off. `f` is PairFrame(pa, pb), the frame of `simplex`
-/// (computed once a query).
+/// (computed once a query). `newton_normal`, when given, is set to whether the answer's normal is
+/// that of a certificate `local` gave (Newton's minimiser of the overlap's terms, the overlap along
+/// it within the tolerance of the certified lower bound): no refinement after EPA moves such a
+/// normal by more than rounding, so the callers skip theirs there.
 template <class S, class A, class B, class Local>
 ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                   const ConvexQueryOptions<S>& o, const SimplexPoint<S> (&simplex)[4], int calls, const Local& local,
-                                  const ConvexContact<S>& cand, const PairFrame<S>& f) {
+                                  const ConvexContact<S>& cand, const PairFrame<S>& f, bool* newton_normal = nullptr) {
   const Vec3<S>* seed = cand.depth < std::numeric_limits<S>::infinity() ? &cand.normal : nullptr;
-  return o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, local, seed, &f)
-                             : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed, &f);
+  bool given = false;  // the last certificate `local` gave, in a's frame
+  Vec3<S> given_normal = Vec3<S>::Zero();
+  const auto recorded = [&](const Vec3<S>& n) {
+    const LocalCertificate<S> lc = local(n);
+    if (lc.ok) {
+      given = true;
+      given_normal = lc.normal;
+    }
+    return lc;
+  };
+  ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, recorded, seed, &f)
+                                           : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed, &f);
+  if (newton_normal) {
+    // EPA's normal is the certificate's (best_n = cert.normal, translated and rotated back) unless
+    // a face's overlap was lower; 64 ulps allow for the rotation's rounding
+    const S eps = S(64) * std::numeric_limits<S>::epsilon();
+    *newton_normal = given && g.intersecting && !g.limit_reached &&
+                     (Vec3<S>(pa.R.transpose() * g.normal) - given_normal).squaredNorm() <= eps * eps;
+  }
+  return g;
 }
 
 /// Two cylinders or cones whose axes are within a small tilt of parallel, after the general
@@ -268,12 +290,7 @@ void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, 
     return;
   }
   ++g.iterations;
-  ConvexContact<S> r = g;
-  r.normal = pa.rotate(lc.normal);
-  settle_contact(a, pa, b, pb, r);
-  if (!(r.depth <= g.depth)) return;
-  r.depth_gap = std::max(r.depth - (g.depth - g.depth_gap), S(0));
-  g = r;
+  keep_if_no_deeper(a, pa, b, pb, lc.normal, g);
 }
 
 /// The most evaluations of cone_side_valley_normal's search.
@@ -285,19 +302,33 @@ inline constexpr int kConeSideEvaluations = 32;
 /// tolerance with its normal off along the circle by up to about the square root of it (1.7e-5 rad
 /// on a cone-cone pose, 1.3e-5 on a capsule-cone: docs/convex-notes.md, note 32). On the circle
 /// f = m . (apex - s_A(-m)) in closed form and its slope along the azimuth is m' . (apex - s_A(-m))
-/// (the support point is the gradient of the support function), so the convex 1-D search of
-/// convex/segment_cylinder.hpp finds its least value within 1e-3 rad of EPA's azimuth. In a's
-/// frame (b placed by R, t there; `sa` a's support there), from EPA's normal n0 within 1e-3 rad of
-/// the circle; true and `n` set when the least value lies inside that window (a local minimum of f
-/// on the circle, the minimiser of f where the contact is the side's). The search takes at most
-/// kConeSideEvaluations evaluations (one support call of a each), fewer when `max_evaluations`
-/// says so; `evaluations` counts them, and `cut_short` says that a smaller `max_evaluations` ended
-/// the search before it decided (or left no room to start it).
+/// (the support point is the gradient of the support function). The search for its least value
+/// within 1e-3 rad of EPA's azimuth starts there, where the minimum is near: secant steps on the
+/// slope downhill (the first 1e-6 rad) until the slope turns, then regula falsi (Illinois) in that
+/// bracket. It gives up at the window's edge, after 32 evaluations, or at a kink of f along the
+/// circle: its first step in the bracket goes to where the ends' two supports tie, and when f there
+/// is both ends' pieces (each with its end's support held) with lo's still falling and hi's rising,
+/// the least value is on that kink. The search of convex/segment_cylinder.hpp over the whole
+/// window, which this replaces, took 15-32 evaluations a call on the bench's poses; this about 4
+/// where it finds the minimum (docs/convex-notes.md, note 35). In a's frame (b placed by R, t there; `sa` a's support
+/// there), from EPA's normal n0 within 1e-3 rad of the circle; true and `n` set when the least value
+/// lies inside the window with its slope within 1e-10 of the size (a local minimum of f on the
+/// circle, the minimiser of f where the contact is the side's); `evaluations_out`, when given,
+/// receives the evaluations of f (a support call of a each), 0 when the window was not entered.
+/// The search takes at most kConeSideEvaluations evaluations, fewer when `max_evaluations` (what
+/// the query's bound leaves) says so; `cut_short`, when given, is set to whether that smaller
+/// bound ended the search before it decided (or left no room to start it).
 template <class S, class SupportA>
 bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n0, S scale,
-                             Vec3<S>& n, int max_evaluations, int& evaluations, bool& cut_short) {
-  evaluations = 0;
-  cut_short = false;
+                             Vec3<S>& n, int* evaluations_out = nullptr, int max_evaluations = kConeSideEvaluations,
+                             bool* cut_short = nullptr) {
+  if (evaluations_out) *evaluations_out = 0;
+  if (cut_short) *cut_short = false;
+  const int most = std::min(kConeSideEvaluations, max_evaluations);
+  const auto out_of_room = [&] {  // the search ended by `most` evaluations, undecided
+    if (cut_short && most < kConeSideEvaluations) *cut_short = true;
+    return false;
+  };
   const Vec3<S> bz = R.col(2), apex = t + b.half_length * bz;
   const S len = std::sqrt(S(4) * b.half_length * b.half_length + b.radius * b.radius);
   const S ku = S(2) * b.half_length / len, kz = b.radius / len;  // m(u) = ku u + kz bz
@@ -305,42 +336,115 @@ bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>
   const S pl = pv.norm();
   if (!(pl > S(1e-9))) return false;
   const Vec3<S> e1 = pv / pl, e2 = bz.cross(e1);
-  if (!((ku * e1 + kz * bz).dot(v) > std::cos(S(1e-3)))) return false;  // not near the side normals
   const S window = S(1e-3);
-  const auto eval = [&](S x) {
-    SegmentSolidPoint<S> e;
-    e.t = x;
-    const S phi = window * (S(2) * x - S(1)), c = std::cos(phi), s = std::sin(phi);
-    const Vec3<S> m = ku * (c * e1 + s * e2) + kz * bz, dm = ku * (c * e2 - s * e1);
-    const Vec3<S> gap = apex - sa(Vec3<S>(-m));
-    e.f = m.dot(gap);
-    e.g = S(2) * window * dm.dot(gap);
-    e.n = -m;
-    return e;
+  if (!((ku * e1 + kz * bz).dot(v) > std::cos(window))) return false;  // not near the side normals
+  struct Trial {
+    S x, f, g;  // azimuth from e1, f there and its slope
+    Vec3<S> s;  // a's support point
   };
-  const S stop = S(2) * window * std::max(S(1e-10) * scale, S(64) * std::numeric_limits<S>::epsilon() * scale);
-  const int most = std::min(kConeSideEvaluations, max_evaluations);
-  if (most < 2) {  // not even the window's two ends
-    cut_short = true;
-    return false;
+  const auto m_of = [&](S x) { return Vec3<S>(ku * (std::cos(x) * e1 + std::sin(x) * e2) + kz * bz); };
+  const auto dm_of = [&](S x) { return Vec3<S>(ku * (std::cos(x) * e2 - std::sin(x) * e1)); };
+  const auto eval = [&](S x) {
+    if (evaluations_out) ++*evaluations_out;
+    const S c = std::cos(x), sn = std::sin(x);
+    const Vec3<S> m = ku * (c * e1 + sn * e2) + kz * bz, s = sa(Vec3<S>(-m)), gap = apex - s;
+    return Trial{x, m.dot(gap), Vec3<S>(ku * (c * e2 - sn * e1)).dot(gap), s};
+  };
+  const S stop = std::max(S(1e-10) * scale, S(64) * std::numeric_limits<S>::epsilon() * scale);  // |df/dx|
+  const auto found = [&](const Trial& e) {
+    if (!(std::abs(e.x) < window)) return false;  // the least value at the window's edge: not found
+    n = -m_of(e.x);
+    return true;
+  };
+  if (most < 1) return out_of_room();
+  int evaluations = 1;
+  Trial lo = eval(S(0));
+  if (!(lo.f > S(0))) return false;
+  if (std::abs(lo.g) <= stop) return found(lo);
+  // downhill from EPA's azimuth by secant steps on the slope (each at most 64 times the one
+  // before; a slope that does not fall, 4 times) until it turns
+  const S dir = lo.g < S(0) ? S(1) : S(-1);
+  S step = S(1e-6);
+  Trial hi;
+  while (true) {
+    if (!(std::abs(lo.x) < window)) return false;  // downhill up to the window's edge
+    if (evaluations >= most) return out_of_room();
+    const Trial e = eval(std::min(std::max(lo.x + dir * step, -window), window));
+    ++evaluations;
+    if (!(e.f > S(0))) return false;
+    if (std::abs(e.g) <= stop) return found(e);
+    if (dir * e.g > S(0)) {
+      hi = e;
+      break;
+    }
+    const S k = (e.g - lo.g) / (e.x - lo.x);  // the slope's rate, > 0 where f is convex
+    const S next = k > S(0) ? std::abs(e.g / k) : S(4) * step;
+    step = std::min(next, S(64) * step);
+    lo = e;
   }
-  SegmentSolidPoint<S> best;
-  const SegmentSearch found = segment_solid_minimum(eval, S(0), stop, S(-1), most, best, evaluations);
-  if (found != SegmentSearch::Answered) {
-    cut_short = found == SegmentSearch::Bound && most < kConeSideEvaluations;
-    return false;
+  // the slope turns between lo (downhill) and hi: regula falsi with Illinois' halving
+  S glo = lo.g, ghi = hi.g;
+  int side = 0;
+  bool kink_tried = false;
+  const S tie = S(16) * std::numeric_limits<S>::epsilon() * scale;
+  while (evaluations < most) {
+    const S a = std::min(lo.x, hi.x), c = std::max(lo.x, hi.x);
+    if (!(c - a > S(8) * std::numeric_limits<S>::epsilon())) return false;
+    S x = (lo.x * ghi - hi.x * glo) / (ghi - glo);
+    if (!(x > a && x < c)) x = (lo.x + hi.x) / S(2);
+    bool at_tie = false;
+    const Vec3<S> d = hi.s - lo.s;
+    if (!kink_tried && d.squaredNorm() > S(0)) {
+      // where the ends' supports tie, m . d = 0 on the circle: ku (cos x e1 + sin x e2) . d = -kz bz . d
+      kink_tried = true;
+      const S al = ku * e1.dot(d), be = ku * e2.dot(d), ga = kz * bz.dot(d), r = std::hypot(al, be);
+      if (r > std::abs(ga)) {
+        const S psi = std::atan2(be, al), w = std::acos(-ga / r);
+        for (const S y : {psi + w, psi - w}) {
+          if (y > a && y < c) {
+            x = y;
+            at_tie = true;
+            break;
+          }
+        }
+      }
+    }
+    const Trial e = eval(x);
+    ++evaluations;
+    if (!(e.f > S(0))) return false;
+    if (std::abs(e.g) <= stop) return found(e);
+    if (at_tie) {
+      // f there on both ends' pieces (a's support jumps from lo's to hi's: a kink of f along the
+      // circle), lo's piece still falling and hi's rising: the least value is on the kink, which
+      // this search does not resolve
+      const Vec3<S> m = m_of(x), dm = dm_of(x);
+      const Vec3<S> gap_lo = apex - lo.s, gap_hi = apex - hi.s;
+      if (std::abs(e.f - m.dot(gap_lo)) <= tie && std::abs(e.f - m.dot(gap_hi)) <= tie && dir * dm.dot(gap_lo) <= S(0) &&
+          dir * dm.dot(gap_hi) >= S(0))
+        return false;
+    }
+    if (dir * e.g < S(0)) {
+      lo = e;
+      glo = e.g;
+      if (side == -1) ghi /= S(2);
+      side = -1;
+    } else {
+      hi = e;
+      ghi = e.g;
+      if (side == 1) glo /= S(2);
+      side = 1;
+    }
   }
-  if (!(best.t > S(0) && best.t < S(1))) return false;  // the least value at the window's edge: not found
-  n = best.n;
-  return true;
+  return out_of_room();
 }
 
 /// EPA's contact g of a and cone b refined on b's side (cone_side_valley_normal): the normal taken
 /// where the true overlap along it is no larger; EPA's lower bound stays the bracket's lower end.
 /// `mirror`: b is the first shape of the query (g's normal points from b towards a). Its support
 /// calls (the search's evaluations and the overlap along the normal found) count in g.iterations
-/// against `max_iterations` (one budget): the search gets what is left less one for that overlap,
-/// and when that cuts it short, EPA's normal is kept and g says limit_reached.
+/// against `max_iterations` (one budget, budgeted_search of convex/edge_valley.hpp): the search
+/// gets what is left less one for that overlap, and when that cuts it short, EPA's normal is kept
+/// and g says limit_reached.
 template <class S, class A>
 void refine_on_cone_side(const A& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb, ConvexContact<S>& g,
                          int max_iterations, bool mirror = false) {
@@ -348,15 +452,12 @@ void refine_on_cone_side(const A& a, const RigidTransform<S>& pa, const Cone<S>&
   const PairFrame<S> f(pa, pb);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const Vec3<S> n0 = pa.R.transpose() * (mirror ? Vec3<S>(-g.normal) : g.normal);
+  const S scale = query_scale<S>(a, b);
   Vec3<S> n;
-  int evaluations = 0;
-  bool cut_short = false;
-  const bool found =
-      cone_side_valley_normal(sa, b, f.R, f.t, n0, query_scale<S>(a, b), n, max_iterations - g.iterations - 1, evaluations, cut_short);
-  g.iterations += evaluations;
-  if (cut_short) g.limit_reached = true;
-  if (!found) return;
-  ++g.iterations;  // the overlap along n
+  const auto search = [&](int most, int& evaluations, bool& cut_short) {
+    return cone_side_valley_normal(sa, b, f.R, f.t, n0, scale, n, &evaluations, most, &cut_short);
+  };
+  if (!budgeted_search(g, max_iterations, search)) return;
   ConvexContact<S> r = g;
   r.normal = pa.rotate(mirror ? Vec3<S>(-n) : n);
   if (mirror) {
@@ -432,11 +533,12 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
       return local_certificate(cylinder_pair_terms(a, b, f.R, f.t), n);
     }
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, c, f);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, c, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   if constexpr (std::is_same_v<B, Cylinder<S>>) {
     refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g, o.max_iterations);
-  } else {
+  } else if (!newton_normal) {  // a certificate's normal is the terms' minimiser already
     OverlapTerms<S> terms;
     if (g.intersecting && cylinder_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
       refine_normal_locally(a, pa, b, pb, terms, g, o.max_iterations);
@@ -506,8 +608,10 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, cand, f);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, cand, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  if (newton_normal) return g;  // a certificate's normal is the terms' minimiser already
   OverlapTerms<S> terms;
   if (g.intersecting && cone_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
     refine_normal_locally(a, pa, b, pb, terms, g, o.max_iterations);
@@ -572,8 +676,9 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
     }
     return LocalCertificate<S>();
   };
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
-  refine_on_cone_side(b, pb, a, pa, g, o.max_iterations, true);
+  bool newton_normal = false;
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
+  if (!newton_normal) refine_on_cone_side(b, pb, a, pa, g, o.max_iterations, true);  // else the terms' minimiser already
   return g;
 }
 
@@ -619,6 +724,25 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
   return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
 }
 
+/// The normal of a contact g of a cylinder or cone a and hull b refined when `uncertain` (EPA
+/// stopped on its depth tolerance, or a candidate certified its depth only: the normal then within
+/// only about the square root of the tolerance of the minimiser) along the valley of a hull edge
+/// orthogonal to it (refine_on_hull_edge, convex/edge_valley.hpp: the minimiser on the kink
+/// of the edge's term, where Newton on the overlap's terms cannot stay) and, for a cone, along
+/// the valley of its side normals (refine_on_cone_side), each kept where the true overlap along
+/// it is no larger. (Newton on cylinder_hull_terms where the overlap is smooth,
+/// tried too, changed no pose of the sweep the valley search left above 1e-8 rad: note 34.)
+/// Both count their support calls in g.iterations against `max_iterations` (one budget), each
+/// getting what the one before left; one cut short keeps g's normal and sets limit_reached.
+template <class S, class A>
+ConvexContact<S> refined_hull_normal(const A& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
+                                     ConvexContact<S> g, bool uncertain, int max_iterations) {
+  if (!uncertain) return g;
+  refine_on_hull_edge(a, pa, b, pb, g, max_iterations);
+  if constexpr (std::is_same_v<A, Cone<S>>) refine_on_cone_side(b, pb, a, pa, g, max_iterations, true);  // a hull vertex on a's side
+  return g;
+}
+
 /// A cylinder (a) and a convex hull (b): a plane normal to the line between the centres, then the
 /// candidates of convex/cylinder_hull_pair.hpp (the hull's face planes, which also separate most
 /// of the separated poses left; faces, caps and edges across the side, certified by a ball inside
@@ -644,7 +768,10 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
     const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
     IMPACT_ASSERT(cand.iterations <= kCandidateCallsCylinderHull);
     if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
-    if (verdict == CylinderHullVerdict::Certified) return settled(a, pa, b, pb, cand, its);
+    // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
+    if (verdict == CylinderHullVerdict::Certified) {
+      return refined_hull_normal(a, pa, b, pb, settled(a, pa, b, pb, cand, its), cand.depth_gap > S(0), o.max_iterations);
+    }
     its += cand.iterations;
   }
   SimplexPoint<S> simplex[4];
@@ -657,7 +784,9 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
     if (certificate_holds(lc, sa, sb, tol)) return lc;
     return LocalCertificate<S>();
   };
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f);
+  bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
@@ -705,7 +834,9 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
     return LocalCertificate<S>();
   };
   none.depth = std::numeric_limits<S>::infinity();
-  return epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f);
+  bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f, &newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 
 }  // namespace detail

@@ -74,7 +74,7 @@
 /// its numbers still hold: a distance is never below the true one, and a penetration's
 /// [depth - depth_gap, depth] holds the true depth, its lower end above 0 only when the
 /// intersection was proven (docs/convex-notes.md, note 28); its normal may be EPA's unrefined one
-/// (note 34).
+/// (note 36).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
 ///
 /// Where the parts live: the options and the validation in convex/query_options.hpp; the general

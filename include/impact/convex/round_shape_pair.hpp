@@ -254,6 +254,9 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
         if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cylinder<S>>) {
           const PairFrame<S> f(pa, pb);
           refine_normal_locally(a, pa, b, pb, segment_cylinder_terms(a.half_length, b, f.R, f.t), c, o.max_iterations);
+          // the normal across the segment near the cylinder's axis: the terms' certificate jumps
+          // to the axis (its disc kink); the valley of the segment's normals (note 34)
+          refine_on_capsule_segment(a, pa, b, pb, c, o.max_iterations);
         } else if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cone<S>>) {
           const PairFrame<S> f(pa, pb);
           OverlapTerms<S> terms;
