@@ -1181,6 +1181,15 @@ void expect_normal_against_referee(const char* what, const A& a, const B& b, int
   }
 }
 
+// A cylinder's cap rim against the other's rim with the minimiser 5.5e-6 rad from the cap's axis
+// (pose 1770 at 0.6 of the sizes, seed 9000582: 1.45e-6 rad before): the disc term's Hessian
+// c / |P n| changes by its own size over a step of |P n|, and Newton on the overlap's terms,
+// unlimited there, jumped across the axis; its steps now stay within half of |P n| (local_newton).
+TEST(ConvexQuery, NormalsNearADiscAxisAgainstReferee) {
+  const auto& z = zoo();
+  expect_normal_against_referee("cylinder-cylinder, near a cap's axis", z.cylinder, z.cylinder, 2000, 0.6, 9000582u, {1770}, 1e-7);
+}
+
 // A capsule whose segment passes through a cylinder: the own EPA on the core stopped on its depth
 // tolerance with its normal up to 2.55e-5 rad from the referee's (poses 239 and 171 of 1000 at 0.6
 // of the sizes, seed 4243013554: 2.55e-5 and 1.08e-6 rad), now refined by Newton on the overlap's

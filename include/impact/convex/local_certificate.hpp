@@ -284,7 +284,13 @@ bool local_newton(const OverlapTerms<S>& f, Vec3<S>& n, const Vec3<S>* constrain
     }
     const S step = std::sqrt(y1 * y1 + y2 * y2);
     if (step <= S(1e-9)) return true;  // Newton's next step is below 1e-18
-    const S shrink = step > S(0.25) ? S(0.25) / step : S(1);
+    // the model of a disc term c |P w| holds only within a fraction of |P n| (its kink, the axis,
+    // is |P n| away; its Hessian c / |P n| changes by its own size over such a step): at most half
+    // that far a step
+    S reach = S(0.25);
+    for (int k = 0; k < f.n; ++k)
+      if (f.disc[k]) reach = std::min(reach, S(0.5) * (n - f.axis[k].dot(n) * f.axis[k]).norm());
+    const S shrink = step > reach ? reach / step : S(1);
     n = (n + shrink * (y1 * e1 + y2 * e2)).normalized();
     if (constraint) {  // back onto the circle (rounding)
       n -= constraint->dot(n) * *constraint;
