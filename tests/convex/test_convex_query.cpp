@@ -1189,11 +1189,14 @@ void expect_normal_against_referee(const char* what, const A& a, const B& b, int
 // 0.9, seed 11000588: 7.7e-7 rad before): the certificate at the minimiser on the ruling's circle
 // needs a cap of T about |P n| (certify_at's radii now down to 1/8192), and the one at the cap's
 // axis, another basin, then held too and came first (local_certificate now prefers one whose cap
-// holds EPA's normal).
+// holds EPA's normal). A cone's base rim against the other's, the minimiser on the first's axis
+// itself (pose 675 at 0.6, seed 8000108: 4.2e-7 rad before): f rises from the axis by only
+// 2.4e-6 per radian more than its smooth terms fall, so its certificate needs T below 1e-4.
 TEST(ConvexQuery, NormalsNearADiscAxisAgainstReferee) {
   const auto& z = zoo();
   expect_normal_against_referee("cylinder-cylinder, near a cap's axis", z.cylinder, z.cylinder, 2000, 0.6, 9000582u, {1770}, 1e-7);
   expect_normal_against_referee("cylinder-cylinder, a ruling near a cap's axis", z.cylinder, z.cylinder, 2000, 0.9, 11000588u, {706}, 1e-7);
+  expect_normal_against_referee("cone-cone, on a base's axis", z.cone, z.cone, 2000, 0.6, 8000108u, {675}, 1e-7);
 }
 
 // A capsule whose segment passes through a cylinder: the own EPA on the core stopped on its depth

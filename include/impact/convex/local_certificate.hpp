@@ -33,7 +33,7 @@
 /// When Newton meets a kink (a ruling, a cap, the cone's apex against its rim) or an indefinite
 /// Hessian, or no T gives lambda > 0, there is no certificate and EPA goes on to its own tolerance.
 /// Bounded: at most kLocalNewtonSteps Newton steps (each within half the distance to a disc term's
-/// axis, where its model holds) and 14 trial radii.
+/// axis, where its model holds) and 20 trial radii.
 ///
 /// Numerical contract: APPROXIMATE; upper is f(n*) from the terms (up to rounding), lower = rho
 /// includes an allowance of 64 ulps of the terms' magnitude for rounding.
@@ -125,7 +125,7 @@ inline S least_eigenvalue(S h0, S h1, S h2) {
 }
 
 /// The certificate of the file comment at unit n (any direction; it holds only near a local
-/// minimiser): true and `out` set when some T of the halving sequence from 1 down to 1/8192 gives a
+/// minimiser): true and `out` set when some T of the halving sequence from 1 down to 2^-19 gives a
 /// lower bound rho > 0. Kinks at n (|P n| or |a . n| within
 /// 1e-9) enter as norms: a disc term's c |z0 + M y| >= c sigma |y| - c |z0| (sigma the least
 /// singular value of M), an abs term's c |z0 + m . y| >= c |m . y| - c |z0|; with
@@ -218,9 +218,12 @@ bool certify_at(const OverlapTerms<S>& f, const Vec3<S>& n, LocalCertificate<S>&
       }
   }
   S T = S(1);
-  // down to 1/8192: near a disc term's kink (|P n| of 1e-3 .. 1e-2) its curvature bound
-  // c / (|P n| + T) needs T about |P n| to outweigh -U on deep poses
-  for (int trial = 0; trial < 14; ++trial, T /= S(2)) {
+  // down to 2^-19 (1.9e-6): near a disc term's kink (|P n| of 1e-3 .. 1e-2) its curvature bound
+  // c / (|P n| + T) needs T about |P n| to outweigh -U on deep poses; at the kink, T <= 2 kappa / mu
+  // with kappa = c - |g| as small as 2.4e-6 where the minimiser is the axis itself. EPA expands
+  // outside a cap only once its nearest face is within rho cos(cap) (epa_face_outside_cap), so
+  // small caps leave it as it was until it has nearly converged.
+  for (int trial = 0; trial < 20; ++trial, T /= S(2)) {
     if (!(T > S(0))) return false;
     S q0 = -U, q1 = S(0), q2 = -U;  // Q - U I
     for (int k = 0; k < nsd; ++k) {
