@@ -12,7 +12,14 @@
 ///   4. EPA from GJK's tetrahedron, seeded with the best candidate's normal and stopped early by a
 ///      local certificate on the pair's overlap terms (epa_from_simplex; convex/epa.hpp and
 ///      convex/local_certificate.hpp).
-/// Cone against hull has no candidates yet: stages 1, 3 and 4 only.
+/// Cone against hull has no candidates yet: stages 1, 3 and 4 only. After stage 4, some paths
+/// refine EPA's normal (refine_normal_locally, refine_on_cone_side).
+/// options.max_iterations is one budget for the whole path (docs/convex-notes.md, notes 25 and 36):
+/// every stage's support calls count in it (`its`, the calls so far, is handed from stage to stage
+/// and reported). A stage of a fixed most (the planes, the candidates: kCandidateCalls*) runs only
+/// when that most fits in what is left, else it is skipped (the candidates' absence changes no
+/// guarantee: GJK and EPA decide without them); GJK and EPA stop at the bound; a refinement that
+/// does not fit is skipped or cut short, EPA's normal kept and limit_reached set.
 /// convex/query.hpp chooses the path per pair of types; the general pieces (GJK, EPA, settling)
 /// are in convex/general_pair.hpp.
 #pragma once
@@ -44,6 +51,38 @@
 namespace impact {
 namespace detail {
 
+/// The most support calls (overlap evaluations, as CandidateBounds counts them) each pair's
+/// candidates make, read off their code: the stage runs only when this many are left of the
+/// bound (fits), and an IMPACT_ASSERT checks the count after each run. A candidate added to one
+/// of those functions must raise its figure here.
+inline constexpr int kCandidateCallsParallelAxes = 1;  // parallel_axes_contact: one overlap
+inline constexpr int kCandidateCallsCylinderPair = 9;  // cylinder_pair_contact: caps 2 + 2, rulings 1, rims 2 + 2
+// cylinder_cone_contact: a's caps 2, b's base 1, apex 1, rulings 2, base rim 1, a's rims 2, b's
+// points 1 + 3 (cylinder_points_bound), a's points 1 + 2 (cone_points_bound), side minimum 1
+inline constexpr int kCandidateCallsCylinderCone = 17;
+// cone_cone_contact: bases 2, apexes 2, rulings 2, rims 2, each cone's points 1 + 2
+inline constexpr int kCandidateCallsConeCone = 14;
+inline constexpr int kCandidateCallsConeBox = 20;       // cone_box_contact: faces 6, corners 8, edges 6
+inline constexpr int kCandidateCallsCylinderBox = 22;   // cylinder_box_contact: faces 6, caps 2, corners 8, edges 6
+inline constexpr int kCandidateCallsCylinderHull = 5;   // cylinder_hull_candidates: edge 1, side vertex 1, caps 2, face 1
+
+/// Whether a stage of at most `calls` support calls fits in what `spent` left of the query's bound
+/// (max_iterations is one budget for the query).
+template <class S>
+bool fits(const ConvexQueryOptions<S>& o, int spent, int calls) {
+  return calls <= o.max_iterations - spent;
+}
+
+/// Whether a pair's candidate stage of at most `most` support calls runs after `its` calls: when it
+/// fits in the bound. `cand` is reset to "no candidate" (infinite depth: EPA goes unseeded), which
+/// it stays when the stage is skipped.
+template <class S>
+bool candidates_fit(const ConvexQueryOptions<S>& o, int its, int most, ConvexContact<S>& cand) {
+  cand = ConvexContact<S>();
+  cand.depth = std::numeric_limits<S>::infinity();
+  return fits(o, its, most);
+}
+
 /// "No contact", after `calls` support calls.
 template <class S>
 ConvexContact<S> no_contact(int calls) {
@@ -53,7 +92,8 @@ ConvexContact<S> no_contact(int calls) {
 }
 
 /// A certified candidate's answer: `calls` support calls of the stages before it added to its
-/// count, and its contact settled along its normal (settle_certified_from_frame).
+/// count, and its contact settled along its normal (settle_certified_from_frame; the settling's
+/// support calls are not counted, as no answer's is).
 template <class S, class A, class B>
 ConvexContact<S> settled(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, ConvexContact<S> c, int calls) {
   c.iterations += calls;
@@ -67,10 +107,13 @@ ConvexContact<S> settled(const A& a, const RigidTransform<S>& pa, const B& b, co
 enum class Enclosure { Enclosed, Apart, Unsure };
 
 /// GJK on support functions of a's frame from the direction `start` (gjk_enclose of
-/// convex/epa.hpp): `simplex` receives the tetrahedron, `calls` counts the support calls.
+/// convex/epa.hpp): `simplex` receives the tetrahedron, `calls` counts the support calls (those of
+/// the stages before it included: they count against the bound). Nothing left of the bound: Unsure
+/// without a call (the caller's general_after then answers out_of_budget).
 template <class S, class SupportA, class SupportB>
 Enclosure enclose_origin(const SupportA& sa, const SupportB& sb, const Vec3<S>& start, S scale, const ConvexQueryOptions<S>& o,
                          SimplexPoint<S> (&simplex)[4], int& calls) {
+  if (!fits(o, calls, 1)) return Enclosure::Unsure;
   bool limit = false, failed = false;
   if (gjk_enclose(sa, sb, start, scale, o.max_iterations, simplex, calls, limit, failed)) return Enclosure::Enclosed;
   return limit || failed ? Enclosure::Unsure : Enclosure::Apart;
@@ -136,13 +179,13 @@ struct PairPath {
   bool separated() const { return separated_along(sa, sb, centre_line, scale); }
 
   /// GJK from the centre line, or with its first support along `first` when given (enclose_origin,
-  /// `its` support calls so far): true with `simplex` its tetrahedron about the origin; false with
-  /// `answer` the query's answer when it ended there (a separating plane: no contact after its
-  /// calls and `extra` more; unsure: the general path from scratch).
-  bool enclose(SimplexPoint<S> (&simplex)[4], int& its, int extra, ConvexContact<S>& answer, const Vec3<S>* first = nullptr) const {
+  /// `its` support calls so far, every stage's): true with `simplex` its tetrahedron about the
+  /// origin; false with `answer` the query's answer when it ended there (a separating plane: no
+  /// contact after its calls; unsure: the general path from scratch with what is left).
+  bool enclose(SimplexPoint<S> (&simplex)[4], int& its, ConvexContact<S>& answer, const Vec3<S>* first = nullptr) const {
     switch (enclose_origin(sa, sb, first ? Vec3<S>(-*first) : Vec3<S>(-centre_line), scale, o, simplex, its)) {
-      case Enclosure::Unsure: answer = general_after(a, pa, b, pb, o, its + extra); return false;
-      case Enclosure::Apart: answer = no_contact<S>(its + extra); return false;
+      case Enclosure::Unsure: answer = general_after(a, pa, b, pb, o, its); return false;
+      case Enclosure::Apart: answer = no_contact<S>(its); return false;
       case Enclosure::Enclosed: break;
     }
     return true;
@@ -159,14 +202,14 @@ bool certificate_holds(const LocalCertificate<S>& lc, const SupportA& sa, const 
   return lc.ok && k.dot(sa(k)) - k.dot(sb(Vec3<S>(-k))) - lc.lower <= tol;
 }
 
-/// EPA from GJK's tetrahedron (`calls` support calls so far), seeded with the best candidate's
-/// normal when one has a finite depth (an upper bound near the answer, and the local
-/// certificate's first start), and stopped early by `local` unless options.local_certificate is
-/// off; the candidates' support calls are added to the count. `f` is PairFrame(pa, pb), the frame
-/// of `simplex` (computed once a query). `newton_normal`, when given, is set to whether the answer's
-/// normal is that of a certificate `local` gave (Newton's minimiser of the overlap's terms, the
-/// overlap along it within the tolerance of the certified lower bound): no refinement after EPA
-/// moves such a normal by more than rounding, so the callers skip theirs there.
+/// EPA from GJK's tetrahedron (`calls` support calls so far, every stage's: EPA stops at the bound
+/// counting them), seeded with the best candidate's normal when one has a finite depth (an upper
+/// bound near the answer, and the local certificate's first start), and stopped early by `local`
+/// unless options.local_certificate is off. `f` is PairFrame(pa, pb), the frame of `simplex`
+/// (computed once a query). `newton_normal`, when given, is set to whether the answer's normal is
+/// that of a certificate `local` gave (Newton's minimiser of the overlap's terms, the overlap along
+/// it within the tolerance of the certified lower bound): no refinement after EPA moves such a
+/// normal by more than rounding, so the callers skip theirs there.
 template <class S, class A, class B, class Local>
 ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                                   const ConvexQueryOptions<S>& o, const SimplexPoint<S> (&simplex)[4], int calls, const Local& local,
@@ -184,7 +227,6 @@ ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const
   };
   ConvexContact<S> g = o.local_certificate ? general_penetration(a, pa, b, pb, o, simplex, calls, recorded, seed, &f)
                                            : general_penetration(a, pa, b, pb, o, simplex, calls, NoLocalCertificate{}, seed, &f);
-  g.iterations += cand.iterations;
   if (newton_normal) {
     // EPA's normal is the certificate's (best_n = cert.normal, translated and rotated back) unless
     // a face's overlap was lower; 64 ulps allow for the rotation's rounding
@@ -200,11 +242,12 @@ ConvexContact<S> epa_from_simplex(const A& a, const RigidTransform<S>& pa, const
 /// a circle EPA cannot close: about 515 support calls and a bracket of 7.5e-5 of the size at a tilt
 /// of 1e-9 rad), the parallel-axes closed form certifies a bracket of about twice the tilt times
 /// b's reach (convex/parallel_axes.hpp). The narrower of the two is kept; limit_reached stays set
-/// unless it is within the tolerance.
+/// unless it is within the tolerance. Skipped when its support call does not fit in the bound
+/// (g.iterations spent; g stays flagged).
 template <class S, class A, class B>
 void narrow_by_parallel_axes(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
                              const ConvexQueryOptions<S>& o, ConvexContact<S>& g) {
-  if (!g.intersecting || !g.limit_reached) return;
+  if (!g.intersecting || !g.limit_reached || !fits(o, g.iterations, kCandidateCallsParallelAxes)) return;
   const PairFrame<S> f(pa, pb);
   ConvexContact<S> p;
   if (!parallel_axes_contact(a, b, f.R, f.t, g.depth_gap, p) || !(p.depth_gap < g.depth_gap)) return;
@@ -214,6 +257,17 @@ void narrow_by_parallel_axes(const A& a, const RigidTransform<S>& pa, const B& b
   g = p;
 }
 
+/// The options of EPA on a pair that narrow_by_parallel_axes may follow: the bound less that
+/// stage's one support call, which it needs exactly when EPA stops at the bound (a coaxial pair at
+/// the default bound: ParallelAxes.CoaxialTiltGetsTheClosedFormsBracket). When EPA closes its
+/// bracket, the call is left to the refinements.
+template <class S>
+ConvexQueryOptions<S> leave_for_narrowing(const ConvexQueryOptions<S>& o) {
+  ConvexQueryOptions<S> e = o;
+  e.max_iterations -= kCandidateCallsParallelAxes;
+  return e;
+}
+
 /// After EPA on two cylinders: EPA stops on its depth tolerance, and where f, the overlap along a
 /// direction, is smooth and quadratic at its minimum, its normal is then within only about the
 /// square root of that tolerance of the minimiser (4.6e-6 and 1.1e-5 rad on two of the bench's
@@ -221,16 +275,26 @@ void narrow_by_parallel_axes(const A& a, const RigidTransform<S>& pa, const B& b
 /// size: docs/convex-notes.md, note 30). The local certificate from EPA's normal (Newton on the
 /// closed-form overlap `terms`, a's frame) gives the minimiser of f on a cap about it; its normal
 /// is taken when that cap holds EPA's normal and the overlap along it is no larger. EPA's lower
-/// bound stays the bracket's lower end.
+/// bound stays the bracket's lower end. That overlap is one support call (of each shape), counted
+/// against `max_iterations` (one budget with g.iterations): when it does not fit, EPA's normal is
+/// kept and g says limit_reached.
 template <class S, class A, class B>
 void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb, const OverlapTerms<S>& terms,
-                           ConvexContact<S>& g) {
+                           ConvexContact<S>& g, int max_iterations) {
   if (!g.intersecting || g.limit_reached) return;
   const Vec3<S> n0 = pa.R.transpose() * g.normal;
   const LocalCertificate<S> lc = local_certificate(terms, n0);
   if (!lc.ok || !(lc.normal.dot(n0) >= lc.cos_cap)) return;
+  if (!(g.iterations < max_iterations)) {
+    g.limit_reached = true;
+    return;
+  }
+  ++g.iterations;
   keep_if_no_deeper(a, pa, b, pb, lc.normal, g);
 }
+
+/// The most evaluations of cone_side_valley_normal's search.
+inline constexpr int kConeSideEvaluations = 32;
 
 /// Where cone b's side touches the contact, the overlap f(n) = h_A(n) + h_B(-n) has a kink along
 /// the circle of b's side normals (-n = m(u), u the azimuth: b's support along -n is a whole ruling,
@@ -251,10 +315,20 @@ void refine_normal_locally(const A& a, const RigidTransform<S>& pa, const B& b, 
 /// lies inside the window with its slope within 1e-10 of the size (a local minimum of f on the
 /// circle, the minimiser of f where the contact is the side's); `evaluations_out`, when given,
 /// receives the evaluations of f (a support call of a each), 0 when the window was not entered.
+/// The search takes at most kConeSideEvaluations evaluations, fewer when `max_evaluations` (what
+/// the query's bound leaves) says so; `cut_short`, when given, is set to whether that smaller
+/// bound ended the search before it decided (or left no room to start it).
 template <class S, class SupportA>
 bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>& R, const Vec3<S>& t, const Vec3<S>& n0, S scale,
-                             Vec3<S>& n, int* evaluations_out = nullptr) {
+                             Vec3<S>& n, int* evaluations_out = nullptr, int max_evaluations = kConeSideEvaluations,
+                             bool* cut_short = nullptr) {
   if (evaluations_out) *evaluations_out = 0;
+  if (cut_short) *cut_short = false;
+  const int most = std::min(kConeSideEvaluations, max_evaluations);
+  const auto out_of_room = [&] {  // the search ended by `most` evaluations, undecided
+    if (cut_short && most < kConeSideEvaluations) *cut_short = true;
+    return false;
+  };
   const Vec3<S> bz = R.col(2), apex = t + b.half_length * bz;
   const S len = std::sqrt(S(4) * b.half_length * b.half_length + b.radius * b.radius);
   const S ku = S(2) * b.half_length / len, kz = b.radius / len;  // m(u) = ku u + kz bz
@@ -282,6 +356,7 @@ bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>
     n = -m_of(e.x);
     return true;
   };
+  if (most < 1) return out_of_room();
   int evaluations = 1;
   Trial lo = eval(S(0));
   if (!(lo.f > S(0))) return false;
@@ -292,7 +367,8 @@ bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>
   S step = S(1e-6);
   Trial hi;
   while (true) {
-    if (evaluations >= 32 || !(std::abs(lo.x) < window)) return false;  // downhill up to the window's edge
+    if (!(std::abs(lo.x) < window)) return false;  // downhill up to the window's edge
+    if (evaluations >= most) return out_of_room();
     const Trial e = eval(std::min(std::max(lo.x + dir * step, -window), window));
     ++evaluations;
     if (!(e.f > S(0))) return false;
@@ -311,7 +387,7 @@ bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>
   int side = 0;
   bool kink_tried = false;
   const S tie = S(16) * std::numeric_limits<S>::epsilon() * scale;
-  while (evaluations < 32) {
+  while (evaluations < most) {
     const S a = std::min(lo.x, hi.x), c = std::max(lo.x, hi.x);
     if (!(c - a > S(8) * std::numeric_limits<S>::epsilon())) return false;
     S x = (lo.x * ghi - hi.x * glo) / (ghi - glo);
@@ -359,21 +435,29 @@ bool cone_side_valley_normal(const SupportA& sa, const Cone<S>& b, const Mat3<S>
       side = 1;
     }
   }
-  return false;
+  return out_of_room();
 }
 
 /// EPA's contact g of a and cone b refined on b's side (cone_side_valley_normal): the normal taken
 /// where the true overlap along it is no larger; EPA's lower bound stays the bracket's lower end.
-/// `mirror`: b is the first shape of the query (g's normal points from b towards a).
+/// `mirror`: b is the first shape of the query (g's normal points from b towards a). Its support
+/// calls (the search's evaluations and the overlap along the normal found) count in g.iterations
+/// against `max_iterations` (one budget, budgeted_search of convex/edge_valley.hpp): the search
+/// gets what is left less one for that overlap, and when that cuts it short, EPA's normal is kept
+/// and g says limit_reached.
 template <class S, class A>
 void refine_on_cone_side(const A& a, const RigidTransform<S>& pa, const Cone<S>& b, const RigidTransform<S>& pb, ConvexContact<S>& g,
-                         bool mirror = false) {
+                         int max_iterations, bool mirror = false) {
   if (!g.intersecting || g.limit_reached) return;
   const PairFrame<S> f(pa, pb);
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const Vec3<S> n0 = pa.R.transpose() * (mirror ? Vec3<S>(-g.normal) : g.normal);
+  const S scale = query_scale<S>(a, b);
   Vec3<S> n;
-  if (!cone_side_valley_normal(sa, b, f.R, f.t, n0, query_scale<S>(a, b), n)) return;
+  const auto search = [&](int most, int& evaluations, bool& cut_short) {
+    return cone_side_valley_normal(sa, b, f.R, f.t, n0, scale, n, &evaluations, most, &cut_short);
+  };
+  if (!budgeted_search(g, max_iterations, search)) return;
   ConvexContact<S> r = g;
   r.normal = pa.rotate(mirror ? Vec3<S>(-n) : n);
   if (mirror) {
@@ -403,25 +487,30 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   // a plane normal to the line between the centres separates them (by more than rounding: a pair
   // touching within rounding goes on to GJK, which decides it)
   if (separated_along(sa, sb, centre_b, scale)) return one_plane_apart<S>();
+  int its = 1;  // the plane along the centre line; each stage adds its calls (one budget)
+  const S tol = o.relative_tolerance * scale;
   ConvexContact<S> c;
-  if (parallel_axes_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c)) return settled(a, pa, b, pb, c, 1);  // parallel axes
-  bool certified;
-  if constexpr (std::is_same_v<B, Cone<S>>) {
-    certified = cylinder_cone_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
-  } else {
-    certified = cylinder_pair_contact(a, b, f.R, f.t, o.relative_tolerance * scale, c);
+  if (fits(o, its, kCandidateCallsParallelAxes) && parallel_axes_contact(a, b, f.R, f.t, tol, c)) return settled(a, pa, b, pb, c, its);
+  constexpr int most = std::is_same_v<B, Cone<S>> ? kCandidateCallsCylinderCone : kCandidateCallsCylinderPair;
+  if (candidates_fit(o, its, most, c)) {
+    bool certified;
+    if constexpr (std::is_same_v<B, Cone<S>>) {
+      certified = cylinder_cone_contact(a, b, f.R, f.t, tol, c);
+    } else {
+      certified = cylinder_pair_contact(a, b, f.R, f.t, tol, c);
+    }
+    IMPACT_ASSERT(c.iterations <= most);
+    if (certified) return settled(a, pa, b, pb, c, its);
+    its += c.iterations;
+    // a candidate's direction with a negative overlap (beyond rounding) is a separating plane: no
+    // contact without GJK (33 of the 145 separated poses of the bench's 2000 cylinder–cone poses
+    // that the centre line leaves)
+    if (c.depth < -std::numeric_limits<S>::epsilon() * S(16) * scale) return no_contact<S>(its);
   }
-  if (certified) return settled(a, pa, b, pb, c, 1);
-  // a candidate's direction with a negative overlap (beyond rounding) is a separating plane: no
-  // contact without GJK (33 of the 145 separated poses of the bench's 2000 cylinder–cone poses that
-  // the centre line leaves)
-  if (c.depth < -std::numeric_limits<S>::epsilon() * S(16) * scale) return no_contact<S>(1 + c.iterations);
-  c.iterations += 1;  // the plane along the centre line
   SimplexPoint<S> simplex[4];
-  int its = 0;
   switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its + c.iterations);
-    case Enclosure::Apart: return no_contact<S>(its + c.iterations);
+    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its);
+    case Enclosure::Apart: return no_contact<S>(its);
     case Enclosure::Enclosed: break;
   }
   // EPA from GJK's tetrahedron (its support calls counted once, in g.iterations), stopped early by
@@ -431,7 +520,6 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
       // a bound through the cone's branch or a body inside it is exact only where that branch or
       // body touches the contact: accepted when the true overlap at the certified normal is within
       // the tolerance of the bound
-      const S tol = o.relative_tolerance * scale;
       OverlapTerms<S> terms;
       if (cylinder_cone_terms(a, b, f.R, f.t, n, terms)) {
         const LocalCertificate<S> lc = local_certificate(terms, n);
@@ -450,18 +538,18 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
     }
   };
   bool newton_normal = false;
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, c, f, &newton_normal);
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, c, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   // a certificate's normal is the terms' minimiser already: no refinement (for two cylinders the
   // same Newton on the same terms from that normal, which stays there)
   if constexpr (std::is_same_v<B, Cylinder<S>>) {
-    if (!newton_normal) refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g);
+    if (!newton_normal) refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g, o.max_iterations);
   } else if (!newton_normal) {
     OverlapTerms<S> terms;
     if (g.intersecting && cylinder_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
-      refine_normal_locally(a, pa, b, pb, terms, g);
+      refine_normal_locally(a, pa, b, pb, terms, g, o.max_iterations);
     }
-    refine_on_cone_side(a, pa, b, pb, g);
+    refine_on_cone_side(a, pa, b, pb, g, o.max_iterations);
   }
   return g;
 }
@@ -486,16 +574,20 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
   const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
   if (path.separated()) return one_plane_apart<S>();
+  int its = 1;  // the plane; each stage adds its calls (one budget)
   ConvexContact<S> cand;
-  if (parallel_axes_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
+  if (fits(o, its, kCandidateCallsParallelAxes) && parallel_axes_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
   SimplexPoint<S> simplex[4];
-  int its = 1;
-  if (!path.enclose(simplex, its, 0, cand)) {
+  if (!path.enclose(simplex, its, cand)) {
     narrow_by_parallel_axes(a, pa, b, pb, o, cand);  // the general path's answer (no contact: unchanged)
     return cand;
   }
-  cand = ConvexContact<S>();
-  if (cone_cone_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, its);
+  if (candidates_fit(o, its, kCandidateCallsConeCone, cand)) {
+    const bool certified = cone_cone_contact(a, b, f.R, f.t, tol, cand);
+    IMPACT_ASSERT(cand.iterations <= kCandidateCallsConeCone);
+    if (certified) return settled(a, pa, b, pb, cand, its);
+    its += cand.iterations;
+  }
   const Mat3<S> Rs = f.R.transpose();
   const Vec3<S> ts = -(Rs * f.t);
   const auto local = [&](const Vec3<S>& n) {
@@ -523,15 +615,15 @@ ConvexContact<S> cone_pair_penetration(const Cone<S>& a, const RigidTransform<S>
     return LocalCertificate<S>();
   };
   bool newton_normal = false;
-  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
+  ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, cand, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
   if (newton_normal) return g;  // a certificate's normal is the terms' minimiser already
   OverlapTerms<S> terms;
   if (g.intersecting && cone_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
-    refine_normal_locally(a, pa, b, pb, terms, g);
+    refine_normal_locally(a, pa, b, pb, terms, g, o.max_iterations);
   }
-  refine_on_cone_side(a, pa, b, pb, g);
-  refine_on_cone_side(b, pb, a, pa, g, true);
+  refine_on_cone_side(a, pa, b, pb, g, o.max_iterations);
+  refine_on_cone_side(b, pb, a, pa, g, o.max_iterations, true);
   return g;
 }
 
@@ -564,13 +656,18 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   // EPA from its tetrahedron. Before GJK: on the bench's 2000 poses, instructions per query
   // 3,126 -> 2,928 (intersecting poses 13,172 -> 11,695; support calls 4,369 -> 3,631), the
   // separated poses left to GJK (80) paying for the candidates
+  int its = 1;  // the planes; each stage adds its calls (one budget)
   ConvexContact<S> cand;
-  if (cone_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
+  if (candidates_fit(o, its, kCandidateCallsConeBox, cand)) {
+    const bool certified = cone_box_contact(a, b, f.R, f.t, tol, cand);
+    IMPACT_ASSERT(cand.iterations <= kCandidateCallsConeBox);
+    if (certified) return settled(a, pa, b, pb, cand, its);
+    its += cand.iterations;
+  }
   SimplexPoint<S> simplex[4];
-  int its = 1;
   ConvexContact<S> answer;
   const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
-  if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
+  if (!path.enclose(simplex, its, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
     // near a side ruling (its branches within 0.02 of the size): the body inside the cone along
     // the ruling the box touches (a box edge across the side: 90 of the bench's 239 EPA poses)
@@ -587,7 +684,7 @@ ConvexContact<S> cone_box_penetration(const Cone<S>& a, const RigidTransform<S>&
   };
   bool newton_normal = false;
   ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
-  if (!newton_normal) refine_on_cone_side(b, pb, a, pa, g, true);  // else the terms' minimiser already
+  if (!newton_normal) refine_on_cone_side(b, pb, a, pa, g, o.max_iterations, true);  // else the terms' minimiser already
   return g;
 }
 
@@ -609,18 +706,23 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
     if (len > S(0) && cylinder_box_overlap(a, b, f.R, f.t, Vec3<S>(f.t / len)) < -margin) return one_plane_apart<S>();
   }
   if (cylinder_box_apart(a, b, f.R, f.t, margin)) return one_plane_apart<S>();
+  int its = 1;  // the planes; each stage adds its calls (one budget)
   ConvexContact<S> cand;
-  if (cylinder_box_contact(a, b, f.R, f.t, tol, cand)) return settled(a, pa, b, pb, cand, 1);
+  if (candidates_fit(o, its, kCandidateCallsCylinderBox, cand)) {
+    const bool certified = cylinder_box_contact(a, b, f.R, f.t, tol, cand);
+    IMPACT_ASSERT(cand.iterations <= kCandidateCallsCylinderBox);
+    if (certified) return settled(a, pa, b, pb, cand, its);
+    its += cand.iterations;
+  }
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   SimplexPoint<S> simplex[4];
-  int its = 1;
   // GJK's first support along the best candidate's normal, when one applied (near the contact's
   // side of D: fewer steps to enclose the origin than from the centre line)
   const Vec3<S> start = cand.depth < std::numeric_limits<S>::infinity() ? Vec3<S>(-cand.normal) : Vec3<S>(-f.t);
   switch (enclose_origin(sa, sb, start, scale, o, simplex, its)) {
-    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its + cand.iterations);
-    case Enclosure::Apart: return no_contact<S>(its + cand.iterations);
+    case Enclosure::Unsure: return general_after(a, pa, b, pb, o, its);
+    case Enclosure::Apart: return no_contact<S>(its);
     case Enclosure::Enclosed: break;
   }
   const OverlapTerms<S> terms = cylinder_box_terms(a, b, f.R, f.t);
@@ -636,12 +738,14 @@ ConvexContact<S> cylinder_box_penetration(const Cylinder<S>& a, const RigidTrans
 /// the valley of its side normals (refine_on_cone_side), each kept where the true overlap along
 /// it is no larger. (Newton on cylinder_hull_terms where the overlap is smooth,
 /// tried too, changed no pose of the sweep the valley search left above 1e-8 rad: note 34.)
+/// Both count their support calls in g.iterations against `max_iterations` (one budget), each
+/// getting what the one before left; one cut short keeps g's normal and sets limit_reached.
 template <class S, class A>
 ConvexContact<S> refined_hull_normal(const A& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
-                                     ConvexContact<S> g, bool uncertain) {
+                                     ConvexContact<S> g, bool uncertain, int max_iterations) {
   if (!uncertain) return g;
-  refine_on_hull_edge(a, pa, b, pb, g);
-  if constexpr (std::is_same_v<A, Cone<S>>) refine_on_cone_side(b, pb, a, pa, g, true);  // a hull vertex on a's side
+  refine_on_hull_edge(a, pa, b, pb, g, max_iterations);
+  if constexpr (std::is_same_v<A, Cone<S>>) refine_on_cone_side(b, pb, a, pa, g, max_iterations, true);  // a hull vertex on a's side
   return g;
 }
 
@@ -664,19 +768,23 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   const auto& sb = path.sb;
   // a plane normal to the line between the centres separates them (most separated poses)
   if (path.separated()) return one_plane_apart<S>();
+  int its = 1;  // the plane; each stage adds its calls (one budget)
   ConvexContact<S> cand;
-  const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
-  if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
-  // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
-  if (verdict == CylinderHullVerdict::Certified) {
-    return refined_hull_normal(a, pa, b, pb, settled(a, pa, b, pb, cand, 1), cand.depth_gap > S(0));
+  if (candidates_fit(o, its, kCandidateCallsCylinderHull, cand)) {
+    const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
+    IMPACT_ASSERT(cand.iterations <= kCandidateCallsCylinderHull);
+    if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
+    // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
+    if (verdict == CylinderHullVerdict::Certified) {
+      return refined_hull_normal(a, pa, b, pb, settled(a, pa, b, pb, cand, its), cand.depth_gap > S(0), o.max_iterations);
+    }
+    its += cand.iterations;
   }
   SimplexPoint<S> simplex[4];
-  int its = 1;
   ConvexContact<S> answer;
   // GJK's first support along the best candidate's normal, when one applied (as cylinder–box)
   const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
-  if (!path.enclose(simplex, its, cand.iterations, answer, seeded ? &cand.normal : nullptr)) return answer;
+  if (!path.enclose(simplex, its, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
     if (certificate_holds(lc, sa, sb, tol)) return lc;
@@ -684,7 +792,7 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   };
   bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
   const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
-  return refined_hull_normal(a, pa, b, pb, g, !newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 
 /// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
@@ -706,7 +814,7 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   SimplexPoint<S> simplex[4];
   int its = 1;
   ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded
-  if (!path.enclose(simplex, its, 0, none)) return none;
+  if (!path.enclose(simplex, its, none)) return none;
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
     const S gap = cone_branch_gap(a, n);
@@ -734,7 +842,7 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   none.depth = std::numeric_limits<S>::infinity();
   bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
   const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f, &newton_normal);
-  return refined_hull_normal(a, pa, b, pb, g, !newton_normal);
+  return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 
 }  // namespace detail

@@ -37,7 +37,8 @@ struct ConvexContact {
   /// The solver stopped before its tolerance: an iteration bound, or (penetration) rounding or a
   /// degenerate polytope left the bracket [depth - depth_gap, depth] wider than it (query.hpp).
   /// `intersecting` is then not decided (either value may be wrong); the bracket still holds the
-  /// true depth, with depth - depth_gap > 0 only when the intersection was proven.
+  /// true depth, with depth - depth_gap > 0 only when the intersection was proven. The normal may
+  /// be EPA's, unrefined, when the bound cut a refinement short (ConvexQueryOptions::max_iterations).
   bool limit_reached = false;
   /// Iterative solvers (EPA, MPR): depth minus a certified lower bound of the true depth (the
   /// distance from the origin to the boundary of the solver's inner polytope of the Minkowski

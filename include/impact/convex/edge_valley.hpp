@@ -25,7 +25,10 @@
 /// Numerical contract: APPROXIMATE. The refined normal is taken only where the true overlap along
 /// it (one support call of each shape) is no larger than the answer's, and the answer's lower
 /// bound stays the bracket's lower end, so the depth's bracket still holds. Bounded: one support
-/// vertex of a hull and its neighbours, at most 32 support calls of X.
+/// vertex of a hull and its neighbours (not counted, as a candidate's points are not), at most
+/// kEdgeValleyEvaluations support calls of X and one overlap, all counted in the query's
+/// max_iterations (one budget, docs/convex-notes.md, note 36): a search the bound cuts short keeps
+/// the answer's normal and sets limit_reached.
 /// Thread safety: pure functions.
 #pragma once
 
@@ -47,6 +50,9 @@ namespace impact::detail {
 /// The valley search's window about its start (radians): EPA's normal is within about the square
 /// root of its depth tolerance of the minimiser (1e-5 rad at 1e-10 of the size).
 inline constexpr double kEdgeValleyWindow = 1e-3;
+
+/// The most evaluations (support calls of X) of the valley search.
+inline constexpr int kEdgeValleyEvaluations = 32;
 
 /// The edge of hull b (placed by R, t in the frame of n0) whose valley holds unit n0 within
 /// `window` radians: b's support vertex along -n0 and, of its neighbours (of every vertex for
@@ -89,9 +95,14 @@ bool hull_edge_near(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, 
 /// kEdgeValleyWindow of the start m0 (the file comment; `sx` X's support, all in one frame,
 /// `scale` the query's). True and `m` set when the least value lies inside the window, is
 /// positive, and s_X(m) projects onto the edge between its ends (a local minimiser of the
-/// overlap on the sphere).
+/// overlap on the sphere). The search takes at most kEdgeValleyEvaluations evaluations, fewer when
+/// `max_evaluations` says so; `evaluations` counts them, and `cut_short` says that a smaller
+/// `max_evaluations` ended the search before it decided (or left no room to start it).
 template <class S, class SupportX>
-bool edge_valley_normal(const SupportX& sx, const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& m0, S c, S scale, Vec3<S>& m) {
+bool edge_valley_normal(const SupportX& sx, const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& m0, S c, S scale, Vec3<S>& m,
+                        int max_evaluations, int& evaluations, bool& cut_short) {
+  evaluations = 0;
+  cut_short = false;
   const Vec3<S> edge = p1 - p0;
   const S len = edge.norm();
   if (!(len > S(0))) return false;
@@ -114,9 +125,17 @@ bool edge_valley_normal(const SupportX& sx, const Vec3<S>& p0, const Vec3<S>& p1
     return r;
   };
   const S stop = S(2) * window * std::max(S(1e-10) * scale, S(64) * std::numeric_limits<S>::epsilon() * scale);
+  const int most = std::min(kEdgeValleyEvaluations, max_evaluations);
+  if (most < 2) {  // not even the window's two ends
+    cut_short = true;
+    return false;
+  }
   SegmentSolidPoint<S> best;
-  int evaluations = 0;
-  if (segment_solid_minimum(eval, S(0), stop, S(-1), 32, best, evaluations) != SegmentSearch::Answered) return false;
+  const SegmentSearch found = segment_solid_minimum(eval, S(0), stop, S(-1), most, best, evaluations);
+  if (found != SegmentSearch::Answered) {
+    cut_short = found == SegmentSearch::Bound && most < kEdgeValleyEvaluations;
+    return false;
+  }
   if (!(best.t > S(0) && best.t < S(1))) return false;  // the least value at the window's edge: not found
   // X's support point across the edge between its ends: the overlap rises off the circle both ways
   const S along = e.dot(best.p - p0);
@@ -138,29 +157,50 @@ void keep_if_no_deeper(const A& a, const RigidTransform<S>& pa, const B& b, cons
   g = r;
 }
 
+/// A valley search refining contact g within the query's bound (one budget): `search(most,
+/// evaluations, cut_short)` gets what g.iterations leaves of `max_iterations` less one for the
+/// overlap along the normal it finds (keep_if_no_deeper's support call of each shape). Its
+/// evaluations and that overlap count in g.iterations; a search cut short sets g.limit_reached.
+/// True when the search found a normal.
+template <class S, class Search>
+bool budgeted_search(ConvexContact<S>& g, int max_iterations, const Search& search) {
+  int evaluations = 0;
+  bool cut_short = false;
+  const bool found = search(max_iterations - g.iterations - 1, evaluations, cut_short);
+  g.iterations += evaluations;
+  if (cut_short) g.limit_reached = true;
+  if (found) ++g.iterations;  // the overlap along the normal found
+  return found;
+}
+
 /// A contact g of a curved shape a (cylinder or cone) and hull b (normal from a towards b)
 /// refined along the valley of b's edge near orthogonal to its normal (hull_edge_near,
 /// edge_valley_normal), kept where the true overlap is no larger. Nothing happens when g is not
 /// intersecting, its bound was hit, or no edge of b is within kEdgeValleyWindow of orthogonal to
-/// its normal.
+/// its normal. Its support calls count against `max_iterations` (budgeted_search).
 template <class S, class A>
 void refine_on_hull_edge(const A& a, const RigidTransform<S>& pa, const ConvexHull<S>& b, const RigidTransform<S>& pb,
-                         ConvexContact<S>& g) {
+                         ConvexContact<S>& g, int max_iterations) {
   if (!g.intersecting || g.limit_reached) return;
   const PairFrame<S> f(pa, pb);
   const Vec3<S> n0 = pa.R.transpose() * g.normal;
   Vec3<S> p0, p1, n;
   if (!hull_edge_near(b, f.R, f.t, n0, S(kEdgeValleyWindow), p0, p1)) return;
   const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  if (edge_valley_normal(sa, p0, p1, n0, S(0), query_scale<S>(a, b), n)) keep_if_no_deeper(a, pa, b, pb, n, g);
+  const S scale = query_scale<S>(a, b);
+  const auto search = [&](int most, int& evaluations, bool& cut_short) {
+    return edge_valley_normal(sa, p0, p1, n0, S(0), scale, n, most, evaluations, cut_short);
+  };
+  if (budgeted_search(g, max_iterations, search)) keep_if_no_deeper(a, pa, b, pb, n, g);
 }
 
 /// A contact g of capsule a and a curved shape b (normal from a towards b) refined along the
 /// valley of a's segment when the normal is within kEdgeValleyWindow of orthogonal to it
-/// (edge_valley_normal with X = b, m = -n), kept where the true overlap is no larger.
+/// (edge_valley_normal with X = b, m = -n), kept where the true overlap is no larger. Its support
+/// calls count against `max_iterations` (budgeted_search).
 template <class S, class B>
 void refine_on_capsule_segment(const Capsule<S>& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb,
-                               ConvexContact<S>& g) {
+                               ConvexContact<S>& g, int max_iterations) {
   if (!g.intersecting || g.limit_reached) return;
   const Vec3<S> m0 = -(pa.R.transpose() * g.normal);
   if (!(std::abs(m0.z()) <= std::sin(S(kEdgeValleyWindow)))) return;
@@ -168,7 +208,11 @@ void refine_on_capsule_segment(const Capsule<S>& a, const RigidTransform<S>& pa,
   const auto sb = [&](const Vec3<S>& d) { return f.support_b(b, d); };
   const Vec3<S> p0(S(0), S(0), -a.half_length), p1(S(0), S(0), a.half_length);
   Vec3<S> m;
-  if (edge_valley_normal(sb, p0, p1, m0, a.radius, query_scale<S>(a, b), m)) keep_if_no_deeper(a, pa, b, pb, Vec3<S>(-m), g);
+  const S scale = query_scale<S>(a, b);
+  const auto search = [&](int most, int& evaluations, bool& cut_short) {
+    return edge_valley_normal(sb, p0, p1, m0, a.radius, scale, m, most, evaluations, cut_short);
+  };
+  if (budgeted_search(g, max_iterations, search)) keep_if_no_deeper(a, pa, b, pb, Vec3<S>(-m), g);
 }
 
 }  // namespace impact::detail

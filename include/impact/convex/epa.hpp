@@ -500,7 +500,9 @@ EpaPenetration<S> epa_penetration_local(const SupportA& support_a, const Support
     }
   };
 
-  if (st.seeded) {  // a direction known to overlap little: its overlap is an upper bound to start from
+  // a direction known to overlap little: its overlap is an upper bound to start from (when the
+  // bound leaves a support call for it)
+  if (st.seeded && its < max_it) {
     const SimplexPoint<S> p = supp(st.seed);
     upper = st.seed.dot(p.w);
     best_n = st.seed;

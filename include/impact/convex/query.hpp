@@ -65,14 +65,16 @@
 ///
 /// Validation: each call throws InvalidInput on an invalid shape (validate_shape), pose
 /// (validate_pose) or options, before computing anything. Iterative solvers are bounded by
-/// options.max_iterations, one budget for the whole query (ConvexQueryOptions); a result stopped by
-/// the bound says limit_reached, and so does a
+/// options.max_iterations, one budget for the whole query that every stage's support calls count in
+/// (candidates and normal refinements too: ConvexQueryOptions); a result stopped or changed by the
+/// bound says limit_reached, and so does a
 /// penetration whose bracket rounding or a degenerate polytope left open (penetration_unchecked).
 /// An answer without limit_reached is decided. A flagged one is not: its boolean (the value of
 /// convex_intersect, `intersecting` of a distance or penetration) may be wrong either way, while
 /// its numbers still hold: a distance is never below the true one, and a penetration's
 /// [depth - depth_gap, depth] holds the true depth, its lower end above 0 only when the
-/// intersection was proven (docs/convex-notes.md, note 28).
+/// intersection was proven (docs/convex-notes.md, note 28); its normal may be EPA's unrefined one
+/// (note 36).
 /// Thread safety: the functions are pure; shapes and poses may be shared between threads.
 ///
 /// Where the parts live: the options and the validation in convex/query_options.hpp; the general

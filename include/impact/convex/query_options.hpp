@@ -20,11 +20,17 @@ namespace impact {
 
 template <class S>
 struct ConvexQueryOptions {
-  /// Bound on the iterations (support calls per shape) of GJK, MPR and EPA; 1 .. 100000. One budget
-  /// for the whole query: its solvers share it (a later run, retry or fallback gets what the runs
-  /// before it left). A pair's closed-form candidates make a fixed number of support calls besides
-  /// (up to 12 over the bounds 1-40 on 300 poses of each pair; a capsule's segment against a
-  /// cylinder up to 64 evaluations), which the reported iterations include.
+  /// Bound on the iterations (support calls per shape) of a query; 1 .. 100000. One budget for the
+  /// whole query, which the reported iterations count: every stage spends from it (a later run,
+  /// retry or fallback gets what the stages before it left): the separating planes, a pair's
+  /// closed-form candidates (run only when the most they can make, 1 to 22 by pair, fits in what is
+  /// left; else the query goes on without them), GJK, MPR, EPA, libccd's attempts, a capsule's
+  /// segment search against a cylinder or a cone, and the refinements of EPA's normal
+  /// (convex/certified_pair.hpp: skipped or cut short when they do not fit). An answer the bound
+  /// changed says limit_reached: its boolean is then not decided, its numbers still hold
+  /// (convex/query.hpp), and its normal may be EPA's unrefined one, which is within only about the
+  /// square root of the tolerance of the minimiser where the overlap is smooth (up to 3e-5 rad on
+  /// the poses of docs/convex-notes.md, note 32).
   int max_iterations = 512;
   /// Tolerance of the iterative solvers relative to the larger shape's size (shape_size()); in
   /// (0, 0.1]. The default is 1e-10 for double, 1e-5 for float.

@@ -249,20 +249,21 @@ ConvexContact<S> round_contact(const R& a, const RigidTransform<S>& pa, const B&
         // EPA stops on its depth's tolerance; its normal is then within only about the square root
         // of it of the minimiser where the overlap is smooth (a capsule's segment through a
         // cylinder: up to 2.6e-5 rad, docs/convex-notes.md, note 32): Newton from EPA's normal on
-        // the overlap's closed form (refine_normal_locally), kept where it is no deeper
+        // the overlap's closed form (refine_normal_locally), kept where it is no deeper; their
+        // support calls count in the query's bound (one budget)
         if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cylinder<S>>) {
           const PairFrame<S> f(pa, pb);
-          refine_normal_locally(a, pa, b, pb, segment_cylinder_terms(a.half_length, b, f.R, f.t), c);
+          refine_normal_locally(a, pa, b, pb, segment_cylinder_terms(a.half_length, b, f.R, f.t), c, o.max_iterations);
           // the normal across the segment near the cylinder's axis: the terms' certificate jumps
           // to the axis (its disc kink); the valley of the segment's normals (note 34)
-          refine_on_capsule_segment(a, pa, b, pb, c);
+          refine_on_capsule_segment(a, pa, b, pb, c, o.max_iterations);
         } else if constexpr (std::is_same_v<R, Capsule<S>> && std::is_same_v<B, Cone<S>>) {
           const PairFrame<S> f(pa, pb);
           OverlapTerms<S> terms;
           if (segment_cone_terms(a.half_length, b, f.R, f.t, Vec3<S>(pa.R.transpose() * c.normal), terms)) {
-            refine_normal_locally(a, pa, b, pb, terms, c);
+            refine_normal_locally(a, pa, b, pb, terms, c, o.max_iterations);
           }
-          refine_on_cone_side(a, pa, b, pb, c);
+          refine_on_cone_side(a, pa, b, pb, c, o.max_iterations);
         }
       }
       if (flip) c.normal = -c.normal;
