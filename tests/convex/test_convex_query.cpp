@@ -483,6 +483,26 @@ TEST(ConvexQuery, CylinderPairCandidatePlaneEndsTheQuery) {
   EXPECT_GE(planes[1], 3);
 }
 
+// Two cylinders after EPA: where a local certificate ended EPA, its normal is Newton's minimiser
+// of the same terms the refinement would run Newton on, so the refinement (one counted support
+// call) is skipped there as for the cone pairs. A work counter on fixed poses: the support calls
+// of the intersecting queries among 400 poses at 0.6 of the sizes (353): 3,599 with the skip,
+// 3,760 with the refinement after every EPA answer.
+TEST(ConvexQuery, CylinderPairRefinementOnlyWithoutACertificate) {
+  const auto& z = zoo();
+  long total = 0;
+  int hits = 0;
+  for (const auto& pose : convex_poses(400, 0.6 * 2 * shape_size(z.cylinder), 4712)) {
+    const ConvexContact<double> c = convex_penetration(z.cylinder, pose.first, z.cylinder, pose.second);
+    if (!c.intersecting) continue;
+    ++hits;
+    total += c.iterations;
+  }
+  std::printf("cylinder-cylinder: %d intersecting, %ld support calls\n", hits, total);
+  EXPECT_EQ(hits, 353);
+  EXPECT_LE(total, 3640);
+}
+
 // The cylinder pairs' skip of a rim candidate (detail::circle_clear_of_cylinder) against samples of
 // the circle: a circle said to be clear has no sample strictly inside the cylinder, and circles
 // near, through and around it are said clear often enough to matter.
