@@ -1245,9 +1245,15 @@ void expect_normal_against_referee(const char* what, const A& a, const B& b, int
 // (pose 1770 at 0.6 of the sizes, seed 9000582: 1.45e-6 rad before): the disc term's Hessian
 // c / |P n| changes by its own size over a step of |P n|, and Newton on the overlap's terms,
 // unlimited there, jumped across the axis; its steps now stay within half of |P n| (local_newton).
+// A cap's rim against the other's ruling 0.0044 rad from the cap's axis on a deep pose (706 at
+// 0.9, seed 11000588: 7.7e-7 rad before): the certificate at the minimiser on the ruling's circle
+// needs a cap of T about |P n| (certify_at's radii now down to 1/8192), and the one at the cap's
+// axis, another basin, then held too and came first (local_certificate now prefers one whose cap
+// holds EPA's normal).
 TEST(ConvexQuery, NormalsNearADiscAxisAgainstReferee) {
   const auto& z = zoo();
   expect_normal_against_referee("cylinder-cylinder, near a cap's axis", z.cylinder, z.cylinder, 2000, 0.6, 9000582u, {1770}, 1e-7);
+  expect_normal_against_referee("cylinder-cylinder, a ruling near a cap's axis", z.cylinder, z.cylinder, 2000, 0.9, 11000588u, {706}, 1e-7);
 }
 
 // A capsule whose segment passes through a cylinder: the own EPA on the core stopped on its depth

@@ -32,7 +32,8 @@
 ///
 /// When Newton meets a kink (a ruling, a cap, the cone's apex against its rim) or an indefinite
 /// Hessian, or no T gives lambda > 0, there is no certificate and EPA goes on to its own tolerance.
-/// Bounded: at most kLocalNewtonSteps Newton steps and 6 trial radii.
+/// Bounded: at most kLocalNewtonSteps Newton steps (each within half the distance to a disc term's
+/// axis, where its model holds) and 14 trial radii.
 ///
 /// Numerical contract: APPROXIMATE; upper is f(n*) from the terms (up to rounding), lower = rho
 /// includes an allowance of 64 ulps of the terms' magnitude for rounding.
@@ -124,7 +125,7 @@ inline S least_eigenvalue(S h0, S h1, S h2) {
 }
 
 /// The certificate of the file comment at unit n (any direction; it holds only near a local
-/// minimiser): true and `out` set when some T of the halving sequence from 1 down to 1/128 gives a
+/// minimiser): true and `out` set when some T of the halving sequence from 1 down to 1/8192 gives a
 /// lower bound rho > 0. Kinks at n (|P n| or |a . n| within
 /// 1e-9) enter as norms: a disc term's c |z0 + M y| >= c sigma |y| - c |z0| (sigma the least
 /// singular value of M), an abs term's c |z0 + m . y| >= c |m . y| - c |z0|; with
@@ -217,7 +218,9 @@ bool certify_at(const OverlapTerms<S>& f, const Vec3<S>& n, LocalCertificate<S>&
       }
   }
   S T = S(1);
-  for (int trial = 0; trial < 8; ++trial, T /= S(2)) {
+  // down to 1/8192: near a disc term's kink (|P n| of 1e-3 .. 1e-2) its curvature bound
+  // c / (|P n| + T) needs T about |P n| to outweigh -U on deep poses
+  for (int trial = 0; trial < 14; ++trial, T /= S(2)) {
     if (!(T > S(0))) return false;
     S q0 = -U, q1 = S(0), q2 = -U;  // Q - U I
     for (int k = 0; k < nsd; ++k) {
@@ -304,11 +307,19 @@ bool local_newton(const OverlapTerms<S>& f, Vec3<S>& n, const Vec3<S>* constrain
 /// 0.1: a term's |P n0| or |a . n0|) are tried first as active constraints, cheapest first: a disc
 /// kink gives n = +-a, two abs kinks n = +-(a1 x a2) / |a1 x a2|, one abs kink Newton on its great
 /// circle; then Newton free of kinks. Each candidate is certified by certify_at; the first that
-/// holds is returned.
+/// holds with n0 in its cap is returned, else the first that holds (a minimiser of another basin:
+/// a cap's axis beside a minimiser on a ruling's circle 0.004 rad away).
 template <class S>
 LocalCertificate<S> local_certificate(const OverlapTerms<S>& f, const Vec3<S>& n0) {
-  LocalCertificate<S> out;
+  LocalCertificate<S> out, first;
   int steps = 0;
+  // true when out holds n0 in its cap (then returned); else the first that held is kept
+  const auto done = [&]() {
+    if (out.normal.dot(n0) >= out.cos_cap) return true;
+    if (!first.ok) first = out;
+    out = LocalCertificate<S>();
+    return false;
+  };
   const S near = S(0.1);
   int abs_near[kMaxOverlapTerms], nan = 0;
   for (int k = 0; k < f.n; ++k) {
@@ -316,7 +327,7 @@ LocalCertificate<S> local_certificate(const OverlapTerms<S>& f, const Vec3<S>& n
     if (f.disc[k]) {
       if ((n0 - a.dot(n0) * a).norm() < near) {
         const Vec3<S> c = a.dot(n0) >= S(0) ? a : Vec3<S>(-a);
-        if (certify_at(f, c, out)) return out;
+        if (certify_at(f, c, out) && done()) return out;
       }
     } else if (std::abs(a.dot(n0)) < near) {
       abs_near[nan++] = k;
@@ -328,21 +339,22 @@ LocalCertificate<S> local_certificate(const OverlapTerms<S>& f, const Vec3<S>& n
       if (!(c.norm() > S(1e-6))) continue;
       c.normalize();
       if (c.dot(n0) < S(0)) c = -c;
-      if (certify_at(f, c, out)) return out;
+      if (certify_at(f, c, out) && done()) return out;
     }
   Vec3<S> n;
   for (int i = 0; i < nan; ++i) {
     n = n0;
-    if (local_newton(f, n, &f.axis[abs_near[i]], steps) && certify_at(f, n, out)) {
+    if (local_newton(f, n, &f.axis[abs_near[i]], steps) && certify_at(f, n, out) && done()) {
       out.newton_steps = steps;
       return out;
     }
   }
   n = n0;
-  if (local_newton(f, n, static_cast<const Vec3<S>*>(nullptr), steps) && certify_at(f, n, out)) {
+  if (local_newton(f, n, static_cast<const Vec3<S>*>(nullptr), steps) && certify_at(f, n, out) && done()) {
     out.newton_steps = steps;
     return out;
   }
+  if (first.ok) out = first;
   out.newton_steps = steps;
   return out;
 }
