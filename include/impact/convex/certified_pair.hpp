@@ -502,6 +502,10 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
     IMPACT_ASSERT(c.iterations <= most);
     if (certified) return settled(a, pa, b, pb, c, its);
     its += c.iterations;
+    // a candidate's direction with a negative overlap (beyond rounding) is a separating plane: no
+    // contact without GJK (33 of the 145 separated poses of the bench's 2000 cylinder–cone poses
+    // that the centre line leaves)
+    if (c.depth < -std::numeric_limits<S>::epsilon() * S(16) * scale) return no_contact<S>(its);
   }
   SimplexPoint<S> simplex[4];
   switch (enclose_origin(sa, sb, Vec3<S>(-centre_b), scale, o, simplex, its)) {
@@ -536,9 +540,11 @@ ConvexContact<S> cylinder_pair_penetration(const Cylinder<S>& a, const RigidTran
   bool newton_normal = false;
   ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, leave_for_narrowing(o), simplex, its, local, c, f, &newton_normal);
   narrow_by_parallel_axes(a, pa, b, pb, o, g);
+  // a certificate's normal is the terms' minimiser already: no refinement (for two cylinders the
+  // same Newton on the same terms from that normal, which stays there)
   if constexpr (std::is_same_v<B, Cylinder<S>>) {
-    refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g, o.max_iterations);
-  } else if (!newton_normal) {  // a certificate's normal is the terms' minimiser already
+    if (!newton_normal) refine_normal_locally(a, pa, b, pb, cylinder_pair_terms(a, b, f.R, f.t), g, o.max_iterations);
+  } else if (!newton_normal) {
     OverlapTerms<S> terms;
     if (g.intersecting && cylinder_cone_terms(a, b, f.R, f.t, Vec3<S>(pa.R.transpose() * g.normal), terms)) {
       refine_normal_locally(a, pa, b, pb, terms, g, o.max_iterations);
