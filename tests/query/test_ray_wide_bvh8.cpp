@@ -60,6 +60,41 @@ TYPED_TEST(WideBvh8Test, TorusStructureAndFirstHits) {
   EXPECT_GT(test::wide::check_casts(torus, from_tree, 500 / kWide8Samples, 0.1, 99), 50 / kWide8Samples);
 }
 
+// A mesh large enough that its blocks take the allocator's huge-page path (arrays of 2 MiB or
+// more, whole 2 MiB pages, aligned to them): the structure, the rows of F in the blocks,
+// the casts against brute force; and the allocator itself on both sides of its threshold (aligned
+// for the element, every element kept through a vector's growth, the bytes it reports).
+TYPED_TEST(WideBvh8Test, LargeTreeOnHugePages) {
+  using S = TypeParam;
+  const TriangleMesh<S> torus = make_torus<S>(S(1), S(0.4), 256, 128);  // 65,536 triangles
+  const WideBvh<S, 8> w(torus);
+  using Block = WideTriangleBlock<S>;
+  const std::size_t block_bytes = w.packed() ? w.packed_blocks().size() * sizeof(WideTriangleBlock<float>) : w.full_blocks().size() * sizeof(Block);
+  ASSERT_GE(block_bytes, detail::WideBvhAllocator<Block>::kHugePageMinBytes);  // (the huge-page path)
+  const void* blocks = w.packed() ? static_cast<const void*>(w.packed_blocks().data()) : static_cast<const void*>(w.full_blocks().data());
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(blocks) % detail::WideBvhAllocator<Block>::kHugePage, 0u);
+  test::wide::check_structure(torus, w, 4);
+  const int n = 300 / kWide8Samples;
+  EXPECT_GT(test::wide::check_casts(torus, w, n, 0.05, 314), n / 20);
+
+  using Alloc = detail::WideBvhAllocator<WideBvhNode8>;
+  EXPECT_EQ(Alloc::bytes(10), 10 * sizeof(WideBvhNode8));
+  EXPECT_EQ(Alloc::bytes(8191), 8191 * sizeof(WideBvhNode8));  // below 2 MiB: operator new
+  EXPECT_EQ(Alloc::bytes(8192), std::size_t(1) << 21);         // 2 MiB: one page
+  EXPECT_EQ(Alloc::bytes(8193), std::size_t(2) << 21);         // rounded up to whole pages
+  std::vector<WideBvhNode8, Alloc> v;
+  for (std::int32_t i = 0; i < 10000; ++i) {  // 2.5 MB, through both paths as it grows
+    v.emplace_back();
+    v.back().first[0] = i;
+    ASSERT_EQ(reinterpret_cast<std::uintptr_t>(v.data()) % alignof(WideBvhNode8), 0u);
+  }
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(v.data()) % Alloc::kHugePage, 0u);
+  for (std::int32_t i = 0; i < 10000; ++i) ASSERT_EQ(v[static_cast<std::size_t>(i)].first[0], i);
+  v.resize(100);
+  v.shrink_to_fit();  // back to operator new
+  for (std::int32_t i = 0; i < 100; ++i) ASSERT_EQ(v[static_cast<std::size_t>(i)].first[0], i);
+}
+
 // Rays aimed at vertices and edge midpoints of closed meshes: a watertight cast hits, with brute
 // force's t, on every path.
 TYPED_TEST(WideBvh8Test, RaysThroughVerticesAndEdgesOfClosedMeshesHit) {

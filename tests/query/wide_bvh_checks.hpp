@@ -100,8 +100,10 @@ template <class S, int W> void check_structure(const TriangleMesh<S>& m, const W
           }
           if (q < n.count[c]) {
             ASSERT_TRUE(t.a == w.triangle(first + q).a && t.b == w.triangle(first + q).b && t.c == w.triangle(first + q).c) << q;
+            ASSERT_EQ(w.block_triangle_id(block + q / 4, q % 4), w.triangle_id(first + q)) << q;  // the block's row of F
           } else {
             ASSERT_TRUE(t.a.isZero() && t.b.isZero() && t.c.isZero()) << q;
+            ASSERT_EQ(w.block_triangle_id(block + q / 4, q % 4), -1) << q;
           }
         }
         // larger leaves hold copies of one triangle only (a leaf of the source tree)

@@ -34,15 +34,59 @@
 #include <array>
 #include <cfloat>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 namespace impact {
 
 namespace detail {
+/// The allocator of a WideBvh's nodes and triangle blocks. An array of at least
+/// kHugePageMinBytes (2 MiB) takes whole 2 MiB pages, aligned to them and, on Linux, marked for
+/// transparent huge pages (madvise MADV_HUGEPAGE, before the first write: the kernel then maps it
+/// with 2 MiB pages when it has them, in the default `madvise` mode as in `always`). A cast reads
+/// a few lines of a node or block here and there: with 4 KiB pages most of those reads on a mesh
+/// of 100,000 triangles or more also miss the TLB (igea's 19 MB span 4,700 pages), with 2 MiB pages
+/// about ten pages hold everything. (Embree advises its own arrays the same way.) Smaller arrays
+/// come from operator new. No effect on any value.
+template <class T> struct WideBvhAllocator {
+  using value_type = T;
+  static constexpr std::size_t kHugePage = std::size_t(1) << 21;
+  static constexpr std::size_t kHugePageMinBytes = std::size_t(1) << 21;
+  WideBvhAllocator() = default;
+  template <class U> WideBvhAllocator(const WideBvhAllocator<U>&) {}
+  /// The bytes an array of n elements takes (a multiple of 2 MiB on the huge-page path).
+  static std::size_t bytes(std::size_t n) {
+    const std::size_t b = n * sizeof(T);
+    return b >= kHugePageMinBytes ? (b + kHugePage - 1) / kHugePage * kHugePage : b;
+  }
+  T* allocate(std::size_t n) {
+    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T) - kHugePage) throw std::bad_alloc();
+    const std::size_t b = bytes(n);
+    if (n * sizeof(T) < kHugePageMinBytes) return static_cast<T*>(::operator new(b, std::align_val_t(alignof(T))));
+    void* p = std::aligned_alloc(kHugePage, b);
+    if (!p) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    (void)::madvise(p, b, MADV_HUGEPAGE);  // a hint: nothing changes where it is refused
+#endif
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, std::size_t n) noexcept {
+    if (n * sizeof(T) < kHugePageMinBytes) ::operator delete(p, std::align_val_t(alignof(T)));
+    else std::free(p);
+  }
+  template <class U> bool operator==(const WideBvhAllocator<U>&) const { return true; }
+  template <class U> bool operator!=(const WideBvhAllocator<U>&) const { return false; }
+};
+
 /// True when the double x is exactly a float (finite or infinite; false for NaN), decided on its
 /// bits alone: a round trip double(float(x)) == x gives the same answer in IEEE arithmetic, but
 /// a compiler that keeps the float in a wider register (x87 excess precision, which g++ 12 does
@@ -100,9 +144,13 @@ static_assert(sizeof(WideBvhNode) == 128, "WideBvhNode: two cache lines");
 static_assert(sizeof(WideBvhNode8) == 256, "WideBvhNode8: four cache lines");
 
 /// Four triangles of a WideBvh leaf, coordinate by coordinate: v[3 * vertex + axis][lane] (vertex
-/// 0, 1, 2 = the triangle's a, b, c). Unused lanes hold zeros.
+/// 0, 1, 2 = the triangle's a, b, c), and their rows of F (`id`). Unused lanes hold zeros and id -1.
+/// The rows sit behind the coordinates, on the cache line of the last ones (a float block is 160
+/// bytes from a multiple of 32), so a hit's row costs no load of its own beyond the block the leaf
+/// test has read (a separate array of rows missed the cache on most hits of a large mesh).
 template <class T> struct alignas(4 * sizeof(T)) WideTriangleBlock {
   T v[9][4];
+  std::int32_t id[4];
 };
 
 /// W: children a node, 4 (WideBvhNode, the default) or 8 (WideBvhNode8: half the levels, its node
@@ -142,7 +190,7 @@ template <class S, int W = 4> class WideBvh {
 
   bool empty() const { return ids_.empty(); }
   /// Nodes; nodes()[0] is the root (absent for an empty mesh).
-  const std::vector<Node>& nodes() const { return nodes_; }
+  const std::vector<Node, detail::WideBvhAllocator<Node>>& nodes() const { return nodes_; }
   /// Triangle at leaf-order position k (the mesh's coordinates, exactly). O(log leaves).
   Triangle<S> triangle(std::int32_t k) const {
     const auto it = std::upper_bound(block_first_.begin(), block_first_.end(), k);
@@ -163,9 +211,9 @@ template <class S, int W = 4> class WideBvh {
   /// exact at half the bytes.
   bool packed() const { return !packed_.empty(); }
   /// The triangle blocks when packed(), else empty.
-  const std::vector<WideTriangleBlock<float>>& packed_blocks() const { return packed_; }
+  const std::vector<WideTriangleBlock<float>, detail::WideBvhAllocator<WideTriangleBlock<float>>>& packed_blocks() const { return packed_; }
   /// The triangle blocks in S when not packed(), else empty.
-  const std::vector<WideTriangleBlock<S>>& full_blocks() const { return full_; }
+  const std::vector<WideTriangleBlock<S>, detail::WideBvhAllocator<WideTriangleBlock<S>>>& full_blocks() const { return full_; }
   /// Leaf-order position of lane 0 of block b (the positions of a block's lanes are consecutive,
   /// and so are those of a leaf's blocks: a leaf of n triangles from block b holds positions
   /// block_first(b) .. block_first(b) + n - 1).
@@ -173,6 +221,11 @@ template <class S, int W = 4> class WideBvh {
   std::int32_t num_blocks() const { return static_cast<std::int32_t>(block_first_.size()); }
   /// Row of F of the triangle at leaf-order position k.
   std::int32_t triangle_id(std::int32_t k) const { return ids_[static_cast<std::size_t>(k)]; }
+  /// Row of F of the triangle in lane `lane` of block b (triangle_id(block_first(b) + lane), read
+  /// from the block itself).
+  std::int32_t block_triangle_id(std::int32_t b, int lane) const {
+    return packed() ? packed_[static_cast<std::size_t>(b)].id[lane] : full_[static_cast<std::size_t>(b)].id[lane];
+  }
   /// True when the triangle at position k repeats the one at k - 1 in the same leaf, vertex order
   /// included (MeshBvh::repeats_previous of the source tree, whose leaves a wide leaf never
   /// splits): a cast that has just tested k - 1 may skip k. False on meshes without copies.
@@ -194,8 +247,9 @@ template <class S, int W = 4> class WideBvh {
   const std::array<double, 8>& box() const { return box_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(Node) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
-           packed_.capacity() * sizeof(WideTriangleBlock<float>) + (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
+    return detail::WideBvhAllocator<Node>::bytes(nodes_.capacity()) + detail::WideBvhAllocator<WideTriangleBlock<S>>::bytes(full_.capacity()) +
+           detail::WideBvhAllocator<WideTriangleBlock<float>>::bytes(packed_.capacity()) +
+           (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
            repeats_.capacity() / 8;
   }
 
@@ -370,11 +424,15 @@ template <class S, int W = 4> class WideBvh {
     auto fill = [&](auto& blocks) {
       using T = std::remove_reference_t<decltype(blocks[0].v[0][0])>;
       blocks.resize(block_first_.size());  // zeros in the unused lanes
+      for (auto& blk : blocks)
+        for (int c = 0; c < 4; ++c) blk.id[c] = -1;
       for (const LeafRef& l : leaves) {
         const std::size_t b = static_cast<std::size_t>(nodes_[l.node].first[l.slot]);
         for (std::int32_t q = 0; q < l.count; ++q) {
           const S* p = full.data() + 9 * static_cast<std::size_t>(l.pos + q);
-          for (int c = 0; c < 9; ++c) blocks[b + static_cast<std::size_t>(q / 4)].v[c][q % 4] = static_cast<T>(p[c]);  // exact when packed
+          auto& blk = blocks[b + static_cast<std::size_t>(q / 4)];
+          for (int c = 0; c < 9; ++c) blk.v[c][q % 4] = static_cast<T>(p[c]);  // exact when packed
+          blk.id[q % 4] = ids_[static_cast<std::size_t>(l.pos + q)];
         }
       }
     };
@@ -383,9 +441,10 @@ template <class S, int W = 4> class WideBvh {
     packed_without_repeats_ = floats && repeats_.empty();
   }
 
-  std::vector<Node> nodes_;
-  std::vector<WideTriangleBlock<float>> packed_;  // the triangle blocks when every coordinate is a float
-  std::vector<WideTriangleBlock<S>> full_;        // otherwise
+  template <class T> using Array = std::vector<T, detail::WideBvhAllocator<T>>;
+  Array<Node> nodes_;
+  Array<WideTriangleBlock<float>> packed_;  // the triangle blocks when every coordinate is a float
+  Array<WideTriangleBlock<S>> full_;        // otherwise
   std::vector<std::int32_t> block_first_;         // leaf-order position of each block's lane 0
   std::vector<std::int32_t> ids_;
   std::vector<bool> repeats_;  // repeats_previous() by leaf-order position; empty when none repeats

@@ -702,7 +702,7 @@ std::optional<RayMeshHit<S>> ray_wide_cast(const WideBvh<S, W>& wide, const Ray<
   RayMeshHit<S> hit;
   hit.t = cast.best;
   hit.leaf_index = cast.hit_position();
-  hit.triangle = wide.triangle_id(hit.leaf_index);
+  hit.triangle = wide.block_triangle_id(cast.best_block, cast.best_lane);  // (not ids_[leaf_index]: a cache miss more)
   hit.barycentric = cast.best_bary;
   hit.point = ray.origin + cast.best * ray.direction;
   const Vec3<S> nrm = wide.block_triangle(cast.best_block, cast.best_lane).normal();
