@@ -61,9 +61,9 @@ TYPED_TEST(WideBvh8Test, TorusStructureAndFirstHits) {
 }
 
 // A mesh large enough that its blocks take the allocator's huge-page path (arrays of 2 MiB or
-// more, whole 2 MiB pages, aligned to them): the structure, the rows of F in the blocks,
-// the casts against brute force; and the allocator itself on both sides of its threshold (aligned
-// for the element, every element kept through a vector's growth, the bytes it reports).
+// more, from a 2 MiB boundary): the structure, the rows of F in the blocks, the casts against
+// brute force; and the allocator itself on both sides of its threshold (aligned for the element,
+// every element kept through a vector's growth and shrinking).
 TYPED_TEST(WideBvh8Test, LargeTreeOnHugePages) {
   using S = TypeParam;
   const TriangleMesh<S> torus = make_torus<S>(S(1), S(0.4), 256, 128);  // 65,536 triangles
@@ -78,10 +78,9 @@ TYPED_TEST(WideBvh8Test, LargeTreeOnHugePages) {
   EXPECT_GT(test::wide::check_casts(torus, w, n, 0.05, 314), n / 20);
 
   using Alloc = detail::WideBvhAllocator<WideBvhNode8>;
-  EXPECT_EQ(Alloc::bytes(10), 10 * sizeof(WideBvhNode8));
-  EXPECT_EQ(Alloc::bytes(8191), 8191 * sizeof(WideBvhNode8));  // below 2 MiB: operator new
-  EXPECT_EQ(Alloc::bytes(8192), std::size_t(1) << 21);         // 2 MiB: one page
-  EXPECT_EQ(Alloc::bytes(8193), std::size_t(2) << 21);         // rounded up to whole pages
+  EXPECT_EQ(Alloc::alignment(10), alignof(WideBvhNode8));
+  EXPECT_EQ(Alloc::alignment(8191), alignof(WideBvhNode8));  // below 2 MiB
+  EXPECT_EQ(Alloc::alignment(8192), Alloc::kHugePage);       // 2 MiB and more
   std::vector<WideBvhNode8, Alloc> v;
   for (std::int32_t i = 0; i < 10000; ++i) {  // 2.5 MB, through both paths as it grows
     v.emplace_back();

@@ -50,39 +50,34 @@ namespace impact {
 
 namespace detail {
 /// The allocator of a WideBvh's nodes and triangle blocks. An array of at least
-/// kHugePageMinBytes (2 MiB) takes whole 2 MiB pages, aligned to them and, on Linux, marked for
-/// transparent huge pages (madvise MADV_HUGEPAGE, before the first write: the kernel then maps it
-/// with 2 MiB pages when it has them, in the default `madvise` mode as in `always`). A cast reads
-/// a few lines of a node or block here and there: with 4 KiB pages most of those reads on a mesh
-/// of 100,000 triangles or more also miss the TLB (igea's 19 MB span 4,700 pages), with 2 MiB pages
-/// about ten pages hold everything. (Embree advises its own arrays the same way.) Smaller arrays
-/// come from operator new. No effect on any value.
+/// kHugePageMinBytes (2 MiB) starts on a 2 MiB boundary and, on Linux, is marked for transparent
+/// huge pages (madvise MADV_HUGEPAGE, before the first write: the kernel then maps each whole 2 MiB
+/// of it with one page when it has them, in the default `madvise` mode as in `always`; the tail
+/// beyond the last whole 2 MiB keeps 4 KiB pages, so no byte is added). A cast reads a few lines
+/// of a node or block here and there: with 4 KiB pages most of those reads on a mesh of 100,000
+/// triangles or more also miss the TLB (igea's 19 MB span 4,700 pages), with 2 MiB pages about
+/// ten pages hold nearly everything. (Embree advises its own arrays the same way.) Smaller arrays
+/// come from operator new as usual. No effect on any value.
 template <class T> struct WideBvhAllocator {
   using value_type = T;
   static constexpr std::size_t kHugePage = std::size_t(1) << 21;
-  static constexpr std::size_t kHugePageMinBytes = std::size_t(1) << 21;
+  static constexpr std::size_t kHugePageMinBytes = kHugePage;
   WideBvhAllocator() = default;
   template <class U> WideBvhAllocator(const WideBvhAllocator<U>&) {}
-  /// The bytes an array of n elements takes (a multiple of 2 MiB on the huge-page path).
-  static std::size_t bytes(std::size_t n) {
-    const std::size_t b = n * sizeof(T);
-    return b >= kHugePageMinBytes ? (b + kHugePage - 1) / kHugePage * kHugePage : b;
+  /// The alignment of an array of n elements.
+  static std::size_t alignment(std::size_t n) {
+    return n >= kHugePageMinBytes / sizeof(T) ? std::max(kHugePage, alignof(T)) : alignof(T);
   }
   T* allocate(std::size_t n) {
-    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T) - kHugePage) throw std::bad_alloc();
-    const std::size_t b = bytes(n);
-    if (n * sizeof(T) < kHugePageMinBytes) return static_cast<T*>(::operator new(b, std::align_val_t(alignof(T))));
-    void* p = std::aligned_alloc(kHugePage, b);
-    if (!p) throw std::bad_alloc();
+    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_alloc();
+    const std::size_t b = n * sizeof(T);
+    void* p = ::operator new(b, std::align_val_t(alignment(n)));
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    (void)::madvise(p, b, MADV_HUGEPAGE);  // a hint: nothing changes where it is refused
+    if (b >= kHugePageMinBytes) (void)::madvise(p, b, MADV_HUGEPAGE);  // a hint: nothing changes where it is refused
 #endif
     return static_cast<T*>(p);
   }
-  void deallocate(T* p, std::size_t n) noexcept {
-    if (n * sizeof(T) < kHugePageMinBytes) ::operator delete(p, std::align_val_t(alignof(T)));
-    else std::free(p);
-  }
+  void deallocate(T* p, std::size_t n) noexcept { ::operator delete(p, std::align_val_t(alignment(n))); }
   template <class U> bool operator==(const WideBvhAllocator<U>&) const { return true; }
   template <class U> bool operator!=(const WideBvhAllocator<U>&) const { return false; }
 };
@@ -247,9 +242,8 @@ template <class S, int W = 4> class WideBvh {
   const std::array<double, 8>& box() const { return box_; }
   /// Heap bytes: nodes, leaf-order triangles and their rows of F.
   std::size_t memory_bytes() const {
-    return detail::WideBvhAllocator<Node>::bytes(nodes_.capacity()) + detail::WideBvhAllocator<WideTriangleBlock<S>>::bytes(full_.capacity()) +
-           detail::WideBvhAllocator<WideTriangleBlock<float>>::bytes(packed_.capacity()) +
-           (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
+    return nodes_.capacity() * sizeof(Node) + full_.capacity() * sizeof(WideTriangleBlock<S>) +
+           packed_.capacity() * sizeof(WideTriangleBlock<float>) + (ids_.capacity() + block_first_.capacity()) * sizeof(std::int32_t) +
            repeats_.capacity() / 8;
   }
 
