@@ -164,7 +164,11 @@ LdpSolution solve_ldp_dense(const Ldp& P, int max_changes) {
   };
   int it = 0;
   while (true) {
-    const Eigen::VectorXd wgrad = cvec - N * u;
+    // c - N u over the columns where u is nonzero (only passive rows are): N is symmetric and
+    // the passive set is mostly a small part of the rows.
+    Eigen::VectorXd wgrad = cvec;
+    for (Eigen::Index j = 0; j < M; ++j)
+      if (u[j] != 0) wgrad -= u[j] * N.col(j);
     Eigen::Index best = -1;
     double best_w = kkt_tol;
     for (Eigen::Index i = 0; i < M; ++i)

@@ -32,6 +32,9 @@
 
 namespace impact::detail::cloth {
 
+template <class T>
+class Appender;  // step_gathering.hpp
+
 /// The stages over one step. Positions are the combined sys.X0 / sys.X1.
 template <class S>
 class Stepper {
@@ -110,7 +113,7 @@ class Stepper {
   template <class Visit>
   void grown_pairs(const std::vector<std::int32_t>& tris, Visit&& visit);
   template <bool OnlyNew = false>
-  void pairs_of(std::int32_t fa, std::int32_t fb, std::vector<Prim>& out) const;
+  void pairs_of(std::int32_t fa, std::int32_t fb, Appender<Prim>& out) const;
   void start_planes();
   void check_pierce(std::int32_t fa, std::int32_t fb);
   bool escaped() const;
