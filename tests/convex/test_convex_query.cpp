@@ -1510,6 +1510,58 @@ TEST(ConvexQuery, MprAndGjkBooleansAgree) {
   EXPECT_GT(hits, 10);
 }
 
+// The general boolean's first test (general_centre_line_apart in convex/query.hpp): a plane
+// normal to the line between the centres. Where it says apart, the full path (libccd's MPR, which
+// answered every such pose before it) says apart too and the ellipsoid method's certified distance
+// bracket lies above 0; and convex_intersect, in both argument orders, agrees with the full path
+// and with the direction-search oracle wherever that is more than 1e-6 of the size from touching.
+// The zoo's cylinder, cone, box and hull against each other at the bench's distances (half near,
+// half at the sum of the sizes), also 1e3 from the origin.
+template <class A, class B>
+void check_centre_line_exit(const char* name, const A& a, const B& b, std::uint64_t seed, int& exits, int& poses_seen) {
+  const double scale = std::max(shape_size(a), shape_size(b));
+  const int n = IMPACT_TEST_SANITIZED ? 10 : 60;
+  auto poses = convex_poses(n / 2, 0.6 * (shape_size(a) + shape_size(b)), seed);
+  const auto far = convex_poses(n - n / 2, shape_size(a) + shape_size(b), seed + 1);
+  poses.insert(poses.end(), far.begin(), far.end());
+  const ConvexQueryOptions<double> o;
+  const auto settings = detail::ccd_settings(o, scale);
+  for (const V3& offset : {V3(0, 0, 0), V3(1e3, -1e3, 1e3)}) {
+    for (auto [pa, pb] : poses) {
+      pa.t += offset;
+      pb.t += offset;
+      const bool exit = detail::general_centre_line_apart(a, pa, b, pb);
+      const bool full = ccd_intersect(a, pa, b, pb, CcdAlgorithm::Mpr, settings);
+      ++poses_seen;
+      if (exit) {
+        ++exits;
+        EXPECT_FALSE(full) << name;
+        EXPECT_GT(test::distance_bracket(a, pa, b, pb).lower, 0.0) << name;
+      }
+      const bool hit = convex_intersect(a, pa, b, pb);
+      EXPECT_EQ(convex_intersect(b, pb, a, pa), hit) << name;
+      const auto oracle = signed_distance_oracle(a, pa, b, pb, 1000, 1);
+      if (std::abs(oracle.value) < 1e-6 * scale) continue;
+      EXPECT_EQ(hit, oracle.value < 0) << name;
+      EXPECT_EQ(full, oracle.value < 0) << name;
+    }
+  }
+}
+
+TEST(ConvexQuery, GeneralBooleanCentreLineExit) {
+  const auto& z = zoo();
+  int exits = 0, poses = 0;
+  check_centre_line_exit("cylinder-cone", z.cylinder, z.cone, 91, exits, poses);
+  check_centre_line_exit("cone-cone", z.cone, z.cone, 92, exits, poses);
+  check_centre_line_exit("cone-box", z.cone, z.box, 93, exits, poses);
+  check_centre_line_exit("cylinder-hull", z.cylinder, z.hull, 94, exits, poses);
+  check_centre_line_exit("cone-hull", z.cone, z.hull, 95, exits, poses);
+  check_centre_line_exit("box-hull", z.box, z.hull, 96, exits, poses);
+  check_centre_line_exit("hull-hull", z.hull, z.hull, 97, exits, poses);
+  // the exit decides a good share of the poses (most separated ones)
+  EXPECT_GT(exits, poses / 5) << exits << " of " << poses;
+}
+
 // Swapping the arguments gives the mirror image of the answer, bit for bit: the same boolean,
 // distance and depth, the witness points exchanged, the normal reversed, the same contact point.
 // The general solvers see each unordered pair of types in one order (general_rank in
