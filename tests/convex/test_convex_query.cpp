@@ -1510,7 +1510,7 @@ TEST(ConvexQuery, MprAndGjkBooleansAgree) {
   EXPECT_GT(hits, 10);
 }
 
-// The general boolean's first test (general_centre_line_apart in convex/query.hpp): a plane
+// The general boolean's first test (centre_line_separates in convex/closed_form.hpp): a plane
 // normal to the line between the centres. Where it says apart, the full path (libccd's MPR, which
 // answered every such pose before it) says apart too and the ellipsoid method's certified distance
 // bracket lies above 0; and convex_intersect, in both argument orders, agrees with the full path
@@ -1530,7 +1530,7 @@ void check_centre_line_exit(const char* name, const A& a, const B& b, std::uint6
     for (auto [pa, pb] : poses) {
       pa.t += offset;
       pb.t += offset;
-      const bool exit = detail::general_centre_line_apart(a, pa, b, pb);
+      const bool exit = detail::centre_line_separates(a, pa, b, pb);
       const bool full = ccd_intersect(a, pa, b, pb, CcdAlgorithm::Mpr, settings);
       ++poses_seen;
       if (exit) {

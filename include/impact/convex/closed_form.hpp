@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace impact {
 
@@ -56,6 +57,13 @@ struct ConvexContact {
 
 namespace detail {
 
+/// Whether the overlap of two shapes along a unit direction, h_a(m) + h_b(-m), proves them apart:
+/// below -16 eps `scale` (`scale` the larger shape's size; touching, and touching within rounding,
+/// do not separate; false for NaN).
+template <class S> bool overlap_separates(S overlap, S scale) {
+  return overlap < -std::numeric_limits<S>::epsilon() * S(16) * scale;
+}
+
 /// Whether a plane normal to `line` separates two convex sets given by their support functions
 /// sa, sb (both in one frame): the overlap along m = line / |line|, h_a(m) + h_b(-m), below
 /// -16 eps `scale` (`scale` the larger shape's size; touching, and touching within rounding, do not
@@ -66,19 +74,35 @@ bool separated_along(const SupportA& sa, const SupportB& sb, const Vec3<S>& line
   const S len = line.norm();
   if (!(len > S(0))) return false;
   const Vec3<S> m = line / len;
-  return m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))) < -std::numeric_limits<S>::epsilon() * S(16) * scale;
+  return overlap_separates(m.dot(sa(m)) - m.dot(sb(Vec3<S>(-m))), scale);
 }
 
-/// separated_along() on the line between the interior points of shapes a (at pa) and b (at pb),
-/// in a's frame, at the scale of the larger shape_size().
+/// Whether a plane normal to the line between the interior points of shapes a (at pa) and b (at pb)
+/// separates them (overlap_separates at the larger shape_size()): one support call each, each taken
+/// in its shape's frame with the positions relative to a's (the values stay of the shapes' size far
+/// from the origin), without the pair frame's matrix product. True is a proof, false says nothing.
+/// The first test of the general boolean (cylinders, cones, boxes, hulls) and of hull-hull
+/// penetration.
 template <class S, class A, class B>
 bool centre_line_separates(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
-  const Mat3<S> R = pa.R.transpose() * pb.R;  // in a's frame
-  const Vec3<S> t = pa.R.transpose() * (pb.t - pa.t);
-  const auto sa = [&](const Vec3<S>& d) { return support(a, d); };
-  const auto sb = [&](const Vec3<S>& d) { return Vec3<S>(R * support(b, Vec3<S>(R.transpose() * d)) + t); };
-  const Vec3<S> line = R * interior_point(b) + t - interior_point(a);
-  return separated_along(sa, sb, line, std::max(shape_size(a), shape_size(b)));
+  // a shape's interior point turned into the world's axes (boxes' and cylinders' are their origin)
+  const auto turned_interior = [](const auto& shape, const RigidTransform<S>& pose) -> Vec3<S> {
+    using T = std::decay_t<decltype(shape)>;
+    if constexpr (std::is_same_v<T, Box<S>> || std::is_same_v<T, Cylinder<S>>) {
+      (void)shape;
+      (void)pose;
+      return Vec3<S>::Zero();
+    } else {
+      return pose.R * interior_point(shape);
+    }
+  };
+  const Vec3<S> d = pb.t - pa.t;
+  const Vec3<S> line = d + turned_interior(b, pb) - turned_interior(a, pa);
+  const S len = line.norm();
+  if (!(len > S(0))) return false;
+  const Vec3<S> m = line / len;
+  const Vec3<S> ma = pa.R.transpose() * m, mb = -(pb.R.transpose() * m);
+  return overlap_separates(ma.dot(support(a, ma)) + mb.dot(support(b, mb)) - m.dot(d), std::max(shape_size(a), shape_size(b)));
 }
 
 /// Two balls (centres ca, cb; radii ra, rb): the base of every round closed form. `fallback` is the

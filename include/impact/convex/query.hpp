@@ -253,47 +253,12 @@ ConvexContact<S> penetration_unchecked(const A& a, const RigidTransform<S>& pose
   return c;
 }
 
-/// The general boolean's first test: for cylinders, cones, boxes and hulls, whether a plane normal
-/// to the line between the interior points separates a and b by more than rounding: their overlap
-/// along it, h_a(m) + h_b(-m), below -16 eps of the larger size (as separated_along; one support
-/// call each; true is a proof, false says nothing). Each support is taken in its shape's frame and
-/// the positions relative to a's (so the values stay of the shapes' size far from the origin),
-/// without the pair frame's matrix product. On the convex bench's poses it ends about 70 % of the
-/// cylinder–cone boolean queries before libccd (whose MPR or GJK decides the rest as before).
-/// Other shapes: false.
-template <class S, class A, class B>
-bool general_centre_line_apart(const A& a, const RigidTransform<S>& pa, const B& b, const RigidTransform<S>& pb) {
-  constexpr bool solid = (std::is_same_v<A, Cylinder<S>> || std::is_same_v<A, Cone<S>> || std::is_same_v<A, Box<S>> ||
-                          std::is_same_v<A, ConvexHull<S>>)&&(std::is_same_v<B, Cylinder<S>> || std::is_same_v<B, Cone<S>> ||
-                                                              std::is_same_v<B, Box<S>> || std::is_same_v<B, ConvexHull<S>>);
-  if constexpr (solid) {
-    // a shape's interior point turned into the world's axes (boxes' and cylinders' are their origin)
-    const auto turned_interior = [](const auto& shape, const RigidTransform<S>& pose) -> Vec3<S> {
-      using T = std::decay_t<decltype(shape)>;
-      if constexpr (std::is_same_v<T, Box<S>> || std::is_same_v<T, Cylinder<S>>) {
-        (void)shape;
-        (void)pose;
-        return Vec3<S>::Zero();
-      } else {
-        return pose.R * interior_point(shape);
-      }
-    };
-    const Vec3<S> d = pb.t - pa.t;
-    const Vec3<S> line = d + turned_interior(b, pb) - turned_interior(a, pa);
-    const S len = line.norm();
-    if (!(len > S(0))) return false;
-    const Vec3<S> m = line / len;
-    const Vec3<S> ma = pa.R.transpose() * m, mb = -(pb.R.transpose() * m);
-    const S overlap = ma.dot(support(a, ma)) + mb.dot(support(b, mb)) - m.dot(d);
-    return overlap < -std::numeric_limits<S>::epsilon() * S(16) * query_scale<S>(a, b);
-  } else {
-    (void)a;
-    (void)pa;
-    (void)b;
-    (void)pb;
-    return false;
-  }
-}
+/// The boolean's general pairs that try centre_line_separates before libccd: cylinders, cones,
+/// boxes and hulls (on the convex bench's poses it ends about 70 % of the cylinder–cone boolean
+/// queries before libccd, whose MPR or GJK decides the rest as before).
+template <class S, class T>
+inline constexpr bool centre_line_first_v = std::is_same_v<T, Cylinder<S>> || std::is_same_v<T, Cone<S>> ||
+                                            std::is_same_v<T, Box<S>> || std::is_same_v<T, ConvexHull<S>>;
 
 /// convex_intersect without the validation (as penetration_unchecked).
 template <class S, class A, class B>
@@ -363,13 +328,16 @@ bool intersect_unchecked(const A& a, const RigidTransform<S>& pose_a, const B& b
   } else {
     // a plane normal to the line between the centres (one support call of each shape, not counted
     // against the bound, as the planes of the cylinder pairs' tests) decides most separated poses
-    // without libccd (general_centre_line_apart), in the general solvers' order of the pair
+    // without libccd (centre_line_separates), in the general solvers' order of the pair
     const CcdSettings settings = ccd_settings(options, query_scale<S>(a, b));
+    constexpr bool plane_first = centre_line_first_v<S, A> && centre_line_first_v<S, B>;
     if constexpr (general_swapped_v<S, A, B>) {
-      if (general_centre_line_apart(b, pose_b, a, pose_a)) return false;
+      if constexpr (plane_first)
+        if (centre_line_separates(b, pose_b, a, pose_a)) return false;
       return ccd_intersect(b, pose_b, a, pose_a, options.boolean_algorithm, settings, limit_reached);
     } else {
-      if (general_centre_line_apart(a, pose_a, b, pose_b)) return false;
+      if constexpr (plane_first)
+        if (centre_line_separates(a, pose_a, b, pose_b)) return false;
       return ccd_intersect(a, pose_a, b, pose_b, options.boolean_algorithm, settings, limit_reached);
     }
   }
