@@ -86,7 +86,7 @@ std::vector<Case> cases(int n, std::uint64_t seed, double scale = 1, double offs
 // (a cylinder's); the face ball's radius taken as the distance to the contact face alone.
 TEST(ConeHullPair, CertifiedDepthsAgainstTheOracle) {
   int face = 0, base = 0, side_edges = 0, side_vertices = 0;
-  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 40 : 200, 651)) {
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 120 : 200, 651)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
     const double size = std::max(shape_size(c.cone), shape_size(h)), tol = 1e-10 * size;
     const detail::PairFrame<double> f(c.pa, c.pb);
@@ -152,7 +152,7 @@ TEST(ConeHullPair, SideVertexIsTheSupportAlongTheSideNormal) {
 template <class S>
 void check_against_oracle(int count, double scale, double offset, std::uint64_t seed, double close) {
   int hits = 0, apart = 0;
-  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 8 : count, seed, scale, offset)) {
+  for (const Case& c : cases(IMPACT_TEST_SANITIZED ? std::max(16, count / 2) : count, seed, scale, offset)) {
     const ConvexHull<double> hd = scale == 1 ? hulls()[static_cast<std::size_t>(c.hull)] : scaled(hulls()[static_cast<std::size_t>(c.hull)], scale);
     const ConvexHull<S> hs = convex_hull(Vertices<S>(hd.vertices.cast<S>()));
     const Cone<S> cone(S(c.cone.radius), S(c.cone.half_length));
