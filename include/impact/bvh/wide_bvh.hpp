@@ -44,6 +44,7 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace impact {
@@ -51,13 +52,18 @@ namespace impact {
 namespace detail {
 /// The allocator of a WideBvh's nodes and triangle blocks. An array of at least
 /// kHugePageMinBytes (2 MiB) starts on a 2 MiB boundary and, on Linux, is marked for transparent
-/// huge pages (madvise MADV_HUGEPAGE, before the first write: the kernel then maps each whole 2 MiB
+/// huge pages (madvise MADV_HUGEPAGE) before its first write: the kernel then maps each whole 2 MiB
 /// of it with one page when it has them, in the default `madvise` mode as in `always`; the tail
-/// beyond the last whole 2 MiB keeps 4 KiB pages, so no byte is added). A cast reads a few lines
-/// of a node or block here and there: with 4 KiB pages most of those reads on a mesh of 100,000
-/// triangles or more also miss the TLB (igea's 19 MB span 4,700 pages), with 2 MiB pages about
-/// ten pages hold nearly everything. (Embree advises its own arrays the same way.) Smaller arrays
-/// come from operator new as usual. No effect on any value.
+/// beyond the last whole 2 MiB keeps 4 KiB pages, so no byte is added. On Linux such an array is
+/// a mapping of its own (mmap), never memory the heap has handed out and written before: advice
+/// given to pages already mapped small changes nothing until khugepaged merges them, which it
+/// does slowly, so a tree built after other large allocations were freed (a bench's or an
+/// application's earlier structures) stayed on 4 KiB pages when it came from operator new. A
+/// cast reads a few lines of a node or block here and there: with 4 KiB pages most of those
+/// reads on a mesh of 100,000 triangles or more also miss the TLB (igea's 19 MB span 4,700
+/// pages), with 2 MiB pages about ten pages hold nearly everything. (Embree maps and advises its
+/// own arrays the same way.) Smaller arrays come from operator new as usual. No effect on any
+/// value.
 template <class T> struct WideBvhAllocator {
   using value_type = T;
   static constexpr std::size_t kHugePage = std::size_t(1) << 21;
@@ -69,15 +75,40 @@ template <class T> struct WideBvhAllocator {
     return n >= kHugePageMinBytes / sizeof(T) ? std::max(kHugePage, alignof(T)) : alignof(T);
   }
   T* allocate(std::size_t n) {
-    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_alloc();
+    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T) - kHugePage) throw std::bad_alloc();
     const std::size_t b = n * sizeof(T);
-    void* p = ::operator new(b, std::align_val_t(alignment(n)));
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (b >= kHugePageMinBytes) (void)::madvise(p, b, MADV_HUGEPAGE);  // a hint: nothing changes where it is refused
+    if (b >= kHugePageMinBytes && alignof(T) <= kHugePage) {
+      // a mapping 2 MiB longer, cut to the first 2 MiB boundary; the pages before it and after
+      // the array's last page are returned at once
+      const std::size_t len = mapped_bytes(b);
+      void* m = ::mmap(nullptr, len + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (m == MAP_FAILED) throw std::bad_alloc();
+      const std::uintptr_t a = reinterpret_cast<std::uintptr_t>(m), start = (a + kHugePage - 1) & ~(kHugePage - 1);
+      if (start > a) (void)::munmap(m, start - a);
+      if (start + len < a + len + kHugePage) (void)::munmap(reinterpret_cast<void*>(start + len), a + len + kHugePage - start - len);
+      (void)::madvise(reinterpret_cast<void*>(start), len, MADV_HUGEPAGE);  // a hint: nothing changes where it is refused
+      return reinterpret_cast<T*>(start);
+    }
 #endif
-    return static_cast<T*>(p);
+    return static_cast<T*>(::operator new(b, std::align_val_t(alignment(n))));
   }
-  void deallocate(T* p, std::size_t n) noexcept { ::operator delete(p, std::align_val_t(alignment(n))); }
+  void deallocate(T* p, std::size_t n) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (n * sizeof(T) >= kHugePageMinBytes && alignof(T) <= kHugePage) {
+      (void)::munmap(p, mapped_bytes(n * sizeof(T)));
+      return;
+    }
+#endif
+    ::operator delete(p, std::align_val_t(alignment(n)));
+  }
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  /// Bytes of the mapping of an array of b bytes: whole pages.
+  static std::size_t mapped_bytes(std::size_t b) {
+    static const std::size_t page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+    return (b + page - 1) / page * page;
+  }
+#endif
   template <class U> bool operator==(const WideBvhAllocator<U>&) const { return true; }
   template <class U> bool operator!=(const WideBvhAllocator<U>&) const { return false; }
 };
