@@ -11,6 +11,7 @@
 //          polytopes (box, hull) 1e-9; EPA on curved shapes (cylinder, cone) 1e-6
 #include "impact/convex/query.hpp"
 #include "support/convex_oracle.hpp"
+#include "support/random.hpp"
 #include "support/sanitizer.hpp"
 
 #include <gtest/gtest.h>
@@ -21,6 +22,7 @@
 #include <limits>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 namespace {
 
@@ -884,6 +886,71 @@ TEST(ConvexQuery, InvalidInputThrowsBeforeAnyWork) {
   EXPECT_THROW(convex_intersect(broken, ok, z.box, ok), InvalidInput);
   const ConvexHull<double> empty;
   EXPECT_THROW(convex_distance(empty, ok, z.box, ok), InvalidInput);
+}
+
+// The convex queries check their two poses together (validate_poses, both_rigid of
+// geometry/transform.hpp: in double one SSE2 lane a pose): the same verdict as each pose's
+// is_rigid on rotations off orthonormal by 0.25 to 4 times the tolerance (a column scaled, a
+// column tilted towards another), reflections, and a NaN or infinite entry in any of the nine
+// places, in either pose; and every rejected pose makes all three queries throw InvalidInput
+// naming that pose, the accepted ones none. Checked to fail: the determinant's test left out
+// (reflections pass); c1 . c2 left out.
+TEST(ConvexQuery, PosePairCheckIsEachPosesCheck) {
+  const auto& z = zoo();
+  test::Rng rng(901);
+  const double tol = rotation_tolerance<double>();
+  std::vector<RigidTransform<double>> poses;
+  for (int k = 0; k < 40; ++k) {
+    const Eigen::Matrix3d q = rng.rotation();
+    poses.push_back({q, rng.vec(-1, 1)});
+    for (const double e : {0.25, 0.45, 0.55, 0.9, 1.1, 4.0}) {
+      const int c = k % 3;
+      Eigen::Matrix3d m = q;
+      m.col(c) *= 1 + e * tol;  // squared norm off by about 2 e tol
+      poses.push_back({m, rng.vec(-1, 1)});
+      m = q;
+      m.col(c) = (m.col(c) + e * tol * m.col((c + 1) % 3)).normalized();  // dot product about e tol
+      poses.push_back({m, rng.vec(-1, 1)});
+    }
+    Eigen::Matrix3d mirrored = q;
+    mirrored.col(k % 3) *= -1;
+    poses.push_back({mirrored, rng.vec(-1, 1)});
+    Eigen::Matrix3d broken = q;
+    broken(k % 9 / 3, k % 3) = k % 2 ? std::numeric_limits<double>::quiet_NaN() : std::numeric_limits<double>::infinity();
+    poses.push_back({broken, rng.vec(-1, 1)});
+  }
+  int rejected = 0, accepted = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const RigidTransform<double>& a = poses[i];
+    const RigidTransform<double>& b = poses[(i * 7 + 3) % poses.size()];
+    EXPECT_EQ(both_rigid(a, b, tol), a.is_rigid(tol) && b.is_rigid(tol)) << i;
+    EXPECT_EQ(both_rigid(b, a, tol), a.is_rigid(tol) && b.is_rigid(tol)) << i;
+    const RigidTransform<double> ok;
+    for (const bool first : {true, false}) {
+      const RigidTransform<double>& pa = first ? a : ok;
+      const RigidTransform<double>& pb = first ? ok : a;
+      const char* name = first ? "pose_a" : "pose_b";
+      const auto expect = [&](const auto& query) {
+        if (a.is_rigid(tol)) {
+          EXPECT_NO_THROW(query());
+          ++accepted;
+          return;
+        }
+        ++rejected;
+        try {
+          query();
+          ADD_FAILURE() << "pose " << i << " accepted as " << name;
+        } catch (const InvalidInput& ex) {
+          EXPECT_NE(std::string(ex.what()).find(name), std::string::npos) << ex.what();
+        }
+      };
+      expect([&] { return convex_intersect(z.cone, pa, z.hull, pb); });
+      expect([&] { return convex_distance(z.sphere, pa, z.box, pb); });
+      expect([&] { return convex_penetration(z.cylinder, pa, z.capsule, pb); });
+    }
+  }
+  EXPECT_GT(rejected, 600);
+  EXPECT_GT(accepted, 600);
 }
 
 TEST(ConvexQuery, IterationBoundIsReportedNeverHangs) {

@@ -13,6 +13,7 @@
 #include "impact/convex/cone_hull_terms.hpp"
 #include "impact/convex/cylinder_hull_pair.hpp"
 #include "impact/convex/query.hpp"
+#include "hull_pair_cases.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
@@ -28,46 +29,7 @@
 namespace cylinder_hull_pair_test {
 
 using namespace impact;
-using LD = long double;
-using V3L = Eigen::Matrix<LD, 3, 1>;
-
-// The hulls: the zoo's (40 points of an ellipsoid, climbed), 8 random points (fewer than
-// kHullClimbMinVertices: scanned), a slab of 24 points (its big faces merged polygons).
-const std::vector<ConvexHull<double>>& hulls() {
-  static const std::vector<ConvexHull<double>> h = [] {
-    std::vector<ConvexHull<double>> out;
-    out.push_back(test::zoo().hull);
-    test::Rng rng(640);
-    Vertices<double> p(8, 3);
-    for (int i = 0; i < 8; ++i) p.row(i) = Eigen::Vector3d(rng.vec(-0.5, 0.5)).transpose();
-    out.push_back(convex_hull(p));
-    Vertices<double> q(24, 3);
-    for (int i = 0; i < 24; ++i) {
-      const Eigen::Vector3d v(rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4), i % 2 ? 0.15 : -0.15);
-      q.row(i) = v.transpose();
-    }
-    out.push_back(convex_hull(q));
-    return out;
-  }();
-  return h;
-}
-
-// The hull's vertices placed by R, t in a's frame, long double.
-std::vector<V3L> placed(const ConvexHull<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  std::vector<V3L> out;
-  for (Eigen::Index i = 0; i < b.vertices.rows(); ++i) {
-    const Eigen::Vector3d v = b.vertices.row(i).transpose();
-    out.push_back(R.cast<LD>() * v.cast<LD>() + t.cast<LD>());
-  }
-  return out;
-}
-
-// The overlap along unit n of cylinder a (its frame) and the hull's placed vertices, long double.
-LD overlap_ld(const Cylinder<double>& a, const std::vector<V3L>& v, const V3L& n) {
-  LD hull = -std::numeric_limits<LD>::infinity();
-  for (const V3L& x : v) hull = std::max(hull, -n.dot(x));
-  return LD(a.half_length) * std::abs(n.z()) + LD(a.radius) * std::sqrt(n.x() * n.x() + n.y() * n.y()) + hull;
-}
+using namespace hull_pair_cases;
 
 // The oracle of the file comment; `extra` (the normal under test) starts both passes.
 test::LeastOverlap depth_oracle(const Cylinder<double>& a, const ConvexHull<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
@@ -117,22 +79,6 @@ std::vector<Case> cases(int n, std::uint64_t seed, double scale = 1, double offs
     out.push_back(c);
   }
   return out;
-}
-
-// A hull scaled by s (vertices and planes).
-ConvexHull<double> scaled(const ConvexHull<double>& h, double s) {
-  Vertices<double> p = h.vertices * s;
-  return convex_hull(p);
-}
-
-// The number of the hull's placed vertices within 1e-9 of the size of its support plane along -n:
-// 1 for a vertex, 2 for an edge.
-int support_count(const std::vector<V3L>& v, const Eigen::Vector3d& n, double size) {
-  LD top = -std::numeric_limits<LD>::infinity();
-  for (const V3L& x : v) top = std::max(top, -n.cast<LD>().dot(x));
-  int count = 0;
-  for (const V3L& x : v) count += -n.cast<LD>().dot(x) >= top - LD(1e-9 * size);
-  return count;
 }
 
 // Each certified candidate: its lower bound below the oracle's depth (an upper bound of the true
@@ -197,14 +143,6 @@ TEST(CylinderHullPair, SideVertexIsTheSupportAlongItsOffset) {
   }
   EXPECT_GT(found, 40);  // 91 and 85 when written
   EXPECT_GT(moved, 20);
-}
-
-// The overlap along unit n of cone a (its frame) and the hull's placed vertices, long double.
-LD overlap_ld(const Cone<double>& a, const std::vector<V3L>& v, const V3L& n) {
-  LD hull = -std::numeric_limits<LD>::infinity();
-  for (const V3L& x : v) hull = std::max(hull, -n.dot(x));
-  const LD h = a.half_length, rim = LD(a.radius) * std::sqrt(n.x() * n.x() + n.y() * n.y()) - h * n.z();
-  return std::max(h * n.z(), rim) + hull;
 }
 
 // The local certificate's terms, of cylinder_hull_terms and of convex/cone_hull_terms.hpp (a cone

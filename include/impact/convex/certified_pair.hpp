@@ -2,7 +2,7 @@
 /// \file
 /// The certified pair paths of convex_penetration: the pairs of curved and flat shapes that have
 /// candidates of their own (cylinder against cylinder or cone, cone against cone, cone against box,
-/// cylinder against box, cylinder against hull). Each path runs the same stages:
+/// cylinder against box, cylinder or cone against hull). Each path runs the same stages:
 ///   1. planes that separate the shapes (one support call each: no contact);
 ///   2. the pair's candidates (its own file: cylinder_pair.hpp, cone_cone_pair.hpp, ...), whose
 ///      certificate, a positive lower bound of the depth within the tolerance of the upper bound,
@@ -12,7 +12,7 @@
 ///   4. EPA from GJK's tetrahedron, seeded with the best candidate's normal and stopped early by a
 ///      local certificate on the pair's overlap terms (epa_from_simplex; convex/epa.hpp and
 ///      convex/local_certificate.hpp).
-/// Cone against hull has no candidates yet: stages 1, 3 and 4 only. After stage 4, some paths
+/// After stage 4, some paths
 /// refine EPA's normal (refine_normal_locally, refine_on_cone_side).
 /// options.max_iterations is one budget for the whole path (docs/convex-notes.md, notes 25 and 36):
 /// every stage's support calls count in it (`its`, the calls so far, is handed from stage to stage
@@ -28,6 +28,7 @@
 #include "impact/convex/cone_box_pair.hpp"
 #include "impact/convex/cone_box_terms.hpp"
 #include "impact/convex/cone_cone_pair.hpp"
+#include "impact/convex/cone_hull_pair.hpp"
 #include "impact/convex/cone_hull_terms.hpp"
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/cylinder_box_pair.hpp"
@@ -65,6 +66,7 @@ inline constexpr int kCandidateCallsConeCone = 14;
 inline constexpr int kCandidateCallsConeBox = 20;       // cone_box_contact: faces 6, corners 8, edges 6
 inline constexpr int kCandidateCallsCylinderBox = 22;   // cylinder_box_contact: faces 6, caps 2, corners 8, edges 6
 inline constexpr int kCandidateCallsCylinderHull = 5;   // cylinder_hull_candidates: edge 1, side vertex 1, caps 2, face 1
+inline constexpr int kCandidateCallsConeHull = 4;       // cone_hull_candidates: edge 1, side vertex 1, base 1, face 1
 
 /// Whether a stage of at most `calls` support calls fits in what `spent` left of the query's bound
 /// (max_iterations is one budget for the query).
@@ -795,9 +797,12 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 
-/// A cone (a) and a convex hull (b), which have no candidates: a plane normal to the line between
-/// the centres (separating: no contact), GJK until it encloses the origin or separates them (no
-/// contact), then EPA from GJK's tetrahedron stopped early by the local certificate on
+/// A cone (a) and a convex hull (b): a plane normal to the line between the centres, then the
+/// candidates of convex/cone_hull_pair.hpp (the hull's face planes, also separating; faces, the
+/// base, and edges and vertices across the side, each certified by a ball; a certified lower bound
+/// is positive, so it proves the intersection: no GJK), else GJK (from the best candidate's
+/// direction) until it encloses the origin or separates them (no contact), then EPA from GJK's
+/// tetrahedron seeded with that direction and stopped early by the local certificate on
 /// cone_hull_terms (the cone's branch active at EPA's normal and the hull's vertex or edge there)
 /// or, near a side ruling of the cone, on cone_side_hull_terms (a body inside the cone along the
 /// ruling the hull's feature touches), accepted when the true overlap at its normal is within the
@@ -808,13 +813,26 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
   const PairPath<S, Cone<S>, ConvexHull<S>> path(a, pa, b, pb, o);
   const PairFrame<S>& f = path.f;
   const S tol = path.tol;
+  const S margin = std::numeric_limits<S>::epsilon() * S(16) * path.scale;
   const auto& sa = path.sa;
   const auto& sb = path.sb;
   if (path.separated()) return one_plane_apart<S>();
+  int its = 1;  // the plane; each stage adds its calls (one budget)
+  ConvexContact<S> cand;
+  if (candidates_fit(o, its, kCandidateCallsConeHull, cand)) {
+    const CylinderHullVerdict verdict = cone_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
+    IMPACT_ASSERT(cand.iterations <= kCandidateCallsConeHull);
+    if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
+    // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
+    if (verdict == CylinderHullVerdict::Certified) {
+      return refined_hull_normal(a, pa, b, pb, settled(a, pa, b, pb, cand, its), cand.depth_gap > S(0), o.max_iterations);
+    }
+    its += cand.iterations;
+  }
   SimplexPoint<S> simplex[4];
-  int its = 1;
-  ConvexContact<S> none;  // GJK's answer when it ends the query; else no candidate: EPA unseeded
-  if (!path.enclose(simplex, its, none)) return none;
+  ConvexContact<S> answer;
+  const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
+  if (!path.enclose(simplex, its, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
     OverlapTerms<S> terms;
     const S gap = cone_branch_gap(a, n);
@@ -839,9 +857,8 @@ ConvexContact<S> cone_hull_penetration(const Cone<S>& a, const RigidTransform<S>
     }
     return LocalCertificate<S>();
   };
-  none.depth = std::numeric_limits<S>::infinity();
   bool newton_normal = false;  // EPA's normal is a certificate's: the minimiser already
-  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, none, f, &newton_normal);
+  const ConvexContact<S> g = epa_from_simplex(a, pa, b, pb, o, simplex, its, local, cand, f, &newton_normal);
   return refined_hull_normal(a, pa, b, pb, g, !newton_normal, o.max_iterations);
 }
 

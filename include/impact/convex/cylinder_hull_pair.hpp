@@ -72,29 +72,33 @@ S cylinder_hull_overlap(const Cylinder<S>& a, const ConvexHull<S>& b, const Mat3
   return a.half_length * std::abs(n.z()) + a.radius * std::sqrt(std::max(n.x() * n.x() + n.y() * n.y(), S(0))) - n.dot(R * v + t);
 }
 
-/// The vertex of hull b deepest into the side of a cylinder (axis ax through c, b's frame) near
-/// vertex v: a vertex x that is b's support along -q(x), q(x) = P (x - c) its offset from the axis
-/// (P = I - ax ax^T), so that the overlap along n = q / |q| (normal to the axis, towards b) is
-/// r - |q|. Climbs from v to the neighbour farthest along -q(v) (q taken afresh at each vertex; all
-/// vertices for hulls without an edge graph) for at most kSideVertexSteps steps; -1 when it does
-/// not settle or a vertex lies on the axis. The support test holds up to rounding.
+/// The vertex of hull b deepest into the side of a solid of revolution (axis ax through c, b's
+/// frame) near vertex v: a vertex x that is b's support along -(q(x) / |q(x)| + lean ax), q(x) =
+/// P (x - c) its offset from the axis (P = I - ax ax^T), the outward side normal at x's azimuth up
+/// to its length: lean 0 for a cylinder (the overlap along n = q / |q|, normal to the axis towards
+/// b, is then r - |q|), r / (2h) for a cone (its side normal (2h q / |q| + r ax) / L). Climbs from
+/// v to the neighbour farthest along that direction (taken afresh at each vertex; all vertices for
+/// hulls without an edge graph) for at most kSideVertexSteps steps; -1 when it does not settle or a
+/// vertex lies on the axis. The support test holds up to rounding.
 inline constexpr int kSideVertexSteps = 8;
 template <class S>
-int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int v) {
+int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int v, S lean = S(0)) {
   const S* p = b.vertices.data();
   const int nv = static_cast<int>(b.vertices.rows());
   for (int step = 0; step < kSideVertexSteps; ++step) {
     const S* x = p + 3 * v;
     const Vec3<S> y(x[0] - c.x(), x[1] - c.y(), x[2] - c.z());
     const Vec3<S> q = y - y.dot(ax) * ax;
-    if (!(q.squaredNorm() > S(0))) return -1;
-    const auto inward = [&](int i) { return -(p[3 * i] * q.x() + p[3 * i + 1] * q.y() + p[3 * i + 2] * q.z()); };
+    const S qq = q.squaredNorm();
+    if (!(qq > S(0))) return -1;
+    const Vec3<S> w = lean == S(0) ? q : Vec3<S>(q + (lean * std::sqrt(qq)) * ax);  // the side normal, scaled by |q|
+    const auto inward = [&](int i) { return -(p[3 * i] * w.x() + p[3 * i + 1] * w.y() + p[3 * i + 2] * w.z()); };
     S best = inward(v);
     int next = v;
     const auto consider = [&](int i) {
-      const S w = inward(i);
-      if (w > best) {
-        best = w;
+      const S s = inward(i);
+      if (s > best) {
+        best = s;
         next = i;
       }
     };
@@ -108,6 +112,55 @@ int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int
     v = next;
   }
   return -1;
+}
+
+/// The pass over the faces of hull b that the cylinder and cone candidates share, in b's frame
+/// (the solid's axis ax and centre c there): along_axis[k] = m_k . ax and overlap[k] = offset_k -
+/// m_k . c + the solid's support along -m_k, the overlap along minus face k's outward normal m_k;
+/// with_reach(F, D) adds that support to F (a function of D = m . ax alone: the solid is one of
+/// revolution), as
+/// whole arrays (Eigen's packets: two or four faces an instruction); returns the least overlap and
+/// sets `face` to its face. A negative one separates the shapes (a separating-axis test of the
+/// hull's faces).
+template <class S, class Reach>
+S hull_face_pass(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, const Reach& with_reach, S* along_axis, S* overlap,
+                 std::size_t& face) {
+  const std::size_t nf = b.faces.size();
+  using Faces = Eigen::Array<S, Eigen::Dynamic, 1>;
+  const Eigen::Index count = static_cast<Eigen::Index>(nf);
+  const S* nx = b.face_planes.data();
+  const Eigen::Map<const Faces> NX(nx, count), NY(nx + nf, count), NZ(nx + 2 * nf, count), OFF(nx + 3 * nf, count);
+  Eigen::Map<Faces> D(along_axis, count), F(overlap, count);
+  D = NX * ax.x() + NY * ax.y() + NZ * ax.z();
+  F = OFF - (NX * c.x() + NY * c.y() + NZ * c.z());
+  F = with_reach(F, D);
+  S best = std::numeric_limits<S>::infinity();
+  face = 0;
+  for (std::size_t k = 0; k < nf; ++k) {
+    if (overlap[k] < best) {
+      best = overlap[k];
+      face = k;
+    }
+  }
+  return best;
+}
+
+/// The face candidate the cylinder and cone candidates share: x, the solid's deepest point across
+/// hull b's face `face` (its support along n = -R m, a's frame; b placed by R, t there), offered
+/// with the face's overlap `f` and the radius of the largest ball about x inside the hull (its
+/// least distance to the face planes; 0 when x is outside: the upper bound only, a seed for EPA).
+template <class S, class A>
+void offer_hull_face(const A& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, std::size_t face, S f, CandidateBounds<S>& k) {
+  const std::size_t nf = b.faces.size();
+  using Faces = Eigen::Array<S, Eigen::Dynamic, 1>;
+  const Eigen::Index count = static_cast<Eigen::Index>(nf);
+  const S* nx = b.face_planes.data();
+  const Eigen::Map<const Faces> NX(nx, count), NY(nx + nf, count), NZ(nx + 2 * nf, count), OFF(nx + 3 * nf, count);
+  const Vec3<S> m = R * Vec3<S>(nx[face], nx[nf + face], nx[2 * nf + face]);
+  const Vec3<S> x = support(a, Vec3<S>(-m));
+  const Vec3<S> y = R.transpose() * (x - t);
+  const S rho = (OFF - (NX * y.x() + NY * y.y() + NZ * y.z())).minCoeff();
+  k.offer(Vec3<S>(-m), f, x, rho > S(0) ? rho : S(0));
 }
 
 /// What cylinder_hull_candidates found: apart (a face plane of the hull separates them by more
@@ -129,25 +182,12 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
   const S* nx = b.face_planes.data();
   const S* ny = nx + nf;
   const S* nz = ny + nf;
-  const S* off = nz + nf;
-  // the faces: f_k = offset_k - n_k . c + h |n_k . ax| + r sqrt(1 - (n_k . ax)^2), as whole
-  // arrays (Eigen's packets: two or four faces an instruction), then the least
-  using Faces = Eigen::Array<S, Eigen::Dynamic, 1>;
-  const Eigen::Index count = static_cast<Eigen::Index>(nf);
-  const Eigen::Map<const Faces> NX(nx, count), NY(ny, count), NZ(nz, count), OFF(off, count);
+  // the faces: f_k = offset_k - n_k . c + h |n_k . ax| + r sqrt(1 - (n_k . ax)^2)
   S along_axis[kCylinderHullMaxFaces];  // m_k . z of each face
   S overlap[kCylinderHullMaxFaces];
-  Eigen::Map<Faces> D(along_axis, count), F(overlap, count);
-  D = NX * ax.x() + NY * ax.y() + NZ * ax.z();
-  F = OFF - (NX * c.x() + NY * c.y() + NZ * c.z()) + h * D.abs() + r * (S(1) - D.square()).max(S(0)).sqrt();
-  S best_face = std::numeric_limits<S>::infinity();
   std::size_t face = 0;
-  for (std::size_t k = 0; k < nf; ++k) {
-    if (overlap[k] < best_face) {
-      best_face = overlap[k];
-      face = k;
-    }
-  }
+  const S best_face = hull_face_pass(
+      b, ax, c, [&](const auto& F, const auto& D) { return F + h * D.abs() + r * (S(1) - D.square()).max(S(0)).sqrt(); }, along_axis, overlap, face);
   if (best_face < -margin) return CylinderHullVerdict::Apart;
   CandidateBounds<S> k;
   const auto decided = [&] { return k.upper - k.lower <= tolerance; };
@@ -216,17 +256,7 @@ CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexH
     if (ball.rho > S(0)) k.offer(Vec3<S>(S(0), S(0), s), h - s * x.z(), x, ball.rho);
   }
   // the best face: the cylinder's deepest point across it and its distance to the hull's boundary
-  if (!(decided() && k.upper <= best_face)) {
-    const Vec3<S> m = R * Vec3<S>(nx[face], ny[face], nz[face]);
-    const Vec3<S> x = support(a, Vec3<S>(-m));
-    const Vec3<S> y = R.transpose() * (x - t);
-    const S rho = (OFF - (NX * y.x() + NY * y.y() + NZ * y.z())).minCoeff();
-    if (rho > S(0)) {
-      k.offer(Vec3<S>(-m), best_face, x, rho);
-    } else {
-      k.offer(Vec3<S>(-m), best_face, x, S(0));  // its upper bound only (a seed for EPA)
-    }
-  }
+  if (!(decided() && k.upper <= best_face)) offer_hull_face(a, b, R, t, face, best_face, k);
   return k.finish(tolerance, out) ? CylinderHullVerdict::Certified : CylinderHullVerdict::Open;
 }
 

@@ -54,6 +54,7 @@
 ///                                     of convex/cone_cone_pair.hpp, then EPA with the local
 ///                                     certificate of convex/cone_box_terms.hpp or
 ///                                     cone_cone_terms; cone against hull: the centre line,
+///                                     the certified candidates of convex/cone_hull_pair.hpp,
 ///                                     GJK, EPA with the local certificate of
 ///                                     convex/cone_hull_terms.hpp; else the own EPA (convex/epa.hpp;
 ///                                     Newton refinement optional; libccd's EPA or MPR with

@@ -78,8 +78,7 @@ void validate_query(const A& a, const RigidTransform<S>& pa, const B& b, const R
   static_assert(is_supported_scalar_v<S>, "convex queries: S must be float or double");
   validate_shape(a, where);
   validate_shape(b, where);
-  validate_pose(pa, where, "pose_a");
-  validate_pose(pb, where, "pose_b");
+  validate_poses(pa, pb, where, "pose_a", "pose_b");
   validate_query_options(o, where);
 }
 
