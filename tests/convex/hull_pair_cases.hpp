@@ -2,17 +2,19 @@
 // What the tests of a solid of revolution (cylinder, cone) against a convex hull share
 // (test_cylinder_hull_pair.cpp, test_cone_hull_pair.cpp): their hulls, the hull's vertices placed
 // in the solid's frame in long double, the overlap along a direction of the placed vertices
-// against a cylinder or a cone in long double, a hull scaled, and the size of the hull's support
-// feature along a direction.
+// against a cylinder or a cone in long double, a hull scaled, the size of the hull's support
+// feature along a direction, the poses of the cases, and the depth oracle.
 #pragma once
 
 #include "impact/convex/convex_hull.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/convex_oracle.hpp"
 #include "support/random.hpp"
+#include "support/sanitizer.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -83,6 +85,62 @@ inline int support_count(const std::vector<V3L>& v, const Eigen::Vector3d& n, do
   int count = 0;
   for (const V3L& x : v) count += -n.cast<LD>().dot(x) >= top - LD(1e-9 * size);
   return count;
+}
+
+// A solid of revolution (a cylinder or a cone, in its own frame at pa) against hulls()[hull] at pb.
+template <class Solid>
+struct SolidHullCase {
+  Solid solid;
+  int hull = 0;
+  impact::RigidTransform<double> pa, pb;
+};
+
+// n cases: solids of varied proportions (every fourth `first`) against the hulls in turn, b about
+// a, `scale` times the size and `offset` from the origin.
+template <class Solid>
+std::vector<SolidHullCase<Solid>> solid_hull_cases(const Solid& first, int n, std::uint64_t seed, double scale, double offset) {
+  impact::test::Rng rng(seed);
+  std::vector<SolidHullCase<Solid>> out;
+  for (int k = 0; k < n; ++k) {
+    SolidHullCase<Solid> c{first, 0, {}, {}};
+    if (k % 4 != 0) c.solid = Solid(rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
+    c.hull = k % 3;
+    const double reach = 0.6 * (impact::shape_size(c.solid) + impact::shape_size(hulls()[static_cast<std::size_t>(c.hull)]));
+    c.pa = {rng.rotation(), Eigen::Vector3d(rng.vec(-1, 1) + Eigen::Vector3d::Constant(offset / scale))};
+    c.pb = {rng.rotation(), Eigen::Vector3d(c.pa.t + rng.vec(-reach, reach))};
+    c.solid = Solid(c.solid.radius * scale, c.solid.half_length * scale);
+    c.pa.t *= scale;
+    c.pb.t *= scale;
+    out.push_back(c);
+  }
+  return out;
+}
+
+// The least overlap of solid a (its frame) and hull b placed by R, t (long double), minimised by
+// test::least_overlap from +z, -z and `extra` (the normal under test) with the kink circle of the
+// solid's side normals (n_z = side_z), then again from that minimiser and `extra` with the circles
+// of the hull's edges whose ends both lie within 0.02 of the size of the support plane along -n
+// (an edge against the rim: a valley along its arc). Its minimum is an upper bound of the depth.
+template <class Solid>
+impact::test::LeastOverlap solid_hull_depth_oracle(const Solid& a, const impact::ConvexHull<double>& b, const Eigen::Matrix3d& R,
+                                                   const Eigen::Vector3d& t, const Eigen::Vector3d& extra, double side_z) {
+  const std::vector<V3L> v = placed(b, R, t);
+  const auto f = [&](const V3L& n) { return overlap_ld(a, v, n); };
+  const std::vector<Eigen::Vector3d> starts = {Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ(), extra};
+  std::vector<impact::test::KinkCircle> circles = {{Eigen::Vector3d::UnitZ(), side_z}};
+  impact::test::LeastOverlap best = impact::test::least_overlap(f, starts, circles, IMPACT_TEST_SANITIZED ? 200 : 400);
+  const V3L d = -best.normal;
+  const LD top = hull_part(v, best.normal);
+  circles.clear();
+  const LD near = LD(0.02) * LD(std::max(impact::shape_size(a), impact::shape_size(b)));
+  for (const impact::HullEdge& e : b.edges) {
+    const std::size_t i0 = static_cast<std::size_t>(e.v0), i1 = static_cast<std::size_t>(e.v1);
+    if (d.dot(v[i0]) >= top - near && d.dot(v[i1]) >= top - near) circles.push_back({(v[i1] - v[i0]).cast<double>(), 0});
+  }
+  if (circles.empty()) return best;
+  const std::vector<Eigen::Vector3d> again = {best.normal.cast<double>(), extra};
+  const impact::test::LeastOverlap second = impact::test::least_overlap(f, again, circles, 50);
+  return second.depth < best.depth ? second : best;
 }
 
 }  // namespace hull_pair_cases

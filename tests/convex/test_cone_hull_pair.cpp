@@ -31,51 +31,15 @@ using namespace hull_pair_cases;
 // The oracle of the file comment; `extra` (the normal under test) starts both passes.
 test::LeastOverlap depth_oracle(const Cone<double>& a, const ConvexHull<double>& b, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
                                 const Eigen::Vector3d& extra) {
-  const std::vector<V3L> v = placed(b, R, t);
-  const auto f = [&](const V3L& n) { return overlap_ld(a, v, n); };
-  const std::vector<Eigen::Vector3d> starts = {Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ(), extra};
-  const double side_z = a.radius / std::sqrt(4 * a.half_length * a.half_length + a.radius * a.radius);
-  std::vector<test::KinkCircle> circles = {{Eigen::Vector3d::UnitZ(), side_z}};
-  test::LeastOverlap best = test::least_overlap(f, starts, circles, IMPACT_TEST_SANITIZED ? 200 : 400);
-  // the edges whose ends both lie within 0.02 of the size of the support plane along -n
-  const V3L d = -best.normal;
-  const LD top = hull_part(v, best.normal);
-  circles.clear();
-  const LD near = LD(0.02) * LD(std::max(shape_size(a), shape_size(b)));
-  for (const HullEdge& e : b.edges) {
-    const std::size_t i0 = static_cast<std::size_t>(e.v0), i1 = static_cast<std::size_t>(e.v1);
-    if (d.dot(v[i0]) >= top - near && d.dot(v[i1]) >= top - near) circles.push_back({(v[i1] - v[i0]).cast<double>(), 0});
-  }
-  if (circles.empty()) return best;
-  const std::vector<Eigen::Vector3d> again = {best.normal.cast<double>(), extra};
-  const test::LeastOverlap second = test::least_overlap(f, again, circles, 50);
-  return second.depth < best.depth ? second : best;
+  return solid_hull_depth_oracle(a, b, R, t, extra, a.radius / std::sqrt(4 * a.half_length * a.half_length + a.radius * a.radius));
 }
 
-struct Case {
-  Cone<double> cone{0.5, 0.6};
-  int hull = 0;
-  RigidTransform<double> pa, pb;
-};
+using Case = SolidHullCase<Cone<double>>;
 
 // Cones of varied proportions (every fourth the zoo's) against the hulls in turn, b about a,
 // `scale` times the size and `offset` from the origin.
 std::vector<Case> cases(int n, std::uint64_t seed, double scale = 1, double offset = 0) {
-  test::Rng rng(seed);
-  std::vector<Case> out;
-  for (int k = 0; k < n; ++k) {
-    Case c;
-    if (k % 4 != 0) c.cone = Cone<double>(rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
-    c.hull = k % 3;
-    const double reach = 0.6 * (shape_size(c.cone) + shape_size(hulls()[static_cast<std::size_t>(c.hull)]));
-    c.pa = {rng.rotation(), Eigen::Vector3d(rng.vec(-1, 1) + Eigen::Vector3d::Constant(offset / scale))};
-    c.pb = {rng.rotation(), Eigen::Vector3d(c.pa.t + rng.vec(-reach, reach))};
-    c.cone = Cone<double>(c.cone.radius * scale, c.cone.half_length * scale);
-    c.pa.t *= scale;
-    c.pb.t *= scale;
-    out.push_back(c);
-  }
-  return out;
+  return solid_hull_cases(Cone<double>(0.5, 0.6), n, seed, scale, offset);
 }
 
 // Each certified candidate: its lower bound below the oracle's depth (an upper bound of the true
@@ -88,18 +52,18 @@ TEST(ConeHullPair, CertifiedDepthsAgainstTheOracle) {
   int face = 0, base = 0, side_edges = 0, side_vertices = 0;
   for (const Case& c : cases(IMPACT_TEST_SANITIZED ? 120 : 200, 651)) {
     const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
-    const double size = std::max(shape_size(c.cone), shape_size(h)), tol = 1e-10 * size;
+    const double size = std::max(shape_size(c.solid), shape_size(h)), tol = 1e-10 * size;
     const detail::PairFrame<double> f(c.pa, c.pb);
     ConvexContact<double> k;
-    const auto verdict = detail::cone_hull_candidates(c.cone, h, f.R, f.t, 1e-15, tol, k);
+    const auto verdict = detail::cone_hull_candidates(c.solid, h, f.R, f.t, 1e-15, tol, k);
     if (verdict != detail::CylinderHullVerdict::Certified) continue;
-    const test::LeastOverlap o = depth_oracle(c.cone, h, f.R, f.t, k.normal);
+    const test::LeastOverlap o = depth_oracle(c.solid, h, f.R, f.t, k.normal);
     const double oracle = double(o.depth);
     EXPECT_GT(oracle, 0) << "certified a pair the oracle finds apart";
     EXPECT_LE(k.depth - k.depth_gap, oracle + 1e-12 * size) << "lower bound above the depth";
     EXPECT_NEAR(k.depth, oracle, 1e-9 * size);
-    EXPECT_NEAR(double(overlap_ld(c.cone, placed(h, f.R, f.t), k.normal.cast<LD>())), k.depth, 1e-12 * size);
-    const double side_z = c.cone.radius / detail::cone_slant(c.cone);
+    EXPECT_NEAR(double(overlap_ld(c.solid, placed(h, f.R, f.t), k.normal.cast<LD>())), k.depth, 1e-12 * size);
+    const double side_z = c.solid.radius / detail::cone_slant(c.solid);
     if (k.normal.z() < -1 + 1e-12) {
       ++base;
     } else if (std::abs(k.normal.z() - side_z) < 1e-12) {
@@ -155,7 +119,7 @@ void check_against_oracle(int count, double scale, double offset, std::uint64_t 
   for (const Case& c : cases(IMPACT_TEST_SANITIZED ? std::max(16, count / 2) : count, seed, scale, offset)) {
     const ConvexHull<double> hd = scale == 1 ? hulls()[static_cast<std::size_t>(c.hull)] : scaled(hulls()[static_cast<std::size_t>(c.hull)], scale);
     const ConvexHull<S> hs = convex_hull(Vertices<S>(hd.vertices.cast<S>()));
-    const Cone<S> cone(S(c.cone.radius), S(c.cone.half_length));
+    const Cone<S> cone(S(c.solid.radius), S(c.solid.half_length));
     const RigidTransform<S> pa{c.pa.R.cast<S>(), c.pa.t.cast<S>()}, pb{c.pb.R.cast<S>(), c.pb.t.cast<S>()};
     // the oracle on the shapes and poses as S holds them
     const RigidTransform<double> qa{pa.R.template cast<double>(), pa.t.template cast<double>()},
