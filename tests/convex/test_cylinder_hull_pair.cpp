@@ -182,6 +182,61 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
   EXPECT_GT(side_terms, 100);
 }
 
+// The terms of a square inside a hull face (add_hull_face_square_terms) with the cylinder's, at
+// minus each face's normal of each case (x a point above the face's centre, so that its projection
+// lies inside): never above the overlap along random directions (the square lies inside the hull),
+// equal to it at the face's normal, and built for most faces (the slab's merged polygons too); not
+// built for a point beyond the face's edges. Checked to fail: the square's half-side delta instead
+// of delta / sqrt(2) (its corners outside the triangle); the triangle's inward normal reversed (no
+// face built).
+TEST(CylinderHullPair, FaceSquareTermsBoundTheOverlap) {
+  test::Rng rng(649);
+  const auto value_of = [](const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
+    double s = terms.linear.dot(w);
+    for (int k = 0; k < terms.n; ++k) {
+      const double d = terms.axis[k].dot(w);
+      s += terms.coef[k] * (terms.disc[k] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
+    }
+    return s;
+  };
+  int built = 0, merged = 0, faces = 0;
+  for (const Case& c : cases(12, 650)) {
+    const ConvexHull<double>& h = hulls()[static_cast<std::size_t>(c.hull)];
+    const detail::PairFrame<double> f(c.pa, c.pb);
+    const std::vector<V3L> v = placed(h, f.R, f.t);
+    const double size = std::max(shape_size(c.solid), shape_size(h));
+    for (std::size_t k = 0; k < h.faces.size(); ++k) {
+      const Eigen::Vector3d n = -(f.R * h.faces[k].normal);
+      detail::OverlapTerms<double> terms;
+      terms.add(Eigen::Vector3d::UnitZ(), c.solid.radius, true);
+      terms.add(Eigen::Vector3d::UnitZ(), c.solid.half_length, false);
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (int i : h.faces[k].vertices) centre += h.vertices.row(i).transpose();
+      centre /= double(h.faces[k].vertices.size());
+      const Eigen::Vector3d above = centre + 0.3 * h.faces[k].normal;
+      ++faces;
+      // beyond the face's edges (twice the largest distance from its centre): no square
+      double reach = 0;
+      for (int i : h.faces[k].vertices) reach = std::max(reach, (Eigen::Vector3d(h.vertices.row(i).transpose()) - centre).norm());
+      const Eigen::Vector3d e = detail::any_orthogonal(h.faces[k].normal);
+      detail::OverlapTerms<double> outside = terms;
+      EXPECT_FALSE(detail::add_hull_face_square_terms(h, f.R, f.t, k, Eigen::Vector3d(f.R * (above + 2 * reach * e) + f.t), outside));
+      EXPECT_EQ(outside.n, 2);
+      if (!detail::add_hull_face_square_terms(h, f.R, f.t, k, Eigen::Vector3d(f.R * above + f.t), terms)) continue;
+      ++built;
+      merged += h.faces[k].vertices.size() > 3;
+      EXPECT_NEAR(value_of(terms, n), double(overlap_ld(c.solid, v, n.cast<LD>())), 1e-12 * size);
+      for (int i = 0; i < 20; ++i) {
+        // directions near n (the square's corners decide there) and anywhere
+        const Eigen::Vector3d m = i < 10 ? Eigen::Vector3d((n + 0.3 * rng.vec(-1, 1)).normalized()) : Eigen::Vector3d(rng.vec(-1, 1).normalized());
+        EXPECT_LE(value_of(terms, m), double(overlap_ld(c.solid, v, m.cast<LD>())) + 1e-12 * size);
+      }
+    }
+  }
+  EXPECT_GT(built, faces * 9 / 10);
+  EXPECT_GT(merged, 2);
+}
+
 // The whole penetration, both argument orders, in S: the same boolean as the oracle away from
 // touching, depth within `close` of the size of the oracle's, never a lower bound above it.
 template <class S>

@@ -757,8 +757,10 @@ ConvexContact<S> refined_hull_normal(const A& a, const RigidTransform<S>& pa, co
 /// one shape; a certified lower bound is positive, so it proves the intersection: no GJK), else
 /// GJK until it encloses the origin or separates them, and EPA from its tetrahedron seeded with
 /// the best candidate's direction and stopped early by the local certificate on
-/// cylinder_hull_terms (the hull's vertex or edge at EPA's normal), accepted when the true overlap
-/// at its normal is within the tolerance of its lower bound.
+/// cylinder_hull_terms (the hull's vertex or edge at EPA's normal) or, while EPA's best normal is
+/// still a face candidate's (a rim against a hull face whose ball is cut), on the cylinder's terms
+/// and a square of that face (add_hull_face_square_terms), accepted when the true overlap at its
+/// normal is within the tolerance of its lower bound.
 template <class S>
 ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTransform<S>& pa, const ConvexHull<S>& b,
                                            const RigidTransform<S>& pb, const ConvexQueryOptions<S>& o) {
@@ -772,8 +774,9 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   if (path.separated()) return one_plane_apart<S>();
   int its = 1;  // the plane; each stage adds its calls (one budget)
   ConvexContact<S> cand;
+  std::size_t cand_face = b.faces.size();  // the face whose candidate is the best (none: b.faces.size())
   if (candidates_fit(o, its, kCandidateCallsCylinderHull, cand)) {
-    const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand);
+    const CylinderHullVerdict verdict = cylinder_hull_candidates(a, b, f.R, f.t, margin, tol, cand, &cand_face);
     IMPACT_ASSERT(cand.iterations <= kCandidateCallsCylinderHull);
     if (verdict == CylinderHullVerdict::Apart) return one_plane_apart<S>();
     // a certified candidate's normal is the minimiser when its bound is exact (depth_gap 0)
@@ -788,6 +791,15 @@ ConvexContact<S> cylinder_hull_penetration(const Cylinder<S>& a, const RigidTran
   const bool seeded = cand.depth < std::numeric_limits<S>::infinity();
   if (!path.enclose(simplex, its, answer, seeded ? &cand.normal : nullptr)) return answer;
   const auto local = [&](const Vec3<S>& n) {
+    if (cand_face < b.faces.size() && n == cand.normal) {  // EPA's best normal still the face candidate's
+      OverlapTerms<S> terms;                              // the cylinder's terms and a square of that face
+      terms.add(Vec3<S>::UnitZ(), a.radius, true);
+      terms.add(Vec3<S>::UnitZ(), a.half_length, false);
+      if (add_hull_face_square_terms(b, f.R, f.t, cand_face, sa(n), terms)) {
+        const LocalCertificate<S> lc = local_certificate(terms, n);
+        if (certificate_holds(lc, sa, sb, tol)) return lc;
+      }
+    }
     const LocalCertificate<S> lc = local_certificate(cylinder_hull_terms(a, b, f.R, f.t, n), n);
     if (certificate_holds(lc, sa, sb, tol)) return lc;
     return LocalCertificate<S>();

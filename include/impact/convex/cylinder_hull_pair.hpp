@@ -34,7 +34,9 @@
 /// convex/local_certificate.hpp on cylinder_hull_terms: the cylinder's terms and the hull's
 /// feature at EPA's normal (a vertex: a linear term; an edge: linear plus an abs term), a lower
 /// bound of the overlap everywhere, accepted where the true overlap at the certified normal is
-/// within the tolerance of it.
+/// within the tolerance of it; at a face candidate's normal (a rim against a face, its ball cut by
+/// a neighbouring face), on the cylinder's terms and a square inside that face
+/// (add_hull_face_square_terms: the vertex and edge terms miss the face's kink).
 ///
 /// Numerical contract: separating test EXACT up to rounding (margin given by the caller);
 /// candidates APPROXIMATE as EPA's: depth is f(normal) (an upper bound up to rounding),
@@ -55,6 +57,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <vector>
 
 namespace impact::detail {
 
@@ -123,11 +126,12 @@ struct CylinderHullPart {
 };
 
 /// The candidates of the file comment for cylinder a (its frame) and hull b placed by R, t there
-/// (use_cylinder_hull_candidates(b) required): solid_hull_candidates with the cylinder's part.
+/// (use_cylinder_hull_candidates(b) required): solid_hull_candidates with the cylinder's part
+/// (`best_face` as there).
 template <class S>
 CylinderHullVerdict cylinder_hull_candidates(const Cylinder<S>& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t,
-                                             S margin, S tolerance, ConvexContact<S>& out) {
-  return solid_hull_candidates(CylinderHullPart<S>{a}, b, R, t, margin, tolerance, out);
+                                             S margin, S tolerance, ConvexContact<S>& out, std::size_t* best_face = nullptr) {
+  return solid_hull_candidates(CylinderHullPart<S>{a}, b, R, t, margin, tolerance, out, best_face);
 }
 
 /// Adds to f the terms of hull b (placed by R, t in the frame of f) near unit n: its support
@@ -187,6 +191,55 @@ OverlapTerms<S> cylinder_hull_terms(const Cylinder<S>& a, const ConvexHull<S>& b
   f.add(Vec3<S>::UnitZ(), a.half_length, false);
   add_hull_feature_terms(b, R, t, n, f);
   return f;
+}
+
+/// The terms of a square P inside face `face` of hull b (placed by R, t in the frame of f): P lies
+/// in a triangle of three of the face's vertices (a fan from its first vertex; the one that holds
+/// the largest square), in that triangle's plane, centred at x's projection c onto it, of half-side
+/// s. The triangle is inside the hull (its corners are vertices), so h_B(-w) >= h_P(-w) = -w . c
+/// + s |e0 . w| + s |e1 . w| (e0, e1 orthonormal in the plane), linear plus two abs terms: a lower
+/// bound of the hull's part of the overlap everywhere, equal to it at minus the triangle's normal,
+/// where the two kinks meet (a merged face's triangles are within its merge angle of its normal:
+/// there the bound is only near the overlap, and the certificate fails rather than err). With x
+/// the other shape's support along the face's normal, this bounds a contact of the face with a
+/// curved point of the other shape (a cylinder's rim), where the hull's vertex and edge terms
+/// (add_hull_feature_terms) miss the face. s = delta / sqrt(2) less 1e-6 of it, delta c's least
+/// distance to the triangle's edges; false (f unchanged) when c is inside no triangle by more
+/// than 1e-9 of the hull's size.
+template <class S>
+bool add_hull_face_square_terms(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, std::size_t face, const Vec3<S>& x,
+                                OverlapTerms<S>& f) {
+  const std::vector<int>& fv = b.faces[face].vertices;
+  const Vec3<S> y = R.transpose() * (x - t);
+  const auto vertex = [&](std::size_t i) { return Vec3<S>(b.vertices.row(fv[i]).transpose()); };
+  S best = S(1e-9) * b.size;
+  Vec3<S> centre = Vec3<S>::Zero(), normal = Vec3<S>::Zero();
+  for (std::size_t i = 1; i + 1 < fv.size(); ++i) {
+    const Vec3<S> p[3] = {vertex(0), vertex(i), vertex(i + 1)};
+    const Vec3<S> m = (p[1] - p[0]).cross(p[2] - p[0]);
+    const S mm = m.norm();
+    if (!(mm > S(0))) continue;
+    const Vec3<S> u = m / mm;  // outward: the vertices turn counter-clockwise seen from outside
+    const Vec3<S> c = y - u.dot(y - p[0]) * u;
+    S delta = std::numeric_limits<S>::infinity();
+    for (int k = 0; k < 3; ++k) {  // u x edge points inwards
+      const Vec3<S> e = p[(k + 1) % 3] - p[k];
+      const S len = e.norm();
+      delta = len > S(0) ? std::min(delta, u.cross(e).dot(c - p[k]) / len) : -S(1);
+    }
+    if (delta > best) {
+      best = delta;
+      centre = c;
+      normal = u;
+    }
+  }
+  if (!(normal.squaredNorm() > S(0))) return false;
+  const S s = best / std::sqrt(S(2)) * (S(1) - S(1e-6));
+  const Vec3<S> e0 = any_orthogonal(normal), e1 = normal.cross(e0);
+  f.add(Vec3<S>(R * e0), s, false);
+  f.add(Vec3<S>(R * e1), s, false);
+  f.linear -= R * centre + t;
+  return true;
 }
 
 }  // namespace impact::detail

@@ -134,8 +134,9 @@ S hull_face_pass(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, co
 /// hull b's face `face` (its support along n = -R m, a's frame; b placed by R, t there), offered
 /// with the face's overlap `f` and the radius of the largest ball about x inside the hull (its
 /// least distance to the face planes; 0 when x is outside: the upper bound only, a seed for EPA).
+/// True when it became the best candidate.
 template <class S, class A>
-void offer_hull_face(const A& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, std::size_t face, S f,
+bool offer_hull_face(const A& a, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, std::size_t face, S f,
                      CandidateBounds<S>& k) {
   const std::size_t nf = b.faces.size();
   using Faces = Eigen::Array<S, Eigen::Dynamic, 1>;
@@ -146,7 +147,9 @@ void offer_hull_face(const A& a, const ConvexHull<S>& b, const Mat3<S>& R, const
   const Vec3<S> x = support(a, Vec3<S>(-m));
   const Vec3<S> y = R.transpose() * (x - t);
   const S rho = (OFF - (NX * y.x() + NY * y.y() + NZ * y.z())).minCoeff();
+  const bool best = f < k.upper;
   k.offer(Vec3<S>(-m), f, x, rho > S(0) ? rho : S(0));
+  return best;
 }
 
 /// What the candidates found (solid_hull_candidates): apart (a face plane of the hull separates them by more
@@ -158,10 +161,11 @@ enum class CylinderHullVerdict { Apart, Certified, Open };
 /// separates them by more than `margin`; Certified with `out` set (normal from the solid towards
 /// b, depth, depth_gap, the deciding point, iterations the candidates offered) when the best bounds
 /// are within `tolerance`; else Open with out.normal and out.depth the best candidate's (depth
-/// infinite when none applied).
+/// infinite when none applied). `best_face`, when given, is set to the face whose candidate is the
+/// best one, else to b.faces.size().
 template <class S, class Part>
 CylinderHullVerdict solid_hull_candidates(const Part& part, const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, S margin,
-                                          S tolerance, ConvexContact<S>& out) {
+                                          S tolerance, ConvexContact<S>& out, std::size_t* best_face = nullptr) {
   const auto& a = part.shape;
   const S h = a.half_length;
   // in b's frame: the solid's axis and centre
@@ -169,9 +173,10 @@ CylinderHullVerdict solid_hull_candidates(const Part& part, const ConvexHull<S>&
   S along_axis[kCylinderHullMaxFaces];  // m_k . z of each face
   S overlap[kCylinderHullMaxFaces];
   std::size_t face = 0;
-  const S best_face = hull_face_pass(
+  const S face_overlap = hull_face_pass(
       b, ax, c, [&](const auto& F, const auto& D) { return part.face_reach(F, D); }, along_axis, overlap, face);
-  if (best_face < -margin) return CylinderHullVerdict::Apart;
+  if (best_face) *best_face = b.faces.size();
+  if (face_overlap < -margin) return CylinderHullVerdict::Apart;
   CandidateBounds<S> k;
   const auto decided = [&] { return k.upper - k.lower <= tolerance; };
   // the edges across the side
@@ -209,11 +214,12 @@ CylinderHullVerdict solid_hull_candidates(const Part& part, const ConvexHull<S>&
   // beat the best so far: the hull holds its centroid, so f >= h - s z_c
   const S z_c = R.row(2).dot(b.centroid) + t.z();
   for (const S s : part.ends) {
-    if (h - s * z_c >= std::min(k.upper, best_face)) continue;
+    if (h - s * z_c >= std::min(k.upper, face_overlap)) continue;
     part.offer_end(k, s, Vec3<S>(R * support(b, Vec3<S>(-s * ax)) + t));
   }
   // the best face: the solid's deepest point across it and its distance to the hull's boundary
-  if (!(decided() && k.upper <= best_face)) offer_hull_face(a, b, R, t, face, best_face, k);
+  if (!(decided() && k.upper <= face_overlap) && offer_hull_face(a, b, R, t, face, face_overlap, k) && best_face)
+    *best_face = face;
   return k.finish(tolerance, out) ? CylinderHullVerdict::Certified : CylinderHullVerdict::Open;
 }
 
