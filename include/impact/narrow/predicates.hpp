@@ -109,14 +109,12 @@ inline int orient2d_exact(double ax, double ay, double bx, double by, double cx,
   return det.sign();
 }
 
-/// Exact sign of det[b - a, c - a, d - a] (3D), by expansions.
-inline int orient3d_exact(const double* a, const double* b, const double* c, const double* d) {
-  Expansion<2> u[3], v[3], w[3];
-  for (int k = 0; k < 3; ++k) {
-    u[k] = Expansion<2>::difference(b[k], a[k]);
-    v[k] = Expansion<2>::difference(c[k], a[k]);
-    w[k] = Expansion<2>::difference(d[k], a[k]);
-  }
+/// Exact sign of det[u, v, w] (3D) for the rows u = diff[0..3), v = diff[3..6), w = diff[6..9),
+/// each component an expansion of at most two components, by expansions.
+inline int det3_exact(const Expansion<2>* diff) {
+  const Expansion<2>* u = diff;
+  const Expansion<2>* v = diff + 3;
+  const Expansion<2>* w = diff + 6;
   Expansion<192> det;
   for (int k = 0; k < 3; ++k) {
     const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
@@ -242,14 +240,16 @@ inline bool to_common_grid(const double* x, int count, Int* out) {
   return true;
 }
 
-/// Exact sign of det[b - a, c - a, d - a] for any finite doubles (0 for non-finite input). Kept
-/// out of line: its 25 KB of stack should not weigh on the frames of the hot callers.
-IMPACT_NOINLINE inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
+/// Exact sign of det[b - a, c - a, d - a] for any finite doubles (0 for non-finite input), or of
+/// det[b - a, c - a, d] when `d_is_direction` (d a vector, not a point). Kept out of line: its
+/// 25 KB of stack should not weigh on the frames of the hot callers.
+IMPACT_NOINLINE inline int orient3d(const double* a, const double* b, const double* c, const double* d, bool d_is_direction = false) {
   const double x[12] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], d[0], d[1], d[2]};
   Int g[12];
   if (!to_common_grid(x, 12, g)) return 0;
   Int u[3], v[3], w[3];
-  for (int k = 0; k < 3; ++k) u[k] = add(g[3 + k], g[k], true), v[k] = add(g[6 + k], g[k], true), w[k] = add(g[9 + k], g[k], true);
+  for (int k = 0; k < 3; ++k)
+    u[k] = add(g[3 + k], g[k], true), v[k] = add(g[6 + k], g[k], true), w[k] = d_is_direction ? g[9 + k] : add(g[9 + k], g[k], true);
   Int det;
   for (int k = 0; k < 3; ++k) {
     const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
@@ -281,16 +281,17 @@ template <int N> inline bool components_in_range(const expansion::Expansion<N>* 
   return true;
 }
 
-/// The exact stages of orient3d: expansions when their range allows, else big integers.
-inline int orient3d_exact(const double* a, const double* b, const double* c, const double* d) {
+/// The exact stages of orient3d: expansions when their range allows, else big integers. With
+/// `d_is_direction`, the exact sign of det[b - a, c - a, d] (d a vector: its row is d itself).
+inline int orient3d_exact(const double* a, const double* b, const double* c, const double* d, bool d_is_direction = false) {
   expansion::Expansion<2> diff[9];
   for (int k = 0; k < 3; ++k) {
     diff[k] = expansion::Expansion<2>::difference(b[k], a[k]);
     diff[3 + k] = expansion::Expansion<2>::difference(c[k], a[k]);
-    diff[6 + k] = expansion::Expansion<2>::difference(d[k], a[k]);
+    diff[6 + k] = expansion::Expansion<2>::difference(d[k], d_is_direction ? 0.0 : a[k]);
   }
-  if (components_in_range(diff, 9, 0x1p-306, 0x1p330)) return expansion::orient3d_exact(a, b, c, d);
-  return bigint::orient3d(a, b, c, d);
+  if (components_in_range(diff, 9, 0x1p-306, 0x1p330)) return expansion::det3_exact(diff);
+  return bigint::orient3d(a, b, c, d, d_is_direction);
 }
 
 /// The exact stages of orient2d: expansions when their range allows, else big integers.

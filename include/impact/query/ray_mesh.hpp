@@ -277,6 +277,17 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
 }
 
+/// Sets pr's band bound (PreparedRay::band) for the triangles of `mesh` in its own frame (pr's ray
+/// in that frame): from the root box of a box tree; other trees keep +infinity (each triangle's
+/// own band).
+template <class BV, class S> inline void bound_band_by_tree(PreparedRay<S>& pr, const MeshBvh<BV>& mesh) {
+  if constexpr (std::is_same_v<BV, Aabb<S>>) {
+    if (!mesh.tree().nodes.empty()) pr.bound_band(mesh.tree().nodes.front().bv.min, mesh.tree().nodes.front().bv.max);
+  } else {
+    (void)pr, (void)mesh;
+  }
+}
+
 /// ray_mesh_triangle_hit for one triangle, the inverse direction computed here (brute-force loops).
 template <class S> inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Triangle<S>& tri) {
   return ray_mesh_triangle_hit(pr, safe_inverse(pr.ray.direction), tri);
@@ -312,6 +323,7 @@ struct FirstHitCast {
         limit(ray.t_max) {
     inv = detail::safe_inverse(d);
     pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
+    bound_band_by_tree(pr, m);
     finite = segment_box && ray.t_max < std::numeric_limits<S>::infinity();
     if (finite) {
       const Vec3<S> e = o + ray.t_max * d;
@@ -476,7 +488,8 @@ bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return false;
-  const PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
+  PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
+  detail::bound_band_by_tree(pr, mesh);
   const Vec3<S> inv = detail::safe_inverse(d);
   bool found = false;
   traverse(
