@@ -187,6 +187,41 @@ template <class S> void edge_function_and_band(const PreparedRay<S>& pr, const V
   band = detail::edge_band(cmx, cmy, bmx, bmy);
 }
 
+// The exact sign the edge functions take near zero, detail::orient3d_direction_exact (sign of
+// det[b - a, c - a, d]), against orient3d of the points a, b, c and a + d (exact here: integers
+// below 2^52 in units of a power of two): values spanning 8 to 50 bits, so both its 128-bit
+// integer path (spans of at most 40 bits) and the expansions are taken, with b often on the line
+// a + t d (a zero determinant) and c one unit off a plane through it; scaled by 2^-900 to 2^900.
+TEST(RayTriDirectionSign, ExactOnIntegerGridsOfEverySpan) {
+  Rng rng(24);
+  int zeros = 0, small = 0, large = 0;
+  for (int it = 0; it < 40000; ++it) {
+    const int bits = 8 + int(rng.index(43));  // 8..50
+    const std::int64_t r = std::int64_t(1) << (bits - 2);
+    const int k2 = int(rng.integer(900));
+    auto ivec = [&](std::int64_t m) { return Vec3<double>(double(rng.integer(m)), double(rng.integer(m)), double(rng.integer(m))); };
+    const Vec3<double> a = ivec(r), d = ivec(r);
+    Vec3<double> b = it % 2 == 0 ? Vec3<double>(a + double(rng.integer(1)) * d) : ivec(r);
+    Vec3<double> c = ivec(r);
+    if (it % 3 == 0) c = a + 2.0 * (b - a) + d, c[int(rng.index(3))] += rng.index(2) == 0 ? 1.0 : -1.0;
+    auto sc = [&](const Vec3<double>& v) { return Vec3<double>(std::ldexp(v[0], k2), std::ldexp(v[1], k2), std::ldexp(v[2], k2)); };
+    const Vec3<double> as = sc(a), bs = sc(b), cs = sc(c), ds = sc(d), q = sc(a + d);
+    const int expect = orient3d(as, bs, cs, q);
+    ASSERT_EQ(detail::orient3d_direction_exact(as.data(), bs.data(), cs.data(), ds.data()), expect) << it;
+    const double x[9] = {bs[0] - as[0], bs[1] - as[1], bs[2] - as[2], cs[0] - as[0], cs[1] - as[1], cs[2] - as[2], ds[0], ds[1], ds[2]};
+    const int s = detail::det3_small_integers(x);
+    if (s != 2) {
+      ASSERT_EQ(s, expect) << it;
+    }
+    small += s != 2 ? 1 : 0;
+    large += s == 2 ? 1 : 0;
+    zeros += expect == 0 ? 1 : 0;
+  }
+  EXPECT_GT(small, 10000);
+  EXPECT_GT(large, 5000);
+  EXPECT_GT(zeros, 5000);
+}
+
 /// det[u; v; w] of integer-valued doubles, exactly (the expansion toolkit of narrow/predicates.hpp),
 /// rounded once to long double (its components summed from the smallest: relative error about
 /// 2^-63).

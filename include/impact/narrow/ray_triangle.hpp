@@ -14,8 +14,9 @@
 /// whose orientation is that of d_kz: the signs cancel; tests/narrow/test_ray_triangle.cpp checks
 /// it), likewise ev with det[a - o, c - o, d] and ew with det[b - o, a - o, d]. Every computed edge
 /// function within its error band (below) has its sign replaced by that determinant's, evaluated
-/// exactly on the inputs as given (detail::orient3d_exact, narrow/predicates.hpp: the
-/// differences as exact expansions, or big integers): the value becomes 0, or keeps its magnitude
+/// exactly on the inputs as given (detail::orient3d_direction_exact, narrow/predicates.hpp:
+/// 128-bit integers when the values lie on one small grid, else the differences as exact
+/// expansions, or big integers): the value becomes 0, or keeps its magnitude
 /// with the exact sign (a value of exact sign set to the smallest normal if it was 0). Outside the
 /// band the computed sign is the exact one. So every sign is exact; it is a function of the
 /// edge's two vertices and the ray only (antisymmetric in the two), whatever the triangle: a ray
@@ -240,9 +241,9 @@ IMPACT_NOINLINE std::optional<RayTriangleHit<S>> intersect_ray_triangle_near_edg
     const double po[3] = {o.x(), o.y(), o.z()}, pd[3] = {pr.ray.direction.x(), pr.ray.direction.y(), pr.ray.direction.z()};
     const double pa[3] = {tri.a.x(), tri.a.y(), tri.a.z()}, pb[3] = {tri.b.x(), tri.b.y(), tri.b.z()}, pc[3] = {tri.c.x(), tri.c.y(), tri.c.z()};
     // eu ~ det[c - o, b - o, d], ev ~ det[a - o, c - o, d], ew ~ det[b - o, a - o, d]
-    if (in_u) eu = with_exact_sign(eu, orient3d_exact(po, pc, pb, pd, true));
-    if (in_v) ev = with_exact_sign(ev, orient3d_exact(po, pa, pc, pd, true));
-    if (in_w) ew = with_exact_sign(ew, orient3d_exact(po, pb, pa, pd, true));
+    if (in_u) eu = with_exact_sign(eu, orient3d_direction_exact(po, pc, pb, pd));
+    if (in_v) ev = with_exact_sign(ev, orient3d_direction_exact(po, pa, pc, pd));
+    if (in_w) ew = with_exact_sign(ew, orient3d_direction_exact(po, pb, pa, pd));
     return finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max);
   }
 }
