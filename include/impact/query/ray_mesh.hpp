@@ -5,19 +5,19 @@
 /// BV as the key) and any hit (depth-first, stops at the first triangle hit).
 ///
 /// Numerical contract. Triangles are tested with the narrow phase's watertight ray-triangle test
-/// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013): the ray is prepared once, and a
-/// ray through a shared edge or vertex of a closed mesh hits at least one of the triangles around
-/// it (never none). A hit on the boundary of a triangle counts (closed triangles). Rays parallel
-/// to a triangle's plane miss it. A triangle counts as hit only when the ray also enters its
+/// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013, with exact signs of its edge
+/// functions: whether the ray's line meets the closed triangle is decided exactly, t is
+/// approximate): the ray is prepared once, and a ray through a shared edge or vertex of a closed
+/// mesh hits at least one of the triangles around it (never none). A hit on the boundary of a
+/// triangle counts (closed triangles). Rays parallel to a triangle's plane miss it. A triangle counts as hit only when the ray also enters its
 /// bounding box by the node tests' slab test, and its t is never below that entry (see
 /// detail::ray_mesh_triangle_hit). The node tests are conservative (their exit parameter is
 /// padded, PBRT's robust slab test) and monotone (a box inside another is entered no earlier), so
 /// no hit is lost to rounding in the traversal of a box tree or a CompactBvh: their first hit's t
 /// is exactly the smallest t of a loop over every triangle. Oriented-box trees key on the same
 /// slab entry into each box's axis-aligned hull and reject nodes whose box the ray's line misses
-/// (detail::ray_bv_entry for Obb): the same exact answer, provided the watertight test hits only
-/// triangles its ray passes within rounding of (32 ulps of the coordinates; it does unless an edge
-/// function's sign is lost on a sliver seen from afar). Sphere trees use the sphere's padded
+/// (detail::ray_bv_entry for Obb): the same exact answer, since the watertight test hits only
+/// triangles its ray's line meets (exact signs) within its approximate t range. Sphere trees use the sphere's padded
 /// entry, a lower bound up to the rounding of the entry itself. One tie rule keeps particles out of surfaces: a hit at
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
 /// normal), so a point exactly on a surface is on its front side: moving into the surface it

@@ -14,12 +14,15 @@
 /// for rays it cannot take (magnitudes beyond 2^60, a zero direction component). The triangles of a leaf, stored in blocks of four coordinate by
 /// coordinate (WideTriangleBlock), go four at a time through the watertight test's own operations
 /// in SIMD (BlockTest, query/wide_leaf_filter.hpp: SSE2, or AVX when the CPU has it), which passes
-/// exactly the triangles the scalar test hits (in float, also those with an edge function equal to
-/// zero); in double their hit values (t, barycentrics) come from the lanes themselves (the same
-/// operations, so the same bits), in float the scalar test itself decides them.
+/// the triangles the scalar test hits and those with an edge function within the ray's bound of
+/// the error bands (PreparedRay::band for the tree's box: near an edge, where the scalar test may
+/// take an exact sign); in double the hit values (t, barycentrics) of the other lanes come from
+/// the lanes themselves (the same operations, so the same bits), in float and near an edge the
+/// scalar test itself decides them.
 ///
 /// Numerical contract: that of query/ray_mesh.hpp. Every crossing is decided by the same
-/// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: a
+/// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: the
+/// exact hit/miss decision of the closed triangle for the ray's line, narrow/ray_triangle.hpp; a
 /// ray through a shared edge or vertex of a closed mesh hits a triangle around it, never none;
 /// the t = 0 tie rule). The node tests are conservative: the double slab test runs in S on the
 /// float boxes (rounded outward, exact in S) with its exit parameter padded (PBRT's robust slab
