@@ -174,4 +174,136 @@ TYPED_TEST(RayTri, NoLeaksThroughSeamsOfClosedMeshes) {
   EXPECT_EQ(leaks, 0) << "of " << rays << " rays";
 }
 
+/// The edge function of the edge (b, c) and its band as intersect_ray_triangle computes them (the
+/// same operations, narrow/ray_triangle.hpp).
+template <class S> void edge_function_and_band(const PreparedRay<S>& pr, const Vec3<S>& b, const Vec3<S>& c, S& e, S& band) {
+  const Vec3<S> B = b - pr.ray.origin, C = c - pr.ray.origin;
+  const S bx = B[pr.kx] - pr.sx * B[pr.kz], by = B[pr.ky] - pr.sy * B[pr.kz];
+  const S cx = C[pr.kx] - pr.sx * C[pr.kz], cy = C[pr.ky] - pr.sy * C[pr.kz];
+  e = cx * by - cy * bx;
+  S bmx, bmy, cmx, cmy;
+  detail::edge_magnitudes(pr, B, bmx, bmy);
+  detail::edge_magnitudes(pr, C, cmx, cmy);
+  band = detail::edge_band(cmx, cmy, bmx, bmy);
+}
+
+// The exact sign the edge functions take near zero, detail::orient3d_direction_exact (sign of
+// det[b - a, c - a, d]), against orient3d of the points a, b, c and a + d (exact here: integers
+// below 2^52 in units of a power of two): values spanning 8 to 50 bits, so both its 128-bit
+// integer path (spans of at most 40 bits) and the expansions are taken, with b often on the line
+// a + t d (a zero determinant) and c one unit off a plane through it; scaled by 2^-900 to 2^900.
+TEST(RayTriDirectionSign, ExactOnIntegerGridsOfEverySpan) {
+  Rng rng(24);
+  int zeros = 0, small = 0, large = 0;
+  for (int it = 0; it < 40000; ++it) {
+    const int bits = 8 + int(rng.index(43));  // 8..50
+    const std::int64_t r = std::int64_t(1) << (bits - 2);
+    const int k2 = int(rng.integer(900));
+    auto ivec = [&](std::int64_t m) { return Vec3<double>(double(rng.integer(m)), double(rng.integer(m)), double(rng.integer(m))); };
+    const Vec3<double> a = ivec(r), d = ivec(r);
+    Vec3<double> b = it % 2 == 0 ? Vec3<double>(a + double(rng.integer(1)) * d) : ivec(r);
+    Vec3<double> c = ivec(r);
+    if (it % 3 == 0) c = a + 2.0 * (b - a) + d, c[int(rng.index(3))] += rng.index(2) == 0 ? 1.0 : -1.0;
+    auto sc = [&](const Vec3<double>& v) { return Vec3<double>(std::ldexp(v[0], k2), std::ldexp(v[1], k2), std::ldexp(v[2], k2)); };
+    const Vec3<double> as = sc(a), bs = sc(b), cs = sc(c), ds = sc(d), q = sc(a + d);
+    const int expect = orient3d(as, bs, cs, q);
+    ASSERT_EQ(detail::orient3d_direction_exact(as.data(), bs.data(), cs.data(), ds.data()), expect) << it;
+    const double x[9] = {bs[0] - as[0], bs[1] - as[1], bs[2] - as[2], cs[0] - as[0], cs[1] - as[1], cs[2] - as[2], ds[0], ds[1], ds[2]};
+    const int s = detail::det3_small_integers(x);
+    if (s != 2) {
+      ASSERT_EQ(s, expect) << it;
+    }
+    small += s != 2 ? 1 : 0;
+    large += s == 2 ? 1 : 0;
+    zeros += expect == 0 ? 1 : 0;
+  }
+  EXPECT_GT(small, 10000);
+  EXPECT_GT(large, 5000);
+  EXPECT_GT(zeros, 5000);
+}
+
+/// det[u; v; w] of integer-valued doubles, exactly (the expansion toolkit of narrow/predicates.hpp),
+/// rounded once to long double (its components summed from the smallest: relative error about
+/// 2^-63).
+inline long double exact_det3(const Vec3<double>& u, const Vec3<double>& v, const Vec3<double>& w) {
+  using detail::expansion::Expansion;
+  Expansion<2> eu[3], ev[3], ew[3];
+  for (int k = 0; k < 3; ++k) eu[k] = Expansion<2>::difference(u[k], 0.0), ev[k] = Expansion<2>::difference(v[k], 0.0), ew[k] = Expansion<2>::difference(w[k], 0.0);
+  Expansion<192> det;
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    Expansion<16> minor;
+    detail::expansion::add_product(minor, eu[k1], ev[k2], false);
+    detail::expansion::add_product(minor, eu[k2], ev[k1], true);
+    detail::expansion::add_product(det, ew[k], minor, false);
+  }
+  long double sum = 0;
+  for (int i = 0; i < det.n; ++i) sum += static_cast<long double>(det.c[i]);
+  return sum;
+}
+
+// The band of the edge functions (narrow/ray_triangle.hpp) against exact values: rays o + t d and
+// edges (b, c) with integer coordinates (up to 2^48 in double, 2^20 in float: exact in S, and so
+// are o + 16 d; then scaled by powers of two, and translated), b on the ray's line, one unit off
+// it (which puts the exact edge function about one to two bands from zero), or anywhere. The exact
+// edge function is det[c - o, b - o, d] / |d_kz| (exact, then rounded to long double, whose error
+// is far below the band). Checks: (1) the computed value is within its band of the exact one (the
+// derivation's claim), and the band is not loose by more than 2^6 on these cases; (2) its sign is
+// the exact determinant's (the sign convention of the file comment) whenever it is outside the
+// band, many cases just outside (within 4 bands) included; (3) the triangle (a, b, c), a in front
+// of the ray, is hit exactly when the exact orientations of the ray's line against its edges have
+// no two opposite strict signs and not all zero, many cases inside the band included (there the
+// exact sign decides).
+TYPED_TEST(RayTri, EdgeFunctionBandAndExactSigns) {
+  using S = TypeParam;
+  Rng rng(23);
+  const std::int64_t range = std::is_same_v<S, float> ? std::int64_t(1) << 20 : std::int64_t(1) << 48;
+  double worst = 0;
+  int just_outside = 0, inside = 0, exact_zero = 0, decided = 0;
+  for (int it = 0; it < 100000; ++it) {
+    const int k2 = std::is_same_v<S, float> ? int(rng.integer(6)) - 6 : int(rng.integer(60));  // scale 2^k2
+    auto ivec = [&](std::int64_t r) { return Vec3<double>(double(rng.integer(r)), double(rng.integer(r)), double(rng.integer(r))); };
+    const Vec3<double> shift = ivec(range / 4), o = ivec(range / 4) + shift, d = ivec(range / 32);
+    if (d.cwiseAbs().maxCoeff() == 0) continue;
+    const int kind = it % 4;  // b on the line, one unit off it, or anywhere (two)
+    Vec3<double> b = kind >= 2 ? Vec3<double>(ivec(range / 4) + shift) : Vec3<double>(o + double(1 + rng.index(4)) * d);
+    if (kind == 1) b[int(rng.index(3))] += rng.index(2) == 0 ? 1.0 : -1.0;
+    const Vec3<double> c = ivec(range / 4) + shift;
+    const Vec3<double> a = o + 6.0 * d + ivec(range / 256);  // in front of the ray
+    auto to_s = [&](const Vec3<double>& v) { return Vec3<S>(S(std::ldexp(v[0], k2)), S(std::ldexp(v[1], k2)), S(std::ldexp(v[2], k2))); };
+    const Ray<S> ray(to_s(o), to_s(d));
+    const PreparedRay<S> pr(ray);
+    S e, band;
+    edge_function_and_band(pr, to_s(b), to_s(c), e, band);
+    const long double det = exact_det3(c - o, b - o, d);  // in units of 2^(3 k2)
+    const int det_sign = det > 0 ? 1 : (det < 0 ? -1 : 0);
+    const long double exact = std::ldexp(det / std::fabs(static_cast<long double>(d[pr.kz])), 2 * k2);
+    const double ratio = double(std::fabs(static_cast<long double>(e) - exact) / static_cast<long double>(band));
+    ASSERT_LE(ratio, 1.0) << it;  // (1)
+    worst = std::max(worst, ratio);
+    if (std::abs(e) > band) {
+      ASSERT_EQ(e > 0 ? 1 : -1, det_sign) << it;  // (2)
+      just_outside += std::abs(e) <= 4 * band ? 1 : 0;
+    } else {
+      ++inside;
+      exact_zero += det_sign == 0 ? 1 : 0;
+    }
+    // (3): the hit decision against the exact orientations of the line (q = o + 16 d, exact)
+    const Vec3<double> od = to_s(o).template cast<double>(), qd = to_s(o + 16.0 * d).template cast<double>();
+    const Vec3<double> ad = to_s(a).template cast<double>(), bd = to_s(b).template cast<double>(), cd = to_s(c).template cast<double>();
+    const int s0 = orient3d(od, qd, ad, bd), s1 = orient3d(od, qd, bd, cd), s2 = orient3d(od, qd, cd, ad);
+    const int sp = orient3d(ad, bd, cd, od), sq = orient3d(ad, bd, cd, qd);
+    if (sp == 0 || sq == 0 || sp == sq) continue;  // the plane not crossed strictly between o and q: the t range left out
+    const bool line_hits = !((s0 < 0 || s1 < 0 || s2 < 0) && (s0 > 0 || s1 > 0 || s2 > 0));
+    const bool hit = intersect_ray_triangle(pr, Triangle<S>(to_s(a), to_s(b), to_s(c))).has_value();
+    ASSERT_EQ(hit, line_hits) << it << " (edge function " << e << ", band " << band << ")";  // (3)
+    ++decided;
+  }
+  EXPECT_GT(worst, 1.0 / 64);  // the band is not vacuous
+  EXPECT_GT(just_outside, 1000);
+  EXPECT_GT(inside, 10000);
+  EXPECT_GT(exact_zero, 10000);
+  EXPECT_GT(decided, 10000);
+}
+
 }  // namespace

@@ -337,7 +337,10 @@ TYPED_TEST(RayMesh, CoincidentTrianglesArePruned) {
 // t = 1 for the first triangle and 1 - 2^-53 for the second (its t is a rounded convex combination
 // of the vertices' depths); before the fix the tree returned 1 (it pruned the second triangle's
 // node, entered at t = 1 = the best found) while the loop found 1 - 2^-53. A hit's t is now never
-// below the entry into its triangle's box, so both give exactly 1, the exact answer.
+// below the entry into its triangle's box, so both give exactly 1, the exact answer. (Since the
+// edge functions' signs are exact, issue 14: the ray lies exactly in the first triangle's plane,
+// normal (-1, 5, -1), so that triangle is not hit, as every ray in a triangle's plane; the second
+// is, at exactly 1.)
 TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
   TriangleMesh<double> m;
   m.V.resize(5, 3);
@@ -346,11 +349,11 @@ TEST(RayMeshExact, FirstHitThroughASharedBoxCorner) {
   m.F << 0, 1, 2, 0, 3, 4;
   const Ray<double> ray(Vec3<double>(-3, -3, -4), Vec3<double>(2, 1, 3));
   const PreparedRay<double> pr(ray);
-  for (int t = 0; t < 2; ++t) {
-    const auto h = detail::ray_mesh_triangle_hit(pr, m.triangle(t));
-    ASSERT_TRUE(h.has_value()) << t;
-    EXPECT_EQ(h->t, 1.0) << t;  // before: 1 - 2^-53 for triangle 1
-  }
+  EXPECT_EQ(m.triangle(0).scaled_normal().dot(ray.direction), 0.0);  // (exactly: small integers)
+  EXPECT_FALSE(detail::ray_mesh_triangle_hit(pr, m.triangle(0)).has_value());  // in its plane
+  const auto h1 = detail::ray_mesh_triangle_hit(pr, m.triangle(1));
+  ASSERT_TRUE(h1.has_value());
+  EXPECT_EQ(h1->t, 1.0);  // before the fix of issue 12: 1 - 2^-53
   for (int leaf : {1, 4}) {
     MeshBvhConfig cfg;
     cfg.build.leaf_size = leaf;

@@ -286,13 +286,24 @@ TYPED_TEST(WideBvhTest, FloatSlabIsConservative) {
 }
 
 #if defined(__SSE2__)
-/// The block test of a leaf against the watertight test on each lane's triangle: in double the
-/// lanes it passes are exactly the triangles the test hits; in float a superset (an edge function
-/// equal to zero is left to the test); with AVX (when the CPU has it) as with SSE2; in double the
-/// passed lanes' values (LaneValues) give the test's t, barycentrics and side. Returns the lanes
-/// it rejects.
-template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const Ray<S>& ray, int count) {
-  const PreparedRay<S> pr(ray);
+/// The block test of a leaf against the watertight test on each lane's triangle, with the band
+/// bound of the block's box (as the casts set it for the tree's box): in double the lanes it
+/// passes are the triangles the test hits and the lanes near an edge (LaneValues::near: those
+/// with an edge function within the bound, which the scalar test decides); in float a superset
+/// of the hits; with AVX (when the CPU has it) as with SSE2; in double the passed lanes' values
+/// not near an edge give the test's t, barycentrics and side. The scalar test with the bound
+/// gives what it gives without (every triangle's own band), bit for bit. Returns the lanes it
+/// rejects.
+template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const Ray<S>& ray, int count, int* near_count = nullptr) {
+  Vec3<S> lo = Vec3<S>::Constant(std::numeric_limits<S>::infinity()), hi = -lo;
+  for (int c = 0; c < count; ++c)
+    for (int v = 0; v < 3; ++v) {
+      const Vec3<S> p(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c]));
+      lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    }
+  PreparedRay<S> pr(ray);
+  pr.bound_band(lo, hi);
+  const PreparedRay<S> unbounded(ray);
   detail::BlockTest<S> bt, sse;
   bt.set(pr);  // AVX when the CPU has it (double)
   sse.set(pr, false);
@@ -303,8 +314,22 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
   for (int c = 0; c < count; ++c) {
     auto at = [&](int v) { return Vec3<S>(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c])); };
     const Triangle<S> t{at(0), at(1), at(2)};
-    const bool hit = intersect_ray_triangle(pr, t).has_value(), passed = (todo >> c) & 1;
-    if (std::is_same_v<S, double>) {
+    const auto with_bound = intersect_ray_triangle(pr, t), without = intersect_ray_triangle(unbounded, t);
+    EXPECT_EQ(with_bound.has_value(), without.has_value()) << "lane " << c;
+    if (with_bound && without) {
+      EXPECT_EQ(with_bound->t, without->t);
+      EXPECT_EQ(with_bound->u, without->u);
+      EXPECT_EQ(with_bound->w, without->w);
+    }
+    const bool hit = with_bound.has_value(), passed = (todo >> c) & 1;
+    const bool near = todo && std::is_same_v<S, double> && ((values.near >> c) & 1);
+    if (near_count) *near_count += near ? 1 : 0;
+    if (std::is_same_v<S, double> && todo) {
+      EXPECT_EQ(values.near, sse_values.near);
+    }
+    if (near) {
+      EXPECT_TRUE(passed) << "lane " << c;
+    } else if (std::is_same_v<S, double>) {
       EXPECT_EQ(passed, hit) << "lane " << c;
       if (passed && hit) {  // the lane's values give the test's hit values, AVX and SSE2 alike
         const auto h = intersect_ray_triangle(pr, t);
@@ -332,11 +357,17 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
     if (detail::wide_avx_available() && inv.allFinite()) {
       detail::BlockTest<S> lanes_test;
       lanes_test.set_ray(ray.origin, ray.direction, inv);
+      lanes_test.bound_band(lo, hi);
       typename detail::BlockTest<S>::LaneHits h;
       const int hit_lanes = lanes_test.hits_avx(b, count, ray.t_max, h);
+      EXPECT_EQ(hit_lanes & h.near, 0);
+      if (todo) {
+        EXPECT_EQ(h.near, values.near);  // the same bound and lanes as set(pr)
+      }
       for (int c = 0; c < count; ++c) {
         auto at = [&](int v) { return Vec3<S>(S(b.v[3 * v][c]), S(b.v[3 * v + 1][c]), S(b.v[3 * v + 2][c])); };
         const auto r = detail::ray_mesh_triangle_hit(pr, inv, Triangle<S>{at(0), at(1), at(2)});
+        if ((h.near >> c) & 1) continue;  // left to the scalar rule
         EXPECT_EQ((hit_lanes >> c) & 1, r ? 1 : 0) << "lane " << c;
         if (r && ((hit_lanes >> c) & 1)) {
           EXPECT_EQ(h.t[c], r->t) << "lane " << c;
@@ -347,6 +378,7 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
         }
       }
       EXPECT_EQ(hit_lanes >> count, 0);
+      EXPECT_EQ(h.near >> count, 0);
     }
   }
 #endif
@@ -362,7 +394,7 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
 TYPED_TEST(WideBvhTest, BlockTestDecidesAsTheScalarTest) {
   using S = TypeParam;
   test::Rng rng(47);
-  int skipped = 0, lanes = 0;
+  int skipped = 0, lanes = 0, near = 0;
   for (int i = 0; i < 20000 / kWideSamples; ++i) {
     const double scale = i % 10 == 9 ? (i % 20 == 9 ? 1e-30 : 1e30) : std::ldexp(1.0, int(rng.integer(20)));
     const double grid = std::ldexp(scale, -12);
@@ -407,11 +439,15 @@ TYPED_TEST(WideBvhTest, BlockTestDecidesAsTheScalarTest) {
     const double t_max = i % 5 == 0 ? rng.uniform(0.99, 1.01) : i % 5 == 1 ? std::numeric_limits<double>::infinity() : 2.0;
     const Ray<S> ray(o.template cast<S>(), d.template cast<S>(), S(t_max));
     if (ray.direction.squaredNorm() == S(0)) continue;
-    skipped += check_block(packed, ray, count);
-    if (std::is_same_v<S, double>) skipped += check_block(full, ray, count);
+    skipped += check_block(packed, ray, count, &near);
+    if (std::is_same_v<S, double>) skipped += check_block(full, ray, count, &near);
     lanes += std::is_same_v<S, double> ? 2 * count : count;
   }
   EXPECT_GT(skipped, lanes / 4);  // the clear misses are rejected
+  if (std::is_same_v<S, double>) {  // the rays through vertices and edge points: some lanes near an edge, most not
+    EXPECT_GT(near, 100 / kWideSamples);
+    EXPECT_LT(near, lanes / 4);
+  }
 }
 
 // The block test's frame as the AVX cast sets it up (BlockTest::set_ray, without jumps) is

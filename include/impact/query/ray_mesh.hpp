@@ -5,19 +5,19 @@
 /// BV as the key) and any hit (depth-first, stops at the first triangle hit).
 ///
 /// Numerical contract. Triangles are tested with the narrow phase's watertight ray-triangle test
-/// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013): the ray is prepared once, and a
-/// ray through a shared edge or vertex of a closed mesh hits at least one of the triangles around
-/// it (never none). A hit on the boundary of a triangle counts (closed triangles). Rays parallel
-/// to a triangle's plane miss it. A triangle counts as hit only when the ray also enters its
+/// (narrow/ray_triangle.hpp; Woop, Benthin and Wald, JCGT 2013, with exact signs of its edge
+/// functions: whether the ray's line meets the closed triangle is decided exactly, t is
+/// approximate): the ray is prepared once, and a ray through a shared edge or vertex of a closed
+/// mesh hits at least one of the triangles around it (never none). A hit on the boundary of a
+/// triangle counts (closed triangles). Rays parallel to a triangle's plane miss it. A triangle counts as hit only when the ray also enters its
 /// bounding box by the node tests' slab test, and its t is never below that entry (see
 /// detail::ray_mesh_triangle_hit). The node tests are conservative (their exit parameter is
 /// padded, PBRT's robust slab test) and monotone (a box inside another is entered no earlier), so
 /// no hit is lost to rounding in the traversal of a box tree or a CompactBvh: their first hit's t
 /// is exactly the smallest t of a loop over every triangle. Oriented-box trees key on the same
 /// slab entry into each box's axis-aligned hull and reject nodes whose box the ray's line misses
-/// (detail::ray_bv_entry for Obb): the same exact answer, provided the watertight test hits only
-/// triangles its ray passes within rounding of (32 ulps of the coordinates; it does unless an edge
-/// function's sign is lost on a sliver seen from afar). Sphere trees use the sphere's padded
+/// (detail::ray_bv_entry for Obb): the same exact answer, since the watertight test hits only
+/// triangles its ray's line meets (exact signs) within its approximate t range. Sphere trees use the sphere's padded
 /// entry, a lower bound up to the rounding of the entry itself. One tie rule keeps particles out of surfaces: a hit at
 /// exactly t = 0 counts only when the ray enters the triangle's front (d . n < 0, n the wound
 /// normal), so a point exactly on a surface is on its front side: moving into the surface it
@@ -277,6 +277,17 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
 }
 
+/// Sets pr's band bound (PreparedRay::band) for the triangles of `mesh` in its own frame (pr's ray
+/// in that frame): from the root box of a box tree; other trees keep +infinity (each triangle's
+/// own band).
+template <class BV, class S> inline void bound_band_by_tree(PreparedRay<S>& pr, const MeshBvh<BV>& mesh) {
+  if constexpr (std::is_same_v<BV, Aabb<S>>) {
+    if (!mesh.tree().nodes.empty()) pr.bound_band(mesh.tree().nodes.front().bv.min, mesh.tree().nodes.front().bv.max);
+  } else {
+    (void)pr, (void)mesh;
+  }
+}
+
 /// ray_mesh_triangle_hit for one triangle, the inverse direction computed here (brute-force loops).
 template <class S> inline std::optional<RayTriangleHit<S>> ray_mesh_triangle_hit(const PreparedRay<S>& pr, const Triangle<S>& tri) {
   return ray_mesh_triangle_hit(pr, safe_inverse(pr.ray.direction), tri);
@@ -312,6 +323,7 @@ struct FirstHitCast {
         limit(ray.t_max) {
     inv = detail::safe_inverse(d);
     pr = PreparedRay<S>(Ray<S>(o, d, ray.t_max));
+    bound_band_by_tree(pr, m);
     finite = segment_box && ray.t_max < std::numeric_limits<S>::infinity();
     if (finite) {
       const Vec3<S> e = o + ray.t_max * d;
@@ -476,7 +488,8 @@ bool ray_mesh_any_hit(const MeshBvh<BV>& mesh, const Ray<typename BvTraits<BV>::
   const Vec3<S> o = pose.R.transpose() * (ray.origin - pose.t);
   const Vec3<S> d = pose.R.transpose() * ray.direction;
   if (d.squaredNorm() == S(0) || !(ray.t_max >= S(0))) return false;
-  const PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
+  PreparedRay<S> pr(Ray<S>(o, d, ray.t_max));
+  detail::bound_band_by_tree(pr, mesh);
   const Vec3<S> inv = detail::safe_inverse(d);
   bool found = false;
   traverse(

@@ -14,12 +14,15 @@
 /// for rays it cannot take (magnitudes beyond 2^60, a zero direction component). The triangles of a leaf, stored in blocks of four coordinate by
 /// coordinate (WideTriangleBlock), go four at a time through the watertight test's own operations
 /// in SIMD (BlockTest, query/wide_leaf_filter.hpp: SSE2, or AVX when the CPU has it), which passes
-/// exactly the triangles the scalar test hits (in float, also those with an edge function equal to
-/// zero); in double their hit values (t, barycentrics) come from the lanes themselves (the same
-/// operations, so the same bits), in float the scalar test itself decides them.
+/// the triangles the scalar test hits and those with an edge function within the ray's bound of
+/// the error bands (PreparedRay::band for the tree's box: near an edge, where the scalar test may
+/// take an exact sign); in double the hit values (t, barycentrics) of the other lanes come from
+/// the lanes themselves (the same operations, so the same bits), in float and near an edge the
+/// scalar test itself decides them.
 ///
 /// Numerical contract: that of query/ray_mesh.hpp. Every crossing is decided by the same
-/// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: a
+/// watertight narrow-phase rule on the mesh's own coordinates (detail::ray_mesh_triangle_hit: the
+/// exact hit/miss decision of the closed triangle for the ray's line, narrow/ray_triangle.hpp; a
 /// ray through a shared edge or vertex of a closed mesh hits a triangle around it, never none;
 /// the t = 0 tie rule). The node tests are conservative: the double slab test runs in S on the
 /// float boxes (rounded outward, exact in S) with its exit parameter padded (PBRT's robust slab
@@ -39,6 +42,7 @@
 #include "impact/query/wide_slab.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -142,8 +146,14 @@ template <class S, int W = 4> struct WideCast {
   struct LeafSetup {
     PreparedRay<S> pr;
     BlockTest<S> block_test;
-    LeafSetup(const Ray<S>& ray, bool avx) : pr(ray) { block_test.set(pr, avx); }  // made in place
+    /// The ray's band bound (PreparedRay::band) for the tree's box `box` (WideBvh::box).
+    LeafSetup(const Ray<S>& ray, bool avx, const std::array<double, 8>& box) : pr(ray) {  // made in place
+      pr.bound_band(box_corner(box, 0), box_corner(box, 4));
+      block_test.set(pr, avx);
+    }
   };
+  /// The corner of WideBvh::box from `at` (0: lower, 4: upper), in S (its floats: exact).
+  static Vec3<S> box_corner(const std::array<double, 8>& box, std::size_t at) { return Vec3<S>(S(box[at]), S(box[at + 1]), S(box[at + 2])); }
   std::optional<LeafSetup> leaf_setup;
   std::optional<WideSlab<S>> slab;  // in S: set up when first needed
   std::size_t node_tests = 0, triangle_tests = 0;
@@ -188,10 +198,10 @@ template <class S, int W = 4> struct WideCast {
   }
   /// The triangle in lane c of block b (a candidate of the block test) by the narrow-phase rule; a
   /// strictly earlier hit replaces the best one. In double with SIMD from the block test's values
-  /// (test_lane), else by the scalar test.
+  /// (test_lane) unless the lane is near an edge, else by the scalar test.
   void test(std::int32_t b, int c, const typename BlockTest<S>::LaneValues& values) {
     if constexpr (BlockTest<S>::kHasValues) {
-      if (use_simd) {
+      if (use_simd && !((values.near >> c) & 1)) {
         test_lane(b, c, values);
         return;
       }
@@ -229,7 +239,7 @@ template <class S, int W = 4> struct WideCast {
   /// (the scalar test's decisions, SIMD), the candidates by test(); without SIMD each by the
   /// scalar test.
   IMPACT_NOINLINE void leaf(std::int32_t block, std::int32_t count) {
-    if (!leaf_setup) leaf_setup.emplace(Ray<S>(o, d, t_max), use_avx);
+    if (!leaf_setup) leaf_setup.emplace(Ray<S>(o, d, t_max), use_avx, wide.box());
     const BlockTest<S>& block_test = leaf_setup->block_test;
     const bool repeats = wide.has_repeats();
     const std::int32_t first = wide.block_first(block);
@@ -268,7 +278,7 @@ template <class S, int W = 4> struct WideCast {
       leaf(block, count);
       return;
     }
-    if (!lane_test) lane_test.emplace(o, d, inv);
+    if (!lane_test) make_lane_test();
     triangle_tests += static_cast<std::size_t>(count);
     const bool packed = wide.packed();
     for (std::int32_t q = 0; q < count; q += 4, ++block) {
@@ -285,7 +295,8 @@ template <class S, int W = 4> struct WideCast {
   template <class T> IMPACT_NOINLINE IMPACT_WIDE_AVX_TARGET void leaf_block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
     block_avx(blk, block, lanes);
   }
-  /// The lanes of one block hit (the first `lanes`), taken in lane order. hits_avx decides
+  /// The lanes of one block hit (the first `lanes`), taken in lane order; a lane near an edge
+  /// (LaneHits::near) by the scalar rule, as test() takes it. hits_avx decides
   /// against the best B as the block begins; after a hit of this block lowered it to B' < B,
   /// test_lane would keep a later lane exactly when its depth check passes against B', its box
   /// is entered before B' and max(min(q, B'), entry) < B' (q = tt / det): that needs q < B' and
@@ -294,11 +305,16 @@ template <class S, int W = 4> struct WideCast {
   /// Inlined into its two callers (GCC and Clang only, as IMPACT_WIDE_AVX).
   template <class T> __attribute__((always_inline)) IMPACT_WIDE_AVX_TARGET void block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
     typename BlockTest<S>::LaneHits h;  // of the block, when it hits a lane
-    int m = lane_test->hits_avx(blk, lanes, best, h);
+    const int hit = lane_test->hits_avx(blk, lanes, best, h);
+    int m = hit | h.near;
     bool lowered = false;  // by a lane of this block: later lanes are re-decided against it
     while (m) {
       const int c = lowest_bit(m);
       m &= m - 1;
+      if (IMPACT_UNLIKELY(!((hit >> c) & 1))) {  // near an edge: the scalar rule against the best
+        lowered |= near_edge_lane(block, c);
+        continue;
+      }
       const S th = h.t[c];
       if (lowered) {  // (hits_avx decided against the best as the block began)
         const S det = h.det[c], tt = h.tt[c], tmd = best * det;
@@ -310,9 +326,24 @@ template <class S, int W = 4> struct WideCast {
       lowered = true;
     }
   }
+  /// The triangle in lane c of block b, near an edge, by the scalar rule (test() without values;
+  /// leaf_setup made here if needed): true when it is the new best hit.
+  IMPACT_NOINLINE bool near_edge_lane(std::int32_t b, int c) {
+    if (!leaf_setup) leaf_setup.emplace(Ray<S>(o, d, t_max), use_avx, wide.box());
+    PreparedRay<S>& pr = leaf_setup->pr;
+    pr.ray.t_max = best;
+    const auto h = ray_mesh_triangle_hit(pr, inv, wide.block_triangle(b, c));
+    if (!h || (has_hit() && !(h->t < best))) return false;
+    record(b, c, h->t, Vec3<S>(h->u, h->v, h->w));
+    return true;
+  }
   std::optional<BlockTest<S>> lane_test;  // leaf_avx's test, made at its first leaf
-  /// Makes lane_test (at a cast's first leaf; kept out of the node loop's code).
-  IMPACT_NOINLINE void make_lane_test() { lane_test.emplace(o, d, inv); }
+  /// Makes lane_test (at a cast's first leaf; kept out of the node loop's code), with the ray's
+  /// band bound for the tree's box.
+  IMPACT_NOINLINE void make_lane_test() {
+    lane_test.emplace(o, d, inv);
+    lane_test->bound_band(box_corner(wide.box(), 0), box_corner(wide.box(), 4));
+  }
   /// leaf_avx() of a leaf of one block (at most four triangles) in a tree of float blocks
   /// without repeated triangles (WideBvh::packed_without_repeats; run_avx checks both, the most
   /// common leaf): one call from the node loop, where leaf_avx made two and its checks and loop

@@ -3,9 +3,11 @@
 /// The leaf test of a WideBvh cast (BlockTest): the watertight ray-triangle test
 /// (intersect_ray_triangle) over the four triangles of a leaf block (WideTriangleBlock, coordinate
 /// by coordinate) at once, with SIMD (SSE2; in double AVX when the CPU has it, checked at run
-/// time), in the scalar test's own IEEE operations, so that the lanes it passes are exactly the
-/// triangles the scalar test hits and a cast through it returns the scalar test's answers bit for
-/// bit. Used by query/ray_wide_bvh.hpp.
+/// time), in the scalar test's own IEEE operations, so that the lanes it passes include every
+/// triangle the scalar test hits and a cast through it returns the scalar test's answers bit for
+/// bit: a lane with an edge function within the ray's bound of the error bands (PreparedRay::band,
+/// narrow/ray_triangle.hpp), where the scalar test may take an exact sign, is passed as "near an
+/// edge" for the scalar test to decide. Used by query/ray_wide_bvh.hpp.
 #pragma once
 
 #include "impact/bvh/wide_bvh.hpp"
@@ -32,12 +34,15 @@ namespace detail {
 
 /// The watertight test (intersect_ray_triangle) over the four triangles of a WideTriangleBlock at
 /// once: the same IEEE operations in the same order as the scalar test, in S (double: two lanes an
-/// SSE2 instruction; float: four), so a lane is a candidate exactly when the scalar test hits its
-/// triangle (no two edge functions of opposite strict signs, det != 0, the depth in [0, t_max
-/// det]); in float a lane with an edge function equal to zero, which the scalar test recomputes in
-/// double, is a candidate too. The caller runs the scalar test on the candidates only. Without
-/// SSE2 every lane is a candidate. In double, on a CPU with AVX (checked at run time), four lanes
-/// an instruction (the same operations, so the same bits). Set up once a ray.
+/// SSE2 instruction; float: four). A lane with an edge function not above the ray's band bound
+/// (`band`: PreparedRay::band for triangles in the tree's box, +infinity when not set) is near an
+/// edge: a candidate, which the scalar test decides (it may take exact signs there). Any other
+/// lane is a candidate exactly when the scalar test hits its triangle (no two edge functions of
+/// opposite strict signs, det != 0, the depth in [0, t_max det]), as the scalar test takes its
+/// values as they are. The caller runs the scalar test on the candidates only (in double, the
+/// lanes not near an edge may be finished from their values). Without SSE2 every lane is a
+/// candidate. In double, on a CPU with AVX (checked at run time), four lanes an instruction (the
+/// same operations, so the same bits). Set up once a ray.
 template <class S> class BlockTest {
  public:
   /// The scalar test's intermediate values of a block's four lanes, as the SIMD test computed
@@ -45,10 +50,13 @@ template <class S> class BlockTest {
   /// test passed is hit with a bound t_max unless tt is outside [0, t_max det] (det > 0) or
   /// [t_max det, 0] (det < 0); then t = min(tt / det, t_max) and the barycentrics are e / det, as
   /// detail::finish_ray_hit computes them.
-  /// Left uninitialised (a leaf visit pays only for the lanes it tests): candidates() writes all
-  /// four lanes whenever it passes one, and only a passed lane is read.
+  /// `near` has bit c set when lane c is near an edge: its values must not be used (the scalar
+  /// test decides it). Left uninitialised (a leaf visit pays only for the lanes it tests):
+  /// candidates() writes all four lanes and `near` whenever it passes one, and only a passed lane
+  /// is read.
   struct alignas(32) LaneValues {
     S eu[4], ev[4], ew[4], det[4], tt[4];  // NOLINT(cppcoreguidelines-pro-type-member-init)
+    int near;                              // NOLINT(cppcoreguidelines-pro-type-member-init)
   };
   /// True when candidates() fills LaneValues (S = double with SSE2: the lanes are computed in
   /// the scalar test's operations, no recomputation in double as for float).
@@ -58,7 +66,7 @@ template <class S> class BlockTest {
   static constexpr bool kHasValues = false;
 #endif
 
-  BlockTest() : off_{0, 1, 2}, o_{S(0), S(0), S(0)}, sx_(S(0)), sy_(S(0)), sz_(S(1)), valid_(false) {
+  BlockTest() : off_{0, 1, 2}, o_{S(0), S(0), S(0)}, sx_(S(0)), sy_(S(0)), sz_(S(1)), band_(std::numeric_limits<S>::infinity()), valid_(false) {
 #if defined(IMPACT_BLOCK_TEST_AVX)
     for (int i = 0; i < 3; ++i) box_o_[i] = box_inv_[i] = S(0);
 #endif
@@ -73,21 +81,32 @@ template <class S> class BlockTest {
     const int k[3] = {pr.kx, pr.ky, pr.kz};
     for (int i = 0; i < 3; ++i) off_[i] = k[i], o_[i] = pr.ray.origin[k[i]];
     sx_ = pr.sx, sy_ = pr.sy, sz_ = pr.sz;
+    band_ = pr.band;
     valid_ = pr.valid;
+  }
+  /// Sets the band bound for triangles inside the box [lo, hi] (original axes), as
+  /// PreparedRay::bound_band does (the same value for the same ray and box).
+  void bound_band(const Vec3<S>& lo, const Vec3<S>& hi) {
+    const S l[3] = {lo[off_[0]], lo[off_[1]], lo[off_[2]]}, h[3] = {hi[off_[0]], hi[off_[1]], hi[off_[2]]};
+    band_ = box_edge_band(o_, l, h);
   }
 #if defined(IMPACT_BLOCK_TEST_AVX)
   /// What hits_avx gives of a block's lanes: the hit's t (raised to the entry into the triangle's
   /// box), 1 / det, the edge functions, det and the scaled depth tt, as the scalar test and
-  /// detail::mesh_hit_t compute them (the same bits). Only passed lanes are meaningful.
+  /// detail::mesh_hit_t compute them (the same bits). Only passed lanes are meaningful. `near`:
+  /// the lanes near an edge (not among the hit lanes; the scalar test decides them), written
+  /// whenever hits_avx returns.
   struct alignas(32) LaneHits {
     S t[4], inv_det[4], eu[4], ev[4], ew[4], det[4], tt[4];  // NOLINT(cppcoreguidelines-pro-type-member-init)
+    int near;                                                // NOLINT(cppcoreguidelines-pro-type-member-init)
   };
   /// A test made by set_ray(o, d, inv) (in place, each member written once: no zeroing first, as
   /// BlockTest() does).
   BlockTest(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) { set_ray(o, d, inv); }  // NOLINT(cppcoreguidelines-pro-type-member-init)
   /// set(PreparedRay<S>(Ray<S>(o, d))) without the PreparedRay (the same frame, shear and
   /// roundings), for S = double, with `inv` = safe_inverse(d), finite on every axis (a ray the
-  /// 8-wide AVX cast takes), for the box entries of hits_avx.
+  /// 8-wide AVX cast takes), for the box entries of hits_avx. The band bound is +infinity (every
+  /// lane near an edge) until bound_band sets it.
   void set_ray(const Vec3<S>& o, const Vec3<S>& d, const Vec3<S>& inv) {
     static_assert(std::is_same_v<S, double>, "set_ray: a ray in double");
     const S ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
@@ -102,6 +121,7 @@ template <class S> class BlockTest {
     const int kx = kx0 ^ ((kx0 ^ ky0) & flip), ky = kx0 ^ ky0 ^ kx;
     off_[0] = kx, off_[1] = ky, off_[2] = kz;
     for (int i = 0; i < 3; ++i) o_[i] = o[off_[i]], box_o_[i] = o[i], box_inv_[i] = inv[i];
+    band_ = std::numeric_limits<S>::infinity();
     if (valid_) {
       sx_ = d[kx] / dz, sy_ = d[ky] / dz, sz_ = S(1) / dz;
     } else {
@@ -112,7 +132,8 @@ template <class S> class BlockTest {
   /// The lanes of `b` (the first `count`, <= 4) hit with t_max = `t_max` by the narrow-phase rule
   /// of the wide cast (detail::ray_mesh_triangle_hit: the watertight test, the hit raised to the
   /// entry into the triangle's box, the t = 0 back-face rule), four at once in 256-bit AVX: bit c
-  /// set when lane c is hit, and then `h` holds its values (LaneHits). For a test made by
+  /// set when lane c is hit, and then `h` holds its values (LaneHits); the lanes near an edge are
+  /// not decided here but set in h.near, for the scalar rule. For a test made by
   /// set_ray; compiled for AVX (call only when the CPU has it). The box entry runs
   /// detail::ray_box_entry's operations on the lanes (no NaN: `inv` is finite), its vertex
   /// minimum and maximum taken before the subtraction of the origin (rounding is monotone: the
@@ -120,7 +141,9 @@ template <class S> class BlockTest {
   template <class T> __attribute__((target("avx"))) int hits_avx(const WideTriangleBlock<T>& b, int count, S t_max, LaneHits& h) const {
     static_assert(std::is_same_v<S, double>, "hits_avx: a ray in double");
     __m256d eu, ev, ew, det, tt;
-    int m = lanes_avx(b, t_max, (1 << count) - 1, eu, ev, ew, det, tt);
+    int near_lanes = 0;
+    int m = lanes_avx(b, t_max, (1 << count) - 1, eu, ev, ew, det, tt, near_lanes);
+    h.near = near_lanes;
     if (!m) return 0;
     const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
     const __m256d zero = _mm256_setzero_pd(), tmax = _mm256_set1_pd(t_max);
@@ -164,8 +187,13 @@ template <class S> class BlockTest {
 #if defined(IMPACT_BLOCK_TEST_AVX)
       if (avx_) return candidates_avx(b, t_max, lanes, values);
 #endif
-      int m = 0;
-      for (int h = 0; h < 2; ++h) m |= sse_lanes<SseDouble>(b, h, t_max, values) << (2 * h);
+      int m = 0, near = 0;
+      for (int h = 0; h < 2; ++h) {
+        const int r = sse_lanes<SseDouble>(b, h, t_max, values);
+        m |= (r & 3) << (2 * h);
+        near |= (r >> 4) << (2 * h);
+      }
+      if ((m & lanes) && values) values->near = near & lanes;
       return m & lanes;
     } else {
       return sse_lanes<SseFloat>(b, 0, t_max) & lanes;
@@ -187,8 +215,11 @@ template <class S> class BlockTest {
   __attribute__((target("avx"))) static __m256d load4(const double* f) { return _mm256_load_pd(f); }
   /// The double test of the four lanes in 256-bit AVX (no FMA: the scalar test's roundings).
   template <class T> __attribute__((target("avx"))) int candidates_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, LaneValues* values) const {
-    __m256d eu, ev, ew, det, tt;
-    const int m = lanes_avx(b, t_max, lanes, eu, ev, ew, det, tt);
+    // (zeroed: g++ cannot see that lanes_avx writes them whenever m is not 0)
+    __m256d eu = _mm256_setzero_pd(), ev = eu, ew = eu, det = eu, tt = eu;
+    int near_lanes = 0;
+    const int m = lanes_avx(b, t_max, lanes, eu, ev, ew, det, tt, near_lanes);
+    if (values && (m | near_lanes)) values->near = near_lanes;
     if (m && values) {
       _mm256_store_pd(values->eu, eu);
       _mm256_store_pd(values->ev, ev);
@@ -196,12 +227,14 @@ template <class S> class BlockTest {
       _mm256_store_pd(values->det, det);
       _mm256_store_pd(values->tt, tt);
     }
-    return m;
+    return m | near_lanes;
   }
-  /// The lanes of `lanes` the double test passes, and its values, in 256-bit AVX.
+  /// The lanes of `lanes` the double test passes that are not near an edge, and its values, in
+  /// 256-bit AVX; `near_out` gets the lanes of `lanes` near an edge (an edge function not above
+  /// band_, or NaN).
   template <class T>
   __attribute__((target("avx"))) int lanes_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, __m256d& eu_out, __m256d& ev_out, __m256d& ew_out,
-                                               __m256d& det_out, __m256d& tt_out) const {
+                                               __m256d& det_out, __m256d& tt_out, int& near_out) const {
     const __m256d o0 = _mm256_broadcast_sd(o_), o1 = _mm256_broadcast_sd(o_ + 1), o2 = _mm256_broadcast_sd(o_ + 2);
     const __m256d sx = _mm256_broadcast_sd(&sx_), sy = _mm256_broadcast_sd(&sy_), sz = _mm256_broadcast_sd(&sz_);
     const __m256d tmax = _mm256_set1_pd(t_max), zero = _mm256_setzero_pd();
@@ -220,9 +253,15 @@ template <class S> class BlockTest {
                                      _mm256_cmp_pd(ew, zero, _CMP_LT_OQ));
     const __m256d pos = _mm256_or_pd(_mm256_or_pd(_mm256_cmp_pd(eu, zero, _CMP_GT_OQ), _mm256_cmp_pd(ev, zero, _CMP_GT_OQ)),
                                      _mm256_cmp_pd(ew, zero, _CMP_GT_OQ));
-    // every lane outside its triangle (edge functions of opposite strict signs): the depth is
-    // not needed (about half the blocks a cast opens; the same operations for the others)
-    const __m256d outside = _mm256_and_pd(neg, pos);
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL)), band = _mm256_broadcast_sd(&band_);
+    const __m256d near = _mm256_or_pd(_mm256_or_pd(_mm256_cmp_pd(_mm256_and_pd(eu, abs_mask), band, _CMP_NGT_UQ),
+                                                   _mm256_cmp_pd(_mm256_and_pd(ev, abs_mask), band, _CMP_NGT_UQ)),
+                                      _mm256_cmp_pd(_mm256_and_pd(ew, abs_mask), band, _CMP_NGT_UQ));
+    near_out = _mm256_movemask_pd(near) & lanes;
+    // every lane outside its triangle (edge functions of opposite strict signs) and none near an
+    // edge: the depth is not needed (about half the blocks a cast opens; the same operations for
+    // the others)
+    const __m256d outside = _mm256_or_pd(_mm256_and_pd(neg, pos), near);
     if ((_mm256_movemask_pd(outside) & lanes) == lanes) return 0;
     __m256d pz[3];
     for (int v = 0; v < 3; ++v) pz[v] = _mm256_mul_pd(sz, az[v]);
@@ -232,6 +271,7 @@ template <class S> class BlockTest {
     const __m256d up = _mm256_cmp_pd(det, zero, _CMP_GT_OQ);
     const __m256d out_up = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_LT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_GT_OQ));
     const __m256d out_down = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_GT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_LT_OQ));
+    // (near lanes count as missed here: outside holds them)
     const __m256d miss = _mm256_or_pd(_mm256_or_pd(outside, _mm256_cmp_pd(det, zero, _CMP_EQ_OQ)),
                                       _mm256_or_pd(_mm256_and_pd(up, out_up), _mm256_andnot_pd(up, out_down)));
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
@@ -256,6 +296,8 @@ template <class S> class BlockTest {
     static V lt(V a, V b) { return _mm_cmplt_pd(a, b); }
     static V gt(V a, V b) { return _mm_cmpgt_pd(a, b); }
     static V eq(V a, V b) { return _mm_cmpeq_pd(a, b); }
+    static V not_gt(V a, V b) { return _mm_cmpngt_pd(a, b); }  // true for NaN
+    static V abs(V a) { return _mm_and_pd(a, _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL))); }
     static V bit_or(V a, V b) { return _mm_or_pd(a, b); }
     static V bit_and(V a, V b) { return _mm_and_pd(a, b); }
     static V and_not(V a, V b) { return _mm_andnot_pd(a, b); }  // ~a & b
@@ -276,6 +318,8 @@ template <class S> class BlockTest {
     static V lt(V a, V b) { return _mm_cmplt_ps(a, b); }
     static V gt(V a, V b) { return _mm_cmpgt_ps(a, b); }
     static V eq(V a, V b) { return _mm_cmpeq_ps(a, b); }
+    static V not_gt(V a, V b) { return _mm_cmpngt_ps(a, b); }  // true for NaN
+    static V abs(V a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
     static V bit_or(V a, V b) { return _mm_or_ps(a, b); }
     static V bit_and(V a, V b) { return _mm_and_ps(a, b); }
     static V and_not(V a, V b) { return _mm_andnot_ps(a, b); }  // ~a & b
@@ -283,9 +327,9 @@ template <class S> class BlockTest {
     static void store(float* p, V a) { _mm_store_ps(p, a); }
   };
   /// The test of lanes [h L, h L + L) of `b` (L = Ops::kLanes), written once for both lane types:
-  /// bit j set when lane h L + j is a candidate (see the class comment; in float, a lane with an
-  /// edge function equal to zero is one too).
-  /// In double, `values` (when not null) gets the lanes' values (LaneValues) when one passes.
+  /// bit j set when lane h L + j is a candidate (see the class comment: a lane near an edge is
+  /// one). In double, bit 4 + j also set when lane h L + j is near an edge, and `values` (when not
+  /// null) gets the lanes' values (LaneValues, but for `near`) when one passes.
   template <class Ops, class T> int sse_lanes(const WideTriangleBlock<T>& b, int h, S t_max, LaneValues* values = nullptr) const {
     using V = typename Ops::V;
     const V zero = Ops::zero(), tmax = Ops::set1(t_max);
@@ -311,10 +355,10 @@ template <class S> class BlockTest {
     const V out_up = Ops::bit_or(Ops::lt(tt, zero), Ops::gt(tt, tmd));
     const V out_down = Ops::bit_or(Ops::gt(tt, zero), Ops::lt(tt, tmd));
     V miss = Ops::bit_or(Ops::bit_or(Ops::bit_and(neg, pos), Ops::eq(det, zero)), Ops::bit_or(Ops::bit_and(up, out_up), Ops::and_not(up, out_down)));
-    if constexpr (Ops::kFloat) {  // an edge function equal to zero: the scalar test redoes it in double
-      const V some_zero = Ops::bit_or(Ops::bit_or(Ops::eq(eu, zero), Ops::eq(ev, zero)), Ops::eq(ew, zero));
-      miss = Ops::and_not(some_zero, miss);
-    }
+    // near an edge (an edge function not above the band bound, or NaN): the scalar test decides
+    const V band = Ops::set1(band_);
+    const V near = Ops::bit_or(Ops::bit_or(Ops::not_gt(Ops::abs(eu), band), Ops::not_gt(Ops::abs(ev), band)), Ops::not_gt(Ops::abs(ew), band));
+    miss = Ops::and_not(near, miss);
     const int m = ~Ops::sign_bits(miss) & ((1 << Ops::kLanes) - 1);
     if constexpr (!Ops::kFloat) {
       if (m && values) {
@@ -322,15 +366,17 @@ template <class S> class BlockTest {
         Ops::store(values->eu + at, eu), Ops::store(values->ev + at, ev), Ops::store(values->ew + at, ew);
         Ops::store(values->det + at, det), Ops::store(values->tt + at, tt);
       }
+      return m | (Ops::sign_bits(near) << 4);
     } else {
       (void)values;
+      return m;
     }
-    return m;
   }
 #endif
   // (initialised by the constructors: the one of the AVX cast writes each member once)
   int off_[3];  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
   S o_[3], sx_, sy_, sz_;
+  S band_;  // the bound of the edge functions' bands (PreparedRay::band)
   bool valid_;
 };
 
