@@ -132,6 +132,7 @@ template <class S> class KdTree {
     const Vec3<S>& o = ray.origin;
     const Vec3<S>& d = ray.direction;
     PreparedRay<S> pr(ray);
+    pr.bound_band(root_box_.min, root_box_.max);  // every triangle lies in the root box: the per-ray band bound
     const S scale = (o.cwiseAbs().maxCoeff() + root_box_.min.cwiseAbs().cwiseMax(root_box_.max.cwiseAbs()).maxCoeff()) /
                     d.cwiseAbs().maxCoeff();
     // the root box: entry and exit, widened
