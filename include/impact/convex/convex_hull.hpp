@@ -102,6 +102,19 @@ struct ConvexHull {
 /// ones by scanning every vertex (cheaper below it; measured on the convex bench's pairs).
 inline constexpr int kHullClimbMinVertices = 12;
 
+/// Calls fn(u) for each neighbour u of vertex v of h on its edge graph, or for every vertex of h
+/// (v too) when h has none (hulls of fewer than kHullClimbMinVertices vertices): the vertices a
+/// step from v can reach, for the local searches that start at a support vertex.
+template <class S, class Fn>
+inline void for_each_neighbor(const ConvexHull<S>& h, int v, Fn&& fn) {
+  if (h.neighbors.empty()) {
+    for (int u = 0, n = static_cast<int>(h.vertices.rows()); u < n; ++u) fn(u);
+    return;
+  }
+  for (int k = h.neighbor_start[static_cast<std::size_t>(v)], end = h.neighbor_start[static_cast<std::size_t>(v) + 1]; k < end; ++k)
+    fn(h.neighbors[static_cast<std::size_t>(k)]);
+}
+
 /// The index of the vertex of h farthest along d. Hulls with an edge graph (convex_hull() builds
 /// one from kHullClimbMinVertices vertices) climb it: from the octant's start vertex to the
 /// neighbour farthest along d, until no neighbour is farther (on a convex polytope a vertex no
@@ -589,22 +602,16 @@ ConvexHull<S> convex_hull(const Vertices<S>& points, const ConvexHullOptions& op
   const auto support_value = [&h](const Vec3<S>& dir, int v) {
     const auto along = [&](int u) { return dir.dot(h.vertices.row(u).transpose()); };
     S top = along(v);
-    if (h.neighbors.empty()) {
-      for (Eigen::Index u = 0; u < h.vertices.rows(); ++u) top = std::max(top, along(static_cast<int>(u)));
-      return top;
-    }
     for (bool moved = true; moved;) {  // each round scans the neighbours of the vertex it starts at
       moved = false;
-      const int from = v;
-      for (int k = h.neighbor_start[static_cast<std::size_t>(from)], end = h.neighbor_start[static_cast<std::size_t>(from) + 1]; k < end; ++k) {
-        const int u = h.neighbors[static_cast<std::size_t>(k)];
+      for_each_neighbor(h, v, [&](int u) {
         const S x = along(u);
         if (x > top) {
           top = x;
           v = u;
           moved = true;
         }
-      }
+      });
     }
     return top;
   };

@@ -147,7 +147,6 @@ void add_hull_feature_terms(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3
   // the farthest vertex v (the hull's support: a climb on its edge graph, a scan for small
   // hulls) and, of its neighbours (of all vertices for small hulls, which have no edge graph), the
   // farthest u
-  const int nv = static_cast<int>(b.vertices.rows());
   const int v = support_vertex(b, d);
   const S best = along(v);
   int u = -1;
@@ -159,12 +158,7 @@ void add_hull_feature_terms(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3
       u = i;
     }
   };
-  if (b.neighbors.empty()) {
-    for (int i = 0; i < nv; ++i) consider(i);
-  } else {
-    for (int q = b.neighbor_start[static_cast<std::size_t>(v)]; q < b.neighbor_start[static_cast<std::size_t>(v) + 1]; ++q)
-      consider(b.neighbors[static_cast<std::size_t>(q)]);
-  }
+  for_each_neighbor(b, v, consider);
   const Vec3<S> pv = R * Vec3<S>(b.vertices.row(v).transpose()) + t;
   if (u >= 0 && best - second <= S(1e-3) * b.size) {
     const Vec3<S> pu = R * Vec3<S>(b.vertices.row(u).transpose()) + t;

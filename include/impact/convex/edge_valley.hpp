@@ -79,12 +79,7 @@ bool hull_edge_near(const ConvexHull<S>& b, const Mat3<S>& R, const Vec3<S>& t, 
       u = i;
     }
   };
-  if (b.neighbors.empty()) {
-    for (int i = 0; i < static_cast<int>(b.vertices.rows()); ++i) consider(i);
-  } else {
-    for (int k = b.neighbor_start[static_cast<std::size_t>(v)]; k < b.neighbor_start[static_cast<std::size_t>(v) + 1]; ++k)
-      consider(b.neighbors[static_cast<std::size_t>(k)]);
-  }
+  for_each_neighbor(b, v, consider);
   if (u < 0) return false;
   p0 = R * pv + t;
   p1 = R * at(u) + t;

@@ -69,7 +69,6 @@ inline constexpr int kSideVertexSteps = 8;
 template <class S>
 int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int v, S lean = S(0)) {
   const S* p = b.vertices.data();
-  const int nv = static_cast<int>(b.vertices.rows());
   for (int step = 0; step < kSideVertexSteps; ++step) {
     const S* x = p + 3 * v;
     const Vec3<S> y(x[0] - c.x(), x[1] - c.y(), x[2] - c.z());
@@ -87,12 +86,7 @@ int side_vertex(const ConvexHull<S>& b, const Vec3<S>& ax, const Vec3<S>& c, int
         next = i;
       }
     };
-    if (b.neighbors.empty()) {
-      for (int i = 0; i < nv; ++i) consider(i);
-    } else {
-      for (int k = b.neighbor_start[static_cast<std::size_t>(v)]; k < b.neighbor_start[static_cast<std::size_t>(v) + 1]; ++k)
-        consider(b.neighbors[static_cast<std::size_t>(k)]);
-    }
+    for_each_neighbor(b, v, consider);
     if (next == v) return v;
     v = next;
   }
