@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // Rays aimed exactly at vertices and at points of edges, on every cast path, against an exact
 // oracle (issue 14: 0 wrong answers on the bench's edges set). The paths: the scalar watertight
-// test over all triangles, MeshBvh, CompactBvh, KdTree, WideBvh (SIMD with AVX when the CPU has
-// it, SSE2, the scalar loop) and WideBvh8 (its AVX loop when the CPU has it, the loop without).
+// test over all triangles, MeshBvh (box, sphere and OBB trees), CompactBvh, KdTree, WideBvh (SIMD
+// with AVX when the CPU has it, SSE2, the scalar loop) and WideBvh8 (its AVX loop when the CPU has
+// it, the loop without). And the per-ray bound of the edge functions' bands that the box and
+// sphere MeshBvh casts take from their root against every triangle's band.
 // The oracle, written here on the library's exact orientation predicates of points: the segment
 // o -> e = o + t_max d (computed exactly in double; a ray where it is not exact is left out)
 // crosses the closed triangle abc when o and e are not strictly on one side of its plane, not
@@ -28,6 +30,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -83,11 +86,13 @@ template <class S> struct PathHit {
 template <class S> struct AllPaths {
   const TriangleMesh<S>& mesh;
   MeshBvh<Aabb<S>> bvh;
+  MeshBvh<Sphere<S>> spheres;
+  MeshBvh<Obb<S>> obbs;
   CompactBvh compact;
   KdTree<S> kd;
   WideBvh<S, 4> wide;
   WideBvh<S, 8> wide8;
-  explicit AllPaths(const TriangleMesh<S>& m) : mesh(m), bvh(m), compact(bvh.tree()), kd(m), wide(m), wide8(m) {}
+  explicit AllPaths(const TriangleMesh<S>& m) : mesh(m), bvh(m), spheres(m), obbs(m), compact(bvh.tree()), kd(m), wide(m), wide8(m) {}
 
   std::vector<std::pair<std::string, std::function<std::optional<PathHit<S>>(const Ray<S>&)>>> paths() const {
     using R = std::optional<PathHit<S>>;
@@ -104,6 +109,8 @@ template <class S> struct AllPaths {
            return best;
          }},
         {"MeshBvh", [this, from](const Ray<S>& ray) { return from(ray_mesh_first_hit(bvh, ray)); }},
+        {"MeshBvh sphere", [this, from](const Ray<S>& ray) { return from(ray_mesh_first_hit(spheres, ray)); }},
+        {"MeshBvh OBB", [this, from](const Ray<S>& ray) { return from(ray_mesh_first_hit(obbs, ray)); }},
         {"CompactBvh", [this, from](const Ray<S>& ray) { return from(ray_mesh_first_hit(bvh, compact, ray)); }},
         {"KdTree", [this, from](const Ray<S>& ray) { return from(kd.first_hit(ray)); }},
         {"WideBvh", [this, from](const Ray<S>& ray) { return from(ray_mesh_first_hit(wide, ray)); }},
@@ -213,6 +220,53 @@ TYPED_TEST(RayExactEdges, BunnyOnEveryPathAgainstTheOracle) {
   Eigen::Vector3d lo = bunny.V.row(0).transpose();
   for (Eigen::Index i = 1; i < bunny.V.rows(); ++i) lo = lo.cwiseMin(Eigen::Vector3d(bunny.V.row(i).transpose()));
   EXPECT_GT(check_mesh(on_float_grid<S>(bunny, 0, Eigen::Vector3d::Constant(1.0) - lo), 77, 120 / kExactEdgeSamples), 90 / kExactEdgeSamples);
+}
+
+/// The band bound a MeshBvh cast sets from its tree's root (detail::bound_band_by_tree) is finite
+/// and at least every triangle's own computed band (the one intersect_ray_triangle_near_edges
+/// compares with), for rays from near and far.
+template <class BV, class S> void check_band_bound(const TriangleMesh<S>& m, test::Rng& rng) {
+  const MeshBvh<BV> tree(m);
+  Vec3<S> lo = m.vertex(0), hi = lo;
+  for (int i = 1; i < m.num_vertices(); ++i) lo = lo.cwiseMin(m.vertex(i)), hi = hi.cwiseMax(m.vertex(i));
+  const Eigen::Vector3d mid = ((lo + hi) / S(2)).template cast<double>();
+  const double size = double((hi - lo).maxCoeff());
+  int tight = 0;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3<S> o = (mid + rng.vec(-1, 1) * (i % 2 ? 256.0 : 0.8) * size).template cast<S>();
+    const Vec3<S> d = rng.vec(-1, 1).template cast<S>();
+    PreparedRay<S> pr(Ray<S>(o, d, S(1)));
+    detail::bound_band_by_tree(pr, tree);
+    ASSERT_TRUE(std::isfinite(pr.band)) << BvTraits<BV>::name;
+    S largest = S(0);
+    for (int k = 0; k < m.num_triangles(); ++k) {
+      const Triangle<S> t = m.triangle(k);
+      S m_[3][2];
+      const Vec3<S>* v[3] = {&t.a, &t.b, &t.c};
+      for (int j = 0; j < 3; ++j) detail::edge_magnitudes(pr, Vec3<S>(*v[j] - o), m_[j][0], m_[j][1]);
+      for (int j = 0; j < 3; ++j) {  // the edges (b, c), (c, a), (a, b)
+        const int p = (j + 2) % 3, q = (j + 1) % 3;
+        const S band = detail::edge_band(m_[p][0], m_[p][1], m_[q][0], m_[q][1]);
+        EXPECT_LE(band, pr.band) << BvTraits<BV>::name << ", triangle " << k;
+        largest = std::max(largest, band);
+      }
+    }
+    tight += pr.band <= S(64) * largest ? 1 : 0;  // a bound, not a vacuous one
+  }
+  EXPECT_GT(tight, 30) << BvTraits<BV>::name;
+}
+
+TYPED_TEST(RayExactEdges, MeshBvhBandBoundFromTheRoot) {
+  using S = TypeParam;
+  test::Rng rng(5);
+  const TriangleMesh<double> shapes[2] = {make_icosphere<double>(1.0, 2), make_torus<double>(1.0, 0.4, 24, 12)};
+  for (const auto& shape : shapes)
+    for (const int k : {0, -20, 17}) {
+      const Eigen::Vector3d shift = k == 0 ? Eigen::Vector3d(0, 0, 0) : Eigen::Vector3d(std::ldexp(3.0, k), -std::ldexp(5.0, k), std::ldexp(1.5, k));
+      const TriangleMesh<S> m = on_float_grid<S>(shape, k, shift);
+      check_band_bound<Aabb<S>>(m, rng);
+      check_band_bound<Sphere<S>>(m, rng);
+    }
 }
 
 // Off the float grid (double): a closed mesh whose vertices have full 53-bit mantissas, rays from a

@@ -277,14 +277,31 @@ template <class S> inline Vec3<S> safe_inverse(const Vec3<S>& d) {
   return Vec3<S>(S(1) / d[0], S(1) / d[1], S(1) / d[2]);  // +-inf for zero components
 }
 
+/// An axis-aligned box holding the sphere `s` (centre c, radius r), for a band bound
+/// (bound_band_by_tree): each side moved out by e = (|c_i| + r) 2^-16, far more than the two
+/// roundings of fl(fl(c_i - r) - e) (at most 3u (|c_i| + r), u <= 2^-24), so the computed corners
+/// lie outside c -+ r. An empty sphere (a negative or NaN radius) gives an empty box.
+template <class S> inline Aabb<S> sphere_band_box(const Sphere<S>& s) {
+  if (!(s.radius >= S(0))) return Aabb<S>();
+  const Vec3<S> e = (s.center.cwiseAbs().array() + s.radius) * S(0x1p-16);
+  return Aabb<S>((s.center.array() - s.radius) - e.array(), (s.center.array() + s.radius) + e.array());
+}
+
 /// Sets pr's band bound (PreparedRay::band) for the triangles of `mesh` in its own frame (pr's ray
-/// in that frame): from the root box of a box tree; other trees keep +infinity (each triangle's
-/// own band).
+/// in that frame), from a box holding every triangle: a box tree's root box, a box around a sphere
+/// tree's root sphere (sphere_band_box: the sphere holds its triangles' vertices). OBB trees (and
+/// an empty tree) keep +infinity, each triangle's own band: their casts test few triangles, and
+/// the bound's set-up cost more than it saved (docs/rays-history.md, thirty-first step).
 template <class BV, class S> inline void bound_band_by_tree(PreparedRay<S>& pr, const MeshBvh<BV>& mesh) {
+  if (mesh.tree().nodes.empty()) return;
+  const BV& root = mesh.tree().nodes.front().bv;
   if constexpr (std::is_same_v<BV, Aabb<S>>) {
-    if (!mesh.tree().nodes.empty()) pr.bound_band(mesh.tree().nodes.front().bv.min, mesh.tree().nodes.front().bv.max);
+    pr.bound_band(root.min, root.max);
+  } else if constexpr (std::is_same_v<BV, Sphere<S>>) {
+    const Aabb<S> box = sphere_band_box(root);
+    pr.bound_band(box.min, box.max);
   } else {
-    (void)pr, (void)mesh;
+    (void)pr, (void)root;
   }
 }
 
