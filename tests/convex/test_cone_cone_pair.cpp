@@ -53,15 +53,7 @@ LD depth_oracle(const Cone<double>& a, const Cone<double>& b, const Eigen::Matri
   return test::least_overlap(f, starts, circles).depth;
 }
 
-// The value of overlap terms (convex/local_certificate.hpp) along w.
-double terms_value(const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
-  double v = terms.linear.dot(w);
-  for (int i = 0; i < terms.n; ++i) {
-    const double d = terms.axis[i].dot(w);
-    v += terms.coef[i] * (terms.disc[i] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
-  }
-  return v;
-}
+using test::overlap_terms_value;
 
 struct Case {
   Cone<double> a{0.5, 0.6}, b{0.5, 0.6};
@@ -184,7 +176,7 @@ TEST(ConeConePair, TermsBoundTheOverlap) {
       detail::OverlapTerms<double> terms;
       if (!detail::cone_cone_terms(c.a, c.b, f.R, f.t, n, terms)) continue;
       ++built;
-      const auto value = [&](const Eigen::Vector3d& w) { return terms_value(terms, w); };
+      const auto value = [&](const Eigen::Vector3d& w) { return overlap_terms_value(terms, w); };
       EXPECT_NEAR(value(n), double(overlap_ld(c.a, c.b, f.R, f.t, n.cast<LD>())), 1e-12);
       for (int j = 0; j < 10; ++j) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
@@ -257,7 +249,7 @@ TEST(ConeConePair, SideCertificateAgainstTheOracle) {
       ++built;
       for (int j = 0; j < 10; ++j) {
         const Eigen::Vector3d w = rng.vec(-1, 1).normalized();
-        EXPECT_LE(terms_value(terms, w), double(overlap_ld(a, b, f.R, f.t, w.cast<LD>())) + 1e-12 * scale);
+        EXPECT_LE(overlap_terms_value(terms, w), double(overlap_ld(a, b, f.R, f.t, w.cast<LD>())) + 1e-12 * scale);
       }
       const detail::LocalCertificate<double> lc = detail::local_certificate(terms, m);
       const auto sa = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(support(a, d)); };

@@ -178,11 +178,7 @@ TEST(CylinderBoxPair, TermsAreTheOverlap) {
     const detail::OverlapTerms<double> terms = detail::cylinder_box_terms(c.cyl, c.box, f.R, f.t);
     for (int j = 0; j < 10; ++j) {
       const Eigen::Vector3d n = rng.vec(-1, 1).normalized();
-      double v = terms.linear.dot(n);
-      for (int k = 0; k < terms.n; ++k) {
-        const Eigen::Vector3d& a = terms.axis[k];
-        v += terms.coef[k] * (terms.disc[k] ? (n - a.dot(n) * a).norm() : std::abs(a.dot(n)));
-      }
+      const double v = test::overlap_terms_value(terms, n);
       const double want = double(overlap_ld(c.cyl, c.box, f.R, f.t, n.cast<LD>()));
       EXPECT_NEAR(v, want, 1e-13);
       EXPECT_NEAR(detail::cylinder_box_overlap(c.cyl, c.box, f.R, f.t, n), want, 1e-13);

@@ -39,16 +39,7 @@ test::LeastOverlap depth_oracle(const Cylinder<double>& a, const ConvexHull<doub
 
 using Case = SolidHullCase<Cylinder<double>>;
 
-// The value along w of the sum of terms (detail::OverlapTerms: a linear part, then each term's
-// coefficient times |w . axis| or, for a disc term, the length of w's part across its axis).
-double terms_value(const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
-  double s = terms.linear.dot(w);
-  for (int k = 0; k < terms.n; ++k) {
-    const double d = terms.axis[k].dot(w);
-    s += terms.coef[k] * (terms.disc[k] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
-  }
-  return s;
-}
+using test::overlap_terms_value;
 
 // Cylinders of varied proportions (every fourth the zoo's) against the hulls in turn, b about a,
 // `scale` times the size and `offset` from the origin.
@@ -142,9 +133,9 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
       detail::OverlapTerms<double> ct;
       const bool has_cone = detail::cone_hull_terms(cone, h, f.R, f.t, n, detail::cone_branch(cone, n), ct);
       cone_terms += has_cone;
-      EXPECT_NEAR(terms_value(terms, n), double(overlap_ld(c.solid, v, n.cast<LD>())), 1e-12);
+      EXPECT_NEAR(overlap_terms_value(terms, n), double(overlap_ld(c.solid, v, n.cast<LD>())), 1e-12);
       if (has_cone) {
-        EXPECT_NEAR(terms_value(ct, n), double(overlap_ld(cone, v, n.cast<LD>())), 1e-12);
+        EXPECT_NEAR(overlap_terms_value(ct, n), double(overlap_ld(cone, v, n.cast<LD>())), 1e-12);
       }
       // the body inside the cone along the ruling the hull's feature along -n touches, at that
       // ruling's side normal s, over a random span
@@ -157,7 +148,7 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
       }
       side_terms += has_side;
       if (has_side) {
-        EXPECT_NEAR(terms_value(st, s), double(overlap_ld(cone, v, s.cast<LD>())), 1e-12);
+        EXPECT_NEAR(overlap_terms_value(st, s), double(overlap_ld(cone, v, s.cast<LD>())), 1e-12);
         // the body holds that ruling's base rim point, so its own part (the terms less the hull's)
         // is the cone's support along the directions whose support is that point: between s and
         // -z in the plane of e and z (a body on another ruling is not, though it still bounds)
@@ -166,17 +157,17 @@ TEST(CylinderHullPair, TermsBoundTheOverlap) {
         for (int i = 0; i < 3; ++i) {
           const Eigen::Vector3d w = (s - rim_rng.uniform(0.05, 2.0) * Eigen::Vector3d::UnitZ()).normalized();
           const double rim = cone.radius * std::hypot(w.x(), w.y()) - cone.half_length * w.z();
-          EXPECT_NEAR(terms_value(st, w) - terms_value(hull_part, w), std::max(cone.half_length * w.z(), rim), 1e-12);
+          EXPECT_NEAR(overlap_terms_value(st, w) - overlap_terms_value(hull_part, w), std::max(cone.half_length * w.z(), rim), 1e-12);
         }
       }
       for (int i = 0; i < 10; ++i) {
         const Eigen::Vector3d m = rng.vec(-1, 1).normalized();
-        EXPECT_LE(terms_value(terms, m), double(overlap_ld(c.solid, v, m.cast<LD>())) + 1e-12);
+        EXPECT_LE(overlap_terms_value(terms, m), double(overlap_ld(c.solid, v, m.cast<LD>())) + 1e-12);
         if (has_cone) {
-          EXPECT_LE(terms_value(ct, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
+          EXPECT_LE(overlap_terms_value(ct, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
         }
         if (has_side) {
-          EXPECT_LE(terms_value(st, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
+          EXPECT_LE(overlap_terms_value(st, m), double(overlap_ld(cone, v, m.cast<LD>())) + 1e-12);
         }
       }
     }
@@ -220,11 +211,11 @@ TEST(CylinderHullPair, FaceSquareTermsBoundTheOverlap) {
       if (!detail::add_hull_face_square_terms(h, f.R, f.t, k, Eigen::Vector3d(f.R * above + f.t), terms)) continue;
       ++built;
       merged += h.faces[k].vertices.size() > 3;
-      EXPECT_NEAR(terms_value(terms, n), double(overlap_ld(c.solid, v, n.cast<LD>())), 1e-12 * size);
+      EXPECT_NEAR(overlap_terms_value(terms, n), double(overlap_ld(c.solid, v, n.cast<LD>())), 1e-12 * size);
       for (int i = 0; i < 20; ++i) {
         // directions near n (the square's corners decide there) and anywhere
         const Eigen::Vector3d m = i < 10 ? Eigen::Vector3d((n + 0.3 * rng.vec(-1, 1)).normalized()) : Eigen::Vector3d(rng.vec(-1, 1).normalized());
-        EXPECT_LE(terms_value(terms, m), double(overlap_ld(c.solid, v, m.cast<LD>())) + 1e-12 * size);
+        EXPECT_LE(overlap_terms_value(terms, m), double(overlap_ld(c.solid, v, m.cast<LD>())) + 1e-12 * size);
       }
     }
   }

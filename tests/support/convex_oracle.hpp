@@ -11,6 +11,7 @@
 #pragma once
 
 #include "impact/convex/convex_hull.hpp"
+#include "impact/convex/local_certificate.hpp"
 #include "impact/convex/shapes.hpp"
 #include "support/random.hpp"
 #include "support/sanitizer.hpp"
@@ -24,6 +25,18 @@
 #include <vector>
 
 namespace impact::test {
+
+/// The value along w of a sum of overlap terms (detail::OverlapTerms, convex/local_certificate.hpp),
+/// evaluated on its own from the definition: the linear part, then each term's coefficient times
+/// |w . axis|, or for a disc term the length of w's part across its axis.
+inline double overlap_terms_value(const detail::OverlapTerms<double>& terms, const Eigen::Vector3d& w) {
+  double v = terms.linear.dot(w);
+  for (int k = 0; k < terms.n; ++k) {
+    const double d = terms.axis[k].dot(w);
+    v += terms.coef[k] * (terms.disc[k] ? std::sqrt(std::max(w.squaredNorm() - d * d, 0.0)) : std::abs(d));
+  }
+  return v;
+}
 
 /// f(n) for unit n (see the file comment).
 template <class A, class B>
