@@ -150,18 +150,27 @@ template <class S> struct PreparedRay {
 
 namespace detail {
 
-/// Whether the ray's origin lies exactly in the triangle's plane (exact orient3d), for finish_ray_hit.
+/// Whether the ray's origin lies exactly in the triangle's plane, for finish_ray_hit, which asks
+/// only when the ray's line meets the closed triangle (exact signs): the origin is then in the
+/// plane only if it is a point of the triangle, so outside the triangle's bounding box it is not
+/// (six comparisons decide most calls); inside it, the exact orient3d decides.
 template <class S> struct OriginOnPlane {
   const Triangle<S>& tri;
   const Vec3<S>& origin;
-  bool operator()() const { return orient3d(tri.a, tri.b, tri.c, origin) == 0; }
+  bool operator()() const {
+    for (int k = 0; k < 3; ++k) {
+      const S x = origin[k];
+      if ((x < tri.a[k] && x < tri.b[k] && x < tri.c[k]) || (x > tri.a[k] && x > tri.b[k] && x > tri.c[k])) return false;
+    }
+    return orient3d(tri.a, tri.b, tri.c, origin) == 0;
+  }
 };
 
 /// The end of the watertight test: the edge functions' signs (exact), then t = tt / det against
 /// [0, t_max]. For an origin exactly in the triangle's plane t is 0, but tt is rounding noise
 /// there (of either sign, for rays whose dominant axis is not the normal's): so a ray that meets
-/// the triangle asks `origin_on_plane()` (the exact orient3d of the triangle and the origin, one
-/// filtered predicate per hit candidate, none for misses), and true makes t exactly 0. A ray from a
+/// the triangle asks `origin_on_plane()` (OriginOnPlane: a box test, then the exact orient3d of
+/// the triangle and the origin; per hit candidate, none for misses), and true makes t exactly 0. A ray from a
 /// point of the triangle is then hit at t = 0, with `front` telling the side it enters, which the
 /// mesh casts' tie rule (query/ray_mesh.hpp) and the particles' colliders rely on: into the front
 /// it hits, away from it it does not (before, tt's rounded sign lost a third of the oblique rays
