@@ -4,7 +4,8 @@
 /// Intersection", JCGT 2013), with exact signs of its edge functions.
 ///
 /// Numerical contract: the hit/miss decision of the closed triangle for the ray's LINE is EXACT;
-/// t, the barycentrics and the checks of t against [0, t_max] are APPROXIMATE. The ray is mapped to
+/// t, the barycentrics and the checks of t against [0, t_max] are APPROXIMATE, except that an
+/// origin exactly in the triangle's plane gives t = 0 exactly (detail::finish_ray_hit). The ray is mapped to
 /// a ray space where it runs along +z from the origin o (a permutation making the dominant
 /// direction component z, kx, ky swapped when d_kz < 0, then the shear x - s_x z, y - s_y z with
 /// s = d_kx / d_kz, d_ky / d_kz rounded); the triangle is hit when its three edge functions (the 2D
