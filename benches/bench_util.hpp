@@ -4,6 +4,7 @@
 // (through impact::io when built with it).
 #pragma once
 
+#include "impact/core/error.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
 #include "support/obj_reader.hpp"
 
@@ -205,6 +206,15 @@ TriangleMesh<S> read_mesh(const std::string& path) {
 #else
   return impact::test::read_obj<S>(path);
 #endif
+}
+
+/// Throws InvalidInput naming `name` when the mesh has no extent (every vertex at one point, as in
+/// files whose triangles all collapsed): the ray, hierarchy, particles, convex and mesh-CCD benches
+/// size their rays, particles, shapes and motions by the mesh's bounding box, which is then a
+/// point (they hung or aborted on such files).
+template <class S> void require_extent(const TriangleMesh<S>& m, const std::string& name) {
+  if (m.num_vertices() == 0 || (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).maxCoeff() > S(0)) return;
+  throw InvalidInput(name + ": the mesh has no extent (every vertex at one point); this bench sizes its queries by the mesh's bounding box");
 }
 
 /// The mesh at `path` in double, through impact::io; in a build without it (assimp not found),

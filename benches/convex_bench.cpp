@@ -926,6 +926,7 @@ int main(int argc, char** argv) {
       for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) mesh.V.row(i) *= jitter.uniform(0.95, 1.05);
     }
     validate_mesh(mesh, mesh_name);
+    bench::require_extent(mesh, mesh_name);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-convex-bench: %s\n", e.what());
     return 1;

@@ -482,9 +482,10 @@ int main(int argc, char** argv) {
       } else {
         meshes.push_back({p, load(p.substr(0, comma)), load(p.substr(comma + 1))});
         validate_mesh(*meshes.back().other, p);
+        bench::require_extent(*meshes.back().other, p);
       }
     }
-    for (auto& mm : meshes) validate_mesh(mm.m, mm.name);
+    for (auto& mm : meshes) validate_mesh(mm.m, mm.name), bench::require_extent(mm.m, mm.name);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-hierarchy-bench: %s\n", e.what());
     return 1;

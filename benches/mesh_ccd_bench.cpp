@@ -342,6 +342,7 @@ int main(int argc, char** argv) {
   try {
     mesh = args.mesh.empty() ? make_torus<double>(1.0, 0.35, 160, 64) : bench::load_mesh_or_exit(args.mesh, kUsage);
     validate_mesh(mesh, args.mesh.empty() ? "generated torus" : args.mesh);
+    bench::require_extent(mesh, args.mesh.empty() ? "generated torus" : args.mesh);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-mesh-ccd-bench: %s\n", e.what());
     return 1;

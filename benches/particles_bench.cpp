@@ -372,6 +372,7 @@ template <class S> int run_all(const Args& a) {
   TriangleMesh<S> mesh;
   try {
     mesh = a.mesh.empty() ? make_torus<S>(1.0, 0.4, 192, 96) : bench::read_mesh<S>(a.mesh);
+    bench::require_extent(mesh, a.mesh);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-particles-bench: %s\n", e.what());
     return 1;

@@ -294,6 +294,7 @@ int main(int argc, char** argv) {
   try {
     source = a.mesh.empty() ? make_torus<double>(1.0, 0.4, 192, 96) : bench::read_mesh<double>(a.mesh);
     if (source.num_triangles() == 0) throw InvalidInput("the mesh has no triangles");
+    bench::require_extent(source, a.mesh);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "impact-ray-bench: %s\n", e.what());
     return 1;

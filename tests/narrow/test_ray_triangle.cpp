@@ -62,6 +62,49 @@ TYPED_TEST(RayTri, AgreesWithExactPredicatesAwayFromBoundaries) {
   EXPECT_GT(hits, 1000);
 }
 
+// An origin exactly in the triangle's plane, strictly inside it (exact: small dyadic coordinates
+// on the planes n . x = 0 below), a ray not parallel to the plane: a hit at t = 0 exactly, front
+// when the ray enters the front, in every direction (audit of 2026-12-07: tt's rounded sign lost
+// the hit for rays whose dominant axis is not the normal's).
+TYPED_TEST(RayTri, OriginInThePlaneHitsAtZero) {
+  using S = TypeParam;
+  Rng rng(5);
+  const Vec3<int> normals[] = {{0, 1, 0}, {1, 2, 4}, {3, -1, 2}, {-1, 4, 8}};
+  int checked = 0, oblique = 0;
+  for (int it = 0; it < 40000; ++it) {
+    const Vec3<int> n = normals[it % 4];
+    // a point of the plane n . x = 0 from integer x, y: z = -(n_x x + n_y y) / n_z (a multiple of
+    // 1/8, exact); the first normal's plane is y = 0
+    auto on_plane = [&](int x, int y) {
+      if (n.z() == 0) return Vec3<S>(S(x), S(0), S(y));
+      return Vec3<S>(S(x), S(y), S(-(n.x() * x + n.y() * y)) / S(n.z()));
+    };
+    auto coord = [&] { return int(rng.index(81)) - 40; };
+    const Triangle<S> tri(on_plane(coord(), coord()), on_plane(coord(), coord()), on_plane(coord(), coord()));
+    const Vec3<S> o = on_plane(coord(), coord());
+    ASSERT_EQ(orient3d(tri.a, tri.b, tri.c, o), 0);
+    const Vec3<S> up = o + n.cast<S>();  // off the plane: strictly inside when the three signs agree
+    const int e0 = orient3d(o, up, tri.a, tri.b), e1 = orient3d(o, up, tri.b, tri.c), e2 = orient3d(o, up, tri.c, tri.a);
+    if (e0 == 0 || e0 != e1 || e1 != e2) continue;
+    const Vec3<S> d = rand_int_vec<S>(rng, 80);
+    const int side = orient3d(tri.a, tri.b, tri.c, Vec3<S>(o + d));  // the side d points to
+    if (side == 0) continue;
+    ++checked;
+    const Vec3<S> ad = d.cwiseAbs();
+    const Vec3<S> an = n.cast<S>().cwiseAbs();
+    int kd = 0, kn = 0;
+    ad.maxCoeff(&kd);
+    an.maxCoeff(&kn);
+    oblique += kd != kn;
+    const auto hit = intersect_ray_triangle(Ray<S>(o, d, S(1)), tri);
+    ASSERT_TRUE(hit.has_value()) << it << ": from (" << o.transpose() << ") along (" << d.transpose() << ")";
+    EXPECT_EQ(hit->t, S(0)) << it;
+    EXPECT_EQ(hit->front, side < 0) << it;
+  }
+  EXPECT_GT(checked, 2000);
+  EXPECT_GT(oblique, checked / 4);
+}
+
 TYPED_TEST(RayTri, TMaxAndParallelAndDegenerate) {
   using S = TypeParam;
   using V = Vec3<S>;

@@ -139,6 +139,31 @@ TYPED_TEST(RayMesh, ParallelRaysAndSurfaceStarts) {
   EXPECT_THROW(ray_mesh_first_hit(gb, Ray<S>(Vec3<S>(0.3, 0.2, 0), Vec3<S>::Zero(), S(1))), InvalidInput);
 }
 
+// The t = 0 rule for every direction (audit of 2026-12-07): from a point exactly on the surface,
+// a ray into the front hits at t = 0 and one away misses, also when the ray's dominant axis is not
+// the normal's (before the fix, tt's rounded sign lost about a third of those rays into the front:
+// a particle resting on a floor tunnelled through it).
+TYPED_TEST(RayMesh, SurfaceStartsInEveryDirection) {
+  using S = typename BvTraits<TypeParam>::Scalar;
+  const MeshBvh<TypeParam> gb(make_grid<S>(4, 4, S(2)));  // z = 0, normal +z
+  test::Rng rng(77);
+  int oblique = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const Vec3<S> o(S(rng.uniform(-0.9, 0.9)), S(rng.uniform(-0.9, 0.9)), S(0));
+    Vec3<S> d = rng.vec(-1, 1).cast<S>();
+    if (!(std::abs(d.z()) > S(1e-3))) continue;
+    oblique += std::abs(d.z()) < std::max(std::abs(d.x()), std::abs(d.y()));
+    d.z() = -std::abs(d.z());
+    const auto in = ray_mesh_first_hit(gb, Ray<S>(o, d, S(1)));
+    ASSERT_TRUE(in.has_value()) << "ray " << k << " from (" << o.transpose() << ") along (" << d.transpose() << ")";
+    EXPECT_EQ(in->t, S(0)) << "ray " << k;
+    EXPECT_TRUE(in->front_face) << "ray " << k;
+    d.z() = -d.z();
+    EXPECT_FALSE(ray_mesh_first_hit(gb, Ray<S>(o, d, S(1))).has_value()) << "ray " << k;
+  }
+  EXPECT_GT(oblique, 1000);
+}
+
 // Swept sphere: the BVH query equals the minimum over all triangles, and at the returned time
 // the sphere touches the mesh (distance = r) while just before it does not (checked with an
 // independent brute-force closest point).
