@@ -231,12 +231,20 @@ template <class S> class BlockTest {
     }
     return m | near_lanes;
   }
-  /// The lanes where the origin may lie exactly in the triangle's plane: the triangle's vertices
-  /// less the origin (rounded, in any order of the axes) give det = orient3d's determinant and
-  /// its permanent, and a lane is set unless |det| > 7.8e-16 permanent (Shewchuk's first error
-  /// bound, (7 + 56 2^-53) 2^-53, for differences rounded as these are: the determinant's sign is
-  /// then certain, so the origin is off the plane), or NaN.
-  __attribute__((target("avx"))) static __m256d maybe_in_plane(const __m256d (&x)[3], const __m256d (&y)[3], const __m256d (&z)[3], __m256d abs_mask) {
+  /// The lanes of `b` where the origin may lie exactly in the triangle's plane: the triangle's
+  /// vertices less the origin (rounded, in the ray frame's order of the axes) give det =
+  /// orient3d's determinant and its permanent, and a lane is set unless |det| > 7.8e-16 permanent
+  /// (Shewchuk's first error bound, (7 + 56 2^-53) 2^-53, for differences rounded as these are:
+  /// the determinant's sign is then certain, so the origin is off the plane), or NaN. Called only
+  /// for a block with a hit lane: it loads the differences again rather than keep them in
+  /// registers through the test (keeping them cost long casts about a tenth of their speed).
+  template <class T> __attribute__((target("avx"), noinline)) __m256d maybe_in_plane(const WideTriangleBlock<T>& b, __m256d abs_mask) const {
+    __m256d x[3], y[3], z[3];
+    for (int v = 0; v < 3; ++v) {
+      x[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[0]]), _mm256_broadcast_sd(o_));
+      y[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[1]]), _mm256_broadcast_sd(o_ + 1));
+      z[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[2]]), _mm256_broadcast_sd(o_ + 2));
+    }
     const __m256d yz12 = _mm256_mul_pd(y[1], z[2]), zy12 = _mm256_mul_pd(z[1], y[2]);
     const __m256d yz20 = _mm256_mul_pd(y[2], z[0]), zy20 = _mm256_mul_pd(z[2], y[0]);
     const __m256d yz01 = _mm256_mul_pd(y[0], z[1]), zy01 = _mm256_mul_pd(z[0], y[1]);
@@ -258,13 +266,13 @@ template <class S> class BlockTest {
     const __m256d o0 = _mm256_broadcast_sd(o_), o1 = _mm256_broadcast_sd(o_ + 1), o2 = _mm256_broadcast_sd(o_ + 2);
     const __m256d sx = _mm256_broadcast_sd(&sx_), sy = _mm256_broadcast_sd(&sy_), sz = _mm256_broadcast_sd(&sz_);
     const __m256d tmax = _mm256_set1_pd(t_max), zero = _mm256_setzero_pd();
-    __m256d px[3], py[3], ax[3], ay[3], az[3];
+    __m256d px[3], py[3], az[3];
     for (int v = 0; v < 3; ++v) {
-      ax[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[0]]), o0);
-      ay[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[1]]), o1);
+      const __m256d ax = _mm256_sub_pd(load4(b.v[3 * v + off_[0]]), o0);
+      const __m256d ay = _mm256_sub_pd(load4(b.v[3 * v + off_[1]]), o1);
       az[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[2]]), o2);
-      px[v] = _mm256_sub_pd(ax[v], _mm256_mul_pd(sx, az[v]));
-      py[v] = _mm256_sub_pd(ay[v], _mm256_mul_pd(sy, az[v]));
+      px[v] = _mm256_sub_pd(ax, _mm256_mul_pd(sx, az[v]));
+      py[v] = _mm256_sub_pd(ay, _mm256_mul_pd(sy, az[v]));
     }
     const __m256d eu = _mm256_sub_pd(_mm256_mul_pd(px[2], py[1]), _mm256_mul_pd(py[2], px[1]));
     const __m256d ev = _mm256_sub_pd(_mm256_mul_pd(px[0], py[2]), _mm256_mul_pd(py[0], px[2]));
@@ -299,7 +307,7 @@ template <class S> class BlockTest {
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
     int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
     if (m) {  // a hit lane whose origin may lie in its plane: the scalar rule (t exactly 0 there)
-      const int on = _mm256_movemask_pd(maybe_in_plane(ax, ay, az, abs_mask)) & m;
+      const int on = _mm256_movemask_pd(maybe_in_plane(b, abs_mask)) & m;
       near_out |= on;
       m &= ~on;
     }
