@@ -455,6 +455,56 @@ TYPED_TEST(WideBvhTest, BlockTestDecidesAsTheScalarTest) {
 // first such axis) and the frame's x and y swap (a negative component along it): rays with such
 // directions, in each of the eight sign combinations, through four triangles around a point;
 // check_block compares the lanes' values with the scalar test's bit for bit.
+// From a point exactly on the surface, every cast path of the 4- and 8-wide trees (AVX, SSE2 and
+// scalar leaves) hits the triangle there at t = 0 exactly when the ray enters its front, and reports
+// nothing when the ray leaves it, also when the ray's dominant axis is not the normal's (before, the
+// leaf tests took the depth's rounded sign: about a quarter of such rays into the front were missed
+// and a quarter of those leaving it reported at a t of a few ulps, as the scalar test did; audit of
+// 2026-12-07). Planes through the origin with small integer normals, points on them exact.
+TYPED_TEST(WideBvhTest, SurfaceStartsInEveryDirection) {
+  using S = TypeParam;
+  test::Rng rng(91);
+  const Vec3<S> normals[] = {Vec3<S>(0, 0, 1), Vec3<S>(1, 2, 4), Vec3<S>(-3, 1, 2), Vec3<S>(1, -4, 8)};
+  int oblique = 0, rays = 0;
+  for (const Vec3<S>& n : normals) {
+    // a 4 x 4 grid in the plane n . x = 0 (z from x and y: multiples of 1/8, exact in float)
+    TriangleMesh<S> m = make_grid<S>(4, 4, S(2));
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V(i, 2) = -(n.x() * m.V(i, 0) + n.y() * m.V(i, 1)) / n.z();
+    const WideBvh<S, 4> w4(m);
+    const WideBvh<S, 8> w8(m);
+    for (int k = 0; k < 1500; ++k) {
+      // a point of the surface: x, y multiples of 2^-10 (z then exact; some on edges)
+      const S x = S(std::ldexp(double(rng.integer(900)), -10)), y = S(std::ldexp(double(rng.integer(900)), -10));
+      const Vec3<S> o(x, y, -(n.x() * x + n.y() * y) / n.z());
+      Vec3<S> d = rng.vec(-1, 1).template cast<S>();
+      const S along = d.dot(n) / n.norm();
+      if (!(std::abs(along) > S(1e-2))) continue;
+      Eigen::Index kd = 0, kn = 0;
+      d.cwiseAbs().maxCoeff(&kd);
+      n.cwiseAbs().maxCoeff(&kn);
+      oblique += kd != kn ? 1 : 0;
+      const bool into_front = along < 0;  // the grid's triangles face +n (make_grid: +z)
+      ++rays;
+      for (int path = 0; path < 3; ++path) {
+        const bool simd = path < 2, avx = path == 0;
+        const Ray<S> ray(o, d, S(1));
+        for (const auto& h : {detail::ray_wide_cast(w4, ray, o, d, static_cast<const RigidTransform<S>*>(nullptr), nullptr, simd, avx),
+                              detail::ray_wide_cast(w8, ray, o, d, static_cast<const RigidTransform<S>*>(nullptr), nullptr, simd, avx)}) {
+          if (into_front) {
+            ASSERT_TRUE(h.has_value()) << "path " << path << " from (" << o.transpose() << ") along (" << d.transpose() << ")";
+            EXPECT_EQ(h->t, S(0)) << "path " << path;
+            EXPECT_TRUE(h->front_face) << "path " << path;
+          } else {
+            EXPECT_FALSE(h.has_value()) << "path " << path << " from (" << o.transpose() << ") along (" << d.transpose() << ") t " << h->t;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(rays, 4000);
+  EXPECT_GT(oblique, rays / 4);
+}
+
 TEST(WideBvh, BlockTestFrameAtTiedDirections) {
   test::Rng rng(53);
   const Eigen::Vector3d p(0.25, -0.5, 0.75);
