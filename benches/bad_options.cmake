@@ -3,14 +3,9 @@
 # 2 (not a crash, not a run on a number nobody typed) and a message on stderr that names the
 # problem. OPTION is one of the bench's integer options, REAL_OPTION (when given) one of its
 # real-number options whose range lies within [0, 1e200]; MISSING_DIR a folder that does not exist.
+include(${CMAKE_CURRENT_LIST_DIR}/expect_exit.cmake)
 function(expect_refused what pattern)
-  execute_process(COMMAND ${EXE} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 30)
-  if(NOT rc STREQUAL "2")
-    message(FATAL_ERROR "${what}: ${EXE} exited with '${rc}', not 2\nstdout: ${out}\nstderr: ${err}")
-  endif()
-  if(NOT err MATCHES "${pattern}")
-    message(FATAL_ERROR "${what}: the message does not match '${pattern}'\nstderr: ${err}")
-  endif()
+  expect_exit("${what}" 2 "${pattern}" ${ARGN})
 endfunction()
 
 # Values no integer option may take: words, trailing characters, overflow, NaN, a fraction, and
