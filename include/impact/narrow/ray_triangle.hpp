@@ -151,38 +151,34 @@ template <class S> struct PreparedRay {
 
 namespace detail {
 
-/// Whether the ray's origin lies exactly in the triangle's plane, for finish_ray_hit, which asks
-/// only when the ray's line meets the closed triangle (exact signs): the origin is then in the
-/// plane only if it is a point of the triangle, so outside the triangle's bounding box it is not
-/// (six comparisons decide most calls); inside it, the exact orient3d decides.
-template <class S> struct OriginOnPlane {
-  const Triangle<S>& tri;
-  const Vec3<S>& origin;
-  bool operator()() const {
-    for (int k = 0; k < 3; ++k) {
-      const S x = origin[k];
-      if ((x < tri.a[k] && x < tri.b[k] && x < tri.c[k]) || (x > tri.a[k] && x > tri.b[k] && x > tri.c[k])) return false;
-    }
-    return orient3d(tri.a, tri.b, tri.c, origin) == 0;
+/// Whether `origin` lies exactly in the triangle's plane, for finish_ray_hit, which asks only when
+/// the ray's line meets the closed triangle (exact signs): the origin is then in the plane only if
+/// it is a point of the triangle, so outside the triangle's bounding box it is not (six
+/// comparisons decide most calls); inside it, the exact orient3d decides.
+template <class S> inline bool origin_in_plane(const Triangle<S>& tri, const Vec3<S>& origin) {
+  for (int k = 0; k < 3; ++k) {
+    const S x = origin[k];
+    if ((x < tri.a[k] && x < tri.b[k] && x < tri.c[k]) || (x > tri.a[k] && x > tri.b[k] && x > tri.c[k])) return false;
   }
-};
+  return orient3d(tri.a, tri.b, tri.c, origin) == 0;
+}
 
 /// The end of the watertight test: the edge functions' signs (exact), then t = tt / det against
 /// [0, t_max]. For an origin exactly in the triangle's plane t is 0, but tt is rounding noise
 /// there (of either sign, for rays whose dominant axis is not the normal's): so a ray that meets
-/// the triangle asks `origin_on_plane()` (OriginOnPlane: a box test, then the exact orient3d of
+/// the triangle asks origin_in_plane(tri, origin) (a box test, then the exact orient3d of
 /// the triangle and the origin; per hit candidate, none for misses), and true makes t exactly 0. A ray from a
 /// point of the triangle is then hit at t = 0, with `front` telling the side it enters, which the
 /// mesh casts' tie rule (query/ray_mesh.hpp) and the particles' colliders rely on: into the front
 /// it hits, away from it it does not (before, tt's rounded sign lost a third of the oblique rays
 /// into the front and could report those away from it at a t of a few ulps).
-template <class S, class W, class OnPlane>
-inline std::optional<RayTriangleHit<S>> finish_ray_hit(W eu, W ev, W ew, S az, S bz, S cz, S t_max, const OnPlane& origin_on_plane) {
+template <class S, class W>
+inline std::optional<RayTriangleHit<S>> finish_ray_hit(W eu, W ev, W ew, S az, S bz, S cz, S t_max, const Triangle<S>& tri, const Vec3<S>& origin) {
   if ((eu < W(0) || ev < W(0) || ew < W(0)) && (eu > W(0) || ev > W(0) || ew > W(0))) return std::nullopt;
   const W det = eu + ev + ew;
   if (det == W(0)) return std::nullopt;
   W tt = eu * W(az) + ev * W(bz) + ew * W(cz);
-  if (origin_on_plane()) tt = W(0);
+  if (origin_in_plane(tri, origin)) tt = W(0);
   if (det > W(0)) {
     if (tt < W(0) || tt > W(t_max) * det) return std::nullopt;
   } else {
@@ -232,7 +228,7 @@ template <class S> inline std::optional<RayTriangleHit<S>> intersect_ray_triangl
   if (IMPACT_UNLIKELY(!(std::abs(eu) > pr.band && std::abs(ev) > pr.band && std::abs(ew) > pr.band)))
     return detail::intersect_ray_triangle_near_edges(pr, tri, eu, ev, ew);
   const S az = pr.sz * A[kz], bz = pr.sz * B[kz], cz = pr.sz * C[kz];
-  return detail::finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, detail::OriginOnPlane<S>{tri, pr.ray.origin});
+  return detail::finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, tri, pr.ray.origin);
 }
 
 namespace detail {
@@ -254,7 +250,7 @@ IMPACT_NOINLINE std::optional<RayTriangleHit<S>> intersect_ray_triangle_near_edg
   const bool in_v = !(std::abs(ev) > edge_band(amx, amy, cmx, cmy));
   const bool in_w = !(std::abs(ew) > edge_band(bmx, bmy, amx, amy));
   const S az = pr.sz * A[pr.kz], bz = pr.sz * B[pr.kz], cz = pr.sz * C[pr.kz];
-  if (!(in_u || in_v || in_w)) return finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, OriginOnPlane<S>{tri, o});
+  if (!(in_u || in_v || in_w)) return finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, tri, o);
   if constexpr (std::is_same_v<S, float>) {  // the double test on the same inputs decides
     const PreparedRay<double> prd(Ray<double>(o.template cast<double>(), pr.ray.direction.template cast<double>(), double(pr.ray.t_max)));
     const auto h = intersect_ray_triangle(prd, Triangle<double>(tri.a.template cast<double>(), tri.b.template cast<double>(), tri.c.template cast<double>()));
@@ -271,7 +267,7 @@ IMPACT_NOINLINE std::optional<RayTriangleHit<S>> intersect_ray_triangle_near_edg
     if (in_u) eu = with_exact_sign(eu, orient3d_direction_exact(po, pc, pb, pd));
     if (in_v) ev = with_exact_sign(ev, orient3d_direction_exact(po, pa, pc, pd));
     if (in_w) ew = with_exact_sign(ew, orient3d_direction_exact(po, pb, pa, pd));
-    return finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, OriginOnPlane<S>{tri, o});
+    return finish_ray_hit<S, S>(eu, ev, ew, az, bz, cz, pr.ray.t_max, tri, o);
   }
 }
 

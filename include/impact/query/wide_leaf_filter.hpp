@@ -37,8 +37,9 @@ namespace detail {
 /// SSE2 instruction; float: four). A lane with an edge function not above the ray's band bound
 /// (`band`: PreparedRay::band for triangles in the tree's box, +infinity when not set) is near an
 /// edge: a candidate, which the scalar test decides (it may take exact signs there). So is a lane
-/// inside its triangle's edges whose depth tt lies behind the origin (the scalar test then asks
-/// whether the origin lies exactly in the triangle's plane: a hit at t = 0). Any other
+/// inside its triangle's edges whose depth tt lies behind the origin, or a hit lane whose origin
+/// orient3d's filter cannot place off the triangle's plane (the scalar test then asks whether the
+/// origin lies exactly in the plane: a hit at t = 0). Any other
 /// lane is a candidate exactly when the scalar test hits its triangle (no two edge functions of
 /// opposite strict signs, det != 0, the depth in [0, t_max det]), as the scalar test takes its
 /// values as they are. The caller runs the scalar test on the candidates only (in double, the
@@ -208,6 +209,28 @@ template <class S> class BlockTest {
   }
 
  private:
+  /// The lanes of `lanes` (bit j: lane `first` + j of `b`) whose triangle may have the origin
+  /// exactly in its plane, which the scalar rule then decides (finish_ray_hit: t exactly 0): those
+  /// that orient3d's filter (narrow/predicates.hpp, with its underflow term) cannot place off the
+  /// plane. Called with the hit lanes only (about one a hitting cast), in the ray frame's order of
+  /// the axes (a permutation: the same magnitude). In double (the lanes' values are).
+  template <class T> int in_plane_lanes(const WideTriangleBlock<T>& b, int lanes, int first) const {
+    int on = 0;
+    for (int m = lanes; m; m &= m - 1) {
+      const int j = __builtin_ctz(static_cast<unsigned>(m)), c = first + j;
+      double p[3][3];
+      for (int v = 0; v < 3; ++v)
+        for (int i = 0; i < 3; ++i) p[v][i] = double(b.v[3 * v + off_[i]][c]);
+      const double ux = p[1][0] - p[0][0], uy = p[1][1] - p[0][1], uz = p[1][2] - p[0][2];
+      const double vx = p[2][0] - p[0][0], vy = p[2][1] - p[0][1], vz = p[2][2] - p[0][2];
+      const double n[3] = {uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx};
+      const double q[3] = {std::fabs(uy * vz) + std::fabs(uz * vy), std::fabs(uz * vx) + std::fabs(ux * vz), std::fabs(ux * vy) + std::fabs(uy * vx)};
+      const double o[3] = {double(o_[0]), double(o_[1]), double(o_[2])};
+      const int s = orient3d_filtered(p[0], n, q, o, uv_safe(ux, uy, uz, vx, vy, vz));
+      if (s == 0 || s == 2) on |= 1 << j;
+    }
+    return on;
+  }
 #if defined(IMPACT_BLOCK_TEST_AVX)
   static bool avx_available() {
     static const bool avx = __builtin_cpu_supports("avx");
@@ -230,32 +253,6 @@ template <class S> class BlockTest {
       _mm256_store_pd(values->tt, tt);
     }
     return m | near_lanes;
-  }
-  /// The lanes of `b` where the origin may lie exactly in the triangle's plane: the triangle's
-  /// vertices less the origin (rounded, in the ray frame's order of the axes) give det =
-  /// orient3d's determinant and its permanent, and a lane is set unless |det| > 7.8e-16 permanent
-  /// (Shewchuk's first error bound, (7 + 56 2^-53) 2^-53, for differences rounded as these are:
-  /// the determinant's sign is then certain, so the origin is off the plane), or NaN. Called only
-  /// for a block with a hit lane: it loads the differences again rather than keep them in
-  /// registers through the test (keeping them cost long casts about a tenth of their speed).
-  template <class T> __attribute__((target("avx"), noinline)) __m256d maybe_in_plane(const WideTriangleBlock<T>& b, __m256d abs_mask) const {
-    __m256d x[3], y[3], z[3];
-    for (int v = 0; v < 3; ++v) {
-      x[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[0]]), _mm256_broadcast_sd(o_));
-      y[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[1]]), _mm256_broadcast_sd(o_ + 1));
-      z[v] = _mm256_sub_pd(load4(b.v[3 * v + off_[2]]), _mm256_broadcast_sd(o_ + 2));
-    }
-    const __m256d yz12 = _mm256_mul_pd(y[1], z[2]), zy12 = _mm256_mul_pd(z[1], y[2]);
-    const __m256d yz20 = _mm256_mul_pd(y[2], z[0]), zy20 = _mm256_mul_pd(z[2], y[0]);
-    const __m256d yz01 = _mm256_mul_pd(y[0], z[1]), zy01 = _mm256_mul_pd(z[0], y[1]);
-    const __m256d det = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x[0], _mm256_sub_pd(yz12, zy12)), _mm256_mul_pd(x[1], _mm256_sub_pd(yz20, zy20))),
-                                      _mm256_mul_pd(x[2], _mm256_sub_pd(yz01, zy01)));
-    const __m256d m = abs_mask;
-    const __m256d per = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_and_pd(yz12, m), _mm256_and_pd(zy12, m)), _mm256_and_pd(x[0], m)),
-                      _mm256_mul_pd(_mm256_add_pd(_mm256_and_pd(yz20, m), _mm256_and_pd(zy20, m)), _mm256_and_pd(x[1], m))),
-        _mm256_mul_pd(_mm256_add_pd(_mm256_and_pd(yz01, m), _mm256_and_pd(zy01, m)), _mm256_and_pd(x[2], m)));
-    return _mm256_cmp_pd(_mm256_and_pd(det, m), _mm256_mul_pd(_mm256_set1_pd(kInPlaneBound), per), _CMP_NGT_UQ);
   }
   /// The lanes of `lanes` the double test passes that are not near an edge, and its values, in
   /// 256-bit AVX; `near_out` gets the lanes of `lanes` near an edge (an edge function not above
@@ -305,13 +302,10 @@ template <class S> class BlockTest {
     const __m256d behind = _mm256_or_pd(_mm256_and_pd(up, _mm256_cmp_pd(tt, zero, _CMP_LT_OQ)), _mm256_andnot_pd(up, _mm256_cmp_pd(tt, zero, _CMP_GT_OQ)));
     near_out |= _mm256_movemask_pd(behind) & ~outside & lanes;
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
-    int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
-    if (m) {  // a hit lane whose origin may lie in its plane: the scalar rule (t exactly 0 there)
-      const int on = _mm256_movemask_pd(maybe_in_plane(b, abs_mask)) & m;
-      near_out |= on;
-      m &= ~on;
-    }
-    return m;
+    const int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
+    const int on = in_plane_lanes(b, m, 0);  // hit lanes the scalar rule takes (t exactly 0 there)
+    near_out |= on;
+    return m & ~on;
   }
   bool avx_ = false;
   S box_o_[3], box_inv_[3];  // set_ray's origin and 1 / d (the box entries; only hits_avx reads them)
@@ -370,14 +364,14 @@ template <class S> class BlockTest {
     using V = typename Ops::V;
     const V zero = Ops::zero(), tmax = Ops::set1(t_max);
     const V sx = Ops::set1(sx_), sy = Ops::set1(sy_), sz = Ops::set1(sz_);
-    V px[3], py[3], pz[3], ax[3], ay[3], az[3];
+    V px[3], py[3], pz[3];
     for (int v = 0; v < 3; ++v) {
-      ax[v] = Ops::sub(Ops::load(b.v[3 * v + off_[0]] + Ops::kLanes * h), Ops::set1(o_[0]));
-      ay[v] = Ops::sub(Ops::load(b.v[3 * v + off_[1]] + Ops::kLanes * h), Ops::set1(o_[1]));
-      az[v] = Ops::sub(Ops::load(b.v[3 * v + off_[2]] + Ops::kLanes * h), Ops::set1(o_[2]));
-      px[v] = Ops::sub(ax[v], Ops::mul(sx, az[v]));
-      py[v] = Ops::sub(ay[v], Ops::mul(sy, az[v]));
-      pz[v] = Ops::mul(sz, az[v]);
+      const V ax = Ops::sub(Ops::load(b.v[3 * v + off_[0]] + Ops::kLanes * h), Ops::set1(o_[0]));
+      const V ay = Ops::sub(Ops::load(b.v[3 * v + off_[1]] + Ops::kLanes * h), Ops::set1(o_[1]));
+      const V az = Ops::sub(Ops::load(b.v[3 * v + off_[2]] + Ops::kLanes * h), Ops::set1(o_[2]));
+      px[v] = Ops::sub(ax, Ops::mul(sx, az));
+      py[v] = Ops::sub(ay, Ops::mul(sy, az));
+      pz[v] = Ops::mul(sz, az);
     }
     const V eu = Ops::sub(Ops::mul(px[2], py[1]), Ops::mul(py[2], px[1]));
     const V ev = Ops::sub(Ops::mul(px[0], py[2]), Ops::mul(py[0], px[2]));
@@ -405,24 +399,15 @@ template <class S> class BlockTest {
         Ops::store(values->eu + at, eu), Ops::store(values->ev + at, ev), Ops::store(values->ew + at, ew);
         Ops::store(values->det + at, det), Ops::store(values->tt + at, tt);
       }
-      int near_bits = Ops::sign_bits(near);
-      if (m & ~near_bits) {  // a hit lane whose origin may lie in its plane: the scalar rule (t exactly 0 there)
-        const V y12 = Ops::mul(ay[1], az[2]), z12 = Ops::mul(az[1], ay[2]), y20 = Ops::mul(ay[2], az[0]), z20 = Ops::mul(az[2], ay[0]);
-        const V y01 = Ops::mul(ay[0], az[1]), z01 = Ops::mul(az[0], ay[1]);
-        const V d3 = Ops::add(Ops::add(Ops::mul(ax[0], Ops::sub(y12, z12)), Ops::mul(ax[1], Ops::sub(y20, z20))), Ops::mul(ax[2], Ops::sub(y01, z01)));
-        const V per = Ops::add(Ops::add(Ops::mul(Ops::add(Ops::abs(y12), Ops::abs(z12)), Ops::abs(ax[0])), Ops::mul(Ops::add(Ops::abs(y20), Ops::abs(z20)), Ops::abs(ax[1]))),
-                               Ops::mul(Ops::add(Ops::abs(y01), Ops::abs(z01)), Ops::abs(ax[2])));
-        near_bits |= Ops::sign_bits(Ops::not_gt(Ops::abs(d3), Ops::mul(Ops::set1(kInPlaneBound), per))) & m;
-      }
-      return m | (near_bits << 4);
+      const int near_bits = Ops::sign_bits(near);
+      const int on = in_plane_lanes(b, m & ~near_bits, Ops::kLanes * h);  // (t exactly 0 there)
+      return m | ((near_bits | on) << 4);
     } else {
       (void)values;
       return m;
     }
   }
 #endif
-  /// Shewchuk's first error bound of orient3d, (7 + 56 2^-53) 2^-53 (maybe_in_plane).
-  static constexpr double kInPlaneBound = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
   // (initialised by the constructors: the one of the AVX cast writes each member once)
   int off_[3];  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
   S o_[3], sx_, sy_, sz_;
