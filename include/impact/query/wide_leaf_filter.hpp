@@ -212,9 +212,10 @@ template <class S> class BlockTest {
   /// The lanes of `lanes` (bit j: lane `first` + j of `b`) whose triangle may have the origin
   /// exactly in its plane, which the scalar rule then decides (finish_ray_hit: t exactly 0): those
   /// that orient3d's filter (narrow/predicates.hpp, with its underflow term) cannot place off the
-  /// plane. Called with the hit lanes only (about one a hitting cast), in the ray frame's order of
-  /// the axes (a permutation: the same magnitude). In double (the lanes' values are).
-  template <class T> int in_plane_lanes(const WideTriangleBlock<T>& b, int lanes, int first) const {
+  /// plane. Called with the hit lanes only (about one a hitting cast; out of line, so that the leaf
+  /// test stays small enough to be inlined), in the ray frame's order of the axes (a permutation:
+  /// the same magnitude). In double (the lanes' values are).
+  template <class T> IMPACT_NOINLINE int in_plane_lanes(const WideTriangleBlock<T>& b, int lanes, int first) const {
     int on = 0;
     for (int m = lanes; m; m &= m - 1) {
       const int j = __builtin_ctz(static_cast<unsigned>(m)), c = first + j;
@@ -303,7 +304,7 @@ template <class S> class BlockTest {
     near_out |= _mm256_movemask_pd(behind) & ~outside & lanes;
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
     const int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
-    const int on = in_plane_lanes(b, m, 0);  // hit lanes the scalar rule takes (t exactly 0 there)
+    const int on = m ? in_plane_lanes(b, m, 0) : 0;  // hit lanes the scalar rule takes (t exactly 0 there)
     near_out |= on;
     return m & ~on;
   }
@@ -400,7 +401,7 @@ template <class S> class BlockTest {
         Ops::store(values->det + at, det), Ops::store(values->tt + at, tt);
       }
       const int near_bits = Ops::sign_bits(near);
-      const int on = in_plane_lanes(b, m & ~near_bits, Ops::kLanes * h);  // (t exactly 0 there)
+      const int on = (m & ~near_bits) ? in_plane_lanes(b, m & ~near_bits, Ops::kLanes * h) : 0;  // (t exactly 0 there)
       return m | ((near_bits | on) << 4);
     } else {
       (void)values;
