@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Example: load two meshes (or generate a torus and a sphere), build sphere trees, place the second
+// Example: load two meshes (or generate a torus and a sphere), build AABB trees, place the second
 // mesh with a rigid pose, and print the colliding triangle pairs with a contact point each.
 //
 //   example-collide_meshes [MESH_A [MESH_B]]
@@ -31,8 +31,10 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // 1. Build one tree per mesh (validates the arrays, fits a sphere per node).
-  const MeshBvh<Sphere<double>> tree_a(a), tree_b(b);
+  // 1. Build one tree per mesh (validates the arrays, fits a box per node). Aabb is the safe
+  //    choice on any mesh; Sphere trees use the least memory but degrade on long thin triangles,
+  //    Obb trees prune best on smooth shapes (docs/hierarchies.md).
+  const MeshBvh<Aabb<double>> tree_a(a), tree_b(b);
 
   // 2. Poses: A at the origin, B moved onto A's surface and tilted.
   const RigidTransform<double> pose_a;
