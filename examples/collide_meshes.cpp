@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
       a = load_mesh<double>(argv[1]);
       b = load_mesh<double>(argc > 2 ? argv[2] : argv[1]);
 #else
+      (void)argv;
       std::fprintf(stderr, "built without assimp: run without arguments\n");
       return 1;
 #endif
