@@ -129,6 +129,98 @@ TYPED_TEST(MeshCcdTest, SelfMatchesBruteForce) {
   }
 }
 
+// The number of distinct primitive pairs (adjacent ones skipped in self CCD) whose swept boxes,
+// each grown by half the separation, overlap: the candidates mesh_ccd must test, no more (its
+// primitive filter) and no fewer (a pair of boxes apart may still be within reach).
+template <class S>
+std::size_t box_overlapping_pairs(const impact::MeshMotion<S>& a, const impact::MeshMotion<S>& b, bool self, double d) {
+  const S grow = impact::SweptMeshBvh<S>::half_separation(d);
+  const auto box = [&](const impact::MeshMotion<S>& m, std::initializer_list<std::int32_t> vs) {
+    impact::Aabb<S> x;
+    for (auto v : vs) x.extend(impact::swept_aabb(m.p0(v), m.p1(v), grow));
+    return x;
+  };
+  std::size_t n = 0;
+  const auto vf = [&](const impact::MeshMotion<S>& mv, const impact::MeshMotion<S>& mf) {
+    std::set<std::int32_t> verts;
+    for (Eigen::Index f = 0; f < mv.faces->rows(); ++f)
+      for (int j = 0; j < 3; ++j) verts.insert((*mv.faces)(f, j));
+    const auto& F = *mf.faces;
+    for (std::int32_t v : verts)
+      for (std::int32_t f = 0; f < F.rows(); ++f)
+        if (!(self && (F(f, 0) == v || F(f, 1) == v || F(f, 2) == v)) && impact::overlap(box(mv, {v}), box(mf, {F(f, 0), F(f, 1), F(f, 2)}))) ++n;
+  };
+  vf(a, b);
+  if (!self) vf(b, a);
+  for (const auto& x : unique_edges(*a.faces))
+    for (const auto& y : unique_edges(*b.faces)) {
+      if (self && (x[0] == y[0] || x[0] == y[1] || x[1] == y[0] || x[1] == y[1] || !(x < y))) continue;
+      if (impact::overlap(box(a, {x[0], x[1]}), box(b, {y[0], y[1]}))) ++n;
+    }
+  return n;
+}
+
+TYPED_TEST(MeshCcdTest, TestsExactlyThePairsWhoseBoxesOverlap) {
+  using S = TypeParam;
+  std::mt19937 rng(5);
+  const Sheet<S> A = sheet<S>(7, S(0), S(0), S(0)), B = sheet<S>(6, S(0.15), S(0.1), S(0.2));
+  for (double d : {0.0, 0.03}) {
+    impact::CcdOptions o;
+    o.min_separation = d;
+    const impact::Vertices<S> A0 = jitter<S>(A.V, rng, S(0.02), S(0)), A1 = jitter<S>(A.V, rng, S(0.05), S(0.25));
+    const impact::Vertices<S> B0 = jitter<S>(B.V, rng, S(0.02), S(0)), B1 = jitter<S>(B.V, rng, S(0.05), S(-0.05));
+    const auto ma = impact::make_mesh_motion(A0, A1, A.F), mb = impact::make_mesh_motion(B0, B1, B.F);
+    // trees grown for a larger separation than the query's: the filter uses the query's
+    const auto ta = impact::SweptMeshBvh<S>::build(ma, 0.1), tb = impact::SweptMeshBvh<S>::build(mb, 0.1);
+    const auto r = impact::mesh_ccd(ma, ta, mb, tb, o);
+    EXPECT_EQ(r.primitive_tests, box_overlapping_pairs(ma, mb, false, d));
+    EXPECT_EQ(keys(r), brute_force(ma, mb, false, o));
+    const auto self = impact::mesh_self_ccd(ma, ta, o);
+    EXPECT_EQ(self.primitive_tests, box_overlapping_pairs(ma, ma, true, d));
+    // the filter removes most of what the triangle pairs give (9 edge pairs and 6 vertex-face
+    // pairs each)
+    EXPECT_LT(r.primitive_tests, 15 * r.triangle_pairs / 2);
+  }
+}
+
+TYPED_TEST(MeshCcdTest, ContactsExactlyAtTheSeparationAreFound) {
+  // A vertex that ends exactly min_separation above a face (a box face exactly on the other box's
+  // face), and an edge that ends exactly min_separation beside another: both are contacts.
+  using S = TypeParam;
+  for (double d : {0.0, 0.25, 1.0 / 1024, 0.1}) {
+    const S z = static_cast<S>(d);  // rounded: the contact is at distance z <= d or just above d
+    if (static_cast<double>(z) > d) continue;
+    impact::Faces F(1, 3);
+    F << 0, 1, 2;
+    impact::Vertices<S> floor(3, 3), v0(3, 3), v1(3, 3);
+    floor << S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1), S(0);
+    // the second triangle: its vertex 0 comes down onto the floor's interior point (0.25, 0.25)
+    v0 << S(0.25), S(0.25), S(1), S(0.75), S(0.25), S(2), S(0.25), S(0.75), S(2);
+    v1 = v0;
+    v1.col(2).array() -= S(1) - z;
+    const auto ma = impact::make_mesh_motion(floor, floor, F), mb = impact::make_mesh_motion(v0, v1, F);
+    impact::CcdOptions o;
+    o.min_separation = d;
+    const auto ta = impact::SweptMeshBvh<S>::build(ma, d), tb = impact::SweptMeshBvh<S>::build(mb, d);
+    const auto r = impact::mesh_ccd(ma, ta, mb, tb, o);
+    EXPECT_TRUE(r.hit) << "vertex-face, d = " << d;
+    EXPECT_EQ(keys(r).count({0, 1, 0, 0, 0}), 1u) << "vertex-face, d = " << d;
+
+    // edge-edge: a segment along x at height 0 and one along y coming down to height z
+    impact::Faces G(1, 3);
+    G << 0, 1, 2;
+    impact::Vertices<S> e0(3, 3), w0(3, 3), w1(3, 3);
+    e0 << S(-1), S(0), S(0), S(1), S(0), S(0), S(0), S(-1), S(-3);  // edge 0-1 on the x axis, apex below
+    w0 << S(0), S(-1), S(1), S(0), S(1), S(1), S(0), S(0), S(4);    // edge 0-1 along y, apex above
+    w1 = w0;
+    w1.col(2).array() -= S(1) - z;
+    const auto me = impact::make_mesh_motion(e0, e0, G), mw = impact::make_mesh_motion(w0, w1, G);
+    const auto te = impact::SweptMeshBvh<S>::build(me, d), tw = impact::SweptMeshBvh<S>::build(mw, d);
+    const auto q = impact::mesh_ccd(me, te, mw, tw, o);
+    EXPECT_EQ(keys(q).count({1, 0, 1, 0, 1}), 1u) << "edge-edge, d = " << d;
+  }
+}
+
 TEST(MeshCcd, FlatSheetHasNoSelfContact) {
   // A sheet translating rigidly never touches itself: adjacent primitives are skipped.
   const Sheet<double> A = sheet<double>(5, 0.0, 0.0, 0.0);

@@ -58,7 +58,7 @@ TYPED_TEST(MeshCcdThreads, SameContactsForEveryThreadCount) {
   for (const int t : {2, 3, 8}) expect_same(impact::mesh_ccd(ma, ta, mb, tb, o, t), ref, t);
 
   // self CCD of a crumpling sheet
-  const impact::Vertices<S> C1 = jitter<S>(A.V, rng, 0.06, 0);
+  const impact::Vertices<S> C1 = jitter<S>(A.V, rng, 0.1, 0);
   const auto mc = impact::make_mesh_motion(A.V, C1, A.F);
   const auto tc = impact::SweptMeshBvh<S>::build(mc, o.min_separation);
   const auto sref = impact::mesh_self_ccd(mc, tc, o, 1);

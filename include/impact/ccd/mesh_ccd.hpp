@@ -82,9 +82,7 @@ struct SweptMeshBvh {
     if (m.start == nullptr || m.end == nullptr || m.faces == nullptr)
       throw InvalidInput("SweptMeshBvh::build: empty mesh motion (use make_mesh_motion)");
     SweptMeshBvh b;
-    b.inflate = static_cast<S>(min_separation / 2);
-    if (static_cast<double>(b.inflate) * 2 < min_separation)
-      b.inflate = std::nextafter(b.inflate, std::numeric_limits<S>::infinity());
+    b.inflate = half_separation(min_separation);
     const auto nf = static_cast<std::size_t>(m.faces->rows());
     std::vector<Vec3<S>> centroids(nf);
     for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), b.inflate).center();
@@ -94,6 +92,12 @@ struct SweptMeshBvh {
   /// Updates the boxes for a new step of the same mesh (same faces); the topology is kept.
   void refit(const MeshMotion<S>& m) { impact::refit(tree, fitter(m, inflate), RefitMode::Merge); }
 
+  /// min_separation / 2 rounded up in S (>= it exactly): the growth of every swept box.
+  static S half_separation(double min_separation) {
+    S h = static_cast<S>(min_separation / 2);
+    if (static_cast<double>(h) * 2 < min_separation) h = std::nextafter(h, std::numeric_limits<S>::infinity());
+    return h;
+  }
   /// Swept box of triangle f over the step.
   static Aabb<S> triangle_box(const MeshMotion<S>& m, int f, S inflate_by) {
     const Vec3<S> a[3] = {m.p0((*m.faces)(f, 0)), m.p0((*m.faces)(f, 1)), m.p0((*m.faces)(f, 2))};
@@ -153,20 +157,52 @@ void validate_mesh_ccd(const char* where, const CcdOptions& opt, const MeshMotio
                        " (its boxes could miss contacts: build it with SweptMeshBvh::build(motion, d))");
 }
 
+// The swept boxes of a motion's vertices over the step, grown by `inflate` as the tree's triangle
+// boxes are (swept_aabb: the hull of a triangle's three vertex boxes is its box in the tree, bit
+// for bit, since the growth and its outward rounding are monotone).
+template <class S>
+std::vector<Aabb<S>> vertex_boxes(const MeshMotion<S>& m, S inflate) {
+  std::vector<Aabb<S>> boxes(static_cast<std::size_t>(m.start->rows()));
+  for (std::size_t v = 0; v < boxes.size(); ++v) boxes[v] = swept_aabb(m.p0(static_cast<int>(v)), m.p1(static_cast<int>(v)), inflate);
+  return boxes;
+}
+
+template <class S>
+Aabb<S> hull_of(const Aabb<S>& a, const Aabb<S>& b) {
+  Aabb<S> h = a;
+  h.extend(b);
+  return h;
+}
+
 // Distinct primitive pairs gathered from overlapping triangle pairs: (vertex_mesh, vertex, face)
-// and (a0, a1, b0, b1), then sorted and deduplicated before testing.
+// and (a0, a1, b0, b1), then sorted and deduplicated before testing. A pair is kept only when the
+// swept boxes of its two primitives (hulls of their vertices' boxes, grown by half the minimum
+// separation each) overlap: the primitives stay within those boxes over the step, so a pair whose
+// boxes are disjoint never comes within the separation (the primitive test would exclude it at its
+// first box; this skips the call and the candidate's sorting).
+template <class S>
 struct MeshCcdCandidates {
   std::vector<std::array<std::int32_t, 3>> vf;
   std::vector<std::array<std::int32_t, 4>> ee;
 
-  void add_triangle_pair(const Faces& fa, std::int32_t ta, const Faces& fb, std::int32_t tb, bool self) {
+  void add_triangle_pair(const Faces& fa, const std::vector<Aabb<S>>& ba, std::int32_t ta, const Faces& fb, const std::vector<Aabb<S>>& bb,
+                         std::int32_t tb, bool self) {
+    const auto box = [](const std::vector<Aabb<S>>& b, std::int32_t v) -> const Aabb<S>& { return b[static_cast<std::size_t>(v)]; };
+    const Aabb<S> tri_a = hull_of(hull_of(box(ba, fa(ta, 0)), box(ba, fa(ta, 1))), box(ba, fa(ta, 2)));
+    const Aabb<S> tri_b = hull_of(hull_of(box(bb, fb(tb, 0)), box(bb, fb(tb, 1))), box(bb, fb(tb, 2)));
     for (int k = 0; k < 3; ++k) {
       const std::int32_t va = fa(ta, k), vb = fb(tb, k);
-      if (!self || (va != fb(tb, 0) && va != fb(tb, 1) && va != fb(tb, 2))) vf.push_back({0, va, tb});
-      if (!self || (vb != fa(ta, 0) && vb != fa(ta, 1) && vb != fa(ta, 2))) vf.push_back({self ? 0 : 1, vb, ta});
+      if ((!self || (va != fb(tb, 0) && va != fb(tb, 1) && va != fb(tb, 2))) && overlap(box(ba, va), tri_b)) vf.push_back({0, va, tb});
+      if ((!self || (vb != fa(ta, 0) && vb != fa(ta, 1) && vb != fa(ta, 2))) && overlap(box(bb, vb), tri_a))
+        vf.push_back({self ? 0 : 1, vb, ta});
     }
-    for (int i = 0; i < 3; ++i)
+    Aabb<S> edge_b[3];
+    for (int j = 0; j < 3; ++j) edge_b[j] = hull_of(box(bb, fb(tb, j)), box(bb, fb(tb, (j + 1) % 3)));
+    for (int i = 0; i < 3; ++i) {
+      const Aabb<S> edge_a = hull_of(box(ba, fa(ta, i)), box(ba, fa(ta, (i + 1) % 3)));
+      if (!overlap(edge_a, tri_b)) continue;
       for (int j = 0; j < 3; ++j) {
+        if (!overlap(edge_a, edge_b[j])) continue;
         std::int32_t a0 = fa(ta, i), a1 = fa(ta, (i + 1) % 3), b0 = fb(tb, j), b1 = fb(tb, (j + 1) % 3);
         if (a0 > a1) std::swap(a0, a1);
         if (b0 > b1) std::swap(b0, b1);
@@ -179,6 +215,7 @@ struct MeshCcdCandidates {
         }
         ee.push_back({a0, a1, b0, b1});
       }
+    }
   }
   void finish() {
     std::sort(vf.begin(), vf.end());
@@ -196,14 +233,14 @@ struct MeshCcdCandidates {
 /// on the threads too (sorted_union; on one thread, finish()): the candidates, hence every
 /// answer, are the same for every thread count.
 template <bool Self, class S>
-std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const Faces& fa, const Faces& fb,
-                              MeshCcdCandidates& c, int threads) {
+std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const Faces& fa, const std::vector<Aabb<S>>& ba,
+                              const Faces& fb, const std::vector<Aabb<S>>& bb, MeshCcdCandidates<S>& c, int threads) {
   const auto overlap_boxes = [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); };
-  const auto walk = [&](std::int32_t i, std::int32_t j, MeshCcdCandidates& out) {
+  const auto walk = [&](std::int32_t i, std::int32_t j, MeshCcdCandidates<S>& out) {
     std::size_t pairs = 0;
     const auto visit = [&](std::int32_t p, std::int32_t q) {
       ++pairs;
-      out.add_triangle_pair(fa, p, fb, q, Self);
+      out.add_triangle_pair(fa, ba, p, fb, bb, q, Self);
       return true;
     };
     if constexpr (Self)
@@ -252,7 +289,7 @@ std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, co
     }
     tasks.swap(next);
   }
-  std::vector<MeshCcdCandidates> parts(tasks.size());
+  std::vector<MeshCcdCandidates<S>> parts(tasks.size());
   std::vector<std::size_t> pairs(tasks.size(), 0);
   parallel_for(tasks.size(), t, [&](std::size_t k) { pairs[k] = walk(tasks[k].first, tasks[k].second, parts[k]); });
   std::size_t total = 0;
@@ -272,7 +309,7 @@ std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, co
 /// pairs, on `threads` threads (chunks of candidates, each with its own contact list, joined in
 /// candidate order): the contacts, their order and the counters do not depend on the thread count.
 template <class S>
-MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt,
+MeshCcdResult<S> run_mesh_ccd(MeshCcdCandidates<S>& c, const MeshMotion<S>& a, const MeshMotion<S>& b, const CcdOptions& opt,
                               int threads) {
   const std::size_t nvf = c.vf.size(), n = nvf + c.ee.size();
   // test k (vertex-face k for k < nvf, else edge-edge k - nvf); appends a hit to out
@@ -340,8 +377,10 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
                           const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_ccd", opt, a, ta, "of mesh a");
   detail::validate_mesh_ccd("mesh_ccd", opt, b, tb, "of mesh b");
-  detail::MeshCcdCandidates c;
-  const std::size_t pairs = detail::gather_candidates<false>(ta.tree, tb.tree, *a.faces, *b.faces, c, threads);
+  const S grow = SweptMeshBvh<S>::half_separation(opt.min_separation);
+  detail::MeshCcdCandidates<S> c;
+  const std::size_t pairs = detail::gather_candidates<false>(ta.tree, tb.tree, *a.faces, detail::vertex_boxes(a, grow), *b.faces,
+                                                             detail::vertex_boxes(b, grow), c, threads);
   auto r = detail::run_mesh_ccd(c, a, b, opt, threads);
   r.triangle_pairs = pairs;
   return r;
@@ -354,8 +393,9 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
 template <class S>
 MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_self_ccd", opt, m, t, "of the mesh");
-  detail::MeshCcdCandidates c;
-  const std::size_t pairs = detail::gather_candidates<true>(t.tree, t.tree, *m.faces, *m.faces, c, threads);
+  const std::vector<Aabb<S>> boxes = detail::vertex_boxes(m, SweptMeshBvh<S>::half_separation(opt.min_separation));
+  detail::MeshCcdCandidates<S> c;
+  const std::size_t pairs = detail::gather_candidates<true>(t.tree, t.tree, *m.faces, boxes, *m.faces, boxes, c, threads);
   auto r = detail::run_mesh_ccd(c, m, m, opt, threads);
   r.triangle_pairs = pairs;
   return r;
