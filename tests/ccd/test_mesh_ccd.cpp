@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <random>
 #include <set>
 
@@ -218,6 +219,29 @@ TYPED_TEST(MeshCcdTest, ContactsExactlyAtTheSeparationAreFound) {
     const auto te = impact::SweptMeshBvh<S>::build(me, d), tw = impact::SweptMeshBvh<S>::build(mw, d);
     const auto q = impact::mesh_ccd(me, te, mw, tw, o);
     EXPECT_EQ(keys(q).count({1, 0, 1, 0, 1}), 1u) << "edge-edge, d = " << d;
+  }
+}
+
+TEST(MeshCcd, EveryVertexAndEdgeHasOneOwner) {
+  // Random faces over 12 vertices, with repeated corners (a, a, b), repeated triangles and
+  // unreferenced vertices: each referenced vertex and each distinct edge is owned by one slot.
+  std::mt19937 rng(3);
+  for (int round = 0; round < 50; ++round) {
+    impact::Faces F(1 + static_cast<int>(rng() % 30), 3);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) F(f, k) = static_cast<std::int32_t>(rng() % 12);
+    const auto owns = impact::detail::primitive_owners(F, 12);
+    ASSERT_EQ(owns.size(), static_cast<std::size_t>(F.rows()));
+    std::map<std::int32_t, int> vertex_owners;
+    std::map<std::array<std::int32_t, 2>, int> edge_owners;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t v = F(f, k), w = F(f, (k + 1) % 3);
+        vertex_owners[v] += (owns[std::size_t(f)] >> k) & 1;
+        edge_owners[{std::min(v, w), std::max(v, w)}] += (owns[std::size_t(f)] >> (3 + k)) & 1;
+      }
+    for (const auto& [v, n] : vertex_owners) EXPECT_EQ(n, 1) << "vertex " << v;
+    for (const auto& [e, n] : edge_owners) EXPECT_EQ(n, 1) << "edge " << e[0] << "-" << e[1];
   }
 }
 

@@ -66,12 +66,40 @@ MeshMotion<S> make_mesh_motion(const Vertices<S>& start, const Vertices<S>& end,
   return {&start, &end, &faces};
 }
 
+namespace detail {
+/// Which vertices and edges each triangle owns, for the mesh CCD's candidates (MeshPrimitives):
+/// each vertex and each edge is owned by the first (triangle, corner) slot that holds it; bit k
+/// of a triangle's byte: the vertex of corner k; bit 3 + k: the edge from corner k to corner k + 1.
+inline std::vector<std::uint8_t> primitive_owners(const Faces& F, Eigen::Index vertices) {
+  const auto nf = static_cast<std::size_t>(F.rows());
+  std::vector<std::uint8_t> owns(nf, 0);
+  std::vector<char> seen(static_cast<std::size_t>(vertices), 0);
+  std::vector<std::array<std::int32_t, 3>> edges;  // (smaller vertex, larger vertex, slot 3 f + k)
+  edges.reserve(3 * nf);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto i = static_cast<Eigen::Index>(f);
+      const std::int32_t v = F(i, k), w = F(i, (k + 1) % 3);
+      if (!seen[static_cast<std::size_t>(v)]) seen[static_cast<std::size_t>(v)] = 1, owns[f] |= std::uint8_t(1u << k);
+      edges.push_back({std::min(v, w), std::max(v, w), static_cast<std::int32_t>(3 * f) + k});
+    }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (e == 0 || edges[e][0] != edges[e - 1][0] || edges[e][1] != edges[e - 1][1])
+      owns[static_cast<std::size_t>(edges[e][2] / 3)] |= std::uint8_t(8u << (edges[e][2] % 3));
+  return owns;
+}
+}  // namespace detail
+
 /// The BVH over a mesh's triangles with swept AABBs for one step, grown by half the minimum
 /// separation (rounded up in S). Build once; call refit() for each new step (same triangles).
 template <class S>
 struct SweptMeshBvh {
   Bvh<Aabb<S>> tree;
   S inflate = S(0);  ///< >= min_separation / 2 exactly
+  /// Per triangle, the vertices and edges it owns (detail::primitive_owners; the topology is
+  /// fixed, so refit keeps it): mesh_ccd gathers each primitive pair once, from its owners.
+  std::vector<std::uint8_t> owners;
 
   /// Builds the tree top-down over the triangles' swept-box centres, for queries with a minimum
   /// separation up to `min_separation` (finite, >= 0 and <= 1e100; InvalidInput otherwise).
@@ -87,6 +115,7 @@ struct SweptMeshBvh {
     std::vector<Vec3<S>> centroids(nf);
     for (std::size_t f = 0; f < nf; ++f) centroids[f] = triangle_box(m, static_cast<int>(f), b.inflate).center();
     b.tree = build_top_down<Aabb<S>>(centroids, fitter(m, b.inflate), cfg);
+    b.owners = detail::primitive_owners(*m.faces, m.start->rows());
     return b;
   }
   /// Updates the boxes for a new step of the same mesh (same faces); the topology is kept.
@@ -151,59 +180,83 @@ void validate_mesh_ccd(const char* where, const CcdOptions& opt, const MeshMotio
   if (t.tree.num_primitives() != static_cast<std::size_t>(m.faces->rows()))
     throw InvalidInput(std::string(where) + ": the tree " + which + " has " + std::to_string(t.tree.num_primitives()) +
                        " triangles, the mesh " + std::to_string(m.faces->rows()) + " (built for another mesh?)");
+  if (t.owners.size() != static_cast<std::size_t>(m.faces->rows()))
+    throw InvalidInput(std::string(where) + ": the tree " + which + " was not built by SweptMeshBvh::build for this mesh");
   if (!(static_cast<double>(t.inflate) * 2 >= opt.min_separation))
     throw InvalidInput(std::string(where) + ": the tree " + which + " was built for a minimum separation up to " +
                        ccd_number(static_cast<double>(t.inflate) * 2) + ", the query asks for " + ccd_number(opt.min_separation) +
                        " (its boxes could miss contacts: build it with SweptMeshBvh::build(motion, d))");
 }
 
-// The swept boxes of a motion's vertices over the step, grown by `inflate` as the tree's triangle
-// boxes are (swept_aabb: the hull of a triangle's three vertex boxes is its box in the tree, bit
-// for bit, since the growth and its outward rounding are monotone).
+// What the candidate gathering needs of one mesh for one query: its triangles, its vertices'
+// swept boxes over the step, grown by `inflate` as the tree's triangle boxes are (swept_aabb: the
+// hull of a triangle's three vertex boxes is its box in the tree, bit for bit, since the growth and
+// its outward rounding are monotone), and which vertices and edges each triangle owns. Each vertex
+// and each edge is owned by the first (triangle, corner) slot that holds it (bit k: the vertex of
+// corner k; bit 3 + k: the edge from corner k to corner k + 1), so that a primitive pair is
+// gathered from the pair of its owners' triangles only: once, with no duplicates to sort away.
+// An owner's box holds its primitive's box, so when the primitives' boxes overlap the tree walk
+// visits the owners' pair (self CCD: two primitives of one triangle are adjacent and skipped).
 template <class S>
-std::vector<Aabb<S>> vertex_boxes(const MeshMotion<S>& m, S inflate) {
-  std::vector<Aabb<S>> boxes(static_cast<std::size_t>(m.start->rows()));
-  for (std::size_t v = 0; v < boxes.size(); ++v) boxes[v] = swept_aabb(m.p0(static_cast<int>(v)), m.p1(static_cast<int>(v)), inflate);
-  return boxes;
-}
+struct MeshPrimitives {
+  const Faces* faces = nullptr;
+  const std::vector<std::uint8_t>& owns;  // SweptMeshBvh::owners
+  std::vector<Aabb<S>> boxes;
 
-template <class S>
-Aabb<S> hull_of(const Aabb<S>& a, const Aabb<S>& b) {
-  Aabb<S> h = a;
-  h.extend(b);
-  return h;
-}
+  MeshPrimitives(const MeshMotion<S>& m, const std::vector<std::uint8_t>& owners, S inflate) : faces(m.faces), owns(owners) {
+    boxes.resize(static_cast<std::size_t>(m.start->rows()));
+    for (std::size_t v = 0; v < boxes.size(); ++v)
+      boxes[v] = swept_aabb(m.p0(static_cast<int>(v)), m.p1(static_cast<int>(v)), inflate);
+  }
+  std::int32_t vertex(std::int32_t f, int k) const { return (*faces)(f, k); }
+  const Aabb<S>& box(std::int32_t v) const { return boxes[static_cast<std::size_t>(v)]; }
+  Aabb<S> triangle_box(std::int32_t f) const {
+    Aabb<S> b = box(vertex(f, 0));
+    b.extend(box(vertex(f, 1)));
+    b.extend(box(vertex(f, 2)));
+    return b;
+  }
+  Aabb<S> edge_box(std::int32_t f, int k) const {
+    Aabb<S> b = box(vertex(f, k));
+    b.extend(box(vertex(f, (k + 1) % 3)));
+    return b;
+  }
+  bool has(std::int32_t f, std::int32_t v) const { return vertex(f, 0) == v || vertex(f, 1) == v || vertex(f, 2) == v; }
+};
 
 // Distinct primitive pairs gathered from overlapping triangle pairs: (vertex_mesh, vertex, face)
-// and (a0, a1, b0, b1), then sorted and deduplicated before testing. A pair is kept only when the
-// swept boxes of its two primitives (hulls of their vertices' boxes, grown by half the minimum
-// separation each) overlap: the primitives stay within those boxes over the step, so a pair whose
-// boxes are disjoint never comes within the separation (the primitive test would exclude it at its
-// first box; this skips the call and the candidate's sorting).
+// and (a0, a1, b0, b1), then sorted before testing (an order that does not depend on the threads).
+// A triangle pair gives the pairs of the primitives its triangles own (MeshPrimitives), and only
+// those whose swept boxes overlap: the primitives stay within those boxes over the step, so a
+// pair whose boxes are disjoint never comes within the separation (the primitive test would
+// exclude it at its first box; this skips the call and the candidate's sorting).
 template <class S>
 struct MeshCcdCandidates {
   std::vector<std::array<std::int32_t, 3>> vf;
   std::vector<std::array<std::int32_t, 4>> ee;
 
-  void add_triangle_pair(const Faces& fa, const std::vector<Aabb<S>>& ba, std::int32_t ta, const Faces& fb, const std::vector<Aabb<S>>& bb,
-                         std::int32_t tb, bool self) {
-    const auto box = [](const std::vector<Aabb<S>>& b, std::int32_t v) -> const Aabb<S>& { return b[static_cast<std::size_t>(v)]; };
-    const Aabb<S> tri_a = hull_of(hull_of(box(ba, fa(ta, 0)), box(ba, fa(ta, 1))), box(ba, fa(ta, 2)));
-    const Aabb<S> tri_b = hull_of(hull_of(box(bb, fb(tb, 0)), box(bb, fb(tb, 1))), box(bb, fb(tb, 2)));
+  void add_triangle_pair(const MeshPrimitives<S>& a, std::int32_t ta, const MeshPrimitives<S>& b, std::int32_t tb, bool self) {
+    const unsigned oa = a.owns[static_cast<std::size_t>(ta)], ob = b.owns[static_cast<std::size_t>(tb)];
+    if (!(oa | ob)) return;
+    const Aabb<S> tri_a = a.triangle_box(ta), tri_b = b.triangle_box(tb);
     for (int k = 0; k < 3; ++k) {
-      const std::int32_t va = fa(ta, k), vb = fb(tb, k);
-      if ((!self || (va != fb(tb, 0) && va != fb(tb, 1) && va != fb(tb, 2))) && overlap(box(ba, va), tri_b)) vf.push_back({0, va, tb});
-      if ((!self || (vb != fa(ta, 0) && vb != fa(ta, 1) && vb != fa(ta, 2))) && overlap(box(bb, vb), tri_a))
-        vf.push_back({self ? 0 : 1, vb, ta});
+      if (oa & (1u << k)) {
+        const std::int32_t v = a.vertex(ta, k);
+        if (!(self && b.has(tb, v)) && overlap(a.box(v), tri_b)) vf.push_back({0, v, tb});
+      }
+      if (ob & (1u << k)) {
+        const std::int32_t v = b.vertex(tb, k);
+        if (!(self && a.has(ta, v)) && overlap(b.box(v), tri_a)) vf.push_back({self ? 0 : 1, v, ta});
+      }
     }
-    Aabb<S> edge_b[3];
-    for (int j = 0; j < 3; ++j) edge_b[j] = hull_of(box(bb, fb(tb, j)), box(bb, fb(tb, (j + 1) % 3)));
+    if (!(oa & 0x38u) || !(ob & 0x38u)) return;
     for (int i = 0; i < 3; ++i) {
-      const Aabb<S> edge_a = hull_of(box(ba, fa(ta, i)), box(ba, fa(ta, (i + 1) % 3)));
+      if (!(oa & (8u << i))) continue;
+      const Aabb<S> edge_a = a.edge_box(ta, i);
       if (!overlap(edge_a, tri_b)) continue;
       for (int j = 0; j < 3; ++j) {
-        if (!overlap(edge_a, edge_b[j])) continue;
-        std::int32_t a0 = fa(ta, i), a1 = fa(ta, (i + 1) % 3), b0 = fb(tb, j), b1 = fb(tb, (j + 1) % 3);
+        if (!(ob & (8u << j)) || !overlap(edge_a, b.edge_box(tb, j))) continue;
+        std::int32_t a0 = a.vertex(ta, i), a1 = a.vertex(ta, (i + 1) % 3), b0 = b.vertex(tb, j), b1 = b.vertex(tb, (j + 1) % 3);
         if (a0 > a1) std::swap(a0, a1);
         if (b0 > b1) std::swap(b0, b1);
         if (self) {
@@ -229,18 +282,18 @@ struct MeshCcdCandidates {
 /// adjacent primitives skipped) on `threads` threads; returns the number of triangle pairs. On one
 /// thread, one traversal. On more, the node pairs near the roots are split breadth first, as the
 /// traversal splits them, until there are 16 per thread (or nothing is left to split); each is
-/// then walked into its own candidate lists, and the lists are joined sorted and deduplicated
-/// on the threads too (sorted_union; on one thread, finish()): the candidates, hence every
-/// answer, are the same for every thread count.
+/// then walked into its own candidate lists (no pair twice: MeshPrimitives), and the lists are
+/// joined sorted on the threads too (sorted_union; on one thread, finish()): the candidates,
+/// hence every answer, are the same for every thread count.
 template <bool Self, class S>
-std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const Faces& fa, const std::vector<Aabb<S>>& ba,
-                              const Faces& fb, const std::vector<Aabb<S>>& bb, MeshCcdCandidates<S>& c, int threads) {
+std::size_t gather_candidates(const Bvh<Aabb<S>>& ta, const Bvh<Aabb<S>>& tb, const MeshPrimitives<S>& pa,
+                              const MeshPrimitives<S>& pb, MeshCcdCandidates<S>& c, int threads) {
   const auto overlap_boxes = [](const Aabb<S>& x, const Aabb<S>& y) { return overlap(x, y); };
   const auto walk = [&](std::int32_t i, std::int32_t j, MeshCcdCandidates<S>& out) {
     std::size_t pairs = 0;
     const auto visit = [&](std::int32_t p, std::int32_t q) {
       ++pairs;
-      out.add_triangle_pair(fa, ba, p, fb, bb, q, Self);
+      out.add_triangle_pair(pa, p, pb, q, Self);
       return true;
     };
     if constexpr (Self)
@@ -379,8 +432,8 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
   detail::validate_mesh_ccd("mesh_ccd", opt, b, tb, "of mesh b");
   const S grow = SweptMeshBvh<S>::half_separation(opt.min_separation);
   detail::MeshCcdCandidates<S> c;
-  const std::size_t pairs = detail::gather_candidates<false>(ta.tree, tb.tree, *a.faces, detail::vertex_boxes(a, grow), *b.faces,
-                                                             detail::vertex_boxes(b, grow), c, threads);
+  const detail::MeshPrimitives<S> pa(a, ta.owners, grow), pb(b, tb.owners, grow);
+  const std::size_t pairs = detail::gather_candidates<false>(ta.tree, tb.tree, pa, pb, c, threads);
   auto r = detail::run_mesh_ccd(c, a, b, opt, threads);
   r.triangle_pairs = pairs;
   return r;
@@ -393,9 +446,9 @@ MeshCcdResult<S> mesh_ccd(const MeshMotion<S>& a, const SweptMeshBvh<S>& ta, con
 template <class S>
 MeshCcdResult<S> mesh_self_ccd(const MeshMotion<S>& m, const SweptMeshBvh<S>& t, const CcdOptions& opt = {}, int threads = 0) {
   detail::validate_mesh_ccd("mesh_self_ccd", opt, m, t, "of the mesh");
-  const std::vector<Aabb<S>> boxes = detail::vertex_boxes(m, SweptMeshBvh<S>::half_separation(opt.min_separation));
+  const detail::MeshPrimitives<S> prims(m, t.owners, SweptMeshBvh<S>::half_separation(opt.min_separation));
   detail::MeshCcdCandidates<S> c;
-  const std::size_t pairs = detail::gather_candidates<true>(t.tree, t.tree, *m.faces, boxes, *m.faces, boxes, c, threads);
+  const std::size_t pairs = detail::gather_candidates<true>(t.tree, t.tree, prims, prims, c, threads);
   auto r = detail::run_mesh_ccd(c, m, m, opt, threads);
   r.triangle_pairs = pairs;
   return r;
