@@ -307,7 +307,7 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
   detail::BlockTest<S> bt, sse;
   bt.set(pr);  // AVX when the CPU has it (double)
   sse.set(pr, false);
-  bt.bound_band(lo, hi), sse.bound_band(lo, hi);  // (the same band; the depth's bound for origins in a plane, as the casts set them)
+  bt.bound_plane(lo, hi), sse.bound_plane(lo, hi);  // the depth's bound for origins in a plane, as the casts set it
   typename detail::BlockTest<S>::LaneValues values, sse_values;
   const int todo = bt.candidates(b, count, ray.t_max, &values);
   EXPECT_EQ(todo, sse.candidates(b, count, ray.t_max, &sse_values));  // the same bits

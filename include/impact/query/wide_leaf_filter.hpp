@@ -139,6 +139,16 @@ template <class S> class BlockTest {
     band_ = box_edge_band(o_, l, h);
     if constexpr (std::is_same_v<S, double>) plane_bound_ = box_plane_bound(o_, l, h, sz_);
   }
+  /// bound_band's bound of the depth only (for a test made by set() from a PreparedRay whose band
+  /// bound_band already set for the same box).
+  void bound_plane(const Vec3<S>& lo, const Vec3<S>& hi) {
+    if constexpr (std::is_same_v<S, double>) {
+      const S l[3] = {lo[off_[0]], lo[off_[1]], lo[off_[2]]}, h[3] = {hi[off_[0]], hi[off_[1]], hi[off_[2]]};
+      plane_bound_ = box_plane_bound(o_, l, h, sz_);
+    } else {
+      (void)lo, (void)hi;
+    }
+  }
   /// The bound of bound_band's box for the depth of an origin in a triangle's plane (+infinity
   /// before bound_band; for the tests).
   S plane_bound() const { return plane_bound_; }
