@@ -49,7 +49,9 @@ namespace detail {
 /// lies in the plane, whatever sx, sy, sz. So |tt| <= |tt - T| there. With R_i >= |v_i - o_i| for
 /// every vertex in the box, |sx|, |sy| <= 1 (|d_kz| is the largest), each vertex has mx = |X| + |sx||Z|
 /// <= Mx = R_x + R_z, my <= My = R_y + R_z, mz = |sz Z| <= Mz = |sz| R_z. From the file comment of
-/// narrow/ray_triangle.hpp (the shear and the edge functions' error): |e - E| <= (10u + 65u^2) 2 Mx My
+/// narrow/ray_triangle.hpp (the shear and the edge functions' error, derived there against the exact
+/// ratio s = d_kx / d_kz with its rounding among the four of g4; against the rounded s taken as exact
+/// one rounding fewer, so the same bounds hold): |e - E| <= (10u + 65u^2) 2 Mx My
 /// + 2.02 eta (Mx + My) + 2.01 eta, |E| <= 2 Mx My; |pz - Pz| <= g2 Mz + eta, |pz| <= (1 + g2) Mz + eta
 /// (g_k = k u / (1 - k u)); the three products and two sums of tt: |tt - sum e pz| <= g3 sum |e pz| +
 /// 3 (1 + u)^2 eta; and |e pz - E Pz| <= |e - E| |pz| + |E| |pz - Pz|. Summed over the three terms:
