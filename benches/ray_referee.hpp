@@ -21,6 +21,8 @@
 // wound normal: a point on a surface is on its front side), and not when it moves away from it, out
 // into the front side (before, such a start always counted as a crossing at t = 0, so on a flat mesh,
 // where every origin lies in the mesh's plane, the answers of the rule were counted as missed).
+// Moving away, a hit at t = 0 on the start's triangle (a ray tracer's convention: the closed
+// segment touches it) is accepted too (judge): neither convention counts as wrong.
 // The parities that classify touches (count) take every crossing, starts included. Candidates come from the referee's own
 // median-split tree over the triangles' exact integer boxes, walked with a slab test padded by a
 // whole unit G, so no crossing triangle is ever left out.
@@ -159,7 +161,10 @@ class RayReferee {
     if (triangle < 0) return ref.hit ? 1 : 0;
     if (triangle >= static_cast<std::int32_t>(f_.size())) return 2;
     const Crossing c = cross(o, e, triangle);
-    if (!c.hit) return 2;
+    // A hit at t = 0 on the triangle the segment starts on, moving away from it (the only case
+    // the tie rule removes), is the other convention, a ray tracer's: the closed segment touches
+    // the triangle at its start. Not counted wrong, for any library.
+    if (!c.hit) return cross(o, e, triangle, false).hit ? 0 : 2;
     return compare_fractions(c.num, c.den, ref.num, ref.den) > 0 ? 3 : 0;
   }
 
