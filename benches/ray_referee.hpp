@@ -14,7 +14,16 @@
 // triangle's plane, like a degenerate triangle, counts as no crossing, as in the watertight test
 // and in Embree), and the three orientations of the segment's line against the triangle's edges
 // have no two opposite strict signs (a line through an edge or a vertex crosses). The crossing
-// parameter is t = orient(o) / (orient(o) - orient(e)). Candidates come from the referee's own
+// parameter is t = orient(o) / (orient(o) - orient(e)). A segment that starts exactly on a
+// triangle (o in its plane, decided exactly, and its line through the closed triangle) is judged
+// by the library's tie rule (query/ray_mesh.hpp) for every library alike: it crosses at t = 0 when
+// it enters the surface through the triangle's front face (d . n < 0, n = (b - a) x (c - a) the
+// wound normal: a point on a surface is on its front side), and not when it moves away from it, out
+// into the front side (before, such a start always counted as a crossing at t = 0, so on a flat mesh,
+// where every origin lies in the mesh's plane, the answers of the rule were counted as missed).
+// Moving away, a hit at t = 0 on the start's triangle (a ray tracer's convention: the closed
+// segment touches it) is accepted too (judge): neither convention counts as wrong.
+// The parities that classify touches (count) take every crossing, starts included. Candidates come from the referee's own
 // median-split tree over the triangles' exact integer boxes, walked with a slab test padded by a
 // whole unit G, so no crossing triangle is ever left out.
 #pragma once
@@ -101,13 +110,18 @@ class RayReferee {
     order_ = ids;
   }
 
-  /// Exact crossing of segment o -> e with triangle t.
-  Crossing cross(const IPoint& o, const IPoint& e, std::int32_t t) const {
+  /// Exact crossing of segment o -> e with triangle t; `tie_rule`: a start on the triangle counts
+  /// only into its front (see the file comment).
+  Crossing cross(const IPoint& o, const IPoint& e, std::int32_t t, bool tie_rule = true) const {
     const auto& f = f_[static_cast<std::size_t>(t)];
     const IPoint &a = v_[static_cast<std::size_t>(f[0])], &b = v_[static_cast<std::size_t>(f[1])], &c = v_[static_cast<std::size_t>(f[2])];
     const I128 so = orient(a, b, c, o), se = orient(a, b, c, e);
     Crossing r;
     if ((so > 0 && se > 0) || (so < 0 && se < 0) || (so == 0 && se == 0)) return r;
+    // from the triangle out to its front side (det[a - e; b - e; c - e] = -(e - a) . ((b - a) x
+    // (c - a)) < 0 there): away from the surface, no crossing at t = 0 by the tie rule; toward the
+    // back side (d . n < 0: through the front face) the crossing at t = 0 counts
+    if (tie_rule && so == 0 && se < 0) return r;
     const I128 s1 = orient(o, e, a, b), s2 = orient(o, e, b, c), s3 = orient(o, e, c, a);
     if ((s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0)) return r;
     r.hit = true;
@@ -132,10 +146,11 @@ class RayReferee {
     return best;
   }
 
-  /// Number of triangles the segment o -> e crosses (the rule above).
+  /// Number of triangles the segment o -> e crosses (the rule above, a start on a triangle counted
+  /// whatever its side: for the parities).
   int count(const IPoint& o, const IPoint& e) const {
     int c = 0;
-    walk(o, e, [&](std::int32_t t) { c += cross(o, e, t).hit ? 1 : 0; });
+    walk(o, e, [&](std::int32_t t) { c += cross(o, e, t, false).hit ? 1 : 0; });
     return c;
   }
 
@@ -146,7 +161,10 @@ class RayReferee {
     if (triangle < 0) return ref.hit ? 1 : 0;
     if (triangle >= static_cast<std::int32_t>(f_.size())) return 2;
     const Crossing c = cross(o, e, triangle);
-    if (!c.hit) return 2;
+    // A hit at t = 0 on the triangle the segment starts on, moving away from it (the only case
+    // the tie rule removes), is the other convention, a ray tracer's: the closed segment touches
+    // the triangle at its start. Not counted wrong, for any library.
+    if (!c.hit) return cross(o, e, triangle, false).hit ? 0 : 2;
     return compare_fractions(c.num, c.den, ref.num, ref.den) > 0 ? 3 : 0;
   }
 

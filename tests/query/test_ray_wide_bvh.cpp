@@ -307,6 +307,7 @@ template <class S, class T> int check_block(const WideTriangleBlock<T>& b, const
   detail::BlockTest<S> bt, sse;
   bt.set(pr);  // AVX when the CPU has it (double)
   sse.set(pr, false);
+  bt.bound_plane(lo, hi), sse.bound_plane(lo, hi);  // the depth's bound for origins in a plane, as the casts set it
   typename detail::BlockTest<S>::LaneValues values, sse_values;
   const int todo = bt.candidates(b, count, ray.t_max, &values);
   EXPECT_EQ(todo, sse.candidates(b, count, ray.t_max, &sse_values));  // the same bits
@@ -503,6 +504,119 @@ TYPED_TEST(WideBvhTest, SurfaceStartsInEveryDirection) {
   }
   EXPECT_GT(rays, 4000);
   EXPECT_GT(oblique, rays / 4);
+}
+
+// The depth's error bound for an origin in a triangle's plane (detail::box_plane_bound: a hit
+// lane with a finite depth above it skips the in-plane test): blocks of four triangles in planes
+// through the ray's origin (exact: small integer slopes, grid offsets around the origin, scales
+// 2^-40 to 2^40, some moved far off), random directions; every finite depth tt the block test
+// computes (SSE2: its values are written for every lane of a half that passes one) lies within the
+// bound of the block's box. The largest ratio found is above 2^-20: a bound 2^20 times smaller
+// would fail here, and in the casts below.
+TEST(WideBvh, PlaneBoundCoversInPlaneDepths) {
+  test::Rng rng(61);
+  double worst = 0.0;
+  int lanes = 0;
+  for (int i = 0; i < 20000 / kWideSamples; ++i) {
+    const double scale = std::ldexp(1.0, int(rng.integer(40))), grid = std::ldexp(scale, -6);
+    // the origin on the grid, sometimes 2^20 scales away from 0
+    const double far = i % 4 == 3 ? std::ldexp(scale, 20) : 0.0;
+    const Eigen::Vector3d o(far + grid * double(rng.integer(64)), grid * double(rng.integer(64)), -far + grid * double(rng.integer(64)));
+    WideTriangleBlock<double> block{};
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int c = 0; c < 4; ++c) {
+      // the plane z - o_z = (p (x - o_x) + q (y - o_y)) / 8 through o, one a lane
+      const double p = double(rng.integer(16)), q = double(rng.integer(16));
+      const int axis = int(rng.index(3));  // the plane's steep axis
+      for (int v = 0; v < 3; ++v) {
+        const double gx = double(rng.integer(64)), gy = double(rng.integer(64));
+        Eigen::Vector3d off(grid * gx, grid * gy, grid * (p * gx + q * gy) / 8.0);
+        std::swap(off[2], off[axis]);
+        const Eigen::Vector3d vertex = o + off;
+        for (int k = 0; k < 3; ++k) block.v[3 * v + k][c] = vertex[k];
+        lo = lo.cwiseMin(vertex), hi = hi.cwiseMax(vertex);
+      }
+    }
+    const Ray<double> ray(o, rng.vec(-1, 1), 4.0 * scale);
+    if (ray.direction.squaredNorm() == 0.0) continue;
+    detail::BlockTest<double> bt;
+    bt.set(PreparedRay<double>(ray), false);
+    bt.bound_band(lo, hi);
+    const double bound = bt.plane_bound();
+    ASSERT_TRUE(bound > 0.0 && bound < std::numeric_limits<double>::infinity());
+    detail::BlockTest<double>::LaneValues values;
+    for (double& t : values.tt) t = std::numeric_limits<double>::quiet_NaN();
+    bt.candidates(block, 4, ray.t_max, &values);
+    for (int c = 0; c < 4; ++c) {
+      if (!std::isfinite(values.tt[c])) continue;  // (not written)
+      ++lanes;
+      ASSERT_LE(std::abs(values.tt[c]), bound) << "lane " << c << " of block " << i;
+      worst = std::max(worst, std::abs(values.tt[c]) / bound);
+    }
+  }
+  EXPECT_GT(lanes, 10000 / kWideSamples);
+  EXPECT_GT(worst, 0x1p-20);
+  EXPECT_LE(worst, 1.0);
+}
+
+// A ray from a point of a mesh of one triangle (so the tree's box, on which the depth's bound for
+// origins in the plane is built, is the triangle's own), on every cast path of the 4- and 8-wide
+// trees: from a point exactly on it, hit at t = 0 exactly into the front and nothing away from it
+// (a depth bound too small would let the depth's rounding decide: misses and t of a few ulps);
+// from points a few ulps off its plane, brute force's answer (the lanes' depth then decides where
+// it is above the bound). Tilted planes, scaled and moved copies, exact coordinates.
+TYPED_TEST(WideBvhTest, SurfaceStartsOnOneTriangle) {
+  using S = TypeParam;
+  test::Rng rng(92);
+  const Vec3<S> normals[] = {Vec3<S>(0, 0, 1), Vec3<S>(1, 2, 4), Vec3<S>(-3, 1, 2), Vec3<S>(1, -4, 8)};
+  int rays = 0, off_plane = 0;
+  for (int copy = 0; copy < 8; ++copy) {
+    const Vec3<S>& n = normals[copy % 4];
+    const S scale = S(std::ldexp(1.0, int(rng.integer(20)))), shift = copy < 4 ? S(0) : S(std::ldexp(1.0, 6)) * scale;
+    auto on_plane = [&](S x, S y) { return Vec3<S>(shift + scale * x, scale * y, scale * (-(n.x() * x + n.y() * y) / n.z()) - shift); };
+    Vertices<S> V(3, 3);
+    V.row(0) = on_plane(S(0), S(0)).transpose();
+    V.row(1) = on_plane(S(1), S(0)).transpose();
+    V.row(2) = on_plane(S(0), S(1)).transpose();
+    Faces F(1, 3);
+    F.row(0) << 0, 1, 2;
+    const TriangleMesh<S> m(V, F);
+    const WideBvh<S, 4> w4(m);
+    const WideBvh<S, 8> w8(m);
+    for (int k = 0; k < 800 / kWideSamples; ++k) {
+      // a point of the triangle: x, y multiples of 2^-10, x + y <= 1 (some on its edges)
+      S x = S(std::ldexp(double(rng.index(1025)), -10)), y = S(std::ldexp(double(rng.index(1025)), -10));
+      if (x + y > S(1)) x = S(1) - x, y = S(1) - y;
+      Vec3<S> o = on_plane(x, y);
+      const int ulps = k % 3 == 2 ? int(rng.integer(3)) : 0;  // a third of them moved off the plane by up to 3 ulps in z
+      for (int u = 0; u < std::abs(ulps); ++u) o.z() = std::nextafter(o.z(), ulps > 0 ? std::numeric_limits<S>::max() : -std::numeric_limits<S>::max());
+      const Vec3<S> d = rng.vec(-1, 1).template cast<S>();
+      const S along = d.dot(n) / n.norm();
+      if (!(std::abs(along) > S(1e-2))) continue;
+      const Ray<S> ray(o, d, S(2) * scale);
+      ++rays;
+      off_plane += ulps != 0 ? 1 : 0;
+      const std::optional<S> ref = test::wide::brute_first_t(m, ray);
+      if (ulps == 0) {
+        ASSERT_EQ(ref.has_value(), along < 0);  // the rule (brute force's): into the front at t = 0, none away
+        if (ref) {
+          ASSERT_EQ(*ref, S(0));
+        }
+      }
+      for (int path = 0; path < 3; ++path) {
+        const bool simd = path < 2, avx = path == 0;
+        for (const auto& h : {detail::ray_wide_cast(w4, ray, o, d, static_cast<const RigidTransform<S>*>(nullptr), nullptr, simd, avx),
+                              detail::ray_wide_cast(w8, ray, o, d, static_cast<const RigidTransform<S>*>(nullptr), nullptr, simd, avx)}) {
+          ASSERT_EQ(h.has_value(), ref.has_value()) << "path " << path << " from (" << o.transpose() << ") along (" << d.transpose() << "), ulps " << ulps;
+          if (h) {
+            EXPECT_EQ(h->t, *ref) << "path " << path << ", ulps " << ulps;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(rays, 4000 / kWideSamples);
+  EXPECT_GT(off_plane, rays / 5);
 }
 
 TEST(WideBvh, BlockTestFrameAtTiedDirections) {

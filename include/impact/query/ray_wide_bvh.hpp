@@ -146,10 +146,12 @@ template <class S, int W = 4> struct WideCast {
   struct LeafSetup {
     PreparedRay<S> pr;
     BlockTest<S> block_test;
-    /// The ray's band bound (PreparedRay::band) for the tree's box `box` (WideBvh::box).
+    /// The ray's band bound (PreparedRay::band) and the block test's depth bound
+    /// (BlockTest::bound_plane) for the tree's box `box` (WideBvh::box).
     LeafSetup(const Ray<S>& ray, bool avx, const std::array<double, 8>& box) : pr(ray) {  // made in place
       pr.bound_band(box_corner(box, 0), box_corner(box, 4));
       block_test.set(pr, avx);
+      block_test.bound_plane(box_corner(box, 0), box_corner(box, 4));
     }
   };
   /// The corner of WideBvh::box from `at` (0: lower, 4: upper), in S (its floats: exact).

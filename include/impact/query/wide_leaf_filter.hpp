@@ -32,14 +32,57 @@
 namespace impact {
 namespace detail {
 
+/// A bound of the rounding error of the depth tt the leaf tests compute (BlockTest: the scalar
+/// test's operations in double) for every triangle inside the box [lo, hi], for the ray from `o`
+/// with the shear factor `sz` (all in the ray's frame kx, ky, kz): an origin exactly in a
+/// triangle's plane gives |tt| <= this bound whenever tt is finite; so a finite tt above it proves
+/// the origin off the plane (the test of in_plane_lanes is then not needed). +infinity or NaN when
+/// a value overflows (no lane is then proven off the plane).
+///
+/// Derivation (u = 2^-53; eta = 2^-1075 bounds a product's loss to underflow; sums are exact
+/// when subnormal). The lanes compute, for each vertex v, ax = fl(v_kx - o_kx) (ay, az likewise),
+/// px = fl(ax - fl(sx az)), py = fl(ay - fl(sy az)), pz = fl(sz az), the edge functions eu =
+/// fl(fl(px_c py_b) - fl(py_c px_b)) (ev, ew cyclically) and tt = fl(fl(fl(eu pz_a) + fl(ev pz_b)) +
+/// fl(ew pz_c)). In the model with exact differences and the rounded sx, sy, sz taken as exact,
+/// P = (X - sx Z, Y - sy Z, sz Z) is a linear map of determinant sz of v - o, and the exact depth
+/// T = Eu Pz_a + Ev Pz_b + Ew Pz_c = -det[P_a; P_b; P_c] = -+ sz det[a - o; b - o; c - o]: 0 when o
+/// lies in the plane, whatever sx, sy, sz. So |tt| <= |tt - T| there. With R_i >= |v_i - o_i| for
+/// every vertex in the box, |sx|, |sy| <= 1 (|d_kz| is the largest), each vertex has mx = |X| + |sx||Z|
+/// <= Mx = R_x + R_z, my <= My = R_y + R_z, mz = |sz Z| <= Mz = |sz| R_z. From the file comment of
+/// narrow/ray_triangle.hpp (the shear and the edge functions' error, derived there against the exact
+/// ratio s = d_kx / d_kz with its rounding among the four of g4; against the rounded s taken as exact
+/// one rounding fewer, so the same bounds hold): |e - E| <= (10u + 65u^2) 2 Mx My
+/// + 2.02 eta (Mx + My) + 2.01 eta, |E| <= 2 Mx My; |pz - Pz| <= g2 Mz + eta, |pz| <= (1 + g2) Mz + eta
+/// (g_k = k u / (1 - k u)); the three products and two sums of tt: |tt - sum e pz| <= g3 sum |e pz| +
+/// 3 (1 + u)^2 eta; and |e pz - E Pz| <= |e - E| |pz| + |E| |pz - Pz|. Summed over the three terms:
+/// |tt - T| <= (3 (20u + 4u + 6u) + 1000 u^2) Mx My Mz + 6.2 eta (Mx My + (Mx + My + 1) Mz + 1).
+/// The computed bound is K Mx My Mz + U (Mx My + (Mx + My + 1) Mz + 1) with K = 96u >= 90u + 1000u^2
+/// and U = 2^-1000 = 2^75 eta, from the computed R (|fl(lo - o)|, |fl(hi - o)|: each at least (1 - u)
+/// times the exact one, rounding being monotone) and nonnegative rounded sums and products: each
+/// rounding loses at most a factor (1 - u) (ten on the way to the K term: less than K's slack of 6u) or
+/// eta for a product (the products' losses, times factors at most K or 1, are covered by the U term,
+/// itself at least 2^-1000, never subnormal). Overflow makes tt or the bound infinite or NaN, so a
+/// lane is taken as off the plane only when its tt is finite (then no operation overflowed).
+inline double box_plane_bound(const double (&o)[3], const double (&lo)[3], const double (&hi)[3], double sz) {
+  double r[3];
+  for (int i = 0; i < 3; ++i) {
+    const double a = std::abs(lo[i] - o[i]), b = std::abs(hi[i] - o[i]);
+    r[i] = a > b ? a : b;
+  }
+  const double mx = r[0] + r[2], my = r[1] + r[2], mz = std::abs(sz) * r[2];
+  const double mxy = mx * my;
+  return 96.0 * 0x1p-53 * (mxy * mz) + 0x1p-1000 * ((mxy + ((mx + my) + 1.0) * mz) + 1.0);
+}
+
 /// The watertight test (intersect_ray_triangle) over the four triangles of a WideTriangleBlock at
 /// once: the same IEEE operations in the same order as the scalar test, in S (double: two lanes an
 /// SSE2 instruction; float: four). A lane with an edge function not above the ray's band bound
 /// (`band`: PreparedRay::band for triangles in the tree's box, +infinity when not set) is near an
 /// edge: a candidate, which the scalar test decides (it may take exact signs there). So is a lane
 /// inside its triangle's edges whose depth tt lies behind the origin, or a hit lane whose origin
-/// orient3d's filter cannot place off the triangle's plane (the scalar test then asks whether the
-/// origin lies exactly in the plane: a hit at t = 0). Any other
+/// neither its depth (finite and above box_plane_bound) nor orient3d's filter places off the
+/// triangle's plane (the scalar test then asks whether the origin lies exactly in the plane: a hit
+/// at t = 0). Any other
 /// lane is a candidate exactly when the scalar test hits its triangle (no two edge functions of
 /// opposite strict signs, det != 0, the depth in [0, t_max det]), as the scalar test takes its
 /// values as they are. The caller runs the scalar test on the candidates only (in double, the
@@ -69,7 +112,7 @@ template <class S> class BlockTest {
   static constexpr bool kHasValues = false;
 #endif
 
-  BlockTest() : off_{0, 1, 2}, o_{S(0), S(0), S(0)}, sx_(S(0)), sy_(S(0)), sz_(S(1)), band_(std::numeric_limits<S>::infinity()), valid_(false) {
+  BlockTest() : off_{0, 1, 2}, o_{S(0), S(0), S(0)}, sx_(S(0)), sy_(S(0)), sz_(S(1)), band_(std::numeric_limits<S>::infinity()), plane_bound_(std::numeric_limits<S>::infinity()), valid_(false) {
 #if defined(IMPACT_BLOCK_TEST_AVX)
     for (int i = 0; i < 3; ++i) box_o_[i] = box_inv_[i] = S(0);
 #endif
@@ -85,14 +128,32 @@ template <class S> class BlockTest {
     for (int i = 0; i < 3; ++i) off_[i] = k[i], o_[i] = pr.ray.origin[k[i]];
     sx_ = pr.sx, sy_ = pr.sy, sz_ = pr.sz;
     band_ = pr.band;
+    plane_bound_ = std::numeric_limits<S>::infinity();
     valid_ = pr.valid;
   }
   /// Sets the band bound for triangles inside the box [lo, hi] (original axes), as
-  /// PreparedRay::bound_band does (the same value for the same ray and box).
+  /// PreparedRay::bound_band does (the same value for the same ray and box), and in double the
+  /// bound of the depth's rounding error for an origin in a triangle's plane (box_plane_bound:
+  /// a hit lane with a finite depth above it needs no in-plane test). Until it is called (and in
+  /// float) every hit lane gets the in-plane test.
   void bound_band(const Vec3<S>& lo, const Vec3<S>& hi) {
     const S l[3] = {lo[off_[0]], lo[off_[1]], lo[off_[2]]}, h[3] = {hi[off_[0]], hi[off_[1]], hi[off_[2]]};
     band_ = box_edge_band(o_, l, h);
+    if constexpr (std::is_same_v<S, double>) plane_bound_ = box_plane_bound(o_, l, h, sz_);
   }
+  /// bound_band's bound of the depth only (for a test made by set() from a PreparedRay whose band
+  /// bound_band already set for the same box).
+  void bound_plane(const Vec3<S>& lo, const Vec3<S>& hi) {
+    if constexpr (std::is_same_v<S, double>) {
+      const S l[3] = {lo[off_[0]], lo[off_[1]], lo[off_[2]]}, h[3] = {hi[off_[0]], hi[off_[1]], hi[off_[2]]};
+      plane_bound_ = box_plane_bound(o_, l, h, sz_);
+    } else {
+      (void)lo, (void)hi;
+    }
+  }
+  /// The bound of bound_band's box for the depth of an origin in a triangle's plane (+infinity
+  /// before bound_band; for the tests).
+  S plane_bound() const { return plane_bound_; }
 #if defined(IMPACT_BLOCK_TEST_AVX)
   /// What hits_avx gives of a block's lanes: the hit's t (raised to the entry into the triangle's
   /// box), 1 / det, the edge functions, det and the scaled depth tt, as the scalar test and
@@ -124,7 +185,7 @@ template <class S> class BlockTest {
     const int kx = kx0 ^ ((kx0 ^ ky0) & flip), ky = kx0 ^ ky0 ^ kx;
     off_[0] = kx, off_[1] = ky, off_[2] = kz;
     for (int i = 0; i < 3; ++i) o_[i] = o[off_[i]], box_o_[i] = o[i], box_inv_[i] = inv[i];
-    band_ = std::numeric_limits<S>::infinity();
+    band_ = plane_bound_ = std::numeric_limits<S>::infinity();
     if (valid_) {
       sx_ = d[kx] / dz, sy_ = d[ky] / dz, sz_ = S(1) / dz;
     } else {
@@ -212,8 +273,9 @@ template <class S> class BlockTest {
   /// The lanes of `lanes` (bit j: lane `first` + j of `b`) whose triangle may have the origin
   /// exactly in its plane, which the scalar rule then decides (finish_ray_hit: t exactly 0): those
   /// that orient3d's filter (narrow/predicates.hpp, with its underflow term) cannot place off the
-  /// plane. Called with the hit lanes only (about one a hitting cast; out of line, so that the leaf
-  /// test stays small enough to be inlined), in the ray frame's order of the axes (a permutation:
+  /// plane. Called with the hit lanes whose depth does not place the origin off the plane (above
+  /// plane_bound_; almost none on the benches' rays: those from a surface or within rounding of
+  /// one; out of line, so that the leaf test stays small enough to be inlined), in the ray frame's order of the axes (a permutation:
   /// the same magnitude). In double (the lanes' values are).
   template <class T> IMPACT_NOINLINE int in_plane_lanes(const WideTriangleBlock<T>& b, int lanes, int first) const {
     int on = 0;
@@ -304,7 +366,14 @@ template <class S> class BlockTest {
     near_out |= _mm256_movemask_pd(behind) & ~outside & lanes;
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
     const int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
-    const int on = m ? in_plane_lanes(b, m, 0) : 0;  // hit lanes the scalar rule takes (t exactly 0 there)
+    if (!m) return 0;
+    // hit lanes with a finite depth above plane_bound_ have the origin off the plane; the others
+    // may be in it, which in_plane_lanes asks (the scalar rule takes those: t exactly 0 there)
+    const __m256d att = _mm256_and_pd(tt, abs_mask);
+    const __m256d off = _mm256_and_pd(_mm256_cmp_pd(att, _mm256_broadcast_sd(&plane_bound_), _CMP_GT_OQ),
+                                      _mm256_cmp_pd(att, _mm256_set1_pd(std::numeric_limits<double>::infinity()), _CMP_LT_OQ));
+    const int maybe = m & ~_mm256_movemask_pd(off);
+    const int on = maybe ? in_plane_lanes(b, maybe, 0) : 0;
     near_out |= on;
     return m & ~on;
   }
@@ -401,7 +470,13 @@ template <class S> class BlockTest {
         Ops::store(values->det + at, det), Ops::store(values->tt + at, tt);
       }
       const int near_bits = Ops::sign_bits(near);
-      const int on = (m & ~near_bits) ? in_plane_lanes(b, m & ~near_bits, Ops::kLanes * h) : 0;  // (t exactly 0 there)
+      int on = 0;
+      if (m & ~near_bits) {  // hit lanes: those not proven off the plane (plane_bound_, as lanes_avx) to in_plane_lanes
+        const V att = Ops::abs(tt);
+        const V off = Ops::bit_and(Ops::gt(att, Ops::set1(plane_bound_)), Ops::lt(att, Ops::set1(std::numeric_limits<S>::infinity())));
+        const int maybe = m & ~near_bits & ~Ops::sign_bits(off);
+        on = maybe ? in_plane_lanes(b, maybe, Ops::kLanes * h) : 0;  // (t exactly 0 there)
+      }
       return m | ((near_bits | on) << 4);
     } else {
       (void)values;
@@ -413,6 +488,7 @@ template <class S> class BlockTest {
   int off_[3];  // the block's rows of the ray frame's x, y, z axes (kx, ky, kz)
   S o_[3], sx_, sy_, sz_;
   S band_;  // the bound of the edge functions' bands (PreparedRay::band)
+  S plane_bound_;  // box_plane_bound (double; +infinity until bound_band)
   bool valid_;
 };
 
