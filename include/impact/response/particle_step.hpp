@@ -124,13 +124,23 @@ template <class S> inline S surface_offset(const StepOptions<S>& o, const Vec3<S
          std::numeric_limits<S>::min();
 }
 
-/// How far beyond a leg's end the cast reaches (see step_particle_in), for coordinates and scales
-/// of magnitude m (|end|_inf + the colliders' largest scale + |chord|_inf): the surface offset
-/// (surface_offset's formula), and at least 8 ulps of m.
-template <class S> inline S end_reach(const StepOptions<S>& o, S m) {
+/// How far beyond a leg's end the cast reaches (see step_particle_in): `reach`, the surface offset
+/// (surface_offset's formula) and at least 8 ulps of m = |end|_inf + the colliders' largest scale
+/// + |chord|_inf; and the cast's t_max, 1 + reach / |chord|_inf (at least `reach` beyond the end;
+/// 1 for a zero chord).
+template <class S> struct EndReach {
+  S reach = S(0);
+  S t_max = S(1);
+};
+template <class S> inline EndReach<S> end_reach(const StepOptions<S>& o, const Vec3<S>& end, const Vec3<S>& chord, S scale) {
   const S eps = std::numeric_limits<S>::epsilon();
-  if (o.surface_offset > S(0)) return std::max(o.surface_offset, S(8) * eps * m);
-  return std::max(o.offset_ulps, S(8)) * eps * m + std::numeric_limits<S>::min();
+  const S c_max = chord.cwiseAbs().maxCoeff();
+  const S m = end.cwiseAbs().maxCoeff() + scale + c_max;
+  EndReach<S> r;
+  r.reach = o.surface_offset > S(0) ? std::max(o.surface_offset, S(8) * eps * m)
+                                    : std::max(o.offset_ulps, S(8)) * eps * m + std::numeric_limits<S>::min();
+  if (c_max > S(0)) r.t_max = S(1) + r.reach / c_max;
+  return r;
 }
 
 /// Whether the backed-off point x + s c of a hit leg (0 < s < 1), once rounded, provably stays on
@@ -703,12 +713,11 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colli
     // leaving from the surface to either side) is a hit, backed off like the others. The reach is
     // the surface offset, and at least 8 ulps of the coordinates and colliders' scales (an
     // absolute StepOptions::surface_offset may be smaller than the casts' rounding).
-    const S c_max = c.cwiseAbs().maxCoeff();
-    const S reach = detail::end_reach(opt, e.cwiseAbs().maxCoeff() + ctx.scale + c_max);
-    const S t_max = c_max > S(0) ? S(1) + reach / c_max : S(1);  // at least `reach` beyond the end
+    const EndReach<S> end = end_reach(opt, e, c, ctx.scale);
+    const S reach = end.reach;
     S scale = S(0);
     const std::optional<Contact<S>> hit =
-        c == Vec3<S>::Zero() && !moving ? std::nullopt : first_hit(colliders, x, c, p.radius, tau_now, left, clear, opt, scale, t_max);
+        c == Vec3<S>::Zero() && !moving ? std::nullopt : first_hit(colliders, x, c, p.radius, tau_now, left, clear, opt, scale, end.t_max);
     if (!hit) {
       on_leg(x, e);
       x = e;
@@ -726,10 +735,9 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colli
       // an absolute surface offset below the rounding at these coordinates: the stored point is
       // kept only when the segment to it, and `reach` beyond, crosses nothing
       const Vec3<S> c2 = x_new - x;
-      const S c2_max = c2.cwiseAbs().maxCoeff();
-      const S reach2 = detail::end_reach(opt, x_new.cwiseAbs().maxCoeff() + ctx.scale + c2_max);
       S scale2 = S(0);
-      if (c2_max > S(0) && first_hit(colliders, x, c2, p.radius, tau_now, left, clear, opt, scale2, S(1) + reach2 / c2_max)) x_new = x;
+      if (c2 != Vec3<S>::Zero() && first_hit(colliders, x, c2, p.radius, tau_now, left, clear, opt, scale2, end_reach(opt, x_new, c2, ctx.scale).t_max))
+        x_new = x;
     }
     const S s_time = std::min(s, S(1));  // the impact time within the leg
     on_leg(x, x_new);
