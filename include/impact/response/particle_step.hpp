@@ -9,6 +9,9 @@
 /// Backtracking (Strategy::Backtrack, continuous):
 ///  1. cast the chord (a ray for point particles, a swept sphere for particles with a radius)
 ///     against every backtracking collider and keep the first hit, at fraction s of the chord;
+///     the chord runs to the leg's end as it will be stored (x + d rounded: far from the origin
+///     that rounding can exceed the leg) and the cast reaches the surface offset beyond it, so an
+///     end is never behind a surface nor on one (a hit beyond the end backs off like the others);
 ///  2. move the particle to the hit, backed off along the chord so that it ends `offset` away
 ///     from the surface along the normal (or at the chord's start if that is nearer): the
 ///     particle only ever stands on the collision-free part of a chord, so it never enters a
@@ -119,6 +122,36 @@ template <class S> inline S surface_offset(const StepOptions<S>& o, const Vec3<S
   if (o.surface_offset > S(0)) return o.surface_offset;
   return o.offset_ulps * std::numeric_limits<S>::epsilon() * (x.cwiseAbs().maxCoeff() + scale + d.cwiseAbs().maxCoeff()) +
          std::numeric_limits<S>::min();
+}
+
+/// How far beyond a leg's end the cast reaches (see step_particle_in): `reach`, the surface offset
+/// (surface_offset's formula) and at least 8 ulps of m = |end|_inf + the colliders' largest scale
+/// + |chord|_inf; and the cast's t_max, 1 + reach / |chord|_inf (at least `reach` beyond the end;
+/// 1 for a zero chord).
+template <class S> struct EndReach {
+  S reach = S(0);
+  S t_max = S(1);
+};
+template <class S> inline EndReach<S> end_reach(const StepOptions<S>& o, const Vec3<S>& end, const Vec3<S>& chord, S scale) {
+  const S eps = std::numeric_limits<S>::epsilon();
+  const S c_max = chord.cwiseAbs().maxCoeff();
+  const S m = end.cwiseAbs().maxCoeff() + scale + c_max;
+  EndReach<S> r;
+  r.reach = o.surface_offset > S(0) ? std::max(o.surface_offset, S(8) * eps * m)
+                                    : std::max(o.offset_ulps, S(8)) * eps * m + std::numeric_limits<S>::min();
+  if (c_max > S(0)) r.t_max = S(1) + r.reach / c_max;
+  return r;
+}
+
+/// Whether the backed-off point x + s c of a hit leg (0 < s < 1), once rounded, provably stays on
+/// the particle's side of the hit's tangent plane when it was `delta` from it: each rounded
+/// component is off by at most u (|s c_k| + |x_k + s c_k|) <= u (|x|_inf + 3 |c|_inf) (u = eps / 2,
+/// two roundings), so the point moves by at most eps (|x|_inf + 3 |c|_inf) (sqrt(3) u < eps); at
+/// least twice that leaves it delta / 2 or more from the plane. The scale-aware offset (256 eps
+/// (|hit|_inf + scale + |c|_inf), with |x|_inf <= |hit|_inf + |c|_inf) always passes; only an
+/// absolute StepOptions::surface_offset below the coordinates' rounding can fail it.
+template <class S> inline bool backoff_rounding_clear(S delta, const Vec3<S>& x, const Vec3<S>& c) {
+  return delta >= S(2) * std::numeric_limits<S>::epsilon() * (x.cwiseAbs().maxCoeff() + S(3) * c.cwiseAbs().maxCoeff());
 }
 
 inline Strategy effective(Strategy own, Strategy system) { return own == Strategy::Inherit ? system : own; }
@@ -387,6 +420,7 @@ template <class S> struct StepContext {
   bool any_projection = false;  ///< some collider uses projection
   bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
   bool identity_poses = false;  ///< every backtracking collider's pose is exactly the identity
+  S scale = S(0);               ///< the largest scale() of the backtracking colliders (legs' end clearance)
   /// Digest of what the free balls depend on (Particle::free_key): every collider's effective
   /// strategy and pose, the shapes of planes, spheres and boxes, the sides, each mesh's address,
   /// triangle count, revision (MeshBvh::revision: set_vertices() changes it) and distance grid,
@@ -403,6 +437,7 @@ template <class S> struct StepContext {
       if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !c.distance_grid) all_grids = false;
     identity_poses = true;
     colliders.for_each([&](const auto& c, int) {
+      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack) scale = std::max(scale, c.scale());
       if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !(c.motion.pose.R == Mat3<S>::Identity() && c.motion.pose.t == Vec3<S>::Zero()))
         identity_poses = false;
     });
@@ -556,9 +591,9 @@ LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, c
 /// contact whose time is the chord fraction; `scale` gets the hit collider's scale.
 template <class S, class BV, class... X>
 std::optional<Contact<S>> first_hit(const ColliderSet<S, BV, X...>& colliders, const Vec3<S>& x, const Vec3<S>& d, S radius, S tau0,
-                                    S len, const LegClearance& clear, const StepOptions<S>& opt, S& scale) {
+                                    S len, const LegClearance& clear, const StepOptions<S>& opt, S& scale, S t_max = S(1)) {
   std::optional<Contact<S>> hit;
-  S best_t = S(1);
+  S best_t = t_max;
   colliders.for_each([&](const auto& c, int index) {
     if constexpr (IsMeshCollider<std::decay_t<decltype(c)>>::value) {
       if (clear.meshes) return;
@@ -664,23 +699,50 @@ StepStats step_particle_in(Particle<S>& p, const ColliderSet<S, BV, X...>& colli
       v += a * left;
       break;
     }
+    // The leg's end as it will be stored (rounded) and the chord cast: from x to that end. Far from
+    // the origin the rounding of x + d can exceed the leg (float near 2^20: a spacing of 1/16 for
+    // legs of 1/100), and a cast of the unrounded chord left the stored end unchecked: it ended
+    // behind triangles the chord missed. c = (x + d) - x is exact in each component where
+    // |d_k| <= |x_k| (Fast2Sum), so the cast covers exactly the segment travelled; elsewhere (a leg
+    // within its length of a coordinate plane through the origin) c is within half an ulp of
+    // |c_k|, the order of the cast's own rounding of t.
+    const Vec3<S> e = x + d;
+    const Vec3<S> c = e - x;
+    // The cast reaches `reach` beyond the end: an end that close to a surface ahead (the cast's t
+    // is rounded, and an end exactly on a triangle could pass for a miss, the next leg then
+    // leaving from the surface to either side) is a hit, backed off like the others. The reach is
+    // the surface offset, and at least 8 ulps of the coordinates and colliders' scales (an
+    // absolute StepOptions::surface_offset may be smaller than the casts' rounding).
+    const EndReach<S> end = end_reach(opt, e, c, ctx.scale);
+    const S reach = end.reach;
     S scale = S(0);
-    const std::optional<Contact<S>> hit = first_hit(colliders, x, d, p.radius, tau_now, left, clear, opt, scale);
+    const std::optional<Contact<S>> hit =
+        c == Vec3<S>::Zero() && !moving ? std::nullopt : first_hit(colliders, x, c, p.radius, tau_now, left, clear, opt, scale, end.t_max);
     if (!hit) {
-      on_leg(x, Vec3<S>(x + d));
-      x += d;
+      on_leg(x, e);
+      x = e;
       v += a * left;
       break;
     }
+    // a hit beyond the end (s > 1, within `reach`) backs off by reach at least: to the end or before
     const S s = hit->time;
-    const S dn = -d.dot(hit->normal);
-    const S delta = detail::surface_offset(opt, hit->point, scale, d);
-    const S s_safe = dn > S(0) ? std::max(s - delta / dn, S(0)) : S(0);
+    const S dn = -c.dot(hit->normal);
+    const S delta = s > S(1) ? std::max(reach, detail::surface_offset(opt, hit->point, scale, c)) : detail::surface_offset(opt, hit->point, scale, c);
+    const S s_safe = dn > S(0) ? std::min(std::max(s - delta / dn, S(0)), S(1)) : S(0);
     const Vec3<S> x_leg = x;
-    const Vec3<S> x_new = x + s_safe * d;
+    Vec3<S> x_new = x + s_safe * c;
+    if (s_safe > S(0) && !backoff_rounding_clear(delta, x, c)) {
+      // an absolute surface offset below the rounding at these coordinates: the stored point is
+      // kept only when the segment to it, and `reach` beyond, crosses nothing
+      const Vec3<S> c2 = x_new - x;
+      S scale2 = S(0);
+      if (c2 != Vec3<S>::Zero() && first_hit(colliders, x, c2, p.radius, tau_now, left, clear, opt, scale2, end_reach(opt, x_new, c2, ctx.scale).t_max))
+        x_new = x;
+    }
+    const S s_time = std::min(s, S(1));  // the impact time within the leg
     on_leg(x, x_new);
     x = x_new;
-    const S tau = detail::impact_time(x_leg, v, a, *hit, s, left, p.radius);
+    const S tau = detail::impact_time(x_leg, v, a, *hit, s_time, left, p.radius);
     const ResponseResult<S> r = respond(Vec3<S>(v + a * tau), hit->normal, hit->collider_velocity, hit->material, ropt);
     v = r.velocity;
     if (r.resting && opt.gravity.dot(hit->normal) < S(0) && n_active < 3) {
