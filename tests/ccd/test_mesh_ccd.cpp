@@ -4,6 +4,7 @@
 // primitives, refit between steps, minimum separation. Float and double.
 #include "impact/ccd/mesh_ccd.hpp"
 #include "sheets.hpp"
+#include "support/mesh_ccd_pairs.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,58 +18,28 @@ using impact::test::jitter;
 using impact::test::Sheet;
 using impact::test::sheet;
 
-std::set<std::array<std::int32_t, 2>> unique_edges(const impact::Faces& F) {
-  std::set<std::array<std::int32_t, 2>> e;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      std::int32_t a = F(f, k), b = F(f, (k + 1) % 3);
-      if (a > b) std::swap(a, b);
-      e.insert({a, b});
-    }
-  return e;
-}
+using Key = impact::test::MeshCcdKey;
 
-using Key = std::array<std::int32_t, 5>;  // kind, then ids
-
-template <class S>
-std::set<Key> keys(const impact::MeshCcdResult<S>& r) {
-  std::set<Key> k;
-  for (const auto& c : r.contacts) {
-    if (c.kind == impact::MeshCcdKind::VertexFace)
-      k.insert({0, c.vertex_mesh, c.vertex, c.face, 0});
-    else
-      k.insert({1, c.a0, c.a1, c.b0, c.b1});
-  }
-  return k;
-}
+template <class S> std::set<Key> keys(const impact::MeshCcdResult<S>& r) { return impact::test::contact_keys(r); }
 
 template <class S>
 std::set<Key> brute_force(const impact::MeshMotion<S>& a, const impact::MeshMotion<S>& b, bool self,
                           const impact::CcdOptions& o) {
   std::set<Key> k;
-  auto vf = [&](int mesh, const impact::MeshMotion<S>& mv, const impact::MeshMotion<S>& mf) {
-    std::set<std::int32_t> verts;
-    for (Eigen::Index f = 0; f < mv.faces->rows(); ++f)
-      for (int j = 0; j < 3; ++j) verts.insert((*mv.faces)(f, j));
-    const auto& F = *mf.faces;
-    for (std::int32_t v : verts)
-      for (std::int32_t f = 0; f < F.rows(); ++f) {
-        if (self && (F(f, 0) == v || F(f, 1) == v || F(f, 2) == v)) continue;
+  impact::test::for_each_primitive_pair(
+      *a.faces, *b.faces, self,
+      [&](int mesh, std::int32_t v, std::int32_t f) {
+        const impact::MeshMotion<S>& mv = mesh == 0 ? a : b;
+        const impact::MeshMotion<S>& mf = mesh == 0 ? b : a;
+        const auto& F = *mf.faces;
         const auto r = impact::vertex_face_ccd(mv.p0(v), mf.p0(F(f, 0)), mf.p0(F(f, 1)), mf.p0(F(f, 2)), mv.p1(v), mf.p1(F(f, 0)),
                                                mf.p1(F(f, 1)), mf.p1(F(f, 2)), o);
         if (r.hit) k.insert({0, mesh, v, f, 0});
-      }
-  };
-  vf(0, a, b);
-  if (!self) vf(1, b, a);
-  const auto ea = unique_edges(*a.faces), eb = unique_edges(*b.faces);
-  for (const auto& x : ea)
-    for (const auto& y : eb) {
-      if (self && (x[0] == y[0] || x[0] == y[1] || x[1] == y[0] || x[1] == y[1] || !(x < y))) continue;
-      const auto r = impact::edge_edge_ccd(a.p0(x[0]), a.p0(x[1]), b.p0(y[0]), b.p0(y[1]), a.p1(x[0]), a.p1(x[1]), b.p1(y[0]),
-                                           b.p1(y[1]), o);
-      if (r.hit) k.insert({1, x[0], x[1], y[0], y[1]});
-    }
+      },
+      [&](std::int32_t a0, std::int32_t a1, std::int32_t b0, std::int32_t b1) {
+        const auto r = impact::edge_edge_ccd(a.p0(a0), a.p0(a1), b.p0(b0), b.p0(b1), a.p1(a0), a.p1(a1), b.p1(b0), b.p1(b1), o);
+        if (r.hit) k.insert({1, a0, a1, b0, b1});
+      });
   return k;
 }
 
@@ -142,22 +113,17 @@ std::size_t box_overlapping_pairs(const impact::MeshMotion<S>& a, const impact::
     return x;
   };
   std::size_t n = 0;
-  const auto vf = [&](const impact::MeshMotion<S>& mv, const impact::MeshMotion<S>& mf) {
-    std::set<std::int32_t> verts;
-    for (Eigen::Index f = 0; f < mv.faces->rows(); ++f)
-      for (int j = 0; j < 3; ++j) verts.insert((*mv.faces)(f, j));
-    const auto& F = *mf.faces;
-    for (std::int32_t v : verts)
-      for (std::int32_t f = 0; f < F.rows(); ++f)
-        if (!(self && (F(f, 0) == v || F(f, 1) == v || F(f, 2) == v)) && impact::overlap(box(mv, {v}), box(mf, {F(f, 0), F(f, 1), F(f, 2)}))) ++n;
-  };
-  vf(a, b);
-  if (!self) vf(b, a);
-  for (const auto& x : unique_edges(*a.faces))
-    for (const auto& y : unique_edges(*b.faces)) {
-      if (self && (x[0] == y[0] || x[0] == y[1] || x[1] == y[0] || x[1] == y[1] || !(x < y))) continue;
-      if (impact::overlap(box(a, {x[0], x[1]}), box(b, {y[0], y[1]}))) ++n;
-    }
+  impact::test::for_each_primitive_pair(
+      *a.faces, *b.faces, self,
+      [&](int mesh, std::int32_t v, std::int32_t f) {
+        const impact::MeshMotion<S>& mv = mesh == 0 ? a : b;
+        const impact::MeshMotion<S>& mf = mesh == 0 ? b : a;
+        const auto& F = *mf.faces;
+        n += impact::overlap(box(mv, {v}), box(mf, {F(f, 0), F(f, 1), F(f, 2)})) ? 1 : 0;
+      },
+      [&](std::int32_t a0, std::int32_t a1, std::int32_t b0, std::int32_t b1) {
+        n += impact::overlap(box(a, {a0, a1}), box(b, {b0, b1})) ? 1 : 0;
+      });
   return n;
 }
 

@@ -14,6 +14,7 @@
 #include "fuzz_input.hpp"
 #include "impact/ccd/mesh_ccd.hpp"
 #include "support/exact_ccd.hpp"
+#include "support/mesh_ccd_pairs.hpp"
 
 #include <array>
 #include <cmath>
@@ -24,7 +25,7 @@
 
 namespace {
 
-using Key = std::array<std::int32_t, 5>;  // kind (0 vertex-face, 1 edge-edge), then the ids
+using Key = impact::test::MeshCcdKey;
 
 struct IntMotion {
   std::vector<std::array<std::int64_t, 3>> p0, p1;
@@ -67,34 +68,6 @@ template <class S> Motion<S> to_motion(const IntMotion& m, int shift) {
   return out;
 }
 
-std::set<std::array<std::int32_t, 2>> edges_of(const std::vector<std::array<std::int32_t, 3>>& faces) {
-  std::set<std::array<std::int32_t, 2>> e;
-  for (const auto& f : faces)
-    for (std::size_t k = 0; k < 3; ++k) {
-      std::int32_t a = f[k], b = f[(k + 1) % 3];
-      if (a > b) std::swap(a, b);
-      e.insert({a, b});
-    }
-  return e;
-}
-
-std::set<std::int32_t> vertices_of(const std::vector<std::array<std::int32_t, 3>>& faces) {
-  std::set<std::int32_t> v;
-  for (const auto& f : faces) v.insert(f.begin(), f.end());
-  return v;
-}
-
-template <class S> std::set<Key> keys(const impact::MeshCcdResult<S>& r) {
-  std::set<Key> k;
-  for (const auto& c : r.contacts) {
-    if (c.kind == impact::MeshCcdKind::VertexFace)
-      k.insert({0, c.vertex_mesh, c.vertex, c.face, 0});
-    else
-      k.insert({1, c.a0, c.a1, c.b0, c.b1});
-  }
-  return k;
-}
-
 std::string describe(const Key& k) {
   std::string s = k[0] == 0 ? "vertex-face (vertex mesh " : "edge-edge (";
   for (std::size_t i = 1; i < 5; ++i) s += (i > 1 ? ", " : "") + std::to_string(k[i]);
@@ -110,21 +83,24 @@ template <class S> void check(const IntMotion& a, const IntMotion* b, int shift)
   const auto ta = impact::SweptMeshBvh<S>::build(va), tb = impact::SweptMeshBvh<S>::build(vb);
   const auto run = [&](int threads) { return self ? impact::mesh_self_ccd(va, ta, o, threads) : impact::mesh_ccd(va, ta, vb, tb, o, threads); };
   const auto r = run(1);
-  const std::set<Key> got = keys(r);
-  if (keys(run(2)) != got) impact::fuzz::fail("different contacts on 1 and 2 threads");
+  const std::set<Key> got = impact::test::contact_keys(r);
+  if (impact::test::contact_keys(run(2)) != got) impact::fuzz::fail("different contacts on 1 and 2 threads");
 
   // The loop over every primitive pair: the same tests, the same vertex orders as mesh_ccd's.
   const auto P = [](const Motion<S>& m, bool end, std::int32_t v) { return impact::Vec3<S>((end ? m.V1 : m.V0).row(v).transpose()); };
   std::set<Key> all;
   std::vector<std::pair<Key, impact::test::IntCcdQuery>> queries;
-  const auto vf = [&](int mesh, const IntMotion& iv, const Motion<S>& mv, const IntMotion& iff, const Motion<S>& mf) {
-    for (std::int32_t v : vertices_of(iv.faces))
-      for (std::int32_t f = 0; f < static_cast<std::int32_t>(iff.faces.size()); ++f) {
+  impact::test::for_each_primitive_pair(
+      ma.F, mb.F, self,
+      [&](int mesh, std::int32_t v, std::int32_t f) {
+        const Motion<S>& mv = mesh == 0 ? ma : mb;
+        const Motion<S>& mf = mesh == 0 ? mb : ma;
+        const IntMotion& iv = mesh == 0 ? a : bi;
+        const IntMotion& iff = mesh == 0 ? bi : a;
         const auto& t = iff.faces[std::size_t(f)];
-        if (self && (t[0] == v || t[1] == v || t[2] == v)) continue;
         const auto res = impact::vertex_face_ccd(P(mv, false, v), P(mf, false, t[0]), P(mf, false, t[1]), P(mf, false, t[2]), P(mv, true, v),
                                                  P(mf, true, t[0]), P(mf, true, t[1]), P(mf, true, t[2]), o);
-        if (!res.hit) continue;
+        if (!res.hit) return;
         impact::test::IntCcdQuery q;
         q.vertex_face = true;
         const std::int32_t ids[4] = {v, t[0], t[1], t[2]};
@@ -136,24 +112,19 @@ template <class S> void check(const IntMotion& a, const IntMotion* b, int shift)
         const Key key{0, mesh, v, f, 0};
         all.insert(key);
         queries.push_back({key, q});
-      }
-  };
-  vf(0, a, ma, bi, mb);
-  if (!self) vf(1, bi, mb, a, ma);
-  for (const auto& x : edges_of(a.faces))
-    for (const auto& y : edges_of(bi.faces)) {
-      if (self && (x[0] == y[0] || x[0] == y[1] || x[1] == y[0] || x[1] == y[1] || !(x < y))) continue;
-      const auto res = impact::edge_edge_ccd(P(ma, false, x[0]), P(ma, false, x[1]), P(mb, false, y[0]), P(mb, false, y[1]), P(ma, true, x[0]),
-                                             P(ma, true, x[1]), P(mb, true, y[0]), P(mb, true, y[1]), o);
-      if (!res.hit) continue;
-      impact::test::IntCcdQuery q;
-      q.vertex_face = false;
-      q.points = {a.p0[std::size_t(x[0])], a.p0[std::size_t(x[1])], bi.p0[std::size_t(y[0])], bi.p0[std::size_t(y[1])],
-                  a.p1[std::size_t(x[0])], a.p1[std::size_t(x[1])], bi.p1[std::size_t(y[0])], bi.p1[std::size_t(y[1])]};
-      const Key key{1, x[0], x[1], y[0], y[1]};
-      all.insert(key);
-      queries.push_back({key, q});
-    }
+      },
+      [&](std::int32_t a0, std::int32_t a1, std::int32_t b0, std::int32_t b1) {
+        const auto res = impact::edge_edge_ccd(P(ma, false, a0), P(ma, false, a1), P(mb, false, b0), P(mb, false, b1), P(ma, true, a0),
+                                               P(ma, true, a1), P(mb, true, b0), P(mb, true, b1), o);
+        if (!res.hit) return;
+        impact::test::IntCcdQuery q;
+        q.vertex_face = false;
+        q.points = {a.p0[std::size_t(a0)], a.p0[std::size_t(a1)], bi.p0[std::size_t(b0)], bi.p0[std::size_t(b1)],
+                    a.p1[std::size_t(a0)], a.p1[std::size_t(a1)], bi.p1[std::size_t(b0)], bi.p1[std::size_t(b1)]};
+        const Key key{1, a0, a1, b0, b1};
+        all.insert(key);
+        queries.push_back({key, q});
+      });
   for (const Key& k : got)
     if (!all.count(k)) impact::fuzz::fail("mesh CCD reports a contact the primitive test does not: " + describe(k));
   for (const auto& [key, q] : queries) {
