@@ -197,12 +197,25 @@ inline void check_writable(const std::string& path, const char* usage, const std
   exit_usage(word == "-h" || word == "--help" ? "" : "unknown option " + word, usage);
 }
 
-/// The mesh at `path`: through impact::io when the bench is built with it, else through the tests'
-/// OBJ reader (OBJ files only). Throws on a file it cannot read.
+#ifdef IMPACT_HAVE_IO
+/// The benches' load options: the defaults, and with IMPACT_BENCH_TRUSTED_FILES=1 in the
+/// environment also the formats whose assimp readers are not safe on hostile files
+/// (LoadOptions::allow_unchecked_formats: .nff, .zae, .ifc, ...), for files you trust, such as
+/// Debian's assimp-testmodels.
+inline LoadOptions bench_load_options() {
+  LoadOptions o;
+  const char* trusted = std::getenv("IMPACT_BENCH_TRUSTED_FILES");
+  o.allow_unchecked_formats = trusted != nullptr && std::string(trusted) == "1";
+  return o;
+}
+#endif
+
+/// The mesh at `path`: through impact::io when the bench is built with it (bench_load_options),
+/// else through the tests' OBJ reader (OBJ files only). Throws on a file it cannot read.
 template <class S>
 TriangleMesh<S> read_mesh(const std::string& path) {
 #ifdef IMPACT_HAVE_IO
-  return load_mesh<S>(path);
+  return load_mesh<S>(path, bench_load_options());
 #else
   return impact::test::read_obj<S>(path);
 #endif
@@ -222,7 +235,7 @@ template <class S> void require_extent(const TriangleMesh<S>& m, const std::stri
 inline TriangleMesh<double> load_mesh_or_exit(const std::string& path, const char* usage) {
 #ifdef IMPACT_HAVE_IO
   (void)usage;
-  return load_mesh<double>(path);
+  return load_mesh<double>(path, bench_load_options());
 #else
   (void)path;
   exit_usage("this build has no mesh loader (assimp was not found); run without meshes", usage);

@@ -29,13 +29,12 @@
 // --impulse-passes P: passes of CCD impulses before the zones (default: the library's, 3); with 0
 // the zones take every CCD collision, which is where harmon and rigid differ.
 // --proximity-rounds R: the proximity relaxation's round budget (ClothCollisionOptions::
-// proximity_rounds, >= 1; default the library's, 500).
+// proximity_rounds, >= 1; default the library's, 30).
 // Exit status 1 when any step ends with an exact intersection (the target is none, ever).
 #include "bench_util.hpp"
 #include "cloth_scenes.hpp"
 #include "impact/cloth/collision_step.hpp"
 #include "impact/cloth/verify_state.hpp"
-#include "support/obj_reader.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -147,11 +146,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<bench::ClothScene> scene;
   try {
     if (!a.obstacle.empty()) {
-#ifdef IMPACT_HAVE_IO
-      obstacle_mesh = load_mesh<double>(a.obstacle);  // any format assimp reads
-#else
-      obstacle_mesh = impact::test::read_obj<double>(a.obstacle);  // built without assimp: OBJ only
-#endif
+      obstacle_mesh = bench::read_mesh<double>(a.obstacle);  // without assimp: OBJ only
       a.scene.obstacle = &obstacle_mesh;
     }
     scene = bench::make_cloth_scene(a.scene);

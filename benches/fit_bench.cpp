@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
     }
     for (const auto& p : paths) {
 #ifdef IMPACT_HAVE_IO
-      meshes.emplace_back(p, load_mesh<double>(p));
+      meshes.emplace_back(p, load_mesh<double>(p, bench::bench_load_options()));
 #else
       std::fprintf(stderr, "impact-fit-bench: built without assimp, cannot load %s\n", p.c_str());
       return 1;
