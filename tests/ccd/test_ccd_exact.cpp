@@ -10,7 +10,7 @@
 //  - random small-integer queries (full of exact degeneracies) and near-touching perturbations of
 //    the contacts: whenever the test answers "no hit", the exact reference (support/exact_ccd.hpp)
 //    must prove that there is no contact. False positives the reference proves are counted and
-//    bounded by the counts measured with these seeds (0 random, 2 perturbed; see random_queries).
+//    bounded by the counts measured with these seeds (0 random, 4 and 2 perturbed; see random_queries).
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/vertex_face.hpp"
 #include "support/exact_ccd.hpp"
@@ -357,8 +357,9 @@ TEST(CcdExact, ConstructionIsExact) {
 
 /// Random queries (and perturbed contacts): every "no hit" must be proven by the reference, and at
 /// most `max_proven_fp` hits may be false positives the reference proves contact-free (the counts
-/// measured with these seeds: 0 for random queries, 2 for perturbed contacts, whose gaps of one
-/// unit at 2^-50 are near misses the re-check's budget cannot always separate).
+/// measured with these seeds: 0 for random queries, 4 (double) and 2 (float) for perturbed
+/// contacts, whose gaps of one unit at 2^-50 are near misses the re-check's budget cannot always
+/// separate; the double count was 2 before the reference clipped its boxes to the triangle).
 template <class S>
 void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed, bool perturb_contacts, int max_proven_fp) {
   Generator g(seed, range);
@@ -410,10 +411,44 @@ void random_queries(std::int64_t range, int shift, int count, std::uint64_t seed
   EXPECT_GT(hits, 0);
 }
 
+// The reference must prove quickly that a point just past the face's edge u + v = 1 misses it,
+// and must not exclude the same point moved onto that edge. Before the reference clipped its
+// boxes to the triangle, each of the misses took ~10^6 boxes (one took 52 s in a fuzz build: the
+// CI timeout of fuzz-ccd, input regressions/ccd/double-point-past-degenerate-face-edge-slow-proof).
+TEST(CcdExact, ReferenceProvesPointsPastTheSlantedEdge) {
+  const std::int64_t r = std::int64_t(1) << 19;
+  // A triangle at rest in z = 0; the point starts in its plane, `past` units beyond the edge f1-f2
+  // along x, and leaves along z.
+  auto flat = [&](std::int64_t past) {
+    IntCcdQuery q;
+    q.points = {IV{r / 2 + past, r / 2, 0}, IV{0, 0, 0}, IV{r, 0, 0}, IV{0, r, 0},
+                IV{r / 2 + past, r / 2, r}, IV{0, 0, 0}, IV{r, 0, 0}, IV{0, r, 0}};
+    return q;
+  };
+  // The fuzz input: a degenerate face (f1 = f2 throughout) and a point one unit past f1 on the
+  // line f0-f1 at t = 0; everything then moves apart.
+  auto degenerate = [&](std::int64_t past) {
+    IntCcdQuery q;
+    const std::int64_t a = -121916, b = -524288;
+    q.points = {IV{a - past, a, a}, IV{-78652, a, a}, IV{a, a, a}, IV{a, a, a},
+                IV{a, -177143, -128509}, IV{b, b, b}, IV{b, b, b}, IV{b, b, b}};
+    return q;
+  };
+  for (const std::int64_t past : {1, 2, 3}) {
+    EXPECT_EQ(impact::test::certify_no_contact(flat(past), {}, 20000), ExactAnswer::NoContact) << past;
+    EXPECT_EQ(impact::test::certify_no_contact(degenerate(past), {}, 20000), ExactAnswer::NoContact) << past;
+  }
+  // On the edge: a contact at t = 0 that no budget may exclude.
+  EXPECT_EQ(impact::test::certify_no_contact(flat(0), {}, 20000), ExactAnswer::Unknown);
+  EXPECT_EQ(impact::test::certify_no_contact(degenerate(0), {}, 20000), ExactAnswer::Unknown);
+  EXPECT_TRUE(impact::test::exact_contact_at(flat(0), 0, 0, 1, 1, 1, 1));
+  EXPECT_TRUE(impact::test::exact_contact_at(degenerate(0), 0, 0, 1, 0, 0, 0));
+}
+
 TEST(CcdExact, RandomSmallIntegersDouble) { random_queries<double>(3, 0, 4000, 11, false, 0); }
 TEST(CcdExact, RandomSmallIntegersFloat) { random_queries<float>(3, 0, 4000, 12, false, 0); }
 TEST(CcdExact, RandomWiderIntegersDouble) { random_queries<double>(1000, 8, 4000, 13, false, 0); }
-TEST(CcdExact, PerturbedContactsDouble) { random_queries<double>(std::int64_t(1) << 45, 50, 1500, 14, true, 2); }
+TEST(CcdExact, PerturbedContactsDouble) { random_queries<double>(std::int64_t(1) << 45, 50, 1500, 14, true, 4); }
 TEST(CcdExact, PerturbedContactsFloat) { random_queries<float>(std::int64_t(1) << 16, 20, 1500, 15, true, 2); }
 
 }  // namespace

@@ -149,6 +149,19 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
   const int kMaxDepth = 60;
   std::size_t used = 0;
   const std::size_t nf = 5 + directions.size();
+  // Values of the exclusion functions (3 components, the two box directions, the given
+  // directions) at up to 16 points; nb and mb are set per box below.
+  std::vector<std::array<BigInt, 16>> val(nf), clipped(nf);
+  std::array<std::int64_t, 3> nb{0, 0, 0}, mb{0, 0, 0};
+  auto eval_at = [&](std::int64_t T, int A, std::int64_t U, int B, std::int64_t V, int C,
+                     std::vector<std::array<BigInt, 16>>& out, std::size_t slot) {
+    const auto f = detail_exact::corner(q, T, A, U, B, V, C);
+    for (std::size_t i = 0; i < 3; ++i) out[i][slot] = f[i];
+    out[3][slot] = f[0].mul(nb[0]) + f[1].mul(nb[1]) + f[2].mul(nb[2]);
+    out[4][slot] = f[0].mul(mb[0]) + f[1].mul(mb[1]) + f[2].mul(mb[2]);
+    for (std::size_t j = 0; j < directions.size(); ++j)
+      out[5 + j][slot] = f[0].mul(directions[j][0]) + f[1].mul(directions[j][1]) + f[2].mul(directions[j][2]);
+  };
   while (!stack.empty()) {
     const XBox b = stack.back();
     stack.pop_back();
@@ -162,7 +175,8 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
     // Integer approximations of two directions at the box's start time: the plane normal, and the
     // part of F at the centre of the start face orthogonal to the longest edge (for parallel
     // edges and degenerate triangles). Any integer direction gives a valid exclusion.
-    std::array<std::int64_t, 3> nb{0, 0, 0}, mb{0, 0, 0};
+    nb = {0, 0, 0};
+    mb = {0, 0, 0};
     {
       const long double t = std::ldexp((long double)b.n[0], -A);
       const long double uc = std::ldexp((long double)(2 * b.n[1] + 1), -B - 1),
@@ -203,22 +217,53 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
       to_int(nn, nb);
       to_int(mm, mb);
     }
-    // Exact corner values of every exclusion function.
-    std::vector<std::array<BigInt, 8>> val(nf);
-    for (int c = 0; c < 8; ++c) {
-      const auto f = detail_exact::corner(q, b.n[0] + ((c >> 2) & 1), A, b.n[1] + ((c >> 1) & 1), B, b.n[2] + (c & 1), C);
-      for (std::size_t i = 0; i < 3; ++i) val[i][std::size_t(c)] = f[i];
-      val[3][std::size_t(c)] = f[0].mul(nb[0]) + f[1].mul(nb[1]) + f[2].mul(nb[2]);
-      val[4][std::size_t(c)] = f[0].mul(mb[0]) + f[1].mul(mb[1]) + f[2].mul(mb[2]);
-      for (std::size_t j = 0; j < directions.size(); ++j)
-        val[5 + j][std::size_t(c)] = f[0].mul(directions[j][0]) + f[1].mul(directions[j][1]) + f[2].mul(directions[j][2]);
+    // Exact values of every exclusion function at the box's corners (they also guide the split).
+    for (int c = 0; c < 8; ++c)
+      eval_at(b.n[0] + ((c >> 2) & 1), A, b.n[1] + ((c >> 1) & 1), B, b.n[2] + (c & 1), C, val, std::size_t(c));
+    // The exclusion itself looks at the box clipped to the triangle (u + v <= 1): F is linear in t
+    // for fixed (u, v) and affine in (u, v) for fixed t, so its range over [t0, t1] x polygon is the
+    // hull of its values at (t0 or t1, polygon vertex). Clipping matters near the edge u + v = 1:
+    // there the unclipped corners lie beyond the triangle, where a contact may be (a point just past
+    // the edge f1-f2 would otherwise need boxes of its distance's size all along the diagonal).
+    std::size_t used_points = 8;
+    const std::vector<std::array<BigInt, 16>>* excl = &val;
+    if (q.vertex_face) {
+      // Polygon vertices (U, depth of u, V, depth of v): the corners inside the triangle and the
+      // crossings of u + v = 1 with the box's edges (strictly inside an edge).
+      struct UV { std::int64_t U; int Bu; std::int64_t V; int Cv; };
+      UV poly[8];
+      int np = 0;
+      const U128 one = U128(1) << (B + C);
+      auto sum = [&](std::int64_t U, std::int64_t V) { return (U128(U) << C) + (U128(V) << B); };  // (u + v) 2^(B+C)
+      const std::int64_t U0 = b.n[1], V0 = b.n[2];
+      bool inside = true;
+      for (int c = 0; c < 4; ++c) {
+        const std::int64_t U = U0 + ((c >> 1) & 1), V = V0 + (c & 1);
+        if (sum(U, V) <= one) poly[np++] = UV{U, B, V, C};
+        else inside = false;
+      }
+      if (!inside) {
+        const std::int64_t pb = std::int64_t(1) << B, pc = std::int64_t(1) << C;
+        for (int e = 0; e < 2; ++e) {
+          const std::int64_t V = V0 + e;  // edge v = V / 2^C: crossing at u = 1 - v
+          if (sum(U0, V) < one && sum(U0 + 1, V) > one) poly[np++] = UV{pc - V, C, V, C};
+          const std::int64_t U = U0 + e;  // edge u = U / 2^B: crossing at v = 1 - u
+          if (sum(U, V0) < one && sum(U, V0 + 1) > one) poly[np++] = UV{U, B, pb - U, B};
+        }
+        for (int k = 0; k < np; ++k)
+          for (int e = 0; e < 2; ++e)
+            eval_at(b.n[0] + e, A, poly[k].U, poly[k].Bu, poly[k].V, poly[k].Cv, clipped, std::size_t(2 * k + e));
+        used_points = std::size_t(2 * np);
+        excl = &clipped;
+      }
     }
     bool excluded = false;
     for (std::size_t j = 0; j < nf && !excluded; ++j) {
       bool pos = true, neg = true;
-      for (const auto& x : val[j]) {
-        pos = pos && x.sign() > 0;
-        neg = neg && x.sign() < 0;
+      for (std::size_t c = 0; c < used_points; ++c) {
+        const int sg = (*excl)[j][c].sign();
+        pos = pos && sg > 0;
+        neg = neg && sg < 0;
       }
       excluded = pos || neg;
     }
