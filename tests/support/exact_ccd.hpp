@@ -1,17 +1,23 @@
 // SPDX-License-Identifier: MIT
 // An exact reference for the CCD tests, independent of the library's floating-point search.
 // Inputs are integer coordinates (the test converts them to double or float by one exact power of
-// two scale). Values of F(t, u, v) (vertex-face: p - f0 - u (f1 - f0) - v (f2 - f0); edge-edge:
-// a0 + u (a1 - a0) - b0 - v (b1 - b0)) at dyadic parameters are integers after scaling by
-// 2^(A+B+C), computed exactly in a 256-bit two's-complement integer. Since F is linear in each of
-// t, u, v separately, its exact range on a box is the hull of the 8 corner values, so a box whose
-// corner values of one component (or of n . F for an integer direction n) all have one strict sign
-// contains no contact. certify_no_contact subdivides until every box is excluded (a proof that
-// there is no contact for t in [0, 1]) or gives up (Unknown) after a budget or at depth 60 per
-// variable. Besides the given directions, each box also tries integer approximations of the
-// plane normal and of a separating direction at the box's start time (any integer n is valid). Bounds:
-// |coordinate| < 2^53, depth <= 60 and |n_i| <= 2^61 keep every value below 2^301 (the integers have
-// 320 bits): corner values of F stay below 2^237, each product with n_i below 2^298.
+// two scale). F is the difference of the two closest candidates: vertex-face p - f0 - u (f1 - f0)
+// - v (f2 - f0), edge-edge a0 + u (a1 - a0) - b0 - v (b1 - b0). Its values at dyadic parameters
+// are integers after scaling by 2^(A+B+C), computed exactly in a 320-bit two's-complement integer.
+// The search runs over the unit cube of (t, u, v) for edge-edge and of (t, w, s) for vertex-face,
+// with u = w (1 - s), v = w s (the triangle as a collapsed square: w = u + v, s the position along
+// the edge u + v = w). F is linear in each variable separately in both cases, so its exact range
+// on a box is the hull of the 8 corner values, and a box whose corner values of one component (or
+// of n . F for an integer direction n) all have one strict sign contains no contact. (In (u, v)
+// the triangle is half a square: boxes across u + v = 1 had corners beyond the face, and a
+// degenerate face, where F depends on u + v alone, was cut into slivers along that sum.)
+// certify_no_contact subdivides until every box is excluded (a proof that there is no contact for
+// t in [0, 1]) or gives up (Unknown) after a budget, at depth 60 per variable, or on reaching a
+// point where F is exactly 0 (a contact). Besides the given directions, each box also tries
+// integer approximations of the plane normal and of a separating direction at the box's start
+// time (any integer n is valid). Bounds: |coordinate| < 2^53, depth <= 60 and |n_i| <= 2^61 keep
+// every value below 2^301 (the integers have 320 bits): corner values of F stay below 2^237, each
+// product with n_i below 2^298.
 #pragma once
 
 #include <algorithm>
@@ -20,6 +26,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace impact::test {
@@ -136,42 +143,81 @@ inline std::array<BigInt, 3> corner(const IntCcdQuery& q, std::int64_t T, int A,
   return out;
 }
 
+// Vertex-face F scaled by 2^(A+B+C) at (t = T/2^A, w = W/2^B, s = S/2^C), that is at
+// u = w (1 - s), v = w s: e0 2^(B+C) - e1 W (2^C - S) - e2 W S with e_k scaled by 2^A.
+inline std::array<BigInt, 3> corner_ws(const IntCcdQuery& q, std::int64_t T, int A, std::int64_t W, int B, std::int64_t S, int C) {
+  std::array<BigInt, 3> out;
+  const std::int64_t rest = (std::int64_t(1) << C) - S;
+  for (int i = 0; i < 3; ++i) {
+    BigInt x[4];
+    for (int k = 0; k < 4; ++k) {
+      const std::int64_t x0 = q.points[std::size_t(k)][std::size_t(i)], x1 = q.points[std::size_t(k) + 4][std::size_t(i)];
+      x[k] = BigInt::from(x0).shl(A) + BigInt::from(x1 - x0).mul(T);
+    }
+    const BigInt e0 = x[0] - x[1], e1 = x[2] - x[1], e2 = x[3] - x[1];
+    out[std::size_t(i)] = e0.shl(B + C) - e1.mul(W).mul(rest) - e2.mul(W).mul(S);
+  }
+  return out;
+}
+
+// The same vertex-face query with the face's vertices reordered so that f0, the apex of the
+// collapsed square, is opposite the face's shortest edge (longest of its two ends). F then varies
+// least along s; for a face with two coincident vertices it does not depend on s at all, whereas
+// with the apex at one of them it would depend on the product w s (boxes along a hyperbola).
+inline IntCcdQuery apex_opposite_shortest_edge(IntCcdQuery q) {
+  if (!q.vertex_face) return q;
+  auto len2 = [&](std::size_t a, std::size_t b) {
+    long double m = 0;
+    for (std::size_t e = 0; e < 8; e += 4) {
+      long double l = 0;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const long double d = (long double)q.points[a + e][i] - (long double)q.points[b + e][i];
+        l += d * d;
+      }
+      m = std::max(m, l);
+    }
+    return m;
+  };
+  // Apex 1 (f0) faces edge 2-3, apex 2 faces 1-3, apex 3 faces 1-2 (indices into points).
+  const long double l1 = len2(2, 3), l2 = len2(1, 3), l3 = len2(1, 2);
+  const std::size_t apex = l1 <= l2 && l1 <= l3 ? 1 : (l2 <= l3 ? 2 : 3);
+  if (apex != 1)
+    for (std::size_t e = 0; e < 8; e += 4) std::swap(q.points[1 + e], q.points[apex + e]);
+  return q;
+}
+
 }  // namespace detail_exact
 
 /// Tries to prove that the closed primitives never touch for t in [0, 1] (distance 0; no minimum
 /// separation). `directions`: optional integer directions n (each |n_i| <= 2^61) whose n . F is
 /// also used to exclude boxes, e.g. the normal of a plane of coplanar motion. NoContact is a
 /// proof; Unknown means the budget (boxes) or the depth limit ran out.
-inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<std::array<std::int64_t, 3>>& directions = {},
+inline ExactAnswer certify_no_contact(const IntCcdQuery& query, const std::vector<std::array<std::int64_t, 3>>& directions = {},
                                       std::size_t budget = 200000) {
   using detail_exact::XBox;
+  const IntCcdQuery q = detail_exact::apex_opposite_shortest_edge(query);
   std::vector<XBox> stack{XBox{{0, 0, 0}, {0, 0, 0}}};
   const int kMaxDepth = 60;
   std::size_t used = 0;
   const std::size_t nf = 5 + directions.size();
   // Values of the exclusion functions (3 components, the two box directions, the given
-  // directions) at up to 16 points; nb and mb are set per box below.
-  std::vector<std::array<BigInt, 16>> val(nf), clipped(nf);
+  // directions) at a box's 8 corners; nb and mb are set per box below.
+  std::vector<std::array<BigInt, 8>> val(nf);
   std::array<std::int64_t, 3> nb{0, 0, 0}, mb{0, 0, 0};
-  auto eval_at = [&](std::int64_t T, int A, std::int64_t U, int B, std::int64_t V, int C,
-                     std::vector<std::array<BigInt, 16>>& out, std::size_t slot) {
-    const auto f = detail_exact::corner(q, T, A, U, B, V, C);
-    for (std::size_t i = 0; i < 3; ++i) out[i][slot] = f[i];
-    out[3][slot] = f[0].mul(nb[0]) + f[1].mul(nb[1]) + f[2].mul(nb[2]);
-    out[4][slot] = f[0].mul(mb[0]) + f[1].mul(mb[1]) + f[2].mul(mb[2]);
+  // Corner `slot` of a box at (t, second, third variable) = (T/2^A, X/2^B, Y/2^C).
+  auto eval_at = [&](std::int64_t T, int A, std::int64_t X, int B, std::int64_t Y, int C, std::size_t slot) {
+    const auto f = q.vertex_face ? detail_exact::corner_ws(q, T, A, X, B, Y, C) : detail_exact::corner(q, T, A, X, B, Y, C);
+    for (std::size_t i = 0; i < 3; ++i) val[i][slot] = f[i];
+    val[3][slot] = f[0].mul(nb[0]) + f[1].mul(nb[1]) + f[2].mul(nb[2]);
+    val[4][slot] = f[0].mul(mb[0]) + f[1].mul(mb[1]) + f[2].mul(mb[2]);
     for (std::size_t j = 0; j < directions.size(); ++j)
-      out[5 + j][slot] = f[0].mul(directions[j][0]) + f[1].mul(directions[j][1]) + f[2].mul(directions[j][2]);
+      val[5 + j][slot] = f[0].mul(directions[j][0]) + f[1].mul(directions[j][1]) + f[2].mul(directions[j][2]);
   };
   while (!stack.empty()) {
     const XBox b = stack.back();
     stack.pop_back();
     if (++used > budget) return ExactAnswer::Unknown;
     const int A = b.depth[0], B = b.depth[1], C = b.depth[2];
-    if (q.vertex_face) {
-      // Outside the triangle when u_lo + v_lo > 1: U 2^C + V 2^B > 2^(B+C).
-      const U128 lhs = (U128(b.n[1]) << C) + (U128(b.n[2]) << B);
-      if (lhs > (U128(1) << (B + C))) continue;
-    }
     // Integer approximations of two directions at the box's start time: the plane normal, and the
     // part of F at the centre of the start face orthogonal to the longest edge (for parallel
     // edges and degenerate triangles). Any integer direction gives a valid exclusion.
@@ -179,8 +225,9 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
     mb = {0, 0, 0};
     {
       const long double t = std::ldexp((long double)b.n[0], -A);
-      const long double uc = std::ldexp((long double)(2 * b.n[1] + 1), -B - 1),
-                        vc = std::ldexp((long double)(2 * b.n[2] + 1), -C - 1);
+      const long double c1 = std::ldexp((long double)(2 * b.n[1] + 1), -B - 1),
+                        c2 = std::ldexp((long double)(2 * b.n[2] + 1), -C - 1);
+      const long double uc = q.vertex_face ? c1 * (1 - c2) : c1, vc = q.vertex_face ? c1 * c2 : c2;
       long double x[4][3];
       for (int k = 0; k < 4; ++k)
         for (int i = 0; i < 3; ++i) {
@@ -217,51 +264,17 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
       to_int(nn, nb);
       to_int(mm, mb);
     }
-    // Exact values of every exclusion function at the box's corners (they also guide the split).
+    // Exact values of every exclusion function at the box's corners.
     for (int c = 0; c < 8; ++c)
-      eval_at(b.n[0] + ((c >> 2) & 1), A, b.n[1] + ((c >> 1) & 1), B, b.n[2] + (c & 1), C, val, std::size_t(c));
-    // The exclusion itself looks at the box clipped to the triangle (u + v <= 1): F is linear in t
-    // for fixed (u, v) and affine in (u, v) for fixed t, so its range over [t0, t1] x polygon is the
-    // hull of its values at (t0 or t1, polygon vertex). Clipping matters near the edge u + v = 1:
-    // there the unclipped corners lie beyond the triangle, where a contact may be (a point just past
-    // the edge f1-f2 would otherwise need boxes of its distance's size all along the diagonal).
-    std::size_t used_points = 8;
-    const std::vector<std::array<BigInt, 16>>* excl = &val;
-    if (q.vertex_face) {
-      // Polygon vertices (U, depth of u, V, depth of v): the corners inside the triangle and the
-      // crossings of u + v = 1 with the box's edges (strictly inside an edge).
-      struct UV { std::int64_t U; int Bu; std::int64_t V; int Cv; };
-      UV poly[8];
-      int np = 0;
-      const U128 one = U128(1) << (B + C);
-      auto sum = [&](std::int64_t U, std::int64_t V) { return (U128(U) << C) + (U128(V) << B); };  // (u + v) 2^(B+C)
-      const std::int64_t U0 = b.n[1], V0 = b.n[2];
-      bool inside = true;
-      for (int c = 0; c < 4; ++c) {
-        const std::int64_t U = U0 + ((c >> 1) & 1), V = V0 + (c & 1);
-        if (sum(U, V) <= one) poly[np++] = UV{U, B, V, C};
-        else inside = false;
-      }
-      if (!inside) {
-        const std::int64_t pb = std::int64_t(1) << B, pc = std::int64_t(1) << C;
-        for (int e = 0; e < 2; ++e) {
-          const std::int64_t V = V0 + e;  // edge v = V / 2^C: crossing at u = 1 - v
-          if (sum(U0, V) < one && sum(U0 + 1, V) > one) poly[np++] = UV{pc - V, C, V, C};
-          const std::int64_t U = U0 + e;  // edge u = U / 2^B: crossing at v = 1 - u
-          if (sum(U, V0) < one && sum(U, V0 + 1) > one) poly[np++] = UV{U, B, pb - U, B};
-        }
-        for (int k = 0; k < np; ++k)
-          for (int e = 0; e < 2; ++e)
-            eval_at(b.n[0] + e, A, poly[k].U, poly[k].Bu, poly[k].V, poly[k].Cv, clipped, std::size_t(2 * k + e));
-        used_points = std::size_t(2 * np);
-        excl = &clipped;
-      }
-    }
+      eval_at(b.n[0] + ((c >> 2) & 1), A, b.n[1] + ((c >> 1) & 1), B, b.n[2] + (c & 1), C, std::size_t(c));
+    // A point of the domain where F is exactly 0 is a contact: nothing left to prove.
+    for (std::size_t c = 0; c < 8; ++c)
+      if (val[0][c].zero() && val[1][c].zero() && val[2][c].zero()) return ExactAnswer::Unknown;
     bool excluded = false;
     for (std::size_t j = 0; j < nf && !excluded; ++j) {
       bool pos = true, neg = true;
-      for (std::size_t c = 0; c < used_points; ++c) {
-        const int sg = (*excl)[j][c].sign();
+      for (std::size_t c = 0; c < 8; ++c) {
+        const int sg = val[j][c].sign();
         pos = pos && sg > 0;
         neg = neg && sg < 0;
       }
@@ -269,11 +282,24 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
     }
     if (excluded) continue;
     // Choose the split (heuristic only): prefer a variable whose split lets a half be excluded
-    // (approximately), otherwise the one along which the components vary most.
+    // (approximately), otherwise the one along which the functional nearest to excluding the box
+    // varies most (the least share of its range on the minority side of 0; the components when
+    // none qualifies). Splitting where the components vary most instead cut degenerate faces
+    // (F depends on u + v alone) into ~10^5 slivers along u + v where one split in t settled them.
     double hv[8][8];
     const double scale = std::ldexp(1.0, -(A + B + C));
     for (std::size_t j = 0; j < nf && j < 8; ++j)
       for (int c = 0; c < 8; ++c) hv[c][j] = val[j][std::size_t(c)].approx() * scale;
+    std::size_t jstar = nf;  // none
+    {
+      double best_frac = 2;
+      for (std::size_t j = 0; j < nf && j < 8; ++j) {
+        double l = 1e300, h = -1e300;
+        for (int c = 0; c < 8; ++c) l = std::min(l, hv[c][j]), h = std::max(h, hv[c][j]);
+        const double frac = h > l ? std::min(-l, h) / (h - l) : 2;
+        if (frac < best_frac) best_frac = frac, jstar = j;
+      }
+    }
     int dim = -1, best_ex = -1;
     double best_w = -1;
     for (int k = 0; k < 3; ++k) {
@@ -288,7 +314,7 @@ inline ExactAnswer certify_no_contact(const IntCcdQuery& q, const std::vector<st
           const double x0 = hv[c][j], x1 = hv[c | bit][j], xm = 0.5 * (x0 + x1);
           l0 = std::min({l0, x0, xm}), h0 = std::max({h0, x0, xm});
           l1 = std::min({l1, x1, xm}), h1 = std::max({h1, x1, xm});
-          if (j < 3) wk = std::max(wk, std::abs(x1 - x0));
+          if (jstar < nf ? j == jstar : j < 3) wk = std::max(wk, std::abs(x1 - x0));
         }
         ex = std::max(ex, int(l0 > 0 || h0 < 0) + int(l1 > 0 || h1 < 0));
       }
