@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <utility>
@@ -435,13 +436,24 @@ TEST(CcdExact, ReferenceProvesPointsPastTheSlantedEdge) {
                 IV{a, -177143, -128509}, IV{b, b, b}, IV{b, b, b}, IV{b, b, b}};
     return q;
   };
+  // The face's vertices in every order: the coincident pair as f1 f2, f0 f1 and f0 f2 (the search
+  // reorders them; the contact on the edge must survive every order).
+  auto rotated = [](IntCcdQuery q, int turns) {
+    for (int k = 0; k < turns; ++k)
+      for (std::size_t e = 0; e < 8; e += 4) std::rotate(&q.points[1 + e], &q.points[2 + e], &q.points[4 + e]);
+    return q;
+  };
   for (const std::int64_t past : {1, 2, 3}) {
     EXPECT_EQ(impact::test::certify_no_contact(flat(past), {}, 20000), ExactAnswer::NoContact) << past;
-    EXPECT_EQ(impact::test::certify_no_contact(degenerate(past), {}, 20000), ExactAnswer::NoContact) << past;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(impact::test::certify_no_contact(rotated(degenerate(past), k), {}, 20000), ExactAnswer::NoContact) << past << " " << k;
+    }
   }
   // On the edge: a contact at t = 0 that no budget may exclude.
   EXPECT_EQ(impact::test::certify_no_contact(flat(0), {}, 20000), ExactAnswer::Unknown);
-  EXPECT_EQ(impact::test::certify_no_contact(degenerate(0), {}, 20000), ExactAnswer::Unknown);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(impact::test::certify_no_contact(rotated(degenerate(0), k), {}, 20000), ExactAnswer::Unknown) << k;
+  }
   EXPECT_TRUE(impact::test::exact_contact_at(flat(0), 0, 0, 1, 1, 1, 1));
   EXPECT_TRUE(impact::test::exact_contact_at(degenerate(0), 0, 0, 1, 0, 0, 0));
 }

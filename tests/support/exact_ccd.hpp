@@ -117,22 +117,28 @@ enum class ExactAnswer { NoContact, Unknown };
 
 namespace detail_exact {
 
-// One box: low end numerator and depth per variable (t, u, v); the interval is
+// One box: low end numerator and depth per variable (t, u, v or t, w, s); the interval is
 // [n / 2^depth, (n + 1) / 2^depth].
 struct XBox {
   std::int64_t n[3];
   int depth[3];
 };
 
+// Coordinate i of the four points at t = T/2^A, scaled by 2^A.
+inline std::array<BigInt, 4> positions_at(const IntCcdQuery& q, std::int64_t T, int A, int i) {
+  std::array<BigInt, 4> x;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const std::int64_t x0 = q.points[k][std::size_t(i)], x1 = q.points[k + 4][std::size_t(i)];
+    x[k] = BigInt::from(x0).shl(A) + BigInt::from(x1 - x0).mul(T);
+  }
+  return x;
+}
+
 // F scaled by 2^(A+B+C) at the corner (t = T/2^A, u = U/2^B, v = V/2^C), all three components.
 inline std::array<BigInt, 3> corner(const IntCcdQuery& q, std::int64_t T, int A, std::int64_t U, int B, std::int64_t V, int C) {
   std::array<BigInt, 3> out;
   for (int i = 0; i < 3; ++i) {
-    BigInt x[4];  // point k at time t, scaled by 2^A
-    for (int k = 0; k < 4; ++k) {
-      const std::int64_t x0 = q.points[std::size_t(k)][std::size_t(i)], x1 = q.points[std::size_t(k) + 4][std::size_t(i)];
-      x[k] = BigInt::from(x0).shl(A) + BigInt::from(x1 - x0).mul(T);
-    }
+    const auto x = positions_at(q, T, A, i);
     if (q.vertex_face) {
       const BigInt e0 = x[0] - x[1], e1 = x[2] - x[1], e2 = x[3] - x[1];
       out[std::size_t(i)] = e0.shl(B + C) - e1.shl(C).mul(U) - e2.shl(B).mul(V);
@@ -149,11 +155,7 @@ inline std::array<BigInt, 3> corner_ws(const IntCcdQuery& q, std::int64_t T, int
   std::array<BigInt, 3> out;
   const std::int64_t rest = (std::int64_t(1) << C) - S;
   for (int i = 0; i < 3; ++i) {
-    BigInt x[4];
-    for (int k = 0; k < 4; ++k) {
-      const std::int64_t x0 = q.points[std::size_t(k)][std::size_t(i)], x1 = q.points[std::size_t(k) + 4][std::size_t(i)];
-      x[k] = BigInt::from(x0).shl(A) + BigInt::from(x1 - x0).mul(T);
-    }
+    const auto x = positions_at(q, T, A, i);
     const BigInt e0 = x[0] - x[1], e1 = x[2] - x[1], e2 = x[3] - x[1];
     out[std::size_t(i)] = e0.shl(B + C) - e1.mul(W).mul(rest) - e2.mul(W).mul(S);
   }
@@ -191,7 +193,7 @@ inline IntCcdQuery apex_opposite_shortest_edge(IntCcdQuery q) {
 /// Tries to prove that the closed primitives never touch for t in [0, 1] (distance 0; no minimum
 /// separation). `directions`: optional integer directions n (each |n_i| <= 2^61) whose n . F is
 /// also used to exclude boxes, e.g. the normal of a plane of coplanar motion. NoContact is a
-/// proof; Unknown means the budget (boxes) or the depth limit ran out.
+/// proof; Unknown means the budget (boxes) or the depth limit ran out, or a contact was found.
 inline ExactAnswer certify_no_contact(const IntCcdQuery& query, const std::vector<std::array<std::int64_t, 3>>& directions = {},
                                       std::size_t budget = 200000) {
   using detail_exact::XBox;
