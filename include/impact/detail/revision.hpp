@@ -2,7 +2,7 @@
 /// \file
 /// Revision stamps: process-wide unique 64-bit numbers that an editable structure takes on
 /// construction and on every edit (MeshBvh::revision), so that a cache keyed to it (the
-/// particles' free balls, response/particle_step.hpp) sees an edit made in place, at the same
+/// particles' free balls, response/detail/particle_step_context.hpp) sees an edit made in place, at the same
 /// address, without comparing contents.
 #pragma once
 

@@ -5,7 +5,7 @@
 /// from its centre c to the mesh; since the distance is 1-Lipschitz, dist(p) >= value(c) - |p - c|
 /// for every point p and every cell, so one array read answers "how far is the surface at least"
 /// in O(1), where a tree query costs O(log n) cache misses. Made for clearance tests such as the
-/// particle free ball (response/particle_step.hpp), which skip exact queries for anything that
+/// particle free ball (response/detail/free_ball.hpp), which skip exact queries for anything that
 /// provably stays away from the surface.
 ///
 /// Numerical contract: conservative. The samples are closest_point_on_mesh distances, shrunk by

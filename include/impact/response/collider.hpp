@@ -137,7 +137,7 @@ template <class S> struct PlaneCollider {
 
   S scale() const { return std::abs(plane.offset); }
   /// Distance from the local point q to the surface when q is strictly on the allowed side, else
-  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  /// 0 (up to rounding; the free ball of response/detail/free_ball.hpp shrinks it).
   S clearance(const Vec3<S>& q) const { return std::max(plane.signed_distance(q), S(0)); }
 
   std::optional<LocalHit<S>> local_first_hit(const Vec3<S>& o, const Vec3<S>& d, S r, S t_max) const {
@@ -177,7 +177,7 @@ template <class S> struct SphereCollider {
 
   S scale() const { return sphere.center.cwiseAbs().maxCoeff() + sphere.radius; }
   /// Distance from the local point q to the surface when q is strictly on the allowed side, else
-  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  /// 0 (up to rounding; the free ball of response/detail/free_ball.hpp shrinks it).
   S clearance(const Vec3<S>& q) const {
     const S c = (q - sphere.center).norm() - sphere.radius;
     return std::max(side == ColliderSide::Inside ? -c : c, S(0));
@@ -257,7 +257,7 @@ template <class S> struct BoxCollider {
 
   S scale() const { return box.center.cwiseAbs().maxCoeff() + box.half.maxCoeff(); }
   /// Distance from the local point q to the surface when q is strictly on the allowed side, else
-  /// 0 (up to rounding; the free ball of particle_step.hpp shrinks it).
+  /// 0 (up to rounding; the free ball of response/detail/free_ball.hpp shrinks it).
   S clearance(const Vec3<S>& qw) const {
     const Vec3<S> q = box.axes.transpose() * (qw - box.center);
     if (side == ColliderSide::Inside) return std::max((box.half - q.cwiseAbs()).minCoeff(), S(0));

@@ -45,116 +45,41 @@
 /// unless StepOptions::surface_offset gives it absolutely: 256 ulps is about 3e-5 of the scene's
 /// size in float and 6e-14 in double, well above the rounding of a hit point and well below any
 /// physical length.
+///
+/// Parts: the options and counters (response/particle_step_options.hpp); what a step computes once
+/// for all particles (response/detail/particle_step_context.hpp); the free-ball cache
+/// (response/detail/free_ball.hpp); the surface offset and the reach beyond a leg's end
+/// (response/detail/particle_offset.hpp). This file: the step of one particle (casts, back-off,
+/// response, projection), validation, and the batch over many particles on threads.
 #pragma once
 
-#include "impact/bvh/traverse.hpp"
 #include "impact/core/parallel.hpp"
 #include "impact/detail/morton.hpp"
 #include "impact/response/collider.hpp"
+#include "impact/response/detail/free_ball.hpp"
+#include "impact/response/detail/particle_offset.hpp"
+#include "impact/response/detail/particle_step_context.hpp"
 #include "impact/response/particle.hpp"
+#include "impact/response/particle_step_options.hpp"
 #include "impact/response/response.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
-#include <utility>
+#include <limits>
+#include <optional>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace impact {
-
-/// Options of a particle step. The strategy is the system's default; a collider whose own
-/// strategy is not Inherit overrides it.
-template <class S> struct StepOptions {
-  Strategy strategy = Strategy::Backtrack;
-  Vec3<S> gravity = Vec3<S>::Zero();  ///< constant acceleration
-  /// Backtracking: impacts handled per particle per step; projection: passes over the colliders.
-  int max_iterations = 16;
-  /// Resting threshold: rest speed = rest_speed + rest_speed_factor * |gravity| * dt.
-  S rest_speed = S(0);
-  S rest_speed_factor = S(2);
-  /// Scale-aware surface offset in units of epsilon(S) (see the file comment).
-  S offset_ulps = S(256);
-  /// Absolute surface offset; used instead of offset_ulps when > 0.
-  S surface_offset = S(0);
-  /// Free-ball cache (Particle::free_radius) under backtracking, used when no collider moves and
-  /// there is a mesh: when a leg leaves the particle's free ball, a new ball is found from lower
-  /// bounds of the distance to every collider (free_ball_at): exact for planes, spheres and boxes,
-  /// in O(1) from a mesh's distance grid when it has one (MeshCollider::distance_grid), else from
-  /// the mesh's tree, at most free_ball_factor times the leg's length. With grids on every mesh the
-  /// ball is first sought near the leg's end (around the centre of the grid cell holding it, the
-  /// largest ball that cell's bound gives; it then also holds the legs that follow), else around
-  /// its start; a leg is also clear of the meshes, or of the other colliders, when their
-  /// balls around both of its ends (and, for grids, its midpoint) cover it. Legs inside the ball
-  /// skip every collision test. Conservative (a test is skipped only when no surface is within
-  /// the leg's reach); 0 disables it.
-  S free_ball_factor = S(8);
-  /// Threads of step_particles: <= 0 the hardware concurrency, 1 the serial loop. Particles are
-  /// independent within a step, so the particles and the counters do not depend on it (bit for
-  /// bit); sets of fewer than 512 particles are stepped serially.
-  int threads = 0;
-};
-
-/// Counters of one or more particle steps.
-struct StepStats {
-  std::size_t impacts = 0;            ///< backtracking impacts handled
-  std::size_t projections = 0;        ///< projections applied
-  std::size_t particles_hit = 0;      ///< particle-steps with at least one impact or projection
-  std::size_t budget_exhausted = 0;   ///< particle-steps that ran out of iterations
-  void operator+=(const StepStats& o) {
-    impacts += o.impacts;
-    projections += o.projections;
-    particles_hit += o.particles_hit;
-    budget_exhausted += o.budget_exhausted;
-  }
-};
-
 namespace detail {
 
 /// The default leg observer: does nothing.
 struct NoLegObserver {
   template <class V> void operator()(const V&, const V&) const {}
 };
-
-template <class S> inline S surface_offset(const StepOptions<S>& o, const Vec3<S>& x, S scale, const Vec3<S>& d) {
-  if (o.surface_offset > S(0)) return o.surface_offset;
-  return o.offset_ulps * std::numeric_limits<S>::epsilon() * (x.cwiseAbs().maxCoeff() + scale + d.cwiseAbs().maxCoeff()) +
-         std::numeric_limits<S>::min();
-}
-
-/// How far beyond a leg's end the cast reaches (see step_particle_in): `reach`, the surface offset
-/// (surface_offset's formula) and at least 8 ulps of m = |end|_inf + the colliders' largest scale
-/// + |chord|_inf; and the cast's t_max, 1 + reach / |chord|_inf (at least `reach` beyond the end;
-/// 1 for a zero chord).
-template <class S> struct EndReach {
-  S reach = S(0);
-  S t_max = S(1);
-};
-template <class S> inline EndReach<S> end_reach(const StepOptions<S>& o, const Vec3<S>& end, const Vec3<S>& chord, S scale) {
-  const S eps = std::numeric_limits<S>::epsilon();
-  const S c_max = chord.cwiseAbs().maxCoeff();
-  const S m = end.cwiseAbs().maxCoeff() + scale + c_max;
-  EndReach<S> r;
-  r.reach = o.surface_offset > S(0) ? std::max(o.surface_offset, S(8) * eps * m)
-                                    : std::max(o.offset_ulps, S(8)) * eps * m + std::numeric_limits<S>::min();
-  if (c_max > S(0)) r.t_max = S(1) + r.reach / c_max;
-  return r;
-}
-
-/// Whether the backed-off point x + s c of a hit leg (0 < s < 1), once rounded, provably stays on
-/// the particle's side of the hit's tangent plane when it was `delta` from it: each rounded
-/// component is off by at most u (|s c_k| + |x_k + s c_k|) <= u (|x|_inf + 3 |c|_inf) (u = eps / 2,
-/// two roundings), so the point moves by at most eps (|x|_inf + 3 |c|_inf) (sqrt(3) u < eps); at
-/// least twice that leaves it delta / 2 or more from the plane. The scale-aware offset (256 eps
-/// (|hit|_inf + scale + |c|_inf), with |x|_inf <= |hit|_inf + |c|_inf) always passes; only an
-/// absolute StepOptions::surface_offset below the coordinates' rounding can fail it.
-template <class S> inline bool backoff_rounding_clear(S delta, const Vec3<S>& x, const Vec3<S>& c) {
-  return delta >= S(2) * std::numeric_limits<S>::epsilon() * (x.cwiseAbs().maxCoeff() + S(3) * c.cwiseAbs().maxCoeff());
-}
-
-inline Strategy effective(Strategy own, Strategy system) { return own == Strategy::Inherit ? system : own; }
 
 /// First hit of the particle's chord x -> x + d, travelled during [tau0, tau0 + len] of the step,
 /// against one collider; updates `best` (a contact whose time is the chord fraction) and `scale`.
@@ -198,157 +123,6 @@ inline void first_hit_one(const C& c, int index, const Vec3<S>& x, const Vec3<S>
 template <class C> struct IsMeshCollider : std::false_type {};
 template <class BV> struct IsMeshCollider<MeshCollider<BV>> : std::true_type {};
 
-/// The point x in the frame of pose P, for distance bounds (free balls): x itself when every
-/// static backtracking collider's pose is the identity (StepContext::identity_poses), where the
-/// product would only turn some zeros' signs.
-template <class S> inline Vec3<S> bound_frame(const RigidTransform<S>& P, const Vec3<S>& x, bool identity) {
-  if (identity) return x;
-  return P.R.transpose() * (x - P.t);
-}
-
-/// A free ball around a centre: the radii within which the centre of a particle of the given
-/// radius stays clear of the meshes and of the other backtracking colliders.
-template <class S> struct FreeBallRefresh {
-  bool cheap = true;                 ///< every mesh had a grid (the radii came in O(1))
-  Vec3<S> center = Vec3<S>::Zero();  ///< the balls' centre
-  S mesh_radius = S(0);              ///< clear of every backtracking mesh
-  S other_radius = S(0);             ///< clear of every backtracking plane, sphere and box
-};
-
-/// min(R, a lower bound of the distance from the local point q to the mesh of c), from its tree:
-/// the walk descends only into nodes whose box contains q; any other node bounds its triangles by
-/// its box's distance, and the leaves that contain q give exact triangle distances. Out of line
-/// (free_ball_at, small without it, is inlined into the grids' refreshes).
-template <class BV, class S>
-IMPACT_NOINLINE S tree_distance_bound(const MeshCollider<BV>& c, const Vec3<S>& q, S R) {
-  traverse(
-      c.mesh->tree(),
-      [&](const BV& bv) {
-        const S d2 = squared_distance_to_bv(q, bv);
-        if (d2 >= R * R) return false;
-        if (d2 > S(0)) {
-          R = std::sqrt(d2);
-          return false;
-        }
-        return true;
-      },
-      [&](std::int32_t k) {
-        R = std::min(R, (q - closest_on_triangle(q, c.mesh->triangle(k)).point).norm());
-        return true;
-      });
-  return R;
-}
-
-/// The free ball around x, for a leg of length len of a particle of the given radius, clear of
-/// every backtracking collider (all static here). Planes, spheres and boxes give their exact
-/// clearance (shrunk for rounding). A mesh with a distance grid (MeshCollider::distance_grid)
-/// bounds it in O(1) from the grid, with no cap. Otherwise the radius is capped at
-/// free_ball_factor * len and is a cheap lower bound of the distance: the walk descends only
-/// into nodes whose box contains x; any other node bounds its triangles by its box's distance,
-/// and the leaves that contain x give exact triangle distances. Conservative, O(depth) per mesh.
-/// A mesh collider `known` of the set, when given, is bounded by known_bound instead (a lower
-/// bound of the distance from x to it that the caller has already).
-template <class S, class BV, class... X>
-inline FreeBallRefresh<S> free_ball_at(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV, X...>& colliders,
-                                       const StepOptions<S>& opt, const MeshCollider<BV>* known = nullptr,
-                                       S known_bound = std::numeric_limits<S>::infinity(), bool identity = false) {
-  FreeBallRefresh<S> out;
-  out.center = x;
-  const S eps = std::numeric_limits<S>::epsilon();
-  S R = known_bound;  // bound on the distance of the centre to any mesh (`known`'s given)
-  for (const auto& c : colliders.meshes) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack || &c == known) continue;
-    const Vec3<S> q = bound_frame(c.motion.pose, x, identity);
-    if (c.distance_grid) {
-      R = std::min(R, c.distance_grid->lower_bound(q));
-      continue;
-    }
-    out.cheap = false;
-    R = tree_distance_bound(c, q, std::min(R, opt.free_ball_factor * len + radius));
-  }
-  // keep clear of rounding: shrink by a relative and a scale-aware absolute margin
-  const S x_margin = S(64) * eps * x.cwiseAbs().maxCoeff();
-  auto shrink = [&](S r) {
-    r = (r - radius) * (S(1) - S(64) * eps) - x_margin;
-    return r > S(0) ? r : S(0);
-  };
-  out.mesh_radius = shrink(R);
-  S Ro = std::numeric_limits<S>::infinity();  // the same for planes, spheres and boxes
-  auto simple = [&](const auto& c) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) return;
-    const Vec3<S> q = bound_frame(c.motion.pose, x, identity);
-    Ro = std::min(Ro, c.clearance(q) * (S(1) - S(64) * eps) - S(64) * eps * (q.cwiseAbs().maxCoeff() + c.scale()));
-  };
-  for (const auto& c : colliders.planes) simple(c);
-  for (const auto& c : colliders.spheres) simple(c);
-  for (const auto& c : colliders.boxes) simple(c);
-  colliders.for_each_extra(simple);
-  out.other_radius = shrink(Ro);
-  return out;
-}
-
-/// The clear radius of a refresh: the smaller of the meshes' and the other colliders'.
-template <class S>
-inline S clear_radius(const FreeBallRefresh<S>& f) {
-  return std::min(f.mesh_radius, f.other_radius);
-}
-
-/// A free ball holding x, from the distance grids (every backtracking mesh has one): the ball
-/// around the centre of the grid cell holding x (of the first such mesh, mapped to the world),
-/// when it holds x, else the ball around x. A grid's bound at a point is its cell's value less
-/// the distance to the cell's centre, so the ball around the centre holds the ball around any
-/// point of the cell that its bound would give (for the meshes; the planes, spheres and boxes are
-/// measured at the centre too): a larger ball, which more of the legs that follow stay in.
-template <class S, class BV, class... X>
-inline FreeBallRefresh<S> free_ball_near(const Vec3<S>& x, S len, S radius, const ColliderSet<S, BV, X...>& colliders,
-                                         const StepOptions<S>& opt, bool identity = false) {
-  for (const auto& c : colliders.meshes) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack || !c.distance_grid) continue;
-    const RigidTransform<S>& P = c.motion.pose;
-    S bound = S(0);
-    const Vec3<S> centre = c.distance_grid->cell_bound(bound_frame(P, x, identity), bound);
-    const Vec3<S> m = identity ? centre : P.apply(centre);
-    if (m == x) break;
-    // the bound at m: the one at the cell's centre when m maps back onto it (exactly, as under
-    // the identity), else the grid's bound at the point m maps to
-    const Vec3<S> qm = bound_frame(P, m, identity);
-    const FreeBallRefresh<S> f =
-        free_ball_at(m, len, radius, colliders, opt, &c, qm == centre ? bound : c.distance_grid->lower_bound(qm), identity);
-    const S r = clear_radius(f);
-    if ((x - m).squaredNorm() <= r * r) return f;
-    break;
-  }
-  return free_ball_at(x, len, radius, colliders, opt, static_cast<const MeshCollider<BV>*>(nullptr), std::numeric_limits<S>::infinity(), identity);
-}
-
-/// The radius of a ball around y that the ball (center, r) holds (0 when it does not hold y):
-/// r less the distance, less its rounding.
-template <class S> inline S radius_within(const Vec3<S>& y, const Vec3<S>& center, S r) {
-  const S eps = std::numeric_limits<S>::epsilon();
-  const S q = r - (y - center).norm() * (S(1) + S(8) * eps) - S(8) * eps * (y.cwiseAbs().maxCoeff() + center.cwiseAbs().maxCoeff());
-  return q > S(0) ? q : S(0);
-}
-
-/// True when every static backtracking mesh (each with a distance grid) provably keeps the
-/// segment x -> e clear, given clear radii rx and re for the meshes at both ends (balls of
-/// centres clear of every mesh): the two balls cover the segment (their radii add up to its
-/// length), or the ball around the midpoint bridges the gap between them.
-template <class S, class BV, class... X>
-inline bool grids_clear_segment(S rx, S re, const Vec3<S>& x, const Vec3<S>& e, S len, S radius,
-                                const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt, bool identity = false) {
-  const S margin = S(64) * std::numeric_limits<S>::epsilon() * (len + x.cwiseAbs().maxCoeff() + e.cwiseAbs().maxCoeff());
-  if (rx + re >= len + margin) return true;
-  if (!(rx > S(0) && re > S(0))) return false;
-  const Vec3<S> m = (x + e) / S(2);
-  for (const auto& c : colliders.meshes) {
-    if (effective(c.strategy, opt.strategy) != Strategy::Backtrack) continue;
-    if (!c.distance_grid) return false;
-    const S rm = c.distance_grid->lower_bound(bound_frame(c.motion.pose, m, identity)) - radius;
-    if (!(rx + rm >= len / S(2) + margin && rm + re >= len / S(2) + margin)) return false;
-  }
-  return true;
-}
-
 /// Time of impact within a leg of length `left` starting at x with velocity v and acceleration
 /// a, of a particle of radius r: the chord's hit fraction s refined on the parabola against the
 /// tangent plane at the hit, which moves with the collider's velocity there and passes through
@@ -378,212 +152,6 @@ inline S impact_time(const Vec3<S>& x, const Vec3<S>& v, const Vec3<S>& a, const
   const S tau = r1 >= S(0) ? r1 : r2;
   if (!(tau >= S(0) && tau <= left)) return chord;
   return tau;
-}
-
-}  // namespace detail
-
-namespace detail {
-
-/// A 64-bit digest of a sequence of values (their bit patterns), for StepContext::ball_key.
-struct BallKeyHasher {
-  std::uint64_t h = 0x6a09e667f3bcc909ull;
-  void word(std::uint64_t w) {
-    h ^= w + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h *= 0xff51afd7ed558ccdull;
-    h ^= h >> 32;
-  }
-  template <class S> void scalar(S x) {
-    static_assert(sizeof(S) <= sizeof(std::uint64_t), "BallKeyHasher: scalar wider than 64 bits");
-    std::uint64_t w = 0;
-    std::memcpy(&w, &x, sizeof(S));
-    word(w);
-  }
-  template <class M> void matrix(const M& m) {
-    for (Eigen::Index i = 0; i < m.size(); ++i) scalar(m.data()[i]);
-  }
-  void pointer(const void* p) { word(static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(p))); }
-};
-
-/// The key of a particle's free ball (Particle::free_key) for a step whose collider digest is
-/// `set_key`: the digest mixed with the particle's radius; never 0 (a particle's initial key).
-template <class S> inline std::uint64_t particle_ball_key(std::uint64_t set_key, S radius) {
-  std::uint64_t w = 0;
-  std::memcpy(&w, &radius, sizeof(S));
-  return (set_key ^ (w * 0x9e3779b97f4a7c15ull)) | 1u;
-}
-
-/// What a step computes once for every particle.
-template <class S> struct StepContext {
-  S rest = S(0);               ///< resting threshold
-  bool moving = false;         ///< some collider moves (a particle at rest can still be hit)
-  bool use_free_ball = false;  ///< the free-ball cache is in use
-  bool any_projection = false;  ///< some collider uses projection
-  bool all_grids = false;       ///< every backtracking mesh has a distance grid (free balls are O(1))
-  bool identity_poses = false;  ///< every backtracking collider's pose is exactly the identity
-  S scale = S(0);               ///< the largest scale() of the backtracking colliders (legs' end clearance)
-  /// Digest of what the free balls depend on (Particle::free_key): every collider's effective
-  /// strategy and pose, the shapes of planes, spheres and boxes, the sides, each mesh's address,
-  /// triangle count, revision (MeshBvh::revision: set_vertices() changes it) and distance grid,
-  /// each trailing-type collider's scale and clearance at seven points of its frame.
-  std::uint64_t ball_key = 0;
-  template <class BV, class... X> StepContext(const ColliderSet<S, BV, X...>& colliders, S dt, const StepOptions<S>& opt) {
-    rest = opt.rest_speed + opt.rest_speed_factor * opt.gravity.norm() * dt;
-    moving = colliders.any_moving();
-    use_free_ball = opt.free_ball_factor > S(0) && !moving && !colliders.meshes.empty();
-    colliders.for_each(
-        [&](const auto& c, int) { any_projection = any_projection || effective(c.strategy, opt.strategy) == Strategy::Project; });
-    all_grids = true;
-    for (const auto& c : colliders.meshes)
-      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !c.distance_grid) all_grids = false;
-    identity_poses = true;
-    colliders.for_each([&](const auto& c, int) {
-      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack) scale = std::max(scale, c.scale());
-      if (effective(c.strategy, opt.strategy) == Strategy::Backtrack && !(c.motion.pose.R == Mat3<S>::Identity() && c.motion.pose.t == Vec3<S>::Zero()))
-        identity_poses = false;
-    });
-    if (use_free_ball) ball_key = set_key(colliders, opt);
-  }
-
-  template <class BV, class... X> static std::uint64_t set_key(const ColliderSet<S, BV, X...>& colliders, const StepOptions<S>& opt) {
-    BallKeyHasher k;
-    k.word(colliders.planes.size());
-    k.word(colliders.spheres.size());
-    k.word(colliders.boxes.size());
-    k.word(colliders.meshes.size());
-    k.word(colliders.size());
-    colliders.for_each([&](const auto& c, int) {
-      k.word(static_cast<std::uint64_t>(effective(c.strategy, opt.strategy)));
-      k.matrix(c.motion.pose.R);
-      k.matrix(c.motion.pose.t);
-    });
-    for (const auto& c : colliders.planes) {
-      k.matrix(c.plane.normal);
-      k.scalar(c.plane.offset);
-    }
-    for (const auto& c : colliders.spheres) {
-      k.matrix(c.sphere.center);
-      k.scalar(c.sphere.radius);
-      k.word(static_cast<std::uint64_t>(c.side));
-    }
-    for (const auto& c : colliders.boxes) {
-      k.matrix(c.box.center);
-      k.matrix(c.box.axes);
-      k.matrix(c.box.half);
-      k.word(static_cast<std::uint64_t>(c.side));
-    }
-    for (const auto& c : colliders.meshes) {
-      k.pointer(c.mesh);
-      k.word(c.mesh ? static_cast<std::uint64_t>(c.mesh->num_triangles()) : 0u);
-      k.word(c.mesh ? c.mesh->revision() : 0u);  // set_vertices() in place, at the same address
-      k.pointer(c.distance_grid);
-      k.word(static_cast<std::uint64_t>(c.side));
-    }
-    colliders.for_each_extra([&](const auto& c) {
-      const S r = c.scale();
-      k.scalar(r);
-      k.scalar(c.clearance(Vec3<S>::Zero()));
-      for (int a = 0; a < 3; ++a)
-        for (const S sgn : {S(-1), S(1)}) k.scalar(c.clearance(Vec3<S>(Vec3<S>::Unit(a) * (sgn * r))));
-    });
-    return k.h;
-  }
-};
-
-/// What free_flight needs of a step, computed once per call (the per-particle loop then reads
-/// no options): whether free flights are possible at all, the step's displacement and velocity
-/// change under gravity (the same products step_particle_in computes), the collider digest.
-template <class S> struct FreeFlightStep {
-  bool possible = false;
-  S dt = S(0);
-  Vec3<S> half_g_dt2 = Vec3<S>::Zero();  ///< (dt^2 / 2) g
-  Vec3<S> g_dt = Vec3<S>::Zero();        ///< g dt
-  std::uint64_t set_key = 0;
-  FreeFlightStep(S dt_, const StepOptions<S>& opt, const StepContext<S>& ctx)
-      : possible(ctx.use_free_ball && !ctx.any_projection && opt.max_iterations > 0 && dt_ > S(0)),
-        dt(dt_),
-        half_g_dt2((dt_ * dt_ / S(2)) * opt.gravity),
-        g_dt(opt.gravity * dt_),
-        set_key(ctx.ball_key) {}
-};
-
-/// The step of a particle whose whole flight stays inside its free ball: exactly what
-/// step_particle_in does on that path (one all-clear leg), without its set-up. Returns false, with
-/// the particle untouched, when the full step is needed.
-template <class S>
-inline bool free_flight(Particle<S>& p, const FreeFlightStep<S>& f) {
-  if (!f.possible || !(p.free_radius > S(0)) || p.free_key != particle_ball_key(f.set_key, p.radius)) return false;
-  const Vec3<S> d = p.velocity * f.dt + f.half_g_dt2;
-  if (d.squaredNorm() == S(0)) return false;
-  const S R2 = p.free_radius * p.free_radius;
-  const Vec3<S> e = p.position + d;
-  if (!((p.position - p.free_center).squaredNorm() <= R2 && (e - p.free_center).squaredNorm() <= R2)) return false;
-  p.position = e;
-  p.velocity += f.g_dt;
-  return true;
-}
-
-/// Which colliders a leg provably stays clear of (their tests are skipped).
-struct LegClearance {
-  bool all = false;     ///< every collider
-  bool meshes = false;  ///< every mesh
-  bool others = false;  ///< every plane, sphere and box
-};
-
-/// The free-ball test of the leg x -> x + d of particle p (the free-ball cache is in use: every
-/// collider is static): inside the particle's ball, every collider is clear; else the ball is
-/// refreshed (StepOptions::free_ball_factor) and the meshes, or the rest, may still be clear.
-template <class S, class BV, class... X>
-LegClearance leg_clearance(Particle<S>& p, const Vec3<S>& x, const Vec3<S>& d, const ColliderSet<S, BV, X...>& colliders,
-                           const StepOptions<S>& opt, const StepContext<S>& ctx) {
-  LegClearance c;
-  const Vec3<S> e = x + d;
-  auto in_ball = [&](const Vec3<S>& y) { return (y - p.free_center).squaredNorm() <= p.free_radius * p.free_radius; };
-  if (p.free_radius > S(0) && in_ball(x) && in_ball(e)) {
-    c.all = true;
-  } else if (p.free_radius < S(0) && in_ball(x)) {
-    // cooling down: the last tree refresh here found a surface too near to help, do not retry yet
-  } else {
-    const S len = d.norm();
-    // The particle's own ball around x (trees: centred there, found where the last leg ended;
-    // grids: holding x, usually found where the last leg ended): both of its radii around x are
-    // then at least free_radius less the distance to its centre.
-    const bool own_at_x = p.free_radius >= S(0) && (p.free_center == x || (ctx.all_grids && in_ball(x)));
-    S rx_mesh = own_at_x ? (p.free_center == x ? p.free_radius : radius_within(x, p.free_center, p.free_radius)) : S(0);
-    S rx_other = rx_mesh;
-    // First a ball near the leg's end (it holds the next legs too) when the grids make it O(1);
-    // else, or when it does not hold the leg, a ball around x.
-    FreeBallRefresh<S> fe;
-    fe.cheap = false;
-    if (ctx.all_grids) {
-      fe = detail::free_ball_near(e, len, p.radius, colliders, opt, ctx.identity_poses);
-      p.free_center = fe.center;  // near where the next leg starts, unless this one is hit
-      p.free_radius = detail::clear_radius(fe);
-      c.all = in_ball(x) && in_ball(e);
-    }
-    if (!c.all && !own_at_x) {
-      const auto fx = detail::free_ball_at(x, len, p.radius, colliders, opt, static_cast<const MeshCollider<BV>*>(nullptr), std::numeric_limits<S>::infinity(), ctx.identity_poses);
-      rx_mesh = fx.mesh_radius;
-      rx_other = fx.other_radius;
-      const S rx = detail::clear_radius(fx);
-      c.all = (e - x).squaredNorm() <= rx * rx;
-      if (!fe.cheap) {
-        p.free_center = x;
-        p.free_radius = rx;
-        // trees: a surface is near, retry two legs away
-        if (!fx.cheap && !c.all) p.free_radius = -S(2) * len;
-      }
-    }
-    if (!c.all) {
-      // the meshes, or the rest, alone may still be clear: the ball at x, or (grids) the balls
-      // at both ends and the midpoint
-      const S e2 = (e - x).squaredNorm();
-      const S re_mesh = fe.cheap ? radius_within(e, fe.center, fe.mesh_radius) : S(0);
-      const S re_other = fe.cheap ? radius_within(e, fe.center, fe.other_radius) : S(0);
-      c.meshes = e2 <= rx_mesh * rx_mesh || (fe.cheap && detail::grids_clear_segment(rx_mesh, re_mesh, x, e, len, p.radius, colliders, opt, ctx.identity_poses));
-      c.others = e2 <= rx_other * rx_other || (fe.cheap && rx_other + re_other >= len);
-    }
-  }
-  return c;
 }
 
 /// The first hit of the chord x -> x + d (travelled during [tau0, tau0 + len] of the step) of a
