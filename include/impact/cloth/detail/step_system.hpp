@@ -45,6 +45,7 @@ struct StepBuffers {
   std::vector<std::uint32_t> stamp, inc_off, inc, inc_fill, todo, run;
   std::vector<CcdResult<S>> res;
   std::vector<PiercePlane> plane0;
+  std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack;
   Vertices<S> x1_seen;
 };
 

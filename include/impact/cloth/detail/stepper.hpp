@@ -198,7 +198,7 @@ class Stepper {
   std::vector<std::uint8_t> grown_tri_;       // regather's triangles with a grown vertex (all 0 between calls)
   std::vector<std::uint8_t> grown_vert_;      // regather's grown vertices (all 0 between calls)
   std::vector<std::uint8_t> grown_node_;      // grown_pairs: tree nodes above such a triangle (all 0 between calls)
-  std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // grown_pairs walk
+  std::vector<std::pair<std::int32_t, std::int32_t>>& pair_stack_ = buf_.pair_stack;  // the walks' stack
   std::vector<double>& d0_ = buf_.d0;              // per candidate: a lower bound on its distance at x0
   std::vector<std::uint8_t>& d0_exact_ = buf_.d0_exact;  // ... which is the exact distance (in double)
   std::vector<std::uint32_t>& stamp_ = buf_.stamp;
