@@ -20,6 +20,7 @@
 
 #include "impact/bvh/bvh.hpp"
 #include "impact/bvh/traversal_stack.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/core/validate.hpp"
 #include "impact/geometry/aabb.hpp"
 
@@ -39,7 +40,7 @@ template <class S>
 inline float round_to_float(S v, int dir) {
   float f = static_cast<float>(v);
   if (dir < 0 ? S(f) > v : S(f) < v)
-    f = std::nextafter(f, dir < 0 ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity());
+    f = dir < 0 ? next_down(f) : next_up(f);
   return f;
 }
 }  // namespace detail

@@ -21,6 +21,7 @@
 #include "impact/ccd/edge_edge.hpp"
 #include "impact/ccd/swept_volume.hpp"
 #include "impact/ccd/vertex_face.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/core/parallel.hpp"
 #include "impact/core/sorted_union.hpp"
 #include "impact/geometry/triangle_mesh.hpp"
@@ -124,7 +125,7 @@ struct SweptMeshBvh {
   /// min_separation / 2 rounded up in S (>= it exactly): the growth of every swept box.
   static S half_separation(double min_separation) {
     S h = static_cast<S>(min_separation / 2);
-    if (static_cast<double>(h) * 2 < min_separation) h = std::nextafter(h, std::numeric_limits<S>::infinity());
+    if (static_cast<double>(h) * 2 < min_separation) h = next_up(h);
     return h;
   }
   /// Swept box of triangle f over the step.

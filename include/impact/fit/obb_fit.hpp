@@ -21,6 +21,7 @@
 /// Time O(n); a 3 x 3 symmetric eigen-decomposition per box.
 #pragma once
 
+#include "impact/core/next_float.hpp"
 #include "impact/core/types.hpp"
 #include "impact/geometry/obb.hpp"
 
@@ -139,7 +140,7 @@ Obb<S> fit_obb_in_range(const Vec3<S>* pts, std::size_t n, const Mat3<S>& axes, 
                      std::numeric_limits<double>::denorm_min();
   const auto round_up = [](double e) {
     S s = static_cast<S>(e);
-    if (double(s) < e) s = std::nextafter(s, std::numeric_limits<S>::infinity());
+    if (double(s) < e) s = next_up(s);
     return s;
   };
   for (int k = 0; k < 3; ++k) box.half[k] = round_up(ext[k] + pad);

@@ -5,6 +5,7 @@
 /// so this is also the test behind AABB trees under a relative rigid transform.
 #pragma once
 
+#include "impact/core/next_float.hpp"
 #include "impact/core/types.hpp"
 #include "impact/geometry/aabb.hpp"
 
@@ -88,14 +89,13 @@ inline bool obb_overlap(const Vec3<S>& ea, const Mat3<S>& R, const Vec3<S>& tb, 
 /// box (a negative extent) gives an empty Aabb.
 template <class S> inline Aabb<S> bounding_aabb(const Obb<S>& b) {
   if ((b.half.array() < S(0)).any()) return Aabb<S>();
-  constexpr S inf = std::numeric_limits<S>::infinity();
   // three non-negative products and two sums: within 3 ulps of the exact radius, below it at worst
   const Vec3<S> r = (b.axes.cwiseAbs() * b.half) * (S(1) + S(8) * std::numeric_limits<S>::epsilon());
   Aabb<S> box;
   for (int i = 0; i < 3; ++i) {
     // fl(c - r) is the float nearest c - r: the next float below it is below c - r (likewise above)
-    box.min[i] = std::nextafter(b.center[i] - r[i], -inf);
-    box.max[i] = std::nextafter(b.center[i] + r[i], inf);
+    box.min[i] = next_down(b.center[i] - r[i]);
+    box.max[i] = next_up(b.center[i] + r[i]);
   }
   return box;
 }

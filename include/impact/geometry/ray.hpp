@@ -4,6 +4,7 @@
 /// x + v dt is the ray (x, v dt) with t_max = 1, so its hit parameter is the fraction of the step.
 #pragma once
 
+#include "impact/core/next_float.hpp"
 #include "impact/core/types.hpp"
 #include "impact/core/validate.hpp"
 
@@ -64,7 +65,7 @@ template <class S, class Cast> auto cast_short_ray(const Ray<S>& ray, S dmax, Ca
   const int k = m - e;  // dmax 2^k = f 2^m, in [min_scale, 2 min_scale)
   Ray<S> scaled(ray.origin, Vec3<S>(std::ldexp(ray.direction[0], k), std::ldexp(ray.direction[1], k), std::ldexp(ray.direction[2], k)),
                 std::ldexp(ray.t_max, -k));
-  if (std::ldexp(scaled.t_max, k) < ray.t_max) scaled.t_max = std::nextafter(scaled.t_max, std::numeric_limits<S>::infinity());
+  if (std::ldexp(scaled.t_max, k) < ray.t_max) scaled.t_max = next_up(scaled.t_max);
   auto hit = cast(static_cast<const Ray<S>&>(scaled));
   if (!hit) return hit;
   hit->t = std::ldexp(hit->t, k);

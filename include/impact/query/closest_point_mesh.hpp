@@ -24,6 +24,7 @@
 
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/geometry/obb.hpp"
 #include "impact/geometry/transform.hpp"
 #include "impact/narrow/closest_point.hpp"
@@ -192,7 +193,7 @@ std::optional<ClosestPointMeshResult<typename BvTraits<BV>::Scalar>> closest_poi
           best_leaf = k;
           best_tp = tp;
           if constexpr (detail::exact_query_keys<BV>)
-            limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+            limit = next_down(best);
           else
             limit = best;
         }

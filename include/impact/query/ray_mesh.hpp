@@ -31,6 +31,7 @@
 #include "impact/bvh/compact_bvh.hpp"
 #include "impact/bvh/mesh_bvh.hpp"
 #include "impact/bvh/traverse.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/geometry/obb.hpp"
 #include "impact/geometry/ray.hpp"
 #include "impact/geometry/transform.hpp"
@@ -368,7 +369,7 @@ struct FirstHitCast {
       best_leaf = k;
       best_bary = Vec3<S>(h->u, h->v, h->w);
       if constexpr (exact_query_keys<BV>)
-        limit = std::nextafter(best, -std::numeric_limits<S>::infinity());
+        limit = next_down(best);
       else
         limit = best;
     }

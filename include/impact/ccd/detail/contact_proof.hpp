@@ -21,6 +21,7 @@
 #pragma once
 
 #include "impact/ccd/options.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/core/types.hpp"
 #include "impact/geometry/ray.hpp"
 #include "impact/geometry/triangle.hpp"
@@ -37,8 +38,8 @@ namespace impact::detail {
 struct Interval {
   double lo = 0.0, hi = 0.0;
 
-  static double down(double x) { return std::nextafter(x, -std::numeric_limits<double>::infinity()); }
-  static double up(double x) { return std::nextafter(x, std::numeric_limits<double>::infinity()); }
+  static double down(double x) { return next_down(x); }
+  static double up(double x) { return next_up(x); }
   static Interval point(double x) { return {x, x}; }
 
   friend Interval operator+(const Interval& a, const Interval& b) { return {down(a.lo + b.lo), up(a.hi + b.hi)}; }

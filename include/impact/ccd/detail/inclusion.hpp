@@ -32,6 +32,7 @@
 #include "impact/ccd/options.hpp"
 #include "impact/core/config.hpp"
 #include "impact/core/error.hpp"
+#include "impact/core/next_float.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -424,7 +425,7 @@ inline CcdNormalised ccd_normalise(const double (&p0)[4][3], const double (&p1)[
   }
   n.opt = opt;
   double d = std::ldexp(opt.min_separation, -e);
-  if (std::ldexp(d, e) < opt.min_separation) d = std::nextafter(d, std::numeric_limits<double>::infinity());
+  if (std::ldexp(d, e) < opt.min_separation) d = next_up(d);
   n.opt.min_separation = std::min(d, 8.0);
   n.opt.tolerance = opt.tolerance * extent;
   return n;
@@ -494,7 +495,7 @@ inline CcdResult<S> ccd_result_cast(const CcdResult<double>& r) {
   CcdResult<S> o;
   o.hit = r.hit;
   S t = static_cast<S>(r.toi);
-  if (r.hit && static_cast<double>(t) > r.toi) t = std::nextafter(t, -std::numeric_limits<S>::infinity());
+  if (r.hit && static_cast<double>(t) > r.toi) t = next_down(t);
   o.toi = std::max(t, S(0));
   o.u = static_cast<S>(r.u);
   o.v = static_cast<S>(r.v);
