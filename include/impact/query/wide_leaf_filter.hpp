@@ -362,7 +362,7 @@ template <class S> class BlockTest {
     // decision of the comparisons with zero, in three operations instead of eleven).
     // (The word taken as the compiler cannot see into it: Clang 14 otherwise merges it with the
     // sign bits of the depth's masks below into vector logic on booleans, which AVX without AVX2
-    // runs as 128-bit integer packs: 9 instructions more a block that reaches the depth.)
+    // runs as 128-bit integer packs: about 3 instructions more a block that reaches the depth.)
     const int outside = opaque_word(_mm256_movemask_pd(_mm256_or_pd(_mm256_or_pd(_mm256_xor_pd(eu, ev), _mm256_xor_pd(eu, ew)), near)));
     // every lane outside or near an edge: the depth is not needed (about half the blocks a cast
     // opens; the same operations for the others)
