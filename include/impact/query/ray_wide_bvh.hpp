@@ -307,7 +307,7 @@ template <class S, int W = 4> struct WideCast {
   /// Inlined into its two callers (GCC and Clang only, as IMPACT_WIDE_AVX).
   template <class T> __attribute__((always_inline)) IMPACT_WIDE_AVX_TARGET void block_avx(const WideTriangleBlock<T>& blk, std::int32_t block, int lanes) {
     typename BlockTest<S>::LaneHits h;  // of the block, when it hits a lane
-    const int hit = lane_test->hits_avx(blk, lanes, best, h);
+    const int hit = lane_test->hits_avx_inline(blk, lanes, best, h);
     int m = hit | h.near;
     bool lowered = false;  // by a lane of this block: later lanes are re-decided against it
     while (m) {

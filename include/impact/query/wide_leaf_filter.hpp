@@ -201,8 +201,14 @@ template <class S> class BlockTest {
   /// set_ray; compiled for AVX (call only when the CPU has it). The box entry runs
   /// detail::ray_box_entry's operations on the lanes (no NaN: `inv` is finite), its vertex
   /// minimum and maximum taken before the subtraction of the origin (rounding is monotone: the
-  /// same values).
+  /// same values). From code compiled for AVX, hits_avx_inline.
   template <class T> __attribute__((target("avx"))) int hits_avx(const WideTriangleBlock<T>& b, int count, S t_max, LaneHits& h) const {
+    return hits_avx_inline(b, count, t_max, h);
+  }
+  /// hits_avx, always inlined (into callers compiled for AVX only: the AVX leaf of the cast, where
+  /// Clang 14 otherwise kept it a call a block).
+  template <class T>
+  __attribute__((always_inline)) __attribute__((target("avx"))) int hits_avx_inline(const WideTriangleBlock<T>& b, int count, S t_max, LaneHits& h) const {
     static_assert(std::is_same_v<S, double>, "hits_avx: a ray in double");
     __m256d eu, ev, ew, det, tt;
     int near_lanes = 0;
@@ -299,6 +305,12 @@ template <class S> class BlockTest {
     static const bool avx = __builtin_cpu_supports("avx");
     return avx;
   }
+  /// `w` as it is, through an empty asm statement (no instruction): the compiler cannot see how
+  /// it was made, so it cannot merge it with later masks (lanes_avx).
+  static int opaque_word(int w) {
+    __asm__("" : "+r"(w));
+    return w;
+  }
   __attribute__((target("avx"))) static __m256d load4(const float* f) { return _mm256_cvtps_pd(_mm_load_ps(f)); }
   __attribute__((target("avx"))) static __m256d load4(const double* f) { return _mm256_load_pd(f); }
   /// The double test of the four lanes in 256-bit AVX (no FMA: the scalar test's roundings).
@@ -319,9 +331,10 @@ template <class S> class BlockTest {
   }
   /// The lanes of `lanes` the double test passes that are not near an edge, and its values, in
   /// 256-bit AVX; `near_out` gets the lanes of `lanes` near an edge (an edge function not above
-  /// band_, or NaN).
+  /// band_, or NaN). Always inlined (its callers are compiled for AVX): Clang 14 kept it a call,
+  /// its five vectors returned through memory (bunny, long rays: 35 instructions a cast).
   template <class T>
-  __attribute__((target("avx"))) int lanes_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, __m256d& eu_out, __m256d& ev_out, __m256d& ew_out,
+  __attribute__((always_inline)) __attribute__((target("avx"))) int lanes_avx(const WideTriangleBlock<T>& b, S t_max, int lanes, __m256d& eu_out, __m256d& ev_out, __m256d& ew_out,
                                                __m256d& det_out, __m256d& tt_out, int& near_out) const {
     const __m256d o0 = _mm256_broadcast_sd(o_), o1 = _mm256_broadcast_sd(o_ + 1), o2 = _mm256_broadcast_sd(o_ + 2);
     const __m256d sx = _mm256_broadcast_sd(&sx_), sy = _mm256_broadcast_sd(&sy_), sz = _mm256_broadcast_sd(&sz_);
@@ -347,7 +360,10 @@ template <class S> class BlockTest {
     // near an edge has |e| > band >= 0 for all three (no zero, no NaN), so its strict signs are its
     // sign bits: opposite strict signs exactly when eu's sign bit differs from ev's or ew's (the
     // decision of the comparisons with zero, in three operations instead of eleven).
-    const int outside = _mm256_movemask_pd(_mm256_or_pd(_mm256_xor_pd(eu, ev), _mm256_xor_pd(eu, ew))) | near_lanes;
+    // (The word taken as the compiler cannot see into it: Clang 14 otherwise merges it with the
+    // sign bits of the depth's masks below into vector logic on booleans, which AVX without AVX2
+    // runs as 128-bit integer packs: about 3 instructions more a block that reaches the depth.)
+    const int outside = opaque_word(_mm256_movemask_pd(_mm256_or_pd(_mm256_or_pd(_mm256_xor_pd(eu, ev), _mm256_xor_pd(eu, ew)), near)));
     // every lane outside or near an edge: the depth is not needed (about half the blocks a cast
     // opens; the same operations for the others)
     if ((outside & lanes) == lanes) return 0;
@@ -355,14 +371,20 @@ template <class S> class BlockTest {
     for (int v = 0; v < 3; ++v) pz[v] = _mm256_mul_pd(sz, az[v]);
     const __m256d det = _mm256_add_pd(_mm256_add_pd(eu, ev), ew);
     const __m256d tt = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(eu, pz[0]), _mm256_mul_pd(ev, pz[1])), _mm256_mul_pd(ew, pz[2]));
-    const __m256d tmd = _mm256_mul_pd(tmax, det);
-    const __m256d up = _mm256_cmp_pd(det, zero, _CMP_GT_OQ);
-    const __m256d out_up = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_LT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_GT_OQ));
-    const __m256d out_down = _mm256_or_pd(_mm256_cmp_pd(tt, zero, _CMP_GT_OQ), _mm256_cmp_pd(tt, tmd, _CMP_LT_OQ));
-    const __m256d miss = _mm256_or_pd(_mm256_cmp_pd(det, zero, _CMP_EQ_OQ), _mm256_or_pd(_mm256_and_pd(up, out_up), _mm256_andnot_pd(up, out_down)));
+    // The scalar test's checks of the depth, for det > 0 tt < 0 or tt > t_max det, for det < 0
+    // tt > 0 or tt < t_max det, as one pair on tt and t_max det with det's sign taken out (exact:
+    // negation is, and a product's rounding is symmetric in sign), so the same decisions on every
+    // lane that is not outside: there the edge functions are nonzero, not NaN and of one sign, so
+    // det is neither 0 nor NaN (a sum of same-signed nonzero values) and its check det == 0 is
+    // not needed; NaN depths fail both comparisons, as in the scalar test. (The AND/ANDNOT blend
+    // on det > 0 it replaces took 16 vector operations, now 7.)
+    const __m256d det_sign = _mm256_andnot_pd(abs_mask, det);
+    const __m256d tt_up = _mm256_xor_pd(tt, det_sign);
+    const __m256d tmd_up = _mm256_mul_pd(tmax, _mm256_and_pd(det, abs_mask));
     // Inside the edges but behind the origin (tt's rounded sign): the scalar rule decides, since
     // an origin exactly in the triangle's plane is a hit at t = 0 there (finish_ray_hit)
-    const __m256d behind = _mm256_or_pd(_mm256_and_pd(up, _mm256_cmp_pd(tt, zero, _CMP_LT_OQ)), _mm256_andnot_pd(up, _mm256_cmp_pd(tt, zero, _CMP_GT_OQ)));
+    const __m256d behind = _mm256_cmp_pd(tt_up, zero, _CMP_LT_OQ);
+    const __m256d miss = _mm256_or_pd(behind, _mm256_cmp_pd(tt_up, tmd_up, _CMP_GT_OQ));
     near_out |= _mm256_movemask_pd(behind) & ~outside & lanes;
     eu_out = eu, ev_out = ev, ew_out = ew, det_out = det, tt_out = tt;
     const int m = ~(_mm256_movemask_pd(miss) | outside) & lanes;  // (near lanes count as missed here: outside or behind holds them)
