@@ -36,6 +36,7 @@
 
 #include "impact/bvh/traversal_stack.hpp"
 #include "impact/bvh/wide_bvh.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/query/ray_mesh.hpp"
 #include "impact/query/wide_fused_slab.hpp"
 #include "impact/query/wide_leaf_filter.hpp"
@@ -189,7 +190,7 @@ template <class S, int W = 4> struct WideCast {
   int double_mask(const Node& n, float (&fk)[W]) {
     S keys[W];
     double_keys(n, keys);
-    const S limit = has_hit() ? next_below(best) : best;
+    const S limit = has_hit() ? next_down(best) : best;
     int mask = 0;
     for (int c = 0; c < W; ++c) {
       const bool in = keys[c] <= limit && n.count[c] >= 0;

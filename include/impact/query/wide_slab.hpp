@@ -12,6 +12,7 @@
 #pragma once
 
 #include "impact/bvh/wide_bvh.hpp"
+#include "impact/core/next_float.hpp"
 #include "impact/core/types.hpp"
 
 #include <algorithm>
@@ -171,7 +172,7 @@ inline void float_bounds(double x, float& down, float& up) {
 
 /// The float bounds of a cast after a hit at t = x (x >= 0 or -0, not NaN): `up` the smallest
 /// float >= x (the node test's exit bound) and `below` the largest float < x
-/// (float_round_down(next_below(x)): the entry bound, so a child entered at or after the hit is
+/// (float_round_down(next_down(x)): the entry bound, so a child entered at or after the hit is
 /// pruned), from one rounding of x: f = float(x) is one of them and the other its neighbour (for f
 /// below x, f and the float up; else the float down, -denorm_min for f = +-0, and f).
 inline void float_hit_bounds(double x, float& up, float& below) {
@@ -194,20 +195,6 @@ inline void float_hit_bounds(double x, float& up, float& below) {
 /// at most P - c (1 - 2^-24) below zero: both <= x (1 - 2^-17) - 4 e; an underflow's 2^-150 is far
 /// below the 0.98 e to spare.
 inline float float_tie_bound(float below, float e) { return below * (1.0f - 0x1p-16f) - 5.0f * e; }
-
-/// The largest S below x (x not NaN): std::nextafter(x, -infinity) without libm (the bound of a
-/// cast after a hit).
-template <class S> inline S next_below(S x) {
-  using U = std::conditional_t<std::is_same_v<S, float>, std::uint32_t, std::uint64_t>;
-  if (x == S(0)) return -std::numeric_limits<S>::denorm_min();
-  if (x == -std::numeric_limits<S>::infinity()) return x;
-  U b;
-  std::memcpy(&b, &x, sizeof b);
-  b = x > S(0) ? b - 1 : b + 1;
-  S y;
-  std::memcpy(&y, &b, sizeof y);
-  return y;
-}
 
 /// The slab test of a ray against the W children of a WideBvhNodeN<W> in float: a conservative
 /// version of WideSlab's keys (in S on the same float boxes) at a quarter of the work, for a ray
