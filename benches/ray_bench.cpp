@@ -31,6 +31,9 @@
 //    triangle geometry (float3 vertex and uint3 index buffers), RTC_BUILD_QUALITY_HIGH on both,
 //    the robust row with RTC_SCENE_FLAG_ROBUST; rtcIntersect1 with an RTCIntersectContext per ray
 //    (tnear 0, tfar t_max, mask all), as Embree's tutorials set it up.
+// Every method hands the same hit record to its caller and the bench keeps all of it (Answer: the
+// triangle, t, the barycentric weights u and v, the unit normal; Embree's Ng normalised as its
+// users would), so that no compiler leaves out of one library's cast what the other computes.
 // Reported per method and set: rays per second on one thread (thread CPU time; the median of K
 // repeats, the methods interleaved, with the range), rays per second on T threads (wall clock,
 // parallel_for over the rays), wrong answers against the referee (missed: no hit reported though
@@ -44,9 +47,11 @@
 // it at t = 0 through its front face (d . n < 0); moving away from it, both no hit there (the
 // library's tie rule, query/ray_mesh.hpp) and a hit at t = 0 (a ray tracer's convention) are
 // accepted, for every library judged; see ray_referee.hpp), build milliseconds (impact: the MeshBvh,
-// the CompactBvh and the grid, or the WideBvh; Embree: device, buffers and rtcCommitScene), and bytes (impact: the
+// the CompactBvh and the grid, or the WideBvh; Embree: device, buffers and rtcCommitScene), bytes (impact: the
 // MeshBvh with its copy of the mesh, the CompactBvh and the grid; Embree: what its memory monitor
-// callback counts after the commit, buffers included). Exits 1 when, on a closed mesh (every
+// callback counts after the commit, buffers included), and the hit record's error against impact's
+// CompactBvh cast (double) on the rays where both report the same triangle (t_err: the largest
+// |t - t'| / t_max; bary_err: of u and v; n_err: |n - n'|). Exits 1 when, on a closed mesh (every
 // edge shared by two triangles), an impact method misses a crossing or reports a triangle that
 // is not crossed (its casts are watertight: a segment that passes through the surface is never
 // missed; a graze of a silhouette vertex may be, its shear rounding the vertex off the ray), or
@@ -59,11 +64,14 @@
 #include "impact/query/ray_wide_bvh.hpp"
 #include "ray_referee.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -96,17 +104,42 @@ struct RaySet {
 };
 
 /// A method: its build figures and its cast (returns the row of F hit, or -1).
+/// What a cast hands its user, the same for every library: the triangle hit (-1: none), the ray
+/// parameter t, two barycentric weights (u, v: of the triangle's second and third vertex) and the
+/// unit normal. Every method fills all of it, as its users read it, so that no compiler leaves
+/// out a part one library computes anyway (Embree fills its whole hit record; impact's cast,
+/// inlined into a handler that reads only the triangle, would skip the normal and the weights).
+struct Answer {
+  std::int32_t triangle = -1;
+  double t = 0, u = 0, v = 0;
+  Vec3<double> normal = Vec3<double>::Zero();
+};
+
+template <class Hit> Answer impact_answer(const std::optional<Hit>& h) {
+  if (!h) return {};
+  return {h->triangle, double(h->t), double(h->barycentric[1]), double(h->barycentric[2]), h->normal.template cast<double>()};
+}
+
+/// Whether two answers are the same, bit for bit (the threads check).
+bool same_answer(const Answer& a, const Answer& b) {
+  return a.triangle == b.triangle && std::memcmp(&a.t, &b.t, sizeof a.t) == 0 && std::memcmp(&a.u, &b.u, sizeof a.u) == 0 &&
+         std::memcmp(&a.v, &b.v, sizeof a.v) == 0 && std::memcmp(a.normal.data(), b.normal.data(), sizeof(double) * 3) == 0;
+}
+
 struct Method {
   std::string library, name;
   double build_ms = 0;
   std::size_t bytes = 0;
-  std::function<std::int32_t(const Vec3<double>&, const Vec3<double>&, double)> cast;
+  std::function<Answer(const Vec3<double>&, const Vec3<double>&, double)> cast;
 };
 
 struct Row {
   std::string library, method, set;
   double rate = 0, rate_lo = 0, rate_hi = 0, rate_threads = 0;
   long missed = 0, extra = 0, skipped = 0, touched = 0;
+  /// Against impact's CompactBvh cast (double) on the rays where both report the same triangle:
+  /// the largest |t - t'| / t_max, |u - u'| or |v - v'|, and |n - n'|.
+  double t_err = 0, bary_err = 0, normal_err = 0;
   double build_ms = 0;
   std::size_t bytes = 0;
   long wrong() const { return missed + extra + skipped + touched; }
@@ -136,9 +169,13 @@ struct EmbreeMethod {
     bytes = static_cast<std::size_t>(embree_bytes.load() - bytes_before);
   }
 
-  std::int32_t cast(const Vec3<double>& o, const Vec3<double>& d, double t_max) const {
+  /// The hit record as Embree's users read it: the normal is Ng normalised (Embree's Ng is
+  /// the unnormalised geometric normal).
+  Answer cast(const Vec3<double>& o, const Vec3<double>& d, double t_max) const {
     const RTCRayHit rh = scene.first_hit(o, d, float(t_max));
-    return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : static_cast<std::int32_t>(rh.hit.primID);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+    const Vec3<double> ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    return {static_cast<std::int32_t>(rh.hit.primID), double(rh.ray.tfar), double(rh.hit.u), double(rh.hit.v), ng / ng.norm()};
   }
 };
 #endif
@@ -318,9 +355,8 @@ int main(int argc, char** argv) {
   const CompactBvh compact(bvh.tree(), a.compact);
   const double bvh_ms = 1e3 * seconds_since(tb);
   methods.push_back({"impact", "CompactBvh", bvh_ms, bvh.memory_bytes() + compact.memory_bytes(),
-                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) -> std::int32_t {
-                       const auto h = ray_mesh_first_hit(bvh, compact, Ray<double>(o, d, t_max));
-                       return h ? h->triangle : -1;
+                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) {
+                       return impact_answer(ray_mesh_first_hit(bvh, compact, Ray<double>(o, d, t_max)));
                      }});
   DistanceGrid<double> grid;
   if (a.grid > 0) {
@@ -330,11 +366,10 @@ int main(int argc, char** argv) {
     gcfg.threads = 1;
     grid = DistanceGrid<double>(bvh, gcfg);
     methods.push_back({"impact", "CompactBvh+grid", bvh_ms + 1e3 * seconds_since(tg), bvh.memory_bytes() + compact.memory_bytes() + grid.memory_bytes(),
-                       [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) -> std::int32_t {
+                       [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) {
                          const std::int32_t start = grid.start_node(o, Vec3<double>(o + t_max * d));
-                         if (start == DistanceGrid<double>::kNoTriangle) return -1;
-                         const auto h = ray_mesh_first_hit(bvh, compact, Ray<double>(o, d, t_max), RigidTransform<double>(), nullptr, start);
-                         return h ? h->triangle : -1;
+                         if (start == DistanceGrid<double>::kNoTriangle) return Answer{};
+                         return impact_answer(ray_mesh_first_hit(bvh, compact, Ray<double>(o, d, t_max), RigidTransform<double>(), nullptr, start));
                        }});
   }
   const auto twb = Clock::now();
@@ -342,16 +377,14 @@ int main(int argc, char** argv) {
   wcfg.leaf_size = a.wide_leaf;
   const WideBvh<double> wide(mesh, wcfg);
   methods.push_back({"impact", "WideBvh", 1e3 * seconds_since(twb), wide.memory_bytes(),
-                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) -> std::int32_t {
-                       const auto h = ray_mesh_first_hit(wide, Ray<double>(o, d, t_max));
-                       return h ? h->triangle : -1;
+                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) {
+                       return impact_answer(ray_mesh_first_hit(wide, Ray<double>(o, d, t_max)));
                      }});
   const auto twb8 = Clock::now();
   const WideBvh<double, 8> wide8(mesh, wcfg);
   methods.push_back({"impact", "WideBvh8", 1e3 * seconds_since(twb8), wide8.memory_bytes(),
-                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) -> std::int32_t {
-                       const auto h = ray_mesh_first_hit(wide8, Ray<double>(o, d, t_max));
-                       return h ? h->triangle : -1;
+                     [&](const Vec3<double>& o, const Vec3<double>& d, double t_max) {
+                       return impact_answer(ray_mesh_first_hit(wide8, Ray<double>(o, d, t_max)));
                      }});
   const std::size_t impact_methods = methods.size();
 #ifdef IMPACT_HAVE_EMBREE
@@ -395,7 +428,7 @@ int main(int argc, char** argv) {
     std::printf("\nset %s: %zu segments, t_max %g, %.1f%% cross the mesh (referee: %.1f s on %d threads)\n", s.name.c_str(), n, s.t_max,
                 100.0 * double(crossing) / double(n), seconds_since(tr), threads);
     std::vector<std::vector<double>> rates(methods.size());
-    std::vector<std::vector<std::int32_t>> answers(methods.size(), std::vector<std::int32_t>(n));
+    std::vector<std::vector<Answer>> answers(methods.size(), std::vector<Answer>(n));
     for (int rep = 0; rep < a.repeat; ++rep)
       for (std::size_t m = 0; m < methods.size(); ++m) {
         auto& out = answers[m];
@@ -415,28 +448,34 @@ int main(int argc, char** argv) {
       w.rate = sm.median;
       w.rate_lo = *std::min_element(rates[m].begin(), rates[m].end());
       w.rate_hi = sm.max;
-      std::vector<std::int32_t> par(n);
+      std::vector<Answer> par(n);
       const auto& cast = methods[m].cast;
       const auto tw = Clock::now();
       parallel_for(n, threads, [&](std::size_t i) { par[i] = cast(s.o[i], s.d[i], s.t_max); });
       w.rate_threads = double(n) / std::max(seconds_since(tw), 1e-12);
       std::vector<int> verdict(n);
-      parallel_for(n, threads, [&](std::size_t i) { verdict[i] = referee.judge(io[i], ie[i], ref[i], answers[m][i]); });
+      parallel_for(n, threads, [&](std::size_t i) { verdict[i] = referee.judge(io[i], ie[i], ref[i], answers[m][i].triangle); });
       // a first contact missed (no hit, or a later one) where the segment only touches the mesh
       // (the points just before and just after it are on the same side of the surface) is a touch
       parallel_for(n, threads, [&](std::size_t i) {
         if ((verdict[i] == 1 || verdict[i] == 3) && touch_only(referee, s.o[i], s.d[i], s.t_max, ref[i], g)) verdict[i] = 4;
       });
       for (std::size_t i = 0; i < n; ++i) {
+        const Answer &x = answers[m][i], &x0 = answers[0][i];
+        if (x.triangle >= 0 && x.triangle == x0.triangle) {
+          w.t_err = std::max(w.t_err, std::abs(x.t - x0.t) / s.t_max);
+          w.bary_err = std::max({w.bary_err, std::abs(x.u - x0.u), std::abs(x.v - x0.v)});
+          w.normal_err = std::max(w.normal_err, (x.normal - x0.normal).norm());
+        }
         if (a.verbose && m < impact_methods && verdict[i] != 0)
           std::fprintf(stderr, "%s %s ray %zu: %s, answer %d, first crossing %d; o = (%.9g, %.9g, %.9g), d = (%.9g, %.9g, %.9g)\n",
                        w.method.c_str(), s.name.c_str(), i, verdict[i] == 1 ? "missed" : verdict[i] == 2 ? "extra" : verdict[i] == 3 ? "skipped" : "touched",
-                       answers[m][i], ref[i].triangle, s.o[i].x(), s.o[i].y(), s.o[i].z(), s.d[i].x(), s.d[i].y(), s.d[i].z());
+                       answers[m][i].triangle, ref[i].triangle, s.o[i].x(), s.o[i].y(), s.o[i].z(), s.d[i].x(), s.d[i].y(), s.d[i].z());
         w.touched += verdict[i] == 4;
         w.missed += verdict[i] == 1;
         w.extra += verdict[i] == 2;
         w.skipped += verdict[i] == 3;
-        if (par[i] != answers[m][i] && m < impact_methods) {
+        if (!same_answer(par[i], answers[m][i]) && m < impact_methods) {
           std::fprintf(stderr, "impact-ray-bench: %s answers differently on %d threads (ray %zu)\n", w.method.c_str(), threads, i);
           return 1;
         }
@@ -446,20 +485,21 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::printf("\n%-7s %-16s %-6s %12s %25s %12s %8s %7s %7s %6s %7s %9s %10s\n", "library", "method", "set", "rays/s(1)", "range", "rays/s(T)",
-              "wrong", "missed", "touched", "extra", "skipped", "build_ms", "bytes");
+  std::printf("\n%-7s %-16s %-6s %12s %25s %12s %8s %7s %7s %6s %7s %9s %10s %9s %9s %9s\n", "library", "method", "set", "rays/s(1)", "range", "rays/s(T)",
+              "wrong", "missed", "touched", "extra", "skipped", "build_ms", "bytes", "t_err", "bary_err", "n_err");
   std::vector<std::string> items;
   for (const auto& w : rows) {
     char range[64];
     std::snprintf(range, sizeof range, "%.3g-%.3g", w.rate_lo, w.rate_hi);
-    std::printf("%-7s %-16s %-6s %12.4g %25s %12.4g %8ld %7ld %7ld %6ld %7ld %9.1f %10zu\n", w.library.c_str(), w.method.c_str(), w.set.c_str(),
-                w.rate, range, w.rate_threads, w.wrong(), w.missed, w.touched, w.extra, w.skipped, w.build_ms, w.bytes);
+    std::printf("%-7s %-16s %-6s %12.4g %25s %12.4g %8ld %7ld %7ld %6ld %7ld %9.1f %10zu %9.2g %9.2g %9.2g\n", w.library.c_str(), w.method.c_str(), w.set.c_str(),
+                w.rate, range, w.rate_threads, w.wrong(), w.missed, w.touched, w.extra, w.skipped, w.build_ms, w.bytes, w.t_err, w.bary_err, w.normal_err);
     bench::JsonObject o;
     o.add("library", w.library).add("method", w.method).add("set", w.set).add("rays_per_s", w.rate);
     o.add("rays_per_s_min", w.rate_lo).add("rays_per_s_max", w.rate_hi).add("threads", threads).add("rays_per_s_threads", w.rate_threads);
     o.add("wrong", static_cast<long long>(w.wrong())).add("missed", static_cast<long long>(w.missed));
     o.add("touched", static_cast<long long>(w.touched)).add("extra", static_cast<long long>(w.extra)).add("skipped", static_cast<long long>(w.skipped));
     o.add("build_ms", w.build_ms).add("bytes", w.bytes);
+    o.add("t_err", w.t_err).add("bary_err", w.bary_err).add("normal_err", w.normal_err);
     items.push_back(o.str());
   }
   // ratios within this run: impact's methods over Embree HIGH, per set
